@@ -1,0 +1,27 @@
+"""Sensor and front-end constants of the putter (brief section 2, paper 1 Table 1).
+
+Kionix KXM52-1050 accelerometer (±2 g, ratiometric, 3.3 V) behind a TI ADS7829
+12-bit ADC: 0…4095 counts over 0…3.3 V.
+"""
+
+from typing import Final
+
+ADC_BITS: Final = 12
+ADC_MIN: Final = 0
+ADC_MAX: Final = (1 << ADC_BITS) - 1  # 4095 counts
+SUPPLY_V: Final = 3.3
+
+#: 0 g offset: 1.65 V at 3.3 V supply, in counts.
+NOMINAL_OFFSET_COUNTS: Final = 2048.0
+#: Datasheet offset spread over −40…125 °C: ±167 mV, i.e. ±207 counts.
+OFFSET_SPREAD_COUNTS: Final = 207.0
+#: Sensitivity 660 mV/g at 3.3 V, in counts/g (660 mV / 3.3 V × 4096).
+NOMINAL_SENSITIVITY_COUNTS_PER_G: Final = 819.2
+#: Sensitivity tolerance over −40…125 °C: ±5 %.
+SENSITIVITY_TOLERANCE: Final = 0.05
+#: Typical cross-axis sensitivity of the KXM52.
+CROSS_AXIS_TYPICAL: Final = 0.02
+#: Samples averaged per still pose in the paper.
+SAMPLES_PER_POSE: Final = 1024
+
+AXES: Final = ("x", "y", "z")
