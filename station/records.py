@@ -26,11 +26,13 @@ from pydantic import (
 )
 
 __all__ = [
+    "SERIAL_PATTERN",
     "Coefficients",
     "FailureReason",
     "GyroSummary",
     "LimitsRef",
     "LinkStats",
+    "Matrix3",
     "Model",
     "PoseRecord",
     "PoseRole",
@@ -52,8 +54,10 @@ PoseRole = Literal["fit", "verify"]
 #: Largest count a database INTEGER column holds.
 _INT32_MAX = 2**31 - 1
 
-Serial = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9._\-]{0,63}$")]
-"""A unit's serial number: letters, digits, ``.``, ``_``, ``-``; at most 64 characters."""
+#: A unit's serial number: letters, digits, ``.``, ``_``, ``-``; at most 64 characters.
+SERIAL_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._\-]{0,63}$"
+
+Serial = Annotated[str, StringConstraints(pattern=SERIAL_PATTERN)]
 
 Identifier = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")]
 """A station, operator, algorithm or limits-profile name."""

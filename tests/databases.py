@@ -1,4 +1,4 @@
-"""Databases for tests: a SQLite file and, when a server answers, a PostgreSQL schema.
+"""Database fixtures (a pytest plugin loaded by tests/conftest.py): SQLite and PostgreSQL.
 
 Every database test runs on both backends (``database_url`` is parametrised). The
 PostgreSQL URL comes from ``CALSTATION_TEST_POSTGRES_URL``; each test session works in a
