@@ -7,7 +7,7 @@ from fastapi import APIRouter, FastAPI
 
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
-from api.routes import health, runs, units
+from api.routes import health, reports, runs, units
 from api.settings import ApiSettings
 from db import open_database
 from station import __version__
@@ -43,6 +43,8 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     v1 = APIRouter(prefix=API_PREFIX)
     v1.include_router(units.router)
     v1.include_router(runs.router)
+    v1.include_router(reports.router)
     app.include_router(health.router)
     app.include_router(v1)
+    app.include_router(reports.dashboard)
     return app

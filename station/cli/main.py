@@ -10,6 +10,7 @@ import typer
 from station import __version__
 from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
+from station.cli.report import report
 from station.cli.serve import serve
 from station.errors import CalstationError
 
@@ -36,6 +37,7 @@ def version() -> None:
 
 
 app.command()(serve)
+app.command()(report)
 app.add_typer(db_app, name="db")
 app.add_typer(keys_app, name="keys")
 

@@ -1,0 +1,91 @@
+"""The end-of-line report, a unit's calibration certificate and the line dashboard.
+
+``GET /api/v1/reports/eol`` (JSON, CSV or HTML), ``GET /api/v1/units/{serial}/certificate``
+(HTML) and ``GET /`` (the dashboard page, reloading itself).
+"""
+
+from datetime import UTC, datetime
+from typing import Annotated, Literal
+
+from fastapi import APIRouter, Depends, HTTPException, Path, Query, status
+from fastapi.responses import HTMLResponse, Response
+
+from api.deps import RepositoryDep, require_reader
+from api.schemas import Problem
+from db.reports import eol_report
+from station.records import SERIAL_PATTERN
+from station.report.bounds import default_bounds
+from station.report.html import certificate_page, dashboard_page
+from station.report.model import ReportFilter
+from station.report.period import parse_moment, start_of_day
+from station.report.render import MEDIA_TYPES, render
+
+#: Units on the dashboard's list, and points on each of its control charts.
+DASHBOARD_UNITS = 20
+DASHBOARD_CHART_POINTS = 60
+
+router = APIRouter(tags=["reports"], dependencies=[Depends(require_reader)])
+dashboard = APIRouter(tags=["reports"], dependencies=[Depends(require_reader)])
+
+
+@router.get(
+    "/reports/eol",
+    responses={
+        200: {
+            "content": {MEDIA_TYPES["csv"]: {}, MEDIA_TYPES["html"]: {}},
+            "description": "the report in the requested format",
+        },
+        400: {"model": Problem, "description": "a bound is not a date or time"},
+    },
+)
+def get_eol_report(
+    repository: RepositoryDep,
+    since: Annotated[
+        str | None, Query(alias="from", description="start, ISO date or time (UTC if no zone)")
+    ] = None,
+    until: Annotated[str | None, Query(alias="to", description="end (exclusive)")] = None,
+    station: Annotated[str | None, Query(description="only this station")] = None,
+    operator: Annotated[str | None, Query(description="only this operator")] = None,
+    format: Literal["json", "csv", "html"] = "json",
+    units: Annotated[int | None, Query(ge=1, description="list only the latest N units")] = None,
+) -> Response:
+    """Yields, failure Pareto, capability, control charts and ship/hold list of a range."""
+    report_filter = ReportFilter(
+        since=parse_moment(since, name="from") if since else None,
+        until=parse_moment(until, name="to") if until else None,
+        station_id=station,
+        operator_id=operator,
+    )
+    report = eol_report(repository.session, report_filter, unit_limit=units)
+    return Response(render(report, format), media_type=MEDIA_TYPES[format])
+
+
+@router.get(
+    "/units/{serial}/certificate",
+    response_class=HTMLResponse,
+    responses={404: {"model": Problem, "description": "no run of this serial number"}},
+)
+def get_certificate(
+    serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
+    repository: RepositoryDep,
+) -> HTMLResponse:
+    """The unit's calibration certificate: its latest run, coefficients, poses, limits."""
+    latest = repository.latest_for_serial(serial)
+    run = repository.get(latest.run_id) if latest is not None else None
+    if run is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
+    return HTMLResponse(certificate_page(run, default_bounds(), datetime.now(UTC)))
+
+
+@dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
+def get_dashboard(repository: RepositoryDep) -> HTMLResponse:
+    """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
+    now = datetime.now(UTC)
+    report = eol_report(
+        repository.session,
+        ReportFilter(since=start_of_day(now)),
+        unit_limit=DASHBOARD_UNITS,
+        chart_points=DASHBOARD_CHART_POINTS,
+        now=now,
+    )
+    return HTMLResponse(dashboard_page(report))

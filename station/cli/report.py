@@ -1,0 +1,74 @@
+"""``calstation report``: the end-of-line report from the results database."""
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from sqlalchemy import make_url
+from sqlalchemy.exc import OperationalError
+
+from db import DatabaseSettings, open_database
+from db.reports import eol_report
+from station.cli.output import err, out
+from station.errors import CalstationError
+from station.report.model import ReportFilter
+from station.report.period import parse_moment
+from station.report.render import FORMATS, render
+
+
+def report(
+    since: Annotated[
+        str | None,
+        typer.Option("--from", help="Start: ISO date or time, UTC unless a zone is given."),
+    ] = None,
+    until: Annotated[str | None, typer.Option("--to", help="End (exclusive).")] = None,
+    station: Annotated[str | None, typer.Option(help="Only this station.")] = None,
+    operator: Annotated[str | None, typer.Option(help="Only this operator.")] = None,
+    format: Annotated[
+        str, typer.Option("--format", help=f"One of: {', '.join(FORMATS)}.")
+    ] = "text",
+    units: Annotated[
+        int | None, typer.Option(min=1, help="List only the latest N units.", show_default=False)
+    ] = None,
+    output: Annotated[
+        Path | None,
+        typer.Option("--out", help="Write to this file instead of standard output."),
+    ] = None,
+    database_url: Annotated[
+        str | None,
+        typer.Option(
+            "--database-url",
+            help="SQLAlchemy URL (default: CALSTATION_DATABASE_URL, else the embedded SQLite).",
+            show_default=False,
+        ),
+    ] = None,
+) -> None:
+    """End-of-line report: yields, failure Pareto, capability, control charts, ship/hold."""
+    if format not in FORMATS:
+        raise CalstationError(f"--format {format!r} is not one of {', '.join(FORMATS)}")
+    report_filter = ReportFilter(
+        since=parse_moment(since, name="--from") if since else None,
+        until=parse_moment(until, name="--to") if until else None,
+        station_id=station,
+        operator_id=operator,
+    )
+    url = database_url or DatabaseSettings().url()
+    try:
+        database = open_database(url)
+        try:
+            with database.session() as session:
+                text = render(eol_report(session, report_filter, unit_limit=units), format)
+        finally:
+            database.dispose()
+    except OperationalError as exc:
+        shown = make_url(url).render_as_string(hide_password=True)
+        raise CalstationError(f"database {shown} unavailable: {exc.orig}") from None
+    if output is None:
+        out.file.write(text)
+        out.file.flush()
+        return
+    try:
+        output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise CalstationError(f"{output}: cannot write the report: {exc.strerror}") from None
+    err.print(f"report written to {output}", markup=False)

@@ -1,0 +1,61 @@
+"""HTML pages: the report, the line dashboard, a unit's calibration certificate.
+
+Jinja2 templates (``templates/``) with autoescaping; charts are inline SVG from
+:mod:`station.report.svg`, styles inline: a page needs no other file, no network.
+"""
+
+from datetime import datetime
+
+from jinja2 import Environment, PackageLoader, select_autoescape
+from markupsafe import Markup
+
+from station import __version__
+from station.records import StoredRun
+from station.report import formatting, svg
+from station.report.bounds import Bounds
+from station.report.model import EolReport
+from station.report.tables import PARAMETER_HEADER, SUMMARY_HEADER, parameter_cells, summary_cells
+
+#: Seconds between the dashboard's reloads.
+DASHBOARD_REFRESH_S = 30
+
+_env = Environment(
+    loader=PackageLoader("station.report", "templates"),
+    autoescape=select_autoescape(["html"]),
+    trim_blocks=True,
+    lstrip_blocks=True,
+)
+_env.filters.update(
+    percent=formatting.percent,
+    number=formatting.number,
+    seconds=formatting.seconds,
+    moment=formatting.moment,
+)
+_env.globals.update(
+    version=__version__,
+    histogram=lambda stats: Markup(svg.histogram(stats)),
+    pareto=lambda entries: Markup(svg.pareto(entries)),
+    control_chart=lambda chart: Markup(svg.control_chart(chart)),
+)
+
+
+_env.globals.update(
+    summary_header=SUMMARY_HEADER, summary_cells=summary_cells, parameter_header=PARAMETER_HEADER
+)
+
+
+def report_page(report: EolReport) -> str:
+    """The end-of-line report as one self-contained HTML page."""
+    return _env.get_template("report.html").render(
+        report=report, parameter_rows=parameter_cells(report)
+    )
+
+
+def dashboard_page(report: EolReport, *, refresh_s: int = DASHBOARD_REFRESH_S) -> str:
+    """The line dashboard over ``report`` (today's runs); reloads every ``refresh_s``."""
+    return _env.get_template("dashboard.html").render(report=report, refresh_s=refresh_s)
+
+
+def certificate_page(run: StoredRun, bounds: Bounds, issued_at: datetime) -> str:
+    """The calibration certificate of the unit whose latest run is ``run``."""
+    return _env.get_template("certificate.html").render(run=run, bounds=bounds, issued_at=issued_at)

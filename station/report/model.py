@@ -1,0 +1,152 @@
+"""The shape of the end-of-line report: one model, rendered as text, CSV, JSON or HTML.
+
+Yields and rates are fractions (0…1), times are seconds, parameter values are in their
+``unit``. ``None`` means "not defined for this range" (no runs, no spread, no limit).
+"""
+
+from datetime import datetime
+from typing import Literal
+
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field
+
+from station.records import LimitsRef, Verdict
+
+#: What the end-of-line tester does with a unit: its latest run passed, or not.
+Disposition = Literal["ship", "hold"]
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class ReportFilter(_Part):
+    """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time)."""
+
+    since: AwareDatetime | None = None
+    until: AwareDatetime | None = None
+    station_id: str | None = None
+    operator_id: str | None = None
+
+
+class Summary(_Part):
+    """Counts and yields of the runs in range.
+
+    A unit's first and latest run are its first and latest *in range* (and at the station,
+    in a per-station summary).
+    """
+
+    runs: int
+    runs_passed: int
+    units_tested: int
+    units_passed: int = Field(description="units whose latest run passed")
+    units_failed: int
+    first_pass_units: int = Field(description="units whose first run passed")
+    report_yield: float | None = Field(description="passing runs / runs")
+    first_pass_yield: float | None = Field(description="units whose first run passed / units")
+    final_yield: float | None = Field(description="units whose latest run passed / units")
+    retests: int = Field(description="runs beyond each unit's first")
+    retest_rate: float | None = Field(description="retests / units")
+    hours: float | None = Field(description="length of the range, hours")
+    units_per_hour: float | None
+    cycle_time_per_run_s: float | None
+    cycle_time_per_unit_s: float | None = Field(description="station time / units")
+    cycle_time_per_pose_s: float | None = Field(description="station time / poses")
+    poses: int
+
+
+class StationSummary(_Part):
+    """The summary of one station."""
+
+    station_id: str
+    summary: Summary
+
+
+class ParetoEntry(_Part):
+    """Failing runs whose first failure reason is ``code``."""
+
+    code: str
+    count: int
+    share: float = Field(description="of all failing runs")
+    cumulative_share: float
+    by_station: dict[str, int]
+    by_operator: dict[str, int]
+
+
+class Histogram(_Part):
+    """Counts of ``bins`` equal bins from ``start``; outliers land in the end bins."""
+
+    start: float
+    width: float
+    counts: list[int]
+
+
+class ParameterStats(_Part):
+    """Distribution and capability of one parameter against its limits."""
+
+    name: str
+    family: str
+    unit: str
+    lower: float | None
+    upper: float | None
+    count: int
+    mean: float | None
+    std: float | None
+    min: float | None
+    max: float | None
+    cp: float | None
+    cpk: float | None
+    out_of_limits: int
+    marginal: int = Field(description="within the limits, within 10 % of the width of one")
+    histogram: Histogram
+
+
+class ChartPoint(_Part):
+    """One run on a control chart."""
+
+    started_at: datetime
+    serial: str
+    value: float
+    moving_range: float | None
+
+
+class ControlChart(_Part):
+    """Individuals and moving-range chart of one coefficient (limits from every run)."""
+
+    name: str
+    unit: str
+    count: int
+    mean: float
+    mr_bar: float | None
+    lcl: float | None
+    ucl: float | None
+    mr_ucl: float | None
+    points: list[ChartPoint] = Field(description="the latest runs, oldest first")
+
+
+class UnitVerdict(_Part):
+    """A unit's final state for the ship/hold decision."""
+
+    serial: str
+    disposition: Disposition
+    verdict: Verdict
+    runs: int
+    last_started_at: datetime
+    station_id: str
+    operator_id: str
+    failure: str | None = Field(description="first failure reason of the latest run")
+
+
+class EolReport(_Part):
+    """The end-of-line report over ``filter``."""
+
+    generated_at: datetime
+    filter: ReportFilter
+    bounds_source: str = Field(description="where the capability limits come from")
+    limits_profiles: list[LimitsRef] = Field(description="profiles the runs were judged by")
+    summary: Summary
+    stations: list[StationSummary]
+    pareto: list[ParetoEntry]
+    parameters: list[ParameterStats]
+    control_charts: list[ControlChart]
+    units: list[UnitVerdict]
+    units_total: int = Field(description="units in range (the list may be cut to the latest)")

@@ -1,0 +1,198 @@
+"""The report in every format: text for the terminal, CSV, JSON, HTML.
+
+CSV is the report flattened into ``section, item, metric, value`` rows (one value per
+row, numbers as JSON writes them), so a spreadsheet or a script reads the same numbers
+the JSON holds. Text and HTML format numbers through :mod:`station.report.formatting`.
+"""
+
+import csv
+import io
+import json
+from collections.abc import Iterator
+from typing import Any, Literal, get_args
+
+from station.report import html
+from station.report.formatting import moment, number, percent
+from station.report.model import EolReport
+from station.report.tables import (
+    PARAMETER_HEADER,
+    SUMMARY_HEADER,
+    parameter_cells,
+    summary_cells,
+)
+
+Format = Literal["text", "csv", "json", "html"]
+FORMATS: tuple[str, ...] = get_args(Format)
+MEDIA_TYPES: dict[str, str] = {
+    "text": "text/plain; charset=utf-8",
+    "csv": "text/csv; charset=utf-8",
+    "json": "application/json",
+    "html": "text/html; charset=utf-8",
+}
+
+Cell = str | int | float | None
+
+
+def as_json(report: EolReport) -> str:
+    """The report as a JSON document."""
+    return json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False) + "\n"
+
+
+def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
+    """The report as ``(section, item, metric, value)`` rows."""
+    doc = report.model_dump(mode="json")
+    yield ("report", "", "generated_at", doc["generated_at"])
+    for key, value in doc["filter"].items():
+        yield ("filter", "", key, value)
+    yield ("limits", "", "bounds_source", doc["bounds_source"])
+    for ref in doc["limits_profiles"]:
+        yield ("limits", f"{ref['name']}@{ref['version']}", "sha256", ref["sha256"])
+    for key, value in doc["summary"].items():
+        yield ("summary", "", key, value)
+    for station in doc["stations"]:
+        for key, value in station["summary"].items():
+            yield ("station", station["station_id"], key, value)
+    for entry in doc["pareto"]:
+        for key in ("count", "share", "cumulative_share"):
+            yield ("pareto", entry["code"], key, entry[key])
+        for station, n in entry["by_station"].items():
+            yield ("pareto", entry["code"], f"station:{station}", n)
+        for operator, n in entry["by_operator"].items():
+            yield ("pareto", entry["code"], f"operator:{operator}", n)
+    for stats in doc["parameters"]:
+        for key, value in stats.items():
+            if key not in ("name", "histogram"):
+                yield ("parameter", stats["name"], key, value)
+        hist = stats["histogram"]
+        yield ("histogram", stats["name"], "start", hist["start"])
+        yield ("histogram", stats["name"], "width", hist["width"])
+        for i, count in enumerate(hist["counts"]):
+            yield ("histogram", stats["name"], f"bin:{i}", count)
+    for chart in doc["control_charts"]:
+        for key, value in chart.items():
+            if key not in ("name", "points"):
+                yield ("control_chart", chart["name"], key, value)
+        for point in chart["points"]:
+            yield (
+                "control_point",
+                chart["name"],
+                f"{point['started_at']} {point['serial']}",
+                point["value"],
+            )
+    yield ("units", "", "total", doc["units_total"])
+    for unit in doc["units"]:
+        for key, value in unit.items():
+            if key != "serial":
+                yield ("unit", unit["serial"], key, value)
+
+
+def as_csv(report: EolReport) -> str:
+    """The report as CSV rows ``section,item,metric,value``."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["section", "item", "metric", "value"])
+    writer.writerows(rows(report))
+    return buffer.getvalue()
+
+
+def _table(header: list[str], body: list[list[str]]) -> list[str]:
+    widths = [max(len(row[i]) for row in [header, *body]) for i in range(len(header))]
+
+    def line(row: list[str]) -> str:
+        first = row[0].ljust(widths[0])
+        rest = (cell.rjust(width) for cell, width in zip(row[1:], widths[1:], strict=True))
+        return "  ".join([first, *rest]).rstrip()
+
+    return [line(header), line(["-" * w for w in widths]), *(line(row) for row in body)]
+
+
+def as_text(report: EolReport) -> str:
+    """The report for a terminal: tables of plain text."""
+    f = report.filter
+    scope = ", ".join(
+        f"{label} {value}"
+        for label, value in (
+            ("from", moment(f.since) if f.since else None),
+            ("to", moment(f.until) if f.until else None),
+            ("station", f.station_id),
+            ("operator", f.operator_id),
+        )
+        if value
+    )
+    out = [
+        f"End-of-line report ({scope or 'all runs'}), generated {moment(report.generated_at)}",
+        "",
+        *_table(
+            SUMMARY_HEADER,
+            [
+                summary_cells("all", report.summary),
+                *(summary_cells(s.station_id, s.summary) for s in report.stations),
+            ],
+        ),
+        "",
+        "Failure Pareto (first failure reason of each failing run)",
+        *_table(
+            ["reason", "runs", "share", "cumulative", "stations", "operators"],
+            [
+                [
+                    e.code,
+                    number(e.count),
+                    percent(e.share),
+                    percent(e.cumulative_share),
+                    " ".join(f"{k}:{v}" for k, v in e.by_station.items()),
+                    " ".join(f"{k}:{v}" for k, v in e.by_operator.items()),
+                ]
+                for e in report.pareto
+            ],
+        ),
+        "",
+        f"Parameters against {report.bounds_source}",
+        *_table(PARAMETER_HEADER, parameter_cells(report)),
+        "",
+        "Control charts (I-MR, limits from every run in range)",
+        *_table(
+            ["coefficient", "n", "mean", "MR-bar", "LCL", "UCL", "MR UCL"],
+            [
+                [
+                    c.name,
+                    number(c.count),
+                    number(c.mean, 6),
+                    number(c.mr_bar),
+                    number(c.lcl, 6),
+                    number(c.ucl, 6),
+                    number(c.mr_ucl),
+                ]
+                for c in report.control_charts
+            ],
+        ),
+        "",
+        f"Units ({len(report.units)} of {report.units_total}, latest first)",
+        *_table(
+            ["serial", "disposition", "runs", "last run", "station", "operator", "failure"],
+            [
+                [
+                    u.serial,
+                    u.disposition,
+                    number(u.runs),
+                    moment(u.last_started_at),
+                    u.station_id,
+                    u.operator_id,
+                    u.failure or "",
+                ]
+                for u in report.units
+            ],
+        ),
+    ]
+    return "\n".join(out) + "\n"
+
+
+def render(report: EolReport, format: str) -> str:
+    """The report in ``format`` (one of :data:`FORMATS`)."""
+    renderers: dict[str, Any] = {
+        "text": as_text,
+        "csv": as_csv,
+        "json": as_json,
+        "html": html.report_page,
+    }
+    text: str = renderers[format](report)
+    return text

@@ -1,0 +1,78 @@
+"""The summary and parameter tables' cells, shared by the text and HTML renderings."""
+
+from station.report.formatting import number, percent, seconds
+from station.report.model import EolReport, Summary
+
+SUMMARY_HEADER = [
+    "",
+    "units",
+    "passed",
+    "failed",
+    "runs",
+    "report yield",
+    "first-pass yield",
+    "final yield",
+    "retests",
+    "retest rate",
+    "units/h",
+    "s/unit",
+    "s/pose",
+]
+
+
+def summary_cells(name: str, s: Summary) -> list[str]:
+    """One summary as table cells (text and HTML)."""
+    return [
+        name,
+        number(s.units_tested),
+        number(s.units_passed),
+        number(s.units_failed),
+        number(s.runs),
+        percent(s.report_yield),
+        percent(s.first_pass_yield),
+        percent(s.final_yield),
+        number(s.retests),
+        percent(s.retest_rate),
+        number(s.units_per_hour),
+        seconds(s.cycle_time_per_unit_s),
+        seconds(s.cycle_time_per_pose_s),
+    ]
+
+
+PARAMETER_HEADER = [
+    "parameter",
+    "unit",
+    "n",
+    "mean",
+    "std",
+    "min",
+    "max",
+    "LSL",
+    "USL",
+    "Cp",
+    "Cpk",
+    "out",
+    "marginal",
+]
+
+
+def parameter_cells(report: EolReport) -> list[list[str]]:
+    """The parameter table's cells (text and HTML)."""
+    return [
+        [
+            p.name,
+            p.unit,
+            number(p.count),
+            number(p.mean, 6),
+            number(p.std),
+            number(p.min, 6),
+            number(p.max, 6),
+            number(p.lower, 6),
+            number(p.upper, 6),
+            number(p.cp, 3),
+            number(p.cpk, 3),
+            number(p.out_of_limits),
+            number(p.marginal),
+        ]
+        for p in report.parameters
+    ]

@@ -1,0 +1,163 @@
+"""The end-of-line report's numbers on a hand-built line history, on SQLite and PostgreSQL."""
+
+import itertools
+import math
+import statistics
+
+import pytest
+from sqlalchemy.orm import Session
+
+from db.reports import eol_report
+from station.report.bounds import default_bounds
+from station.report.model import EolReport, ReportFilter
+from tests.db.eol_data import IN_RANGE, SINCE, UNTIL, insert_line_history
+
+RUN_SECONDS = 95.0  # every test run lasts 95 s
+POSES_PER_RUN = 7
+
+
+def _report(session: Session, **filters: str) -> EolReport:
+    insert_line_history(session)
+    return eol_report(session, ReportFilter(since=SINCE, until=UNTIL, **filters))
+
+
+def test_counts_and_yields_over_the_range(session: Session) -> None:
+    s = _report(session).summary
+    # 7 runs in range (U9's is after it); passes: U1, U4, U2's retest.
+    assert (s.runs, s.runs_passed) == (7, 3)
+    assert s.report_yield == pytest.approx(3 / 7)
+    # Units U1…U5; first runs passed: U1, U4; latest runs passed: U1, U2, U4.
+    assert (s.units_tested, s.first_pass_units, s.units_passed, s.units_failed) == (5, 2, 3, 2)
+    assert s.first_pass_yield == pytest.approx(2 / 5)
+    assert s.final_yield == pytest.approx(3 / 5)
+    assert (s.retests, s.retest_rate) == (2, pytest.approx(2 / 5))
+    assert s.hours == pytest.approx(2.0)
+    assert s.units_per_hour == pytest.approx(5 / 2)
+    assert s.cycle_time_per_run_s == pytest.approx(RUN_SECONDS)
+    assert s.cycle_time_per_unit_s == pytest.approx(7 * RUN_SECONDS / 5)
+    assert s.poses == 7 * POSES_PER_RUN
+    assert s.cycle_time_per_pose_s == pytest.approx(RUN_SECONDS / POSES_PER_RUN)
+
+
+def test_per_station_summaries_rank_units_within_the_station(session: Session) -> None:
+    stations = {s.station_id: s.summary for s in _report(session).stations}
+    assert sorted(stations) == ["st1", "st2"]
+    st1, st2 = stations["st1"], stations["st2"]
+    # st1: U1 pass; U2 fail then pass; U5 fail.
+    assert (st1.runs, st1.units_tested, st1.first_pass_units, st1.units_passed) == (4, 3, 1, 2)
+    # st2: U3 fail, fail; U4 pass.
+    assert (st2.runs, st2.units_tested, st2.first_pass_units, st2.units_passed) == (3, 2, 1, 1)
+    assert st2.first_pass_yield == pytest.approx(1 / 2)
+
+
+def test_pareto_counts_each_failing_runs_first_reason(session: Session) -> None:
+    pareto = _report(session).pareto
+    assert [(e.code, e.count) for e in pareto] == [
+        ("offset", 2),
+        ("sensitivity", 1),
+        ("verification_error", 1),
+    ]
+    offset = pareto[0]
+    assert (offset.share, offset.cumulative_share) == (pytest.approx(0.5), pytest.approx(0.5))
+    assert offset.by_station == {"st1": 1, "st2": 1}
+    assert offset.by_operator == {"op-b": 2}
+    assert pareto[-1].cumulative_share == pytest.approx(1.0)
+    assert "link_loss" not in {e.code for e in pareto}
+
+
+def test_capability_of_the_offsets_against_the_datasheet_bounds(session: Session) -> None:
+    report = _report(session)
+    lower, upper = default_bounds()["offset"]
+    assert (lower, upper) == (1841.0, 2255.0)
+    params = {p.name: p for p in report.parameters}
+    xs = [run[5] for run in IN_RANGE]
+    mean, std = statistics.mean(xs), statistics.stdev(xs)
+    x = params["offset_x"]
+    assert (x.count, x.min, x.max) == (7, 2040.0, 2060.0)
+    assert x.mean == pytest.approx(mean, rel=1e-12)
+    assert x.std == pytest.approx(std, rel=1e-9)
+    assert x.cp == pytest.approx((upper - lower) / (6 * std), rel=1e-9)
+    assert x.cpk == pytest.approx(min(upper - mean, mean - lower) / (3 * std), rel=1e-9)
+    assert (x.out_of_limits, x.marginal) == (0, 0)
+    # offset_y: 2260 is outside; 2240 lies within 10 % of the 414-count width of 2255.
+    y = params["offset_y"]
+    assert (y.out_of_limits, y.marginal) == (1, 1)
+    ys = [run[6] for run in IN_RANGE]
+    assert y.cpk == pytest.approx(
+        (upper - statistics.mean(ys)) / (3 * statistics.stdev(ys)), rel=1e-9
+    )
+
+
+def test_histograms_count_every_value_once_in_its_bin(session: Session) -> None:
+    params = {p.name: p for p in _report(session).parameters}
+    y = params["offset_y"].histogram
+    assert sum(y.counts) == 7
+    assert y.start == pytest.approx(1841 - 414 / 4)
+    for value, expected in ((2048.0, 5), (2240.0, 1), (2260.0, 1)):
+        assert y.counts[math.floor((value - y.start) / y.width)] == expected
+    noise = params["pose_noise_x"]
+    assert (noise.count, noise.mean, noise.upper) == (49, pytest.approx(1.1), 8.0)
+    assert noise.cp is None  # one-sided limit
+    bias = params["gyro_bias_x"]
+    assert (bias.count, bias.mean) == (7, pytest.approx(0.01))
+
+
+def test_control_chart_limits_from_moving_ranges_in_time_order(session: Session) -> None:
+    chart = next(c for c in _report(session).control_charts if c.name == "offset_x")
+    xs = [run[5] for run in IN_RANGE]
+    mr_bar = statistics.mean(abs(b - a) for a, b in itertools.pairwise(xs))
+    assert chart.count == 7
+    assert chart.mean == pytest.approx(statistics.mean(xs))
+    assert chart.mr_bar == pytest.approx(mr_bar)
+    assert chart.ucl == pytest.approx(statistics.mean(xs) + 2.66 * mr_bar, rel=1e-3)
+    assert chart.mr_ucl == pytest.approx(3.267 * mr_bar)
+    assert [p.value for p in chart.points] == xs
+    assert [p.moving_range for p in chart.points][1:] == pytest.approx(
+        [abs(b - a) for a, b in itertools.pairwise(xs)]
+    )
+
+
+def test_control_chart_points_are_the_latest_runs(session: Session) -> None:
+    insert_line_history(session)
+    report = eol_report(session, ReportFilter(since=SINCE, until=UNTIL), chart_points=3)
+    chart = report.control_charts[0]
+    assert [p.serial for p in chart.points] == ["U5", "U2", "U3"]
+    assert chart.points[0].moving_range == pytest.approx(10.0)  # 2055 after U4's 2045
+    assert chart.count == 7
+
+
+def test_units_list_gives_each_units_final_disposition(session: Session) -> None:
+    report = _report(session)
+    units = {u.serial: u for u in report.units}
+    assert report.units_total == 5
+    assert {s: u.disposition for s, u in units.items()} == {
+        "U1": "ship",
+        "U2": "ship",
+        "U3": "hold",
+        "U4": "ship",
+        "U5": "hold",
+    }
+    assert (units["U3"].runs, units["U3"].failure) == (2, "verification_error")
+    assert [u.serial for u in report.units][:2] == ["U3", "U2"]  # latest first
+
+
+def test_filters_by_station_and_operator(session: Session) -> None:
+    insert_line_history(session)
+    st1 = eol_report(session, ReportFilter(since=SINCE, until=UNTIL, station_id="st1"))
+    assert (st1.summary.runs, st1.summary.units_tested, st1.summary.units_passed) == (4, 3, 2)
+    assert {u.serial for u in st1.units} == {"U1", "U2", "U5"}
+    op_b = eol_report(session, ReportFilter(since=SINCE, until=UNTIL, operator_id="op-b"))
+    assert (op_b.summary.runs, op_b.summary.first_pass_units) == (4, 1)
+    assert [(e.code, e.count) for e in op_b.pareto] == [("offset", 2), ("verification_error", 1)]
+    everything = eol_report(session, ReportFilter())
+    assert everything.summary.runs == 8
+    assert everything.units_total == 6
+
+
+def test_an_empty_range_reports_zeros_and_no_ratios(session: Session) -> None:
+    report = eol_report(session, ReportFilter(since=SINCE, until=SINCE))
+    s = report.summary
+    assert (s.runs, s.units_tested, s.poses) == (0, 0, 0)
+    assert (s.report_yield, s.first_pass_yield, s.units_per_hour) == (None, None, None)
+    assert report.pareto == report.units == report.control_charts == []
+    assert all(p.count == 0 and p.mean is None for p in report.parameters)
