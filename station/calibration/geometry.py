@@ -28,7 +28,13 @@ from station.calibration.errors import (
     TooFewPosesError,
 )
 from station.calibration.model import FloatArray
-from station.sensor import ADC_MAX, ADC_MIN, AXES, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.sensor import (
+    ADC_MAX,
+    ADC_MIN,
+    AXES,
+    NOMINAL_OFFSET_COUNTS,
+    NOMINAL_SENSITIVITY_COUNTS_PER_G,
+)
 
 #: Default minimum angle between two poses' gravity directions, degrees.
 MIN_POSE_ANGLE_DEG = 10.0
@@ -69,11 +75,16 @@ class Screen:
     coverage: FloatArray
 
 
+def chord_to_angle_deg(chord: FloatArray) -> FloatArray:
+    """Angle (degrees) between two poses' gravity directions from their distance in counts."""
+    half = np.clip(chord / (2.0 * NOMINAL_SENSITIVITY_COUNTS_PER_G), 0.0, 1.0)
+    return np.asarray(np.degrees(2.0 * np.arcsin(half)), dtype=np.float64)
+
+
 def pair_angles_deg(poses: FloatArray) -> FloatArray:
     """Angles (degrees) between every two poses' gravity directions, shape (..., N, N)."""
     chord = np.linalg.norm(poses[..., :, None, :] - poses[..., None, :, :], axis=-1)
-    half = np.clip(chord / (2.0 * NOMINAL_SENSITIVITY_COUNTS_PER_G), 0.0, 1.0)
-    return np.asarray(np.degrees(2.0 * np.arcsin(half)), dtype=np.float64)
+    return chord_to_angle_deg(chord)
 
 
 def coverage(poses: FloatArray) -> FloatArray:
@@ -81,45 +92,44 @@ def coverage(poses: FloatArray) -> FloatArray:
     centred = poses - poses.mean(axis=-2, keepdims=True)
     scatter = np.swapaxes(centred, -1, -2) @ centred
     eig = np.linalg.eigvalsh(scatter)
-    ratio = np.divide(
-        eig[..., 0], eig[..., -1], out=np.zeros_like(eig[..., 0]), where=eig[..., -1] > 0
-    )
+    ratio = np.divide(eig[..., 0], eig[..., -1], out=np.zeros_like(eig[..., 0]), where=eig[..., -1] > 0)
     return np.asarray(np.sqrt(np.clip(ratio, 0.0, 1.0)), dtype=np.float64)
 
 
 def screen(poses: FloatArray, limits: GeometryLimits = GeometryLimits()) -> Screen:
     """Screen K units' poses, shape (K, N, 3); the first finding per unit wins."""
     k, n, _ = poses.shape
+    units = np.arange(k)
     finding = np.zeros(k, dtype=np.int64)
     where = np.full(k, -1, dtype=np.int64)
     other = np.full(k, -1, dtype=np.int64)
 
-    def mark(
-        code: Finding, bad: NDArray[np.bool_], pose: NDArray[np.int64], extra: NDArray[np.int64]
-    ) -> None:
+    def mark(code: Finding, bad: NDArray[np.bool_], pose: NDArray[np.int64], extra: NDArray[np.int64]) -> None:
         new = bad & (finding == Finding.OK)
         finding[new] = code
         where[new] = pose[new]
         other[new] = extra[new]
 
-    flat_bad = ~np.isfinite(poses).reshape(k, n * 3)
-    first = flat_bad.argmax(axis=1)
-    mark(Finding.NON_FINITE, np.asarray(flat_bad.any(axis=1)), first // 3, first % 3)
-
-    finite = np.where(np.isfinite(poses), poses, NOMINAL_SENSITIVITY_COUNTS_PER_G)
-    rail = ((finite <= ADC_MIN) | (finite >= ADC_MAX)).reshape(k, n * 3)
+    flat = poses.reshape(k, n * 3)
+    finite = np.isfinite(flat)
+    if not finite.all():
+        bad = ~finite
+        first = bad.argmax(axis=1)
+        mark(Finding.NON_FINITE, bad[units, first], first // 3, first % 3)
+        flat = np.where(finite, flat, NOMINAL_OFFSET_COUNTS)
+    rail = (flat <= ADC_MIN) | (flat >= ADC_MAX)
     first = rail.argmax(axis=1)
-    mark(Finding.AT_RAIL, np.asarray(rail.any(axis=1)), first // 3, first % 3)
+    mark(Finding.AT_RAIL, rail[units, first], first // 3, first % 3)
 
-    angles = pair_angles_deg(finite)
-    angles[:, np.arange(n), np.arange(n)] = np.inf
-    lower = np.tril(np.ones((n, n), dtype=bool))
-    flat = np.where(lower, angles, np.inf).reshape(k, n * n)
-    closest = flat.argmin(axis=1)
-    min_angle = flat[np.arange(k), closest]
-    mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, closest // n, closest % n)
+    clean = flat.reshape(k, n, 3)
+    earlier, later = np.triu_indices(n, 1)
+    diff = clean[:, later, :] - clean[:, earlier, :]
+    chord2 = np.einsum("kpi,kpi->kp", diff, diff)
+    closest = chord2.argmin(axis=1)
+    min_angle = chord_to_angle_deg(np.sqrt(chord2[units, closest]))
+    mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, later[closest], earlier[closest])
 
-    cover = coverage(finite)
+    cover = coverage(clean)
     none = np.full(k, -1, dtype=np.int64)
     mark(Finding.COPLANAR, cover < limits.min_coverage, none, none)
     return Screen(finding, where, other, min_angle, cover)
