@@ -92,7 +92,9 @@ def coverage(poses: FloatArray) -> FloatArray:
     centred = poses - poses.mean(axis=-2, keepdims=True)
     scatter = np.swapaxes(centred, -1, -2) @ centred
     eig = np.linalg.eigvalsh(scatter)
-    ratio = np.divide(eig[..., 0], eig[..., -1], out=np.zeros_like(eig[..., 0]), where=eig[..., -1] > 0)
+    ratio = np.divide(
+        eig[..., 0], eig[..., -1], out=np.zeros_like(eig[..., 0]), where=eig[..., -1] > 0
+    )
     return np.asarray(np.sqrt(np.clip(ratio, 0.0, 1.0)), dtype=np.float64)
 
 
@@ -104,7 +106,9 @@ def screen(poses: FloatArray, limits: GeometryLimits = GeometryLimits()) -> Scre
     where = np.full(k, -1, dtype=np.int64)
     other = np.full(k, -1, dtype=np.int64)
 
-    def mark(code: Finding, bad: NDArray[np.bool_], pose: NDArray[np.int64], extra: NDArray[np.int64]) -> None:
+    def mark(
+        code: Finding, bad: NDArray[np.bool_], pose: NDArray[np.int64], extra: NDArray[np.int64]
+    ) -> None:
         new = bad & (finding == Finding.OK)
         finding[new] = code
         where[new] = pose[new]

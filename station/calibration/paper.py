@@ -39,6 +39,8 @@ from station.calibration.solution import Solution, quality_of
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 PAPER_POSES = 6
+#: Units solved together: bounds the batch path's memory and keeps it in cache.
+CHUNK_UNITS = 1 << 12
 
 
 class Outcome(IntEnum):
@@ -93,6 +95,36 @@ def solve_paper_batch(
     p = np.asarray(poses, dtype=np.float64)
     if p.ndim != 3 or p.shape[1:] != (PAPER_POSES, 3):
         raise CalibrationError(f"the paper's method takes K×6×3 poses, got shape {p.shape}")
+    parts = [
+        _solve_chunk(p[start : start + CHUNK_UNITS], limits, max_condition)
+        for start in range(0, max(len(p), 1), CHUNK_UNITS)
+    ]
+    if len(parts) == 1:
+        return parts[0]
+
+    def cat(field: str, owner: str = "") -> FloatArray:
+        return np.concatenate(
+            [getattr(getattr(part, owner) if owner else part, field) for part in parts]
+        )
+
+    return PaperBatch(
+        offset=cat("offset"),
+        sensitivity=cat("sensitivity"),
+        k=cat("k"),
+        condition=cat("condition"),
+        outcome=cat("outcome").astype(np.int64),
+        screen=Screen(
+            finding=cat("finding", "screen").astype(np.int64),
+            pose=cat("pose", "screen").astype(np.int64),
+            other=cat("other", "screen").astype(np.int64),
+            min_angle_deg=cat("min_angle_deg", "screen"),
+            coverage=cat("coverage", "screen"),
+        ),
+    )
+
+
+def _solve_chunk(p: FloatArray, limits: GeometryLimits, max_condition: float) -> PaperBatch:
+    """:func:`solve_paper_batch` on one chunk of units, small enough to stay in cache."""
     screened = screen(p, limits)
     outcome = np.where(screened.finding == Finding.OK, Outcome.OK, Outcome.SCREENED_OUT)
 

@@ -144,3 +144,18 @@ def test_refuses_ill_conditioned_poses() -> None:
     poses = pose_means(unit, d, 0.0, rng)
     with pytest.raises(IllConditionedError, match="ill-conditioned"):
         solve_paper(poses, limits=GeometryLimits(min_coverage=0.0))
+
+
+def test_chunked_batch_equals_one_chunk(monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(9)
+    poses = np.stack(
+        [pose_means(random_unit(rng), six_directions(rng, 6.0), 0.1, rng) for _ in range(10)]
+    )
+    poses[4, 0, 0] = np.nan
+    whole = solve_paper_batch(poses)
+    monkeypatch.setattr("station.calibration.paper.CHUNK_UNITS", 3)
+    chunked = solve_paper_batch(poses)
+    for field in ("offset", "sensitivity", "k", "condition", "outcome"):
+        np.testing.assert_array_equal(getattr(chunked, field), getattr(whole, field))
+    np.testing.assert_array_equal(chunked.screen.finding, whole.screen.finding)
+    np.testing.assert_array_equal(chunked.screen.coverage, whole.screen.coverage)
