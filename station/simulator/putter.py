@@ -206,21 +206,33 @@ class VirtualPutter:
         return self._motion.target
 
     def move_to(
-        self, target: str | Pose | Rotation, duration_s: float = 1.5, *, wait: bool = False
+        self,
+        target: str | Pose | Rotation,
+        duration_s: float = 1.5,
+        *,
+        wait: bool = False,
+        at_s: float | None = None,
     ) -> None:
         """Have the operator move the unit to ``target`` over ``duration_s`` simulated seconds.
 
-        With ``wait``, return once the unit has settled (tremor below 1 %).
+        The move starts now, or at simulated time ``at_s`` (for :meth:`trace`). With
+        ``wait``, return once the unit has settled (tremor below 1 %).
         """
         if isinstance(target, str):
             target = pose(target)
         rotation = target.rotation if isinstance(target, Pose) else target
         with self._lock:
             self._motion.never_settles = self.faults.never_settle
-            self._motion.move_to(rotation, self.clock.now(), duration_s)
+            start = self.clock.now() if at_s is None else at_s
+            self._motion.move_to(rotation, start, duration_s)
             settled = self._motion.settled_at()
         if wait:
             self.clock.sleep(settled - self.clock.now(), self._stop)
+
+    @property
+    def settled_at_s(self) -> float:
+        """Simulated time from which the last move's tremor is below 1 %."""
+        return self._motion.settled_at()
 
     def sleep(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass."""
@@ -320,20 +332,38 @@ class VirtualPutter:
         self._emitted += count
         link.send(self._frames(t))
 
-    def _frames(self, t: np.ndarray) -> bytes:
-        count = len(t)
+    def _sense(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Accelerometer counts, gyro and temperature fields (protocol counts) at ``t``."""
         kin = self._motion.evaluate(t)
         temperature = self.thermal.at(t)
         acc = accelerometer_counts(self._truth, kin.force_g, temperature, self._noise_rng)
         if self.faults.saturate_axis is not None:
             acc[:, AXES.index(self.faults.saturate_axis)] = ADC_MAX
         gyro = gyro_rates(self._truth, kin.rate_dps, kin.force_g, self._noise_rng)
+        return acc, _int16(gyro, GYRO_DPS_PER_LSB), _int16(temperature, TEMP_C_PER_LSB)
+
+    def trace(self, start_s: float, count: int) -> np.ndarray:
+        """``count`` raw samples from simulated time ``start_s``, without the wire.
+
+        Rows are as :meth:`station.device.PutterDriver.drain` returns them (sequence
+        number counting from 0, counts, deg/s, °C), quantised as on the wire: for
+        testing what consumes samples at full speed.
+        """
+        t = start_s + np.arange(count) / self._rate_hz
+        acc, gyro, temperature = self._sense(t)
+        return np.column_stack(
+            (np.arange(count), acc, gyro * GYRO_DPS_PER_LSB, temperature * TEMP_C_PER_LSB)
+        )
+
+    def _frames(self, t: np.ndarray) -> bytes:
+        count = len(t)
+        acc, gyro, temperature = self._sense(t)
         calibrated = self._mode == StreamMode.CALIBRATED
         rec = np.empty(count, dtype=CAL_SAMPLE_DTYPE if calibrated else SAMPLE_DTYPE)
         rec["seq"] = (self._seq + np.arange(count)) & 0xFFFF
         rec["acc"] = self._calibration.apply(acc) if calibrated else acc
-        rec["gyro"] = _int16(gyro, GYRO_DPS_PER_LSB)
-        rec["temp"] = _int16(temperature, TEMP_C_PER_LSB)
+        rec["gyro"] = gyro
+        rec["temp"] = temperature
         self._seq += count
         self._stream_samples += count
         kind = FrameType.CAL_SAMPLE if calibrated else FrameType.SAMPLE
