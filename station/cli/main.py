@@ -9,7 +9,9 @@ import typer
 
 from station import __version__
 from station.cli import solve
+from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
+from station.cli.serve import serve
 from station.errors import CalstationError
 
 EXIT_USER_ERROR = 2
@@ -33,6 +35,11 @@ def _root() -> None:
 def version() -> None:
     """Print the software version."""
     out.print(__version__)
+
+
+app.command()(serve)
+app.add_typer(db_app, name="db")
+app.add_typer(keys_app, name="keys")
 
 
 def main() -> None:
