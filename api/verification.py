@@ -6,8 +6,8 @@ poses and refuses the run when they disagree beyond the tolerances below.
 """
 
 import numpy as np
-from station.calibration import CalibrationError, solve
 
+from station.calibration import CalibrationError, solve
 from station.errors import CalstationError
 from station.records import RunRecord
 

@@ -7,7 +7,13 @@ Public surface::
     DatabaseSettings                        CALSTATION_DATABASE_URL / CALSTATION_DATA_DIR
 """
 
-from db.engine import Database, make_engine, open_database
+from db.engine import (
+    Database,
+    DatabaseUnavailableError,
+    make_engine,
+    open_database,
+    upgrade_database,
+)
 from db.migrate import SchemaOutOfDateError
 from db.repository import RunConflictError, RunPage, RunQuery, RunRepository, SubmitOutcome
 from db.settings import DatabaseSettings
@@ -15,6 +21,7 @@ from db.settings import DatabaseSettings
 __all__ = [
     "Database",
     "DatabaseSettings",
+    "DatabaseUnavailableError",
     "RunConflictError",
     "RunPage",
     "RunQuery",
@@ -23,4 +30,5 @@ __all__ = [
     "SubmitOutcome",
     "make_engine",
     "open_database",
+    "upgrade_database",
 ]

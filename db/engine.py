@@ -3,11 +3,13 @@
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import Connection, Engine, create_engine, event, make_url
+from sqlalchemy import URL, Connection, Engine, create_engine, event, make_url
+from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
 from db import migrate
 from db.settings import DatabaseSettings
+from station.errors import CalstationError
 
 
 def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:
@@ -35,8 +37,18 @@ def make_engine(url: str, **kwargs: Any) -> Engine:
         event.listen(engine, "connect", _sqlite_connect)
         event.listen(engine, "begin", _sqlite_begin)
         return engine
-    kwargs.setdefault("pool_pre_ping", True)
     return create_engine(parsed, **kwargs)
+
+
+class DatabaseUnavailableError(CalstationError):
+    """The database does not answer (wrong URL, server down, no permission)."""
+
+    @classmethod
+    def of(cls, url: str | URL, exc: OperationalError) -> "DatabaseUnavailableError":
+        """One line naming the database (password hidden) and the driver's first line."""
+        shown = make_url(url).render_as_string(hide_password=True)
+        reason = str(exc.orig or exc).strip().splitlines()[0]
+        return cls(f"database {shown} unavailable: {reason}")
 
 
 class Database:
@@ -75,7 +87,21 @@ def open_database(url: str | None = None, *, auto_migrate: bool | None = None) -
             migrate.upgrade(engine)
         else:
             migrate.require_current(engine)
+    except OperationalError as exc:
+        database.dispose()
+        raise DatabaseUnavailableError.of(engine.url, exc) from None
     except BaseException:
         database.dispose()
         raise
     return database
+
+
+def upgrade_database(url: str | None = None) -> str:
+    """Migrate the database at ``url`` to the packaged head; return the revision reached."""
+    database = open_database(url, auto_migrate=True)
+    try:
+        revision = migrate.current_revision(database.engine)
+    finally:
+        database.dispose()
+    assert revision is not None
+    return revision

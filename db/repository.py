@@ -21,10 +21,15 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
+from db.base import Base
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import Pose, Run, RunFailure, StationKey
 from station.errors import CalstationError, InputError
 from station.records import RunRecord, RunSummary, StoredRun, Verdict
+
+# Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
+_POSES = Base.metadata.tables[Pose.__tablename__]
+_FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 #: Largest page of a run list.
 MAX_PAGE = 500
@@ -127,10 +132,11 @@ class RunRepository:
             stored = self.get(record.run_id)
             assert stored is not None
             return SubmitOutcome(created=False, run=stored)
-        self.session.execute(insert(Pose), [pose_row(pk, pose) for pose in record.poses])
+        self.session.execute(insert(_POSES), [pose_row(pk, pose) for pose in record.poses])
         if record.failures:
-            self.session.execute(insert(RunFailure), failure_rows(pk, record))
-        stored = StoredRun.model_validate({**record.model_dump(), "received_at": received_at})
+            self.session.execute(insert(_FAILURES), failure_rows(pk, record))
+        # Already validated: build the answer without validating it again.
+        stored = StoredRun.model_construct(**dict(record), received_at=received_at)
         return SubmitOutcome(created=True, run=stored)
 
     def _insert_new_run(self, row: dict[str, Any]) -> ReturningInsert[int]:

@@ -17,7 +17,14 @@ from typing import Protocol, Self
 import httpx
 from sqlalchemy.exc import OperationalError
 
-from db import Database, RunConflictError, RunRepository, SubmitOutcome, open_database
+from db import (
+    Database,
+    DatabaseUnavailableError,
+    RunConflictError,
+    RunRepository,
+    SubmitOutcome,
+    open_database,
+)
 from station.errors import CalstationError
 from station.records import RunRecord, StoredRun
 
@@ -81,7 +88,10 @@ class DatabaseStore(_Closing):
     """Store runs straight into the results database (default: the embedded SQLite file)."""
 
     def __init__(self, url: str | None = None, *, database: Database | None = None) -> None:
-        self.database = database or open_database(url)
+        try:
+            self.database = database or open_database(url)
+        except DatabaseUnavailableError as exc:
+            raise StoreUnavailableError(str(exc)) from None
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         try:
@@ -90,7 +100,8 @@ class DatabaseStore(_Closing):
         except RunConflictError as exc:
             raise SubmissionRefusedError(str(exc)) from None
         except OperationalError as exc:
-            raise StoreUnavailableError(f"results database unavailable: {exc.orig}") from None
+            url = self.database.engine.url
+            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
 
     def close(self) -> None:
         self.database.dispose()

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-pytest_plugins = ["tests.databases"]
+pytest_plugins = ["tests.databases", "tests.servers"]
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 

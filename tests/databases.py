@@ -44,7 +44,9 @@ def postgresql_url() -> Iterator[str]:
     admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
     with admin.connect() as connection:
         connection.execute(text(f'CREATE SCHEMA "{schema}"'))
-    url = make_url(server_url).update_query_dict({"options": f"-csearch_path={schema}"})
+    url = make_url(server_url).update_query_dict(
+        {"options": f"-csearch_path={schema} -csynchronous_commit=off"}
+    )
     try:
         yield url.render_as_string(hide_password=False)
     finally:

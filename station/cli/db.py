@@ -5,13 +5,10 @@ from typing import Annotated
 import typer
 from pydantic import TypeAdapter, ValidationError
 from sqlalchemy import make_url
-from sqlalchemy.exc import OperationalError
 
-from db import DatabaseSettings, make_engine, open_database
-from db.migrate import current_revision, upgrade
+from db import DatabaseSettings, open_database, upgrade_database
 from db.repository import RunRepository
 from station.cli.output import err, out
-from station.errors import CalstationError
 from station.records import Identifier
 
 db_app = typer.Typer(help="The results database: schema migrations.", no_args_is_help=True)
@@ -27,10 +24,6 @@ DatabaseUrlOption = Annotated[
 ]
 
 
-def _url(database_url: str | None) -> str:
-    return database_url or DatabaseSettings().url()
-
-
 def _shown(url: str) -> str:
     return make_url(url).render_as_string(hide_password=True)
 
@@ -38,15 +31,8 @@ def _shown(url: str) -> str:
 @db_app.command("upgrade")
 def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     """Migrate the database to the current schema (creating it if it is empty)."""
-    url = _url(database_url)
-    engine = make_engine(url)
-    try:
-        upgrade(engine)
-        revision = current_revision(engine)
-    except OperationalError as exc:
-        raise CalstationError(f"database {_shown(url)} unavailable: {exc.orig}") from None
-    finally:
-        engine.dispose()
+    url = database_url or DatabaseSettings().url()
+    revision = upgrade_database(url)
     out.print(f"database {_shown(url)} at schema revision {revision}")
 
 
@@ -67,11 +53,7 @@ def keys_create(
     database_url: DatabaseUrlOption = None,
 ) -> None:
     """Create an API key for a station and print it (only its hash is stored)."""
-    url = _url(database_url)
-    try:
-        database = open_database(url)
-    except OperationalError as exc:
-        raise CalstationError(f"database {_shown(url)} unavailable: {exc.orig}") from None
+    database = open_database(database_url)
     try:
         with database.session() as session, session.begin():
             key = RunRepository(session).create_key(station)

@@ -8,6 +8,7 @@ its traceback.
 import typer
 
 from station import __version__
+from station.cli import solve
 from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
 from station.cli.report import report
@@ -23,6 +24,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+app.command(name="solve")(solve.solve_command)
 
 
 @app.callback()

@@ -5,11 +5,9 @@ from typing import Annotated
 
 import typer
 import uvicorn
-from sqlalchemy.exc import OperationalError
 
 from api.settings import ApiSettings
 from db import open_database
-from station.errors import CalstationError
 
 
 def serve(
@@ -28,13 +26,9 @@ def serve(
     """Serve the results API (OpenAPI at /docs)."""
     if database_url:
         os.environ["CALSTATION_DATABASE_URL"] = database_url
-    url = ApiSettings().url()
     # Migrate the embedded database (or check a server's schema) once, before the
     # workers start, so they never race on it and a bad URL fails here in one line.
-    try:
-        open_database(url).dispose()
-    except OperationalError as exc:
-        raise CalstationError(f"results database unavailable: {exc.orig}") from None
+    open_database(ApiSettings().url()).dispose()
     uvicorn.run(
         "api.main:create_app",
         factory=True,

@@ -1,4 +1,4 @@
-"""The API on each backend: in-process (``client``) and as a real uvicorn server (``live``)."""
+"""Server fixtures (a pytest plugin loaded by tests/conftest.py): the API as a real process."""
 
 import os
 import socket
@@ -33,7 +33,7 @@ def free_port() -> int:
 
 
 @contextmanager
-def serving(database_url: str, *, workers: int = 2, **settings: str) -> Iterator[str]:
+def serving(database_url: str, *, workers: int = 1, **settings: str) -> Iterator[str]:
     """Run ``calstation serve`` as a real process on a free port; yield its base URL.
 
     ``settings`` become ``CALSTATION_<NAME>`` variables of the server process.
@@ -88,7 +88,7 @@ def live_url(migrated_database: Database, database_url: str) -> Iterator[str]:
 @pytest.fixture(scope="session")
 def keyed_url(migrated_database: Database, database_url: str) -> Iterator[str]:
     """A server whose read endpoints need a station key too."""
-    with serving(database_url, workers=1, read_requires_key="true") as base:
+    with serving(database_url, read_requires_key="true") as base:
         yield base
 
 

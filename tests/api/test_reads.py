@@ -1,0 +1,158 @@
+"""Read endpoints: a unit's state and history, run lists with cursors, single runs, health."""
+
+from datetime import timedelta
+
+import httpx
+import pytest
+
+from db import Database, RunRepository
+from station.records import RunRecord
+from tests.db.records import T0, make_record
+
+
+def _store(database: Database, *records: RunRecord) -> None:
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for record in records:
+            repository.submit(record)
+
+
+def test_health_answers_when_the_database_does(client: httpx.Client) -> None:
+    answer = client.get("/healthz")
+    assert answer.status_code == 200
+    assert answer.json()["status"] == "ok"
+
+
+def test_a_unit_shows_its_latest_run(client: httpx.Client, database: Database) -> None:
+    first = make_record(verdict="fail", started_at=T0)
+    retest = make_record(offset=(2050.0, 2040.0, 2030.0), started_at=T0 + timedelta(hours=1))
+    _store(database, retest, first)
+    unit = client.get(f"/api/v1/units/{first.serial}").json()
+    assert unit["serial"] == first.serial
+    assert (unit["verdict"], unit["run_id"]) == ("pass", str(retest.run_id))
+    assert unit["offset"] == {"x": 2050.0, "y": 2040.0, "z": 2030.0}
+    assert unit["sensitivity"] == {"x": 813.95, "y": 815.66, "z": 820.17}
+    assert unit["matrix"][0][0] == pytest.approx(1 / 813.95)
+    assert unit["calibrated_at"] == "2026-11-02T09:01:35Z"
+    assert unit["station_id"] == retest.station_id
+    assert unit["failures"] == []
+    history = client.get(f"/api/v1/units/{first.serial}/runs").json()
+    assert [r["run_id"] for r in history["data"]] == [str(first.run_id), str(retest.run_id)]
+    assert history["data"][0]["failures"][0]["code"] == "sensitivity_out_of_range"
+
+
+def test_a_failing_unit_shows_its_failure_reasons(client: httpx.Client, database: Database) -> None:
+    record = make_record(verdict="fail")
+    _store(database, record)
+    unit = client.get(f"/api/v1/units/{record.serial}").json()
+    assert unit["verdict"] == "fail"
+    assert unit["failures"] == [
+        {
+            "code": "sensitivity_out_of_range",
+            "message": "sensitivity z 820.17 counts/g above 819.0",
+            "measured": 820.17,
+            "lower": pytest.approx(778.24),
+            "upper": 819.0,
+            "axis": "z",
+            "pose": None,
+        }
+    ]
+
+
+@pytest.mark.parametrize("path", ["/api/v1/units/PT-404", "/api/v1/units/PT-404/runs"])
+def test_an_unknown_serial_is_a_404_naming_it(client: httpx.Client, path: str) -> None:
+    answer = client.get(path)
+    assert answer.status_code == 404
+    assert answer.json() == {"detail": "no calibration run of serial PT-404"}
+
+
+@pytest.mark.parametrize(
+    ("path", "status"),
+    [
+        ("/api/v1/units/bad%20serial", 422),
+        ("/api/v1/runs/not-a-uuid", 422),
+        ("/api/v1/runs?verdict=maybe", 422),
+        ("/api/v1/runs?since=2026-11-02T08:00:00", 422),
+        ("/api/v1/runs?limit=0", 422),
+        ("/api/v1/runs?limit=100000", 422),
+        ("/api/v1/runs?cursor=garbage", 400),
+        ("/api/v1/runs/6f1b0c8e-8a52-4f4a-9d43-0c8f6f1e1a11", 404),
+        ("/api/v1/nowhere", 404),
+    ],
+)
+def test_bad_reads_are_4xx_with_a_clear_detail(
+    client: httpx.Client, path: str, status: int
+) -> None:
+    answer = client.get(path)
+    assert answer.status_code == status
+    assert answer.json()["detail"]
+
+
+def test_run_lists_filter_and_page_with_a_cursor(client: httpx.Client, database: Database) -> None:
+    records = [
+        make_record(
+            serial=f"PT-{i % 3:06d}",
+            verdict="fail" if i % 4 == 0 else "pass",
+            started_at=T0 + timedelta(minutes=i),
+        )
+        for i in range(12)
+    ]
+    _store(database, *records)
+    seen: list[str] = []
+    params: dict[str, str | int] = {"verdict": "pass", "limit": 2}
+    while True:
+        page = client.get("/api/v1/runs", params=params).json()
+        assert page["count"] == len(page["data"])
+        seen += [run["run_id"] for run in page["data"]]
+        if page["next_cursor"] is None:
+            break
+        params["cursor"] = page["next_cursor"]
+    passing = sorted(records, key=lambda r: r.started_at, reverse=True)
+    assert seen == [str(r.run_id) for r in passing if r.verdict == "pass"]
+    window = client.get(
+        "/api/v1/runs",
+        params={
+            "serial": "PT-000001",
+            "since": (T0 + timedelta(minutes=2)).isoformat(),
+            "until": (T0 + timedelta(minutes=8)).isoformat(),
+        },
+    ).json()
+    assert [run["started_at"] for run in window["data"]] == [
+        "2026-11-02T08:07:00Z",
+        "2026-11-02T08:04:00Z",
+    ]
+
+
+def test_one_run_comes_with_every_pose(client: httpx.Client, database: Database) -> None:
+    record = make_record()
+    _store(database, record)
+    run = client.get(f"/api/v1/runs/{record.run_id}").json()
+    assert len(run["poses"]) == len(record.poses)
+    assert run["poses"][0]["replaced"][0]["reason"] == "moved during capture"
+    assert RunRecord.model_validate({k: v for k, v in run.items() if k != "received_at"}) == record
+
+
+def test_reads_can_require_a_station_key(
+    keyed_url: str, database: Database, station_key: str
+) -> None:
+    record = make_record()
+    _store(database, record)
+    with httpx.Client(base_url=keyed_url) as client:
+        path = f"/api/v1/units/{record.serial}"
+        assert client.get(path).status_code == 401
+        assert client.get(path, headers={"Authorization": "Bearer csk_wrong"}).status_code == 401
+        answer = client.get(path, headers={"Authorization": f"Bearer {station_key}"})
+        assert answer.status_code == 200
+        assert client.get("/healthz").status_code == 200
+
+
+def test_the_openapi_document_lists_every_route(client: httpx.Client) -> None:
+    paths = client.get("/openapi.json").json()["paths"]
+    assert {
+        "/healthz",
+        "/api/v1/units/{serial}",
+        "/api/v1/units/{serial}/runs",
+        "/api/v1/runs",
+        "/api/v1/runs/{run_id}",
+    } <= set(paths)
+    assert client.get("/docs").status_code == 200

@@ -1,0 +1,68 @@
+"""``calstation db upgrade`` and ``calstation keys create`` as real processes."""
+
+import os
+from pathlib import Path
+
+from sqlalchemy import select
+
+from db import Database, RunRepository
+from db.models import StationKey
+from tests.conftest import CliRunner
+
+UNREACHABLE = "postgresql+psycopg://nobody@127.0.0.1:1/none?connect_timeout=2"
+
+
+def _env(**variables: str) -> dict[str, str]:
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")}
+    return {**clean, **variables}
+
+
+def test_db_upgrade_creates_the_embedded_database_in_the_data_dir(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    result = run_cli("db", "upgrade", env=_env(CALSTATION_DATA_DIR=str(tmp_path / "data")))
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "data" / "calstation.sqlite3").is_file()
+    assert "at schema revision 0001" in result.stdout
+
+
+def test_db_upgrade_is_idempotent_on_a_migrated_database(
+    run_cli: CliRunner, migrated_database: Database, database_url: str
+) -> None:
+    result = run_cli("db", "upgrade", "--database-url", database_url, env=_env())
+    assert result.returncode == 0, result.stderr
+    assert "at schema revision 0001" in result.stdout
+
+
+def test_an_unreachable_database_is_one_line_and_exit_2(run_cli: CliRunner) -> None:
+    for command in (("db", "upgrade"), ("keys", "create", "--station", "st1"), ("serve",)):
+        result = run_cli(*command, "--database-url", UNREACHABLE, env=_env())
+        assert result.returncode == 2, (command, result.stderr)
+        assert result.stderr.startswith("calstation: error: ")
+        assert "unavailable" in result.stderr
+        assert "Traceback" not in result.stderr
+        assert "nobody@127.0.0.1" in result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_keys_create_prints_a_key_stored_only_as_its_hash(
+    run_cli: CliRunner, database: Database, database_url: str
+) -> None:
+    result = run_cli(
+        "keys", "create", "--station", "line3-st2", "--database-url", database_url, env=_env()
+    )
+    assert result.returncode == 0, result.stderr
+    key = result.stdout.strip()
+    assert key.startswith("csk_")
+    assert "line3-st2" in result.stderr
+    with database.session() as session:
+        assert RunRepository(session).station_for_key(key) == "line3-st2"
+        assert key not in session.scalars(select(StationKey.key_sha256)).one()
+
+
+def test_keys_create_refuses_a_bad_station_id(run_cli: CliRunner, tmp_path: Path) -> None:
+    result = run_cli(
+        "keys", "create", "--station", "line 3", env=_env(CALSTATION_DATA_DIR=str(tmp_path))
+    )
+    assert result.returncode == 2
+    assert "--station" in result.stderr

@@ -1,0 +1,95 @@
+"""docker-compose.yml: the shape the plant deploys (no Docker engine here, so read it)."""
+
+import re
+import shlex
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from api.settings import ApiSettings
+from station.cli.main import app
+from tests.conftest import REPO_ROOT
+
+COMPOSE = REPO_ROOT / "docker-compose.yml"
+
+
+@pytest.fixture(scope="module")
+def services() -> dict[str, Any]:
+    document = yaml.safe_load(COMPOSE.read_text())
+    assert set(document["services"]) == {"db", "migrate", "api"}
+    assert "pgdata" in document["volumes"]
+    services: dict[str, Any] = document["services"]
+    return services
+
+
+def _command(service: dict[str, Any]) -> list[str]:
+    command = service["command"]
+    return command if isinstance(command, list) else shlex.split(command)
+
+
+def test_postgres_has_a_pg_isready_health_check_and_a_volume(services: dict[str, Any]) -> None:
+    db = services["db"]
+    assert db["image"].startswith("postgres:")
+    check = db["healthcheck"]
+    assert "pg_isready" in " ".join(check["test"])
+    assert {"interval", "timeout", "retries"} <= set(check)
+    assert any(v.endswith(":/var/lib/postgresql/data") for v in db["volumes"])
+
+
+def test_migrate_runs_once_after_the_database_is_healthy(services: dict[str, Any]) -> None:
+    migrate = services["migrate"]
+    assert _command(migrate) == ["calstation", "db", "upgrade"]
+    assert migrate["depends_on"]["db"]["condition"] == "service_healthy"
+    assert migrate["restart"] == "no"
+
+
+def test_the_api_waits_for_a_healthy_database_and_a_finished_migration(
+    services: dict[str, Any],
+) -> None:
+    api = services["api"]
+    assert api["depends_on"] == {
+        "db": {"condition": "service_healthy"},
+        "migrate": {"condition": "service_completed_successfully"},
+    }
+    command = _command(api)
+    assert command[:2] == ["calstation", "serve"]
+    assert int(command[command.index("--workers") + 1]) > 1
+    assert command[command.index("--host") + 1] == "0.0.0.0"
+    assert "/healthz" in " ".join(api["healthcheck"]["test"])
+
+
+def test_the_serve_command_takes_the_options_compose_gives(services: dict[str, Any]) -> None:
+    serve = next(
+        c for c in app.registered_commands if c.callback and c.callback.__name__ == "serve"
+    )
+    assert serve.callback is not None
+    options = {f"--{name.replace('_', '-')}" for name in serve.callback.__annotations__}
+    given = {arg for arg in _command(services["api"]) if arg.startswith("--")}
+    assert given <= options
+
+
+def test_every_calstation_variable_is_a_real_setting_and_urls_match_the_database(
+    services: dict[str, Any],
+) -> None:
+    db_env = services["db"]["environment"]
+    known = {f"CALSTATION_{name.upper()}" for name in ApiSettings.model_fields}
+    for name in ("migrate", "api"):
+        env = services[name]["environment"]
+        assert set(env) <= known, set(env) - known
+        url = env["CALSTATION_DATABASE_URL"]
+        match = re.fullmatch(r"postgresql\+psycopg://(\w+):(.+)@db:5432/(\w+)", url)
+        assert match is not None, url
+        assert match[1] == db_env["POSTGRES_USER"]
+        assert match[2] == db_env["POSTGRES_PASSWORD"]
+        assert match[3] == db_env["POSTGRES_DB"]
+
+
+def test_both_app_services_build_the_image_of_the_dockerfile(services: dict[str, Any]) -> None:
+    dockerfile = (REPO_ROOT / "Dockerfile").read_text()
+    for name in ("migrate", "api"):
+        assert services[name]["build"] == "."
+    for package in ("station", "api", "db"):
+        assert f"COPY {package} ./{package}" in dockerfile
+    assert Path(REPO_ROOT / ".dockerignore").is_file()
