@@ -10,7 +10,7 @@ applies the capability formulas of :mod:`station.report.capability`.
 """
 
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from datetime import UTC, datetime
 from typing import Any
 
@@ -35,8 +35,16 @@ from sqlalchemy import (
 from sqlalchemy.orm import Session
 
 from db.models import Pose, Run, RunFailure
+from station.limits import LimitsProfile, load_profiles
 from station.records import LimitsRef
-from station.report.bounds import COEFFICIENTS, PARAMETERS, Bounds, ParameterSpec, default_bounds
+from station.report.bounds import (
+    COEFFICIENTS,
+    PARAMETERS,
+    Bounds,
+    ParameterSpec,
+    choose_profile,
+    profile_bounds,
+)
 from station.report.capability import (
     cp,
     cpk,
@@ -63,8 +71,6 @@ from station.report.model import (
 NO_LIMIT = 1e300
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
-#: How the report says where its capability limits come from.
-BOUNDS_SOURCE = "datasheet defaults (KXM52-1050, ADS7829)"
 
 
 class ReportQueries:
@@ -480,18 +486,21 @@ def eol_report(
     session: Session,
     filter: ReportFilter,
     *,
-    bounds: Bounds | None = None,
+    profiles: Mapping[str, LimitsProfile] | None = None,
     unit_limit: int | None = None,
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
-    ``bounds`` (default :func:`station.report.bounds.default_bounds`) are the limits of
-    the capability indices; ``unit_limit`` cuts the unit list to the latest units.
+    Capability is measured against the profile of ``profiles`` (default: the shipped
+    limits file) that :func:`station.report.bounds.choose_profile` picks for the runs in
+    range; ``unit_limit`` cuts the unit list to the latest units.
     """
-    bounds = bounds or default_bounds()
     queries = ReportQueries(session, filter)
+    used = queries.limits_profiles()
+    profile, bounds_source = choose_profile(used, profiles or load_profiles())
+    bounds = profile_bounds(profile)
     overall = queries.summaries(by_station=False)[0]
     hours = _hours(filter, overall)
     poses = queries.pose_counts()
@@ -515,8 +524,8 @@ def eol_report(
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
-        bounds_source=BOUNDS_SOURCE,
-        limits_profiles=queries.limits_profiles(),
+        bounds_source=bounds_source,
+        limits_profiles=used,
         summary=_summary(overall, sum(poses.values()), hours),
         stations=[
             StationSummary(

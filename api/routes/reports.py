@@ -13,8 +13,9 @@ from fastapi.responses import HTMLResponse, Response
 from api.deps import RepositoryDep, require_reader
 from api.schemas import Problem
 from db.reports import eol_report
+from station.limits import load_profiles
 from station.records import SERIAL_PATTERN
-from station.report.bounds import default_bounds
+from station.report.bounds import choose_profile
 from station.report.html import certificate_page, dashboard_page
 from station.report.model import ReportFilter
 from station.report.period import parse_moment, start_of_day
@@ -74,7 +75,8 @@ def get_certificate(
     run = repository.get(latest.run_id) if latest is not None else None
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
-    return HTMLResponse(certificate_page(run, default_bounds(), datetime.now(UTC)))
+    profile, _ = choose_profile([run.limits], load_profiles())
+    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC)))
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

@@ -4,13 +4,14 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from sqlalchemy import make_url
 from sqlalchemy.exc import OperationalError
 
-from db import DatabaseSettings, open_database
+from db import DatabaseSettings, DatabaseUnavailableError, open_database
 from db.reports import eol_report
+from station.cli.db import DatabaseUrlOption
 from station.cli.output import err, out
 from station.errors import CalstationError
+from station.limits import load_profiles
 from station.report.model import ReportFilter
 from station.report.period import parse_moment
 from station.report.render import FORMATS, render
@@ -30,18 +31,19 @@ def report(
     units: Annotated[
         int | None, typer.Option(min=1, help="List only the latest N units.", show_default=False)
     ] = None,
+    limits: Annotated[
+        Path | None,
+        typer.Option(
+            "--limits",
+            help="Limits profiles file (TOML) for Cp/Cpk (default: the shipped profiles).",
+            show_default=False,
+        ),
+    ] = None,
     output: Annotated[
         Path | None,
         typer.Option("--out", help="Write to this file instead of standard output."),
     ] = None,
-    database_url: Annotated[
-        str | None,
-        typer.Option(
-            "--database-url",
-            help="SQLAlchemy URL (default: CALSTATION_DATABASE_URL, else the embedded SQLite).",
-            show_default=False,
-        ),
-    ] = None,
+    database_url: DatabaseUrlOption = None,
 ) -> None:
     """End-of-line report: yields, failure Pareto, capability, control charts, ship/hold."""
     if format not in FORMATS:
@@ -52,17 +54,17 @@ def report(
         station_id=station,
         operator_id=operator,
     )
+    profiles = load_profiles(limits)
     url = database_url or DatabaseSettings().url()
+    database = open_database(url)
     try:
-        database = open_database(url)
-        try:
-            with database.session() as session:
-                text = render(eol_report(session, report_filter, unit_limit=units), format)
-        finally:
-            database.dispose()
+        with database.session() as session:
+            report_ = eol_report(session, report_filter, profiles=profiles, unit_limit=units)
     except OperationalError as exc:
-        shown = make_url(url).render_as_string(hide_password=True)
-        raise CalstationError(f"database {shown} unavailable: {exc.orig}") from None
+        raise DatabaseUnavailableError.of(url, exc) from None
+    finally:
+        database.dispose()
+    text = render(report_, format)
     if output is None:
         out.file.write(text)
         out.file.flush()

@@ -2,14 +2,16 @@
 
 Each parameter belongs to a limits family (``offset``, ``sensitivity``,
 ``verification_error``, ``pose_noise``, ``gyro_bias``: the check codes of a limits
-profile). :func:`default_bounds` is the one place bounds enter the report: the
-datasheet figures of the KXM52-1050 behind the ADS7829 (brief, Table 1).
+profile, :data:`station.limits.CHECKS`). :func:`profile_bounds` is the one place bounds
+enter the report: from a limits profile (:mod:`station.limits`).
 """
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.limits import CHECKS, DEFAULT_PROFILE, LimitsProfile, load_profile
+from station.records import LimitsRef
 
 #: ``(lower, upper)``; ``None`` for an unbounded side.
 Bound = tuple[float | None, float | None]
@@ -17,27 +19,42 @@ Bound = tuple[float | None, float | None]
 #: Limits family → bounds.
 Bounds = dict[str, Bound]
 
-#: 0 g offset spread over −40…125 °C: ±167 mV = ±207 counts.
-OFFSET_SPREAD_COUNTS = 207.0
-#: Sensitivity tolerance over −40…125 °C.
-SENSITIVITY_TOLERANCE = 0.05
+#: The limits families the report measures capability against.
+FAMILIES = ("offset", "sensitivity", "verification_error", "pose_noise", "gyro_bias")
+
+
+def profile_bounds(profile: LimitsProfile) -> Bounds:
+    """The bounds of ``profile`` per limits family (counts, counts/g, mg, counts, deg/s)."""
+    bounds = {family: getattr(profile, CHECKS[family]) for family in FAMILIES}
+    return {family: (b.lower, b.upper) for family, b in bounds.items()}
 
 
 def default_bounds() -> Bounds:
-    """The datasheet bounds per limits family (counts, counts/g, mg, counts, deg/s)."""
-    return {
-        "offset": (
-            NOMINAL_OFFSET_COUNTS - OFFSET_SPREAD_COUNTS,
-            NOMINAL_OFFSET_COUNTS + OFFSET_SPREAD_COUNTS,
-        ),
-        "sensitivity": (
-            NOMINAL_SENSITIVITY_COUNTS_PER_G * (1 - SENSITIVITY_TOLERANCE),
-            NOMINAL_SENSITIVITY_COUNTS_PER_G * (1 + SENSITIVITY_TOLERANCE),
-        ),
-        "verification_error": (None, 30.0),
-        "pose_noise": (None, 8.0),
-        "gyro_bias": (-10.0, 10.0),
-    }
+    """The bounds of the shipped default profile (datasheet figures of the KXM52-1050)."""
+    return profile_bounds(load_profile())
+
+
+def choose_profile(
+    used: Sequence[LimitsRef], known: Mapping[str, LimitsProfile]
+) -> tuple[LimitsProfile, str]:
+    """The profile capability is measured against, and a line saying why that one.
+
+    The profile every run in range was judged by when it is in ``known`` with the same
+    hash; otherwise the default profile (or the first one known).
+    """
+    if len(used) == 1:
+        ref = used[0]
+        profile = known.get(ref.name)
+        if profile is not None and profile.sha256 == ref.sha256:
+            return profile, f"limits profile {ref.name} v{ref.version}, as every run in range"
+    default = known.get(DEFAULT_PROFILE) or next(iter(known.values()))
+    if not used:
+        why = "no run in range"
+    elif len(used) > 1:
+        why = f"the runs in range were judged by {len(used)} profiles"
+    else:
+        why = f"the runs' profile {used[0].name} v{used[0].version} is not in the limits file"
+    return default, f"limits profile {default.name} v{default.version} ({why})"
 
 
 @dataclass(frozen=True)

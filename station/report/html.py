@@ -10,9 +10,10 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
+from station.limits import LimitsProfile
 from station.records import StoredRun
 from station.report import formatting, svg
-from station.report.bounds import Bounds
+from station.report.bounds import profile_bounds
 from station.report.model import EolReport
 from station.report.tables import PARAMETER_HEADER, SUMMARY_HEADER, parameter_cells, summary_cells
 
@@ -56,6 +57,16 @@ def dashboard_page(report: EolReport, *, refresh_s: int = DASHBOARD_REFRESH_S) -
     return _env.get_template("dashboard.html").render(report=report, refresh_s=refresh_s)
 
 
-def certificate_page(run: StoredRun, bounds: Bounds, issued_at: datetime) -> str:
-    """The calibration certificate of the unit whose latest run is ``run``."""
-    return _env.get_template("certificate.html").render(run=run, bounds=bounds, issued_at=issued_at)
+def certificate_page(run: StoredRun, profile: LimitsProfile, issued_at: datetime) -> str:
+    """The calibration certificate of the unit whose latest run is ``run``.
+
+    ``profile`` is the limits profile shown next to the coefficients: the run's own
+    when it is known (same hash), else the default one, which the page says.
+    """
+    return _env.get_template("certificate.html").render(
+        run=run,
+        profile=profile,
+        bounds=profile_bounds(profile),
+        own_profile=profile.sha256 == run.limits.sha256,
+        issued_at=issued_at,
+    )

@@ -1,0 +1,84 @@
+"""``calstation report`` as a real process, on both backends."""
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from db import Database
+from tests.conftest import CliRunner
+from tests.db.eol_data import insert_line_history
+
+RANGE = ("--from", "2026-11-02T08:00Z", "--to", "2026-11-02T10:00Z")
+
+
+def _env(**variables: str) -> dict[str, str]:
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")}
+    return {**clean, **variables}
+
+
+@pytest.fixture
+def line(database: Database) -> None:
+    with database.session() as session:
+        insert_line_history(session)
+
+
+@pytest.mark.usefixtures("line")
+def test_text_report_reads_the_database_from_the_environment(
+    run_cli: CliRunner, database_url: str
+) -> None:
+    result = run_cli("report", *RANGE, env=_env(CALSTATION_DATABASE_URL=database_url))
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith("End-of-line report (from 2026-11-02 08:00:00 UTC")
+    all_row = next(line for line in lines if line.startswith("all "))
+    # units, passed, failed, runs, report yield, first-pass yield, final yield
+    assert all_row.split()[1:11] == ["5", "3", "2", "7", "42.9", "%", "40.0", "%", "60.0", "%"]
+    assert any(line.split()[:2] == ["U3", "hold"] for line in lines)
+
+
+@pytest.mark.usefixtures("line")
+def test_json_to_a_file_with_station_and_operator_filters(
+    run_cli: CliRunner, database_url: str, tmp_path: Path
+) -> None:
+    target = tmp_path / "eol.json"
+    result = run_cli(
+        "report",
+        *RANGE,
+        "--station",
+        "st1",
+        "--operator",
+        "op-a",
+        "--format",
+        "json",
+        "--out",
+        str(target),
+        "--database-url",
+        database_url,
+        env=_env(),
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+    report = json.loads(target.read_text())
+    # st1 by op-a: U1 pass; U2 fail then pass.
+    assert (report["summary"]["runs"], report["summary"]["first_pass_units"]) == (3, 1)
+    assert report["filter"]["operator_id"] == "op-a"
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (("--from", "yesterday"), "--from 'yesterday' is not an ISO date"),
+        (("--format", "xml"), "--format 'xml' is not one of text, csv, json, html"),
+        (("--limits", "/nonexistent/limits.toml"), "cannot read the limits file"),
+    ],
+)
+def test_bad_options_are_one_line_and_exit_2(
+    run_cli: CliRunner, tmp_path: Path, arguments: tuple[str, ...], message: str
+) -> None:
+    result = run_cli("report", *arguments, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
+    assert result.returncode == 2
+    assert result.stderr.startswith("calstation: error: ")
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
