@@ -138,8 +138,9 @@ def control_chart(chart: ControlChart) -> str:
         if mr_path:
             body.append(f'<polyline points="{mr_path}" fill="none" stroke="{BAR_COLOUR}"/>')
         for i, p in enumerate(points):
-            alarm = (chart.ucl is not None and p.value > chart.ucl) or (
-                chart.lcl is not None and p.value < chart.lcl
+            alarm = bool(chart.mr_bar) and (
+                (chart.ucl is not None and p.value > chart.ucl)
+                or (chart.lcl is not None and p.value < chart.lcl)
             )
             colour = ALARM_COLOUR if alarm else BAR_COLOUR
             body.append(
