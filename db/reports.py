@@ -19,18 +19,16 @@ from sqlalchemy import (
     Float,
     Integer,
     Row,
-    String,
-    Subquery,
     and_,
     case,
     cast,
     extract,
+    false,
     func,
-    literal,
+    or_,
     select,
-    true,
+    text,
     type_coerce,
-    union_all,
 )
 from sqlalchemy.orm import Session
 
@@ -39,6 +37,7 @@ from station.limits import LimitsProfile, load_profiles
 from station.records import LimitsRef
 from station.report.bounds import (
     COEFFICIENTS,
+    FAMILIES,
     PARAMETERS,
     Bounds,
     ParameterSpec,
@@ -67,8 +66,6 @@ from station.report.model import (
     UnitVerdict,
 )
 
-#: Stands for a missing limit inside SQL (no stored value comes near it).
-NO_LIMIT = 1e300
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
 
@@ -80,6 +77,10 @@ class ReportQueries:
         self.session = session
         self.filter = filter
         self.dialect = session.get_bind().dialect.name
+        if self.dialect == "postgresql":
+            # The report's statements are short scans with long expressions: compiling
+            # them (JIT) costs seconds and saves nothing.
+            session.execute(text("SET LOCAL jit = off"))
 
     # -- helpers -----------------------------------------------------------------------
 
@@ -188,73 +189,54 @@ class ReportQueries:
         run_column: ColumnElement[float] = getattr(Run, spec.column)
         return run_column
 
-    @staticmethod
-    def _parameter_table(specs: Sequence[ParameterSpec], bounds: Bounds) -> Subquery:
-        """One row per parameter: its name, summing shift, bins and limits (SQL literals)."""
-        rows = []
-        for spec in specs:
-            lower, upper = bounds[spec.family]
-            start, width, bins = histogram_bins(lower, upper)
-            zone_low, zone_high = marginal_zones(lower, upper)
-            low, high = tolerance(lower, upper)
-            numbers = {
-                "shift": (low + high) / 2,
-                "start": start,
-                "width": width,
-                "lower": -NO_LIMIT if lower is None else lower,
-                "upper": NO_LIMIT if upper is None else upper,
-                "zone_low": -NO_LIMIT if lower is None else zone_low,
-                "zone_high": NO_LIMIT if upper is None else zone_high,
-            }
-            rows.append(
-                select(
-                    cast(literal(spec.name), String).label("name"),
-                    cast(literal(bins), Integer).label("bins"),
-                    *(cast(literal(v), Float).label(k) for k, v in numbers.items()),
-                )
-            )
-        return union_all(*rows).subquery("p")
+    def family_bins(self, family: str, bounds: Bounds) -> list[Row[Any]]:
+        """The parameters of one limits family (up to three axes), in one scan.
 
-    def parameter_bins(self, source: str, bounds: Bounds) -> list[Row[Any]]:
-        """Per parameter of ``source`` and histogram bin: count, shifted sums, min, max,
-        values out of limits and marginal values.
-
-        The table is scanned once: each row is crossed with the parameter list and the
-        ``CASE`` picks that parameter's value (an unpivot that both dialects run).
+        Grouped by the histogram bin of every axis at once (bins ``b0, b1, …``), each
+        group holds per axis ``i``: count ``n{i}``, Σ(x − c) ``sum{i}``, Σ(x − c)²
+        ``squares{i}`` (c the centre of the tolerance), ``min{i}``, ``max{i}``, values out
+        of limits ``outside{i}`` and marginal values ``marginal{i}``. Sums, counts, minima
+        and maxima add up across groups, so the caller merges the groups (at most 30³,
+        in practice a few hundred) into each axis' statistics and histogram.
         """
-        specs = [spec for spec in PARAMETERS if spec.source == source]
-        p = self._parameter_table(specs, bounds)
-        value = case(*((p.c.name == spec.name, self._value(spec)) for spec in specs))
-        base = select(p, value.label("value"))
-        if source == "poses":
-            base = base.select_from(Pose).join(Run, Pose.run_pk == Run.id)
-        else:
-            base = base.select_from(Run)
-        v = base.join(p, true()).where(*self.conditions()).subquery("v")
-        top = v.c.bins - 1
-        bin_ = case(
-            (v.c.value < v.c.start, 0),
-            (v.c.value >= v.c.start + v.c.width * v.c.bins, top),
-            else_=cast(func.floor((v.c.value - v.c.start) / v.c.width), Integer),
-        )
-        deviation = v.c.value - v.c.shift
-        outside = (v.c.value < v.c.lower) | (v.c.value > v.c.upper)
-        marginal = and_(~outside, (v.c.value < v.c.zone_low) | (v.c.value > v.c.zone_high))
-        stmt = (
-            select(
-                v.c.name,
-                bin_.label("bin"),
-                func.count().label("n"),
-                func.sum(deviation).label("sum"),
-                func.sum(deviation * deviation).label("squares"),
-                func.min(v.c.value).label("min"),
-                func.max(v.c.value).label("max"),
-                func.sum(case((outside, 1), else_=0)).label("outside"),
-                func.sum(case((marginal, 1), else_=0)).label("marginal"),
+        specs = _of_family(family)
+        lower, upper = bounds[family]
+        start, width, bins = histogram_bins(lower, upper)
+        zone_low, zone_high = marginal_zones(lower, upper)
+        low, high = tolerance(lower, upper)
+        centre = (low + high) / 2
+        groups: list[ColumnElement[Any]] = []
+        columns: list[ColumnElement[Any]] = []
+        for i, spec in enumerate(specs):
+            x = self._value(spec)
+            groups.append(
+                case(
+                    (x < start, 0),
+                    (x >= start + width * bins, bins - 1),
+                    else_=cast(func.floor((x - start) / width), Integer),
+                ).label(f"b{i}")
             )
-            .where(v.c.value.is_not(None))
-            .group_by(v.c.name, bin_)
-        )
+            outside = or_(
+                false() if lower is None else x < lower, false() if upper is None else x > upper
+            )
+            near = or_(
+                false() if lower is None else x < zone_low,
+                false() if upper is None else x > zone_high,
+            )
+            deviation = x - centre
+            columns += [
+                func.count(x).label(f"n{i}"),
+                func.sum(deviation).label(f"sum{i}"),
+                func.sum(deviation * deviation).label(f"squares{i}"),
+                func.min(x).label(f"min{i}"),
+                func.max(x).label(f"max{i}"),
+                func.sum(case((outside, 1), else_=0)).label(f"outside{i}"),
+                func.sum(case((and_(~outside, near), 1), else_=0)).label(f"marginal{i}"),
+            ]
+        stmt = select(*groups, *columns)
+        if specs[0].source == "poses":
+            stmt = stmt.select_from(Pose).join(Run, Pose.run_pk == Run.id)
+        stmt = stmt.where(*self.conditions()).group_by(*groups)
         return list(self.session.execute(stmt).all())
 
     # -- control charts ----------------------------------------------------------------
@@ -415,18 +397,22 @@ def _pareto(rows: Sequence[Row[str, str, str, int]]) -> list[ParetoEntry]:
     return entries
 
 
-def _parameter(spec: ParameterSpec, bounds: Bounds, bins: Sequence[Row[Any]]) -> ParameterStats:
+def _parameter(
+    spec: ParameterSpec, axis: int, bounds: Bounds, groups: Sequence[Row[Any]]
+) -> ParameterStats:
+    """Merge the grouped rows of :meth:`ReportQueries.family_bins` for one axis."""
     lower, upper = bounds[spec.family]
     start, width, n_bins = histogram_bins(lower, upper)
     low, high = tolerance(lower, upper)
     counts = [0] * n_bins
-    for row in bins:
-        counts[row.bin] = int(row.n)
+    rows = [row._mapping for row in groups if row._mapping[f"n{axis}"]]
+    for row in rows:
+        counts[row[f"b{axis}"]] += int(row[f"n{axis}"])
     count = sum(counts)
     mean, std = shifted_moments(
         count,
-        sum(float(r.sum) for r in bins),
-        sum(float(r.squares) for r in bins),
+        sum(float(row[f"sum{axis}"]) for row in rows),
+        sum(float(row[f"squares{axis}"]) for row in rows),
         (low + high) / 2,
     )
     return ParameterStats(
@@ -438,14 +424,18 @@ def _parameter(spec: ParameterSpec, bounds: Bounds, bins: Sequence[Row[Any]]) ->
         count=count,
         mean=mean,
         std=std,
-        min=min((float(r.min) for r in bins), default=None),
-        max=max((float(r.max) for r in bins), default=None),
+        min=min((float(row[f"min{axis}"]) for row in rows), default=None),
+        max=max((float(row[f"max{axis}"]) for row in rows), default=None),
         cp=cp(std, lower, upper),
         cpk=cpk(mean, std, lower, upper),
-        out_of_limits=sum(int(r.outside) for r in bins),
-        marginal=sum(int(r.marginal) for r in bins),
+        out_of_limits=sum(int(row[f"outside{axis}"]) for row in rows),
+        marginal=sum(int(row[f"marginal{axis}"]) for row in rows),
         histogram=Histogram(start=start, width=width, counts=counts),
     )
+
+
+def _of_family(family: str) -> list[ParameterSpec]:
+    return [spec for spec in PARAMETERS if spec.family == family]
 
 
 def _charts(limits: Row[Any], points: Sequence[Row[Any]]) -> list[ControlChart]:
@@ -504,10 +494,8 @@ def eol_report(
     overall = queries.summaries(by_station=False)[0]
     hours = _hours(filter, overall)
     poses = queries.pose_counts()
-    bins: dict[str, list[Row[Any]]] = defaultdict(list)
-    for source in ("runs", "poses"):
-        for row in queries.parameter_bins(source, bounds):
-            bins[row.name].append(row)
+    families = {family: queries.family_bins(family, bounds) for family in FAMILIES}
+    axes = {spec.name: i for family in FAMILIES for i, spec in enumerate(_of_family(family))}
     units = [
         UnitVerdict(
             serial=row.serial,
@@ -535,7 +523,9 @@ def eol_report(
             for row in queries.summaries(by_station=True)
         ],
         pareto=_pareto(queries.first_failures()),
-        parameters=[_parameter(spec, bounds, bins[spec.name]) for spec in PARAMETERS],
+        parameters=[
+            _parameter(spec, axes[spec.name], bounds, families[spec.family]) for spec in PARAMETERS
+        ],
         control_charts=_charts(queries.chart_limits(), queries.chart_points(chart_points)),
         units=units,
         units_total=int(overall.units),

@@ -1,0 +1,168 @@
+"""End-of-line report speed: every section over a large line history on PostgreSQL.
+
+    python benchmarks/bench_report.py                   # 1,000,000 runs (about 2 minutes to load)
+    python benchmarks/bench_report.py --runs 100000
+
+The history is generated inside the database (``INSERT … SELECT generate_series``): N
+runs of about 0.9·N units at four stations by seven operators, one retest per ten runs,
+seven poses per run, one to three failure reasons per failing run. It lives in a schema
+of its own (``bench_report_<pid>``), dropped at the end. The server comes from
+``CALSTATION_BENCH_POSTGRES_URL`` (default: ``CALSTATION_TEST_POSTGRES_URL``, else
+``postgresql+psycopg://postgres@127.0.0.1:5432/test``).
+
+Each section's query is timed (best of ``--repeat``), then the whole report as the API
+builds it (every section, the unit list cut to its latest 1,000 units).
+"""
+
+import argparse
+import os
+import time
+from collections.abc import Callable
+from datetime import UTC, datetime
+from typing import Any
+
+from sqlalchemy import make_url, text
+
+from db import make_engine, open_database
+from db.reports import ReportQueries, eol_report
+from station.limits import load_profile, load_profiles
+from station.report.bounds import profile_bounds
+from station.report.model import ReportFilter
+
+DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+CODES = "ARRAY['offset','sensitivity','verification_error','pose_noise','gyro_bias','link_loss']"
+
+
+def fill(connection: Any, runs: int, sha256: str) -> None:
+    """Generate ``runs`` runs with their poses and failure reasons in SQL."""
+    connection.execute(
+        text("""
+        INSERT INTO runs (id, run_id, serial, station_id, operator_id, started_at, finished_at,
+            received_at, software_version, algorithm, model, limits_name, limits_version,
+            limits_sha256, verdict, offset_x, offset_y, offset_z, sensitivity_x,
+            sensitivity_y, sensitivity_z, matrix, residual_rms_mg, residual_max_mg,
+            condition_number, verification_error_mg, gyro, record_sha256)
+        SELECT g, md5(g::text)::uuid,
+            'PT-' || lpad((g - (g % 10 = 0)::int)::text, 8, '0'),
+            'line1-st' || (g % 4 + 1), 'op-' || (g % 7 + 1),
+            t, t + make_interval(secs => 90 + g % 20), t + interval '100 seconds',
+            '1.4.0', 'autocal-ls', 'six', 'kxm52-production', '1', :sha,
+            CASE WHEN g % 10 = 9 OR g % 37 = 0 THEN 'fail' ELSE 'pass' END,
+            2048 + 60 * (random() + random() + random() - 1.5),
+            2048 + 60 * (random() + random() + random() - 1.5),
+            2048 + 60 * (random() + random() + random() - 1.5),
+            819.2 + 8 * (random() + random() + random() - 1.5),
+            819.2 + 8 * (random() + random() + random() - 1.5),
+            819.2 + 8 * (random() + random() + random() - 1.5),
+            '[[0.00122, 0, 0], [0, 0.00122, 0], [0, 0, 0.00122]]'::jsonb,
+            0.4, 0.9, 3.2, 12 * random() + 10 * random(),
+            jsonb_build_object(
+                'bias', jsonb_build_object('x', 2 * (random() - 0.5), 'y', 2 * (random() - 0.5),
+                                           'z', 2 * (random() - 0.5)),
+                'noise', jsonb_build_object('x', 0.05, 'y', 0.05, 'z', 0.06)),
+            md5(g::text) || md5(g::text)
+        FROM generate_series(1, :runs) AS g,
+             LATERAL (SELECT timestamptz '2026-01-01 00:00Z' + g * interval '40 seconds') AS s(t)
+        """),
+        {"runs": runs, "sha": sha256},
+    )
+    connection.execute(
+        text("""
+        INSERT INTO poses (run_pk, index, name, role, mean_x, mean_y, mean_z, std_x, std_y,
+            std_z, sample_count, gyro_x, gyro_y, gyro_z, temperature_c, crc_errors, gaps,
+            resyncs, lost_samples, replaced)
+        SELECT r.id, i, 'pose' || i, CASE WHEN i = 6 THEN 'verify' ELSE 'fit' END,
+            2048 + 800 * sin(i), 2048 + 800 * cos(i), 2048, 1 + 2 * random(), 1 + 2 * random(),
+            1 + 2 * random(), 1024, 0.01, -0.02, 0.005, 24.5, 0, 0, 0, 0, '[]'::jsonb
+        FROM runs r, generate_series(0, 6) AS i
+        """)
+    )
+    connection.execute(
+        text(f"""
+        INSERT INTO run_failures (run_pk, position, code, message)
+        SELECT r.id, k, ({CODES})[1 + (r.id / 10 + k) % 6], 'generated'
+        FROM runs r, generate_series(0, 2) AS k
+        WHERE r.verdict = 'fail' AND k <= r.id % 3
+        """)
+    )
+    connection.execute(text("ANALYZE runs; ANALYZE poses; ANALYZE run_failures"))
+
+
+def best(repeat: int, action: Callable[[], object]) -> float:
+    """Best wall time of ``repeat`` calls, seconds."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        action()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=1_000_000)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    server = os.environ.get(
+        "CALSTATION_BENCH_POSTGRES_URL", os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
+    )
+    schema = f"bench_report_{os.getpid()}"
+    admin = make_engine(server, isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'CREATE SCHEMA "{schema}"'))
+    url = make_url(server).update_query_dict({"options": f"-csearch_path={schema}"})
+    try:
+        database = open_database(url.render_as_string(hide_password=False), auto_migrate=True)
+        start = time.perf_counter()
+        with database.engine.begin() as connection:
+            fill(connection, args.runs, load_profile().sha256)
+        load_s = time.perf_counter() - start
+        bounds = profile_bounds(load_profile())
+        with database.session() as session:
+            runs, poses = session.execute(
+                text("SELECT (SELECT count(*) FROM runs), (SELECT count(*) FROM poses)")
+            ).one()
+            q = ReportQueries(session, ReportFilter())
+            day = ReportQueries(
+                session,
+                ReportFilter(
+                    since=datetime(2026, 1, 5, tzinfo=UTC), until=datetime(2026, 1, 6, tzinfo=UTC)
+                ),
+            )
+            sections: list[tuple[str, Callable[[], object]]] = [
+                ("counts and yields (overall)", lambda: q.summaries(by_station=False)),
+                ("counts and yields (per station)", lambda: q.summaries(by_station=True)),
+                ("poses per station", q.pose_counts),
+                ("failure Pareto", q.first_failures),
+                (
+                    "parameters of runs (stats + histograms)",
+                    lambda: q.parameter_bins("runs", bounds),
+                ),
+                ("pose noise (stats + histograms)", lambda: q.parameter_bins("poses", bounds)),
+                ("control-chart limits", q.chart_limits),
+                ("control-chart points (200)", lambda: q.chart_points(200)),
+                ("latest 1,000 units", lambda: q.latest_runs(1000)),
+                ("every unit (ship/hold list)", lambda: q.latest_runs(None)),
+            ]
+            profiles = load_profiles()
+            print(f"{runs:,} runs, {poses:,} poses; generated in {load_s:.0f} s\n")
+            print(f"| section | best of {args.repeat} (s) |")
+            print("|---|---|")
+            for name, action in sections:
+                print(f"| {name} | {best(args.repeat, action):.3f} |")
+            whole = best(
+                args.repeat,
+                lambda: eol_report(session, ReportFilter(), profiles=profiles, unit_limit=1000),
+            )
+            print(f"| **whole report, every run (units cut to 1,000)** | **{whole:.3f}** |")
+            one_day = best(args.repeat, lambda: eol_report(session, day.filter, profiles=profiles))
+            print(f"| whole report, one day (2,160 runs, every unit) | {one_day:.3f} |")
+        database.dispose()
+    finally:
+        with admin.connect() as connection:
+            connection.execute(text(f'DROP SCHEMA "{schema}" CASCADE'))
+        admin.dispose()
+
+
+if __name__ == "__main__":
+    main()
