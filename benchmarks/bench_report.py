@@ -66,6 +66,7 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
         """),
         {"runs": runs, "sha": sha256},
     )
+    connection.execute(text("ANALYZE runs"))
     connection.execute(
         text("""
         INSERT INTO poses (run_pk, index, name, role, mean_x, mean_y, mean_z, std_x, std_y,
@@ -80,10 +81,11 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
     connection.execute(
         text(f"""
         INSERT INTO run_failures (run_pk, position, code, message)
-        SELECT r.id, k, ({CODES})[1 + (r.id / 10 + k) % 6], 'generated'
-        FROM runs r, generate_series(0, 2) AS k
-        WHERE r.verdict = 'fail' AND k <= r.id % 3
-        """)
+        SELECT g, k, ({CODES})[1 + (g / 10 + k) % 6], 'generated'
+        FROM generate_series(1, :runs) AS g, generate_series(0, 2) AS k
+        WHERE (g % 10 = 9 OR g % 37 = 0) AND k <= g % 3
+        """),
+        {"runs": runs},
     )
     connection.execute(text("ANALYZE runs; ANALYZE poses; ANALYZE run_failures"))
 
