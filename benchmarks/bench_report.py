@@ -132,9 +132,7 @@ def main() -> None:
                 ),
             )
             sections: list[tuple[str, Callable[[], object]]] = [
-                ("counts and yields (overall)", lambda: q.summaries(by_station=False)),
-                ("counts and yields (per station)", lambda: q.summaries(by_station=True)),
-                ("poses per station", q.pose_counts),
+                ("counts and yields (per station and line)", q.station_counts),
                 ("failure Pareto", q.first_failures),
                 (
                     "parameters of runs (stats + histograms)",

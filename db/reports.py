@@ -11,6 +11,7 @@ applies the capability formulas of :mod:`station.report.capability`.
 
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
@@ -107,14 +108,17 @@ class ReportQueries:
 
     # -- counts and yields -------------------------------------------------------------
 
-    def summaries(self, *, by_station: bool) -> list[Row[Any]]:
-        """Counts per station (or overall): runs, passes, units, first and final passes.
+    def station_counts(self) -> list[Row[Any]]:
+        """Per station: runs, passes, station time, and units with their first and final
+        passes, both within the station and on the whole line (``line_*``).
 
-        Each run is ranked within its unit (and station) by ``(started_at, id)``: rank 1
-        is the unit's first run, a run without a ``lead`` its latest.
+        Each run is ranked within its unit at the station and within its unit on the
+        line by ``(started_at, id)``: rank 1 is the unit's first run, a run without a
+        ``lead`` its latest. A unit's first (latest) run on the line is at exactly one
+        station, so the ``line_*`` columns add up across stations to the line's counts.
         """
-        partition = [Run.station_id, Run.serial] if by_station else [Run.serial]
         order = (Run.started_at, Run.id)
+        at_station, on_line = [Run.station_id, Run.serial], [Run.serial]
         ranked = (
             select(
                 Run.station_id,
@@ -122,48 +126,39 @@ class ReportQueries:
                 Run.started_at,
                 Run.finished_at,
                 self._seconds().label("seconds"),
-                func.row_number().over(partition_by=partition, order_by=order).label("nth"),
-                func.lead(Run.id).over(partition_by=partition, order_by=order).label("next_id"),
+                func.row_number().over(partition_by=at_station, order_by=order).label("nth"),
+                func.lead(Run.id).over(partition_by=at_station, order_by=order).label("next"),
+                func.row_number().over(partition_by=on_line, order_by=order).label("line_nth"),
+                func.lead(Run.id).over(partition_by=on_line, order_by=order).label("line_next"),
             )
             .where(*self.conditions())
             .subquery("ranked")
         )
-        passed = ranked.c.verdict == "pass"
-        first, last = ranked.c.nth == 1, ranked.c.next_id.is_(None)
+        c = ranked.c
+        passed = c.verdict == "pass"
 
-        def count_if(condition: ColumnElement[bool]) -> ColumnElement[int]:
-            return func.coalesce(func.sum(case((condition, 1), else_=0)), 0)
+        def count_if(*conditions: ColumnElement[bool]) -> ColumnElement[int]:
+            return func.sum(case((and_(*conditions), 1), else_=0))
 
-        columns = [
-            func.count().label("runs"),
-            count_if(passed).label("runs_passed"),
-            count_if(first).label("units"),
-            count_if(and_(first, passed)).label("first_pass"),
-            count_if(and_(last, passed)).label("final_pass"),
-            func.sum(ranked.c.seconds).label("seconds"),
-            func.min(ranked.c.started_at).label("first_start"),
-            func.max(ranked.c.finished_at).label("last_finish"),
-        ]
-        if by_station:
-            stmt = (
-                select(ranked.c.station_id, *columns)
-                .group_by(ranked.c.station_id)
-                .order_by(ranked.c.station_id)
-            )
-        else:
-            stmt = select(*columns)
-        return list(self.session.execute(stmt).all())
-
-    def pose_counts(self) -> dict[str, int]:
-        """Poses per station."""
         stmt = (
-            select(Run.station_id, func.count())
-            .select_from(Pose)
-            .join(Run, Pose.run_pk == Run.id)
-            .where(*self.conditions())
-            .group_by(Run.station_id)
+            select(
+                c.station_id,
+                func.count().label("runs"),
+                count_if(passed).label("runs_passed"),
+                func.sum(c.seconds).label("seconds"),
+                func.min(c.started_at).label("first_start"),
+                func.max(c.finished_at).label("last_finish"),
+                count_if(c.nth == 1).label("units"),
+                count_if(c.nth == 1, passed).label("first_pass"),
+                count_if(c.next.is_(None), passed).label("final_pass"),
+                count_if(c.line_nth == 1).label("line_units"),
+                count_if(c.line_nth == 1, passed).label("line_first_pass"),
+                count_if(c.line_next.is_(None), passed).label("line_final_pass"),
+            )
+            .group_by(c.station_id)
+            .order_by(c.station_id)
         )
-        return {station: count for station, count in self.session.execute(stmt)}
+        return list(self.session.execute(stmt).all())
 
     # -- failures ----------------------------------------------------------------------
 
@@ -197,7 +192,8 @@ class ReportQueries:
         ``squares{i}`` (c the centre of the tolerance), ``min{i}``, ``max{i}``, values out
         of limits ``outside{i}`` and marginal values ``marginal{i}``. Sums, counts, minima
         and maxima add up across groups, so the caller merges the groups (at most 30³,
-        in practice a few hundred) into each axis' statistics and histogram.
+        in practice a few hundred) into each axis' statistics and histogram. Poses are
+        grouped by station as well, which gives the pose count per station.
         """
         specs = _of_family(family)
         lower, upper = bounds[family]
@@ -233,6 +229,9 @@ class ReportQueries:
                 func.sum(case((outside, 1), else_=0)).label(f"outside{i}"),
                 func.sum(case((and_(~outside, near), 1), else_=0)).label(f"marginal{i}"),
             ]
+        if specs[0].source == "poses":
+            # Grouped by station too: the pose counts per station come with it.
+            groups.append(Run.station_id.label("station_id"))
         stmt = select(*groups, *columns)
         if specs[0].source == "poses":
             stmt = stmt.select_from(Pose).join(Run, Pose.run_pk == Run.id)
@@ -340,34 +339,70 @@ def _ratio(part: float, whole: float) -> float | None:
     return part / whole if whole else None
 
 
-def _summary(row: Row[Any], poses: int, hours: float | None) -> Summary:
-    runs, units = int(row.runs), int(row.units)
-    seconds = float(row.seconds) if row.seconds is not None else None
-    retests = runs - units
-    return Summary(
-        runs=runs,
+@dataclass(frozen=True)
+class _Counts:
+    """What a summary is computed from (one station, or the line)."""
+
+    runs: int
+    runs_passed: int
+    units: int
+    first_pass: int
+    final_pass: int
+    seconds: float | None
+    poses: int
+
+
+def _station(row: Row[Any], poses: int) -> _Counts:
+    return _Counts(
+        runs=int(row.runs),
         runs_passed=int(row.runs_passed),
-        units_tested=units,
-        units_passed=int(row.final_pass),
-        units_failed=units - int(row.final_pass),
-        first_pass_units=int(row.first_pass),
-        report_yield=_ratio(row.runs_passed, runs),
-        first_pass_yield=_ratio(row.first_pass, units),
-        final_yield=_ratio(row.final_pass, units),
-        retests=retests,
-        retest_rate=_ratio(retests, units),
-        hours=hours,
-        units_per_hour=_ratio(units, hours) if hours else None,
-        cycle_time_per_run_s=_ratio(seconds, runs) if seconds is not None else None,
-        cycle_time_per_unit_s=_ratio(seconds, units) if seconds is not None else None,
-        cycle_time_per_pose_s=_ratio(seconds, poses) if seconds is not None else None,
+        units=int(row.units),
+        first_pass=int(row.first_pass),
+        final_pass=int(row.final_pass),
+        seconds=float(row.seconds),
         poses=poses,
     )
 
 
-def _hours(filter: ReportFilter, row: Row[Any]) -> float | None:
-    start = filter.since or row.first_start
-    end = filter.until or row.last_finish
+def _line(rows: Sequence[Row[Any]], poses: int) -> _Counts:
+    return _Counts(
+        runs=sum(int(r.runs) for r in rows),
+        runs_passed=sum(int(r.runs_passed) for r in rows),
+        units=sum(int(r.line_units) for r in rows),
+        first_pass=sum(int(r.line_first_pass) for r in rows),
+        final_pass=sum(int(r.line_final_pass) for r in rows),
+        seconds=sum(float(r.seconds) for r in rows) if rows else None,
+        poses=poses,
+    )
+
+
+def _summary(n: _Counts, hours: float | None) -> Summary:
+    retests = n.runs - n.units
+    seconds = n.seconds
+    return Summary(
+        runs=n.runs,
+        runs_passed=n.runs_passed,
+        units_tested=n.units,
+        units_passed=n.final_pass,
+        units_failed=n.units - n.final_pass,
+        first_pass_units=n.first_pass,
+        report_yield=_ratio(n.runs_passed, n.runs),
+        first_pass_yield=_ratio(n.first_pass, n.units),
+        final_yield=_ratio(n.final_pass, n.units),
+        retests=retests,
+        retest_rate=_ratio(retests, n.units),
+        hours=hours,
+        units_per_hour=_ratio(n.units, hours) if hours else None,
+        cycle_time_per_run_s=_ratio(seconds, n.runs) if seconds is not None else None,
+        cycle_time_per_unit_s=_ratio(seconds, n.units) if seconds is not None else None,
+        cycle_time_per_pose_s=_ratio(seconds, n.poses) if seconds is not None else None,
+        poses=n.poses,
+    )
+
+
+def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
+    start = filter.since or min((r.first_start for r in rows), default=None)
+    end = filter.until or max((r.last_finish for r in rows), default=None)
     if start is None or end is None or end <= start:
         return None
     return float((end - start).total_seconds() / 3600)
@@ -491,10 +526,12 @@ def eol_report(
     used = queries.limits_profiles()
     profile, bounds_source = choose_profile(used, profiles or load_profiles())
     bounds = profile_bounds(profile)
-    overall = queries.summaries(by_station=False)[0]
-    hours = _hours(filter, overall)
-    poses = queries.pose_counts()
+    stations = queries.station_counts()
+    hours = _hours(filter, stations)
     families = {family: queries.family_bins(family, bounds) for family in FAMILIES}
+    poses: dict[str, int] = defaultdict(int)
+    for row in families["pose_noise"]:
+        poses[row.station_id] += row.n0
     axes = {spec.name: i for family in FAMILIES for i, spec in enumerate(_of_family(family))}
     units = [
         UnitVerdict(
@@ -514,13 +551,13 @@ def eol_report(
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
-        summary=_summary(overall, sum(poses.values()), hours),
+        summary=_summary(_line(stations, sum(poses.values())), hours),
         stations=[
             StationSummary(
                 station_id=row.station_id,
-                summary=_summary(row, poses.get(row.station_id, 0), hours),
+                summary=_summary(_station(row, poses[row.station_id]), hours),
             )
-            for row in queries.summaries(by_station=True)
+            for row in stations
         ],
         pareto=_pareto(queries.first_failures()),
         parameters=[
@@ -528,5 +565,5 @@ def eol_report(
         ],
         control_charts=_charts(queries.chart_limits(), queries.chart_points(chart_points)),
         units=units,
-        units_total=int(overall.units),
+        units_total=sum(int(row.line_units) for row in stations),
     )
