@@ -82,6 +82,7 @@ class ReportQueries:
             # The report's statements are short scans with long expressions: compiling
             # them (JIT) costs seconds and saves nothing.
             session.execute(text("SET LOCAL jit = off"))
+            session.execute(text("SET LOCAL work_mem = '256MB'"))
 
     # -- helpers -----------------------------------------------------------------------
 
@@ -201,10 +202,21 @@ class ReportQueries:
         zone_low, zone_high = marginal_zones(lower, upper)
         low, high = tolerance(lower, upper)
         centre = (low + high) / 2
+        picked: list[ColumnElement[Any]] = [
+            self._value(spec).label(f"x{i}") for i, spec in enumerate(specs)
+        ]
+        if specs[0].source == "poses":
+            picked.append(Run.station_id.label("station_id"))
+        values = select(*picked)
+        if specs[0].source == "poses":
+            values = values.select_from(Pose).join(Run, Pose.run_pk == Run.id)
+        # OFFSET 0 keeps PostgreSQL from inlining the values into every aggregate
+        # (a gyro bias would be read out of its JSON document thirty times a row).
+        v = values.where(*self.conditions()).offset(0).subquery("v")
         groups: list[ColumnElement[Any]] = []
         columns: list[ColumnElement[Any]] = []
-        for i, spec in enumerate(specs):
-            x = self._value(spec)
+        for i in range(len(specs)):
+            x = v.c[f"x{i}"]
             groups.append(
                 case(
                     (x < start, 0),
@@ -231,11 +243,8 @@ class ReportQueries:
             ]
         if specs[0].source == "poses":
             # Grouped by station too: the pose counts per station come with it.
-            groups.append(Run.station_id.label("station_id"))
-        stmt = select(*groups, *columns)
-        if specs[0].source == "poses":
-            stmt = stmt.select_from(Pose).join(Run, Pose.run_pk == Run.id)
-        stmt = stmt.where(*self.conditions()).group_by(*groups)
+            groups.append(v.c.station_id)
+        stmt = select(*groups, *columns).group_by(*groups)
         return list(self.session.execute(stmt).all())
 
     # -- control charts ----------------------------------------------------------------
