@@ -103,9 +103,10 @@ class RunRepository:
     def __init__(self, session: Session) -> None:
         self.session = session
 
-    def ping(self) -> None:
-        """Raise if the database does not answer."""
+    def ping(self) -> str:
+        """Raise if the database does not answer; return its dialect's name."""
         self.session.execute(text("SELECT 1"))
+        return self.session.get_bind().dialect.name
 
     # -- runs --------------------------------------------------------------------------
 
