@@ -16,7 +16,7 @@ from datetime import UTC, datetime
 from typing import Any
 from uuid import UUID
 
-from sqlalchemy import insert, select, text, tuple_
+from sqlalchemy import insert, select, text, tuple_, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
@@ -228,6 +228,16 @@ class RunRepository:
             )
         )
         return key
+
+    def revoke_keys(self, station_id: str) -> int:
+        """Revoke every valid key of ``station_id``; return how many there were."""
+        revoked = self.session.scalars(
+            update(StationKey)
+            .where(StationKey.station_id == station_id, StationKey.revoked_at.is_(None))
+            .values(revoked_at=datetime.now(UTC))
+            .returning(StationKey.id)
+        ).all()
+        return len(revoked)
 
     def station_for_key(self, key: str) -> str | None:
         """The station a valid (not revoked) key belongs to."""
