@@ -20,6 +20,7 @@ import argparse
 import asyncio
 import os
 import random
+import re
 import secrets
 import statistics
 import subprocess
@@ -31,9 +32,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
+from urllib.parse import urlencode
 
 import httpx
 import numpy as np
+import uvloop
 from sqlalchemy import make_url, text
 
 from db import RunRepository, make_engine, open_database
@@ -95,11 +98,13 @@ FROM runs WHERE verdict = 'fail'
 
 @dataclass
 class Result:
-    """Latencies (s) of the successful requests and the wall time they took."""
+    """Latencies (s) of the successful requests, wall time, CPU time of server and client."""
 
     latencies: list[float]
     wall_s: float
     errors: int
+    server_cpu_s: float = 0.0
+    client_cpu_s: float = 0.0
 
     def row(self, name: str, clients: int) -> str:
         """One Markdown table row."""
@@ -107,10 +112,23 @@ class Result:
         p50 = statistics.median(ms)
         p99 = ms[min(len(ms) - 1, int(0.99 * len(ms)))]
         rate = len(ms) / self.wall_s
+        n = max(1, len(ms) + self.errors)
         return (
             f"| {name} | {clients} | {len(ms)} | {p50:.1f} | {p99:.1f} | {rate:,.0f} | "
+            f"{1e3 * self.server_cpu_s / n:.2f} | {1e3 * self.client_cpu_s / n:.2f} | "
             f"{self.errors} |"
         )
+
+
+def tree_cpu_s(pid: int) -> float:
+    """CPU time (user + system) of process ``pid`` and its children, seconds (Linux /proc)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    total = 0.0
+    for each in [pid, *map(int, children)]:
+        fields = Path(f"/proc/{each}/stat").read_text().rsplit(")", 1)[1].split()
+        total += (int(fields[11]) + int(fields[12])) / tick
+    return total
 
 
 @contextmanager
@@ -151,8 +169,8 @@ def seed(url: str, runs: int) -> tuple[str, int]:
 
 
 @contextmanager
-def server(url: str, workers: int, port: int) -> Iterator[str]:
-    """``calstation serve`` as a real process; yields its base URL once it answers."""
+def server(url: str, workers: int, port: int) -> Iterator[tuple[str, int]]:
+    """``calstation serve`` as a real process; yields its base URL and pid once it answers."""
     env = {**os.environ, "CALSTATION_DATABASE_URL": url, "PYTHONPATH": str(ROOT)}
     command = [sys.executable, "-m", "station", "serve", "--port", str(port)]
     process = subprocess.Popen([*command, "--workers", str(workers)], env=env)
@@ -168,51 +186,97 @@ def server(url: str, workers: int, port: int) -> Iterator[str]:
             if time.monotonic() > deadline or process.poll() is not None:
                 raise SystemExit("the server did not start")
             time.sleep(0.2)
-        yield base
+        yield base, process.pid
     finally:
         process.terminate()
         process.wait(timeout=20)
 
 
+#: One request of the load: method, target (path and query), body.
+Call = tuple[str, str, bytes]
+
+
+class Connection:
+    """One keep-alive HTTP/1.1 connection of the load generator.
+
+    Deliberately minimal: httpx spends more CPU per request than the server does, and on
+    one 2-core machine the load generator's CPU is taken from the server under test.
+    """
+
+    def __init__(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, head: str):
+        self.reader, self.writer, self.head = reader, writer, head
+
+    @classmethod
+    async def open(cls, base: str, headers: dict[str, str]) -> "Connection":
+        url = httpx.URL(base)
+        assert url.port is not None
+        reader, writer = await asyncio.open_connection(url.host, url.port)
+        head = "".join(f"{k}: {v}\r\n" for k, v in {"Host": url.host, **headers}.items())
+        return cls(reader, writer, head)
+
+    async def send(self, call: Call) -> int:
+        """Send one request, read the whole answer, return its status."""
+        method, target, body = call
+        self.writer.write(
+            f"{method} {target} HTTP/1.1\r\n{self.head}Content-Length: {len(body)}\r\n\r\n".encode()
+            + body
+        )
+        head = await self.reader.readuntil(b"\r\n\r\n")
+        length = re.search(rb"(?i)\r\ncontent-length: *(\d+)", head)
+        assert length is not None, head
+        await self.reader.readexactly(int(length[1]))
+        return int(head[9:12])
+
+    def close(self) -> None:
+        self.writer.close()
+
+
 def load(
     base: str,
+    server_pid: int,
     clients: int,
     seconds: float,
-    request: Callable[[random.Random], httpx.Request],
+    call: Callable[[random.Random], Call],
     expect: tuple[int, ...] = (200,),
     total: int | None = None,
+    headers: dict[str, str] | None = None,
 ) -> Result:
-    """``clients`` keep-alive connections issuing requests for ``seconds`` (or ``total``)."""
+    """``clients`` keep-alive connections issuing calls for ``seconds`` (or ``total`` calls)."""
 
     async def main() -> Result:
         latencies: list[float] = []
         errors = 0
-        limits = httpx.Limits(max_connections=clients, max_keepalive_connections=clients)
-        async with httpx.AsyncClient(base_url=base, limits=limits, timeout=30) as client:
-            warm = await asyncio.gather(
-                *(client.get("/healthz") for _ in range(clients)), return_exceptions=True
-            )
-            assert all(isinstance(r, httpx.Response) for r in warm)
-            issued = 0
-            stop = time.perf_counter() + seconds
+        connections = [await Connection.open(base, headers or {}) for _ in range(clients)]
+        for connection in connections:
+            assert await connection.send(("GET", "/healthz", b"")) == 200
+        issued = 0
+        stop = time.perf_counter() + seconds
 
-            async def worker(seed: int) -> None:
-                nonlocal errors, issued
-                rng = random.Random(seed)
-                while time.perf_counter() < stop and (total is None or issued < total):
-                    issued += 1
-                    started = time.perf_counter()
-                    answer = await client.send(request(rng))
-                    if answer.status_code in expect:
-                        latencies.append(time.perf_counter() - started)
-                    else:
-                        errors += 1
+        async def worker(connection: Connection, seed: int) -> None:
+            nonlocal errors, issued
+            rng = random.Random(seed)
+            while time.perf_counter() < stop and (total is None or issued < total):
+                issued += 1
+                started = time.perf_counter()
+                if await connection.send(call(rng)) in expect:
+                    latencies.append(time.perf_counter() - started)
+                else:
+                    errors += 1
 
-            began = time.perf_counter()
-            await asyncio.gather(*(worker(i) for i in range(clients)))
-            return Result(latencies, time.perf_counter() - began, errors)
+        began, server0, client0 = time.perf_counter(), tree_cpu_s(server_pid), time.process_time()
+        await asyncio.gather(*(worker(c, i) for i, c in enumerate(connections)))
+        result = Result(
+            latencies,
+            time.perf_counter() - began,
+            errors,
+            server_cpu_s=tree_cpu_s(server_pid) - server0,
+            client_cpu_s=time.process_time() - client0,
+        )
+        for connection in connections:
+            connection.close()
+        return result
 
-    return asyncio.run(main())
+    return uvloop.run(main())
 
 
 def new_record(rng: random.Random, np_rng: np.random.Generator, index: int) -> RunRecord:
@@ -268,74 +332,86 @@ def main() -> None:
         "--postgres-url", default=os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
     )
     args = parser.parse_args()
+    load_before = os.getloadavg()
 
     with bench_schema(args.postgres_url) as url:
         key, units = seed(url, args.runs)
-        with server(url, args.workers, args.port) as base:
+        with server(url, args.workers, args.port) as (base, pid):
             unit = load(
                 base,
+                pid,
                 args.clients,
                 args.seconds,
-                lambda rng: httpx.Request(
-                    "GET", f"{base}/api/v1/units/PT-{rng.randrange(units):07d}"
-                ),
+                lambda rng: ("GET", f"/api/v1/units/PT-{rng.randrange(units):07d}", b""),
             )
             np_rng = np.random.default_rng(7)
             rng = random.Random(7)
-            posts = [new_record(rng, np_rng, i).model_dump_json() for i in range(3000)]
+            posts = [new_record(rng, np_rng, i).model_dump_json().encode() for i in range(3000)]
             queue = iter(posts)
-            auth = {"Authorization": f"Bearer {key}", "Content-Type": "application/json"}
             post = load(
                 base,
+                pid,
                 args.clients,
                 args.seconds,
-                lambda _: httpx.Request(
-                    "POST", f"{base}/api/v1/runs", content=next(queue), headers=auth
-                ),
+                lambda _: ("POST", "/api/v1/runs", next(queue)),
                 expect=(201,),
                 total=len(posts),
+                headers={"Authorization": f"Bearer {key}", "Content-Type": "application/json"},
             )
-            runs_url = f"{base}/api/v1/runs"
-            page = httpx.get(runs_url, params={"station_id": "line2-st3", "limit": 50}).json()
+            runs = "/api/v1/runs"
+            page = httpx.get(
+                f"{base}{runs}", params={"station_id": "line2-st3", "limit": 50}
+            ).json()
             some_run = page["data"][0]["run_id"]
             t_mid = T0 + timedelta(seconds=STEP_S * args.runs // 2)
-            lists: dict[str, Callable[[random.Random], httpx.Request]] = {
-                "GET /runs?station_id (50)": lambda _: httpx.Request(
-                    "GET", runs_url, params={"station_id": "line2-st3", "limit": 50}
-                ),
-                "GET /runs?station_id, 2nd page": lambda _: httpx.Request(
+            by_time = urlencode(
+                {
+                    "verdict": "fail",
+                    "since": t_mid.isoformat(),
+                    "until": (t_mid + timedelta(days=1)).isoformat(),
+                }
+            )
+            second = urlencode(
+                {"station_id": "line2-st3", "limit": 50, "cursor": page["next_cursor"]}
+            )
+            lists: dict[str, Callable[[random.Random], Call]] = {
+                "GET /runs?station_id (50)": lambda _: (
                     "GET",
-                    runs_url,
-                    params={"station_id": "line2-st3", "limit": 50, "cursor": page["next_cursor"]},
+                    f"{runs}?station_id=line2-st3&limit=50",
+                    b"",
                 ),
-                "GET /runs?verdict=fail&since&until (100)": lambda _: httpx.Request(
+                "GET /runs?station_id, 2nd page": lambda _: ("GET", f"{runs}?{second}", b""),
+                "GET /runs?verdict=fail&since&until (100)": lambda _: (
                     "GET",
-                    runs_url,
-                    params={
-                        "verdict": "fail",
-                        "since": t_mid.isoformat(),
-                        "until": (t_mid + timedelta(days=1)).isoformat(),
-                    },
+                    f"{runs}?{by_time}",
+                    b"",
                 ),
-                "GET /runs?serial": lambda rng: httpx.Request(
-                    "GET", runs_url, params={"serial": f"PT-{rng.randrange(units):07d}"}
+                "GET /runs?serial": lambda rng: (
+                    "GET",
+                    f"{runs}?serial=PT-{rng.randrange(units):07d}",
+                    b"",
                 ),
-                "GET /units/{serial}/runs": lambda rng: httpx.Request(
-                    "GET", f"{base}/api/v1/units/PT-{rng.randrange(units):07d}/runs"
+                "GET /units/{serial}/runs": lambda rng: (
+                    "GET",
+                    f"/api/v1/units/PT-{rng.randrange(units):07d}/runs",
+                    b"",
                 ),
-                "GET /runs/{run_id} (7 poses)": lambda _: httpx.Request(
-                    "GET", f"{runs_url}/{some_run}"
-                ),
+                "GET /runs/{run_id} (7 poses)": lambda _: ("GET", f"{runs}/{some_run}", b""),
             }
             list_results = {
-                name: load(base, 8, args.seconds / 3, request) for name, request in lists.items()
+                name: load(base, pid, 8, args.seconds / 3, call) for name, call in lists.items()
             }
 
     print()
     print(f"{args.runs:,} runs, {units:,} units; server: {args.workers} uvicorn workers")
     print()
-    print("| request | clients | requests | p50 ms | p99 ms | per s | errors |")
-    print("|---|---|---|---|---|---|---|")
+    print(f"load average before the run: {load_before}; after: {os.getloadavg()}")
+    print()
+    print(
+        "| request | clients | requests | p50 ms | p99 ms | per s "
+        "| server CPU ms/req | client CPU ms/req | errors |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
     print(unit.row("GET /api/v1/units/{serial}", args.clients))
     print(post.row("POST /api/v1/runs", args.clients))
     for name, result in list_results.items():

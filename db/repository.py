@@ -13,7 +13,6 @@ from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any
 from uuid import UUID
 
 from sqlalchemy import insert, select, text, tuple_, update
@@ -30,6 +29,16 @@ from station.records import RunRecord, RunSummary, StoredRun, Verdict
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
 _POSES = Base.metadata.tables[Pose.__tablename__]
 _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
+
+# Built once, values bound at execution: the compiled statement is cached.
+_INSERT_NEW_RUN: dict[str, ReturningInsert[int]] = {
+    "postgresql": postgresql.insert(Run)
+    .on_conflict_do_nothing(index_elements=["run_id"])
+    .returning(Run.id),
+    "sqlite": sqlite.insert(Run)
+    .on_conflict_do_nothing(index_elements=["run_id"])
+    .returning(Run.id),
+}
 
 #: Largest page of a run list.
 MAX_PAGE = 500
@@ -121,7 +130,7 @@ class RunRepository:
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
         row = run_row(record, received_at=received_at, record_sha256=digest)
-        pk = self.session.execute(self._insert_new_run(row)).scalar_one_or_none()
+        pk = self.session.execute(self._insert_new_run(), row).scalar_one_or_none()
         if pk is None:
             stored_digest = self.session.scalars(
                 select(Run.record_sha256).where(Run.run_id == record.run_id)
@@ -140,16 +149,12 @@ class RunRepository:
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
         return SubmitOutcome(created=True, run=stored)
 
-    def _insert_new_run(self, row: dict[str, Any]) -> ReturningInsert[int]:
+    def _insert_new_run(self) -> ReturningInsert[int]:
         """``INSERT … ON CONFLICT (run_id) DO NOTHING RETURNING id`` in the session's dialect."""
         dialect = self.session.get_bind().dialect.name
-        if dialect == "postgresql":
-            stmt: postgresql.Insert | sqlite.Insert = postgresql.insert(Run)
-        elif dialect == "sqlite":
-            stmt = sqlite.insert(Run)
-        else:
+        if dialect not in _INSERT_NEW_RUN:
             raise CalstationError(f"database dialect {dialect!r} is not supported")
-        return stmt.values(row).on_conflict_do_nothing(index_elements=["run_id"]).returning(Run.id)
+        return _INSERT_NEW_RUN[dialect]
 
     def get(self, run_id: UUID) -> StoredRun | None:
         """One run with its poses and failure reasons."""

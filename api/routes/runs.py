@@ -59,6 +59,7 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
 @submissions.post(
     "",
     status_code=status.HTTP_201_CREATED,
+    response_model=StoredRun,
     responses={
         200: {"model": StoredRun, "description": "already stored: the stored run"},
         401: {"model": Problem},
@@ -68,9 +69,7 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
         422: {"model": Problem, "description": "invalid, or the poses give other coefficients"},
     },
 )
-async def submit_run(
-    record: RunRecord, station: StationDep, repository: RepositoryDep, response: Response
-) -> StoredRun:
+async def submit_run(record: RunRecord, station: StationDep, repository: RepositoryDep) -> Response:
     """Store a station's run; a retry of a stored run returns it (200) unchanged."""
     if record.station_id != station:
         raise HTTPException(
@@ -80,7 +79,9 @@ async def submit_run(
     check_coefficients(record)
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
-    response.headers["Location"] = f"/api/v1/runs/{record.run_id}"
-    if not outcome.created:
-        response.status_code = status.HTTP_200_OK
-    return outcome.run
+    answer = json_response(
+        outcome.run,
+        status.HTTP_201_CREATED if outcome.created else status.HTTP_200_OK,
+    )
+    answer.headers["Location"] = f"/api/v1/runs/{record.run_id}"
+    return answer
