@@ -136,6 +136,8 @@ class UnitRun:
         self.index = journal.next_pose
         self.live = LiveView()
         self.messages: deque[Message] = deque(maxlen=6)
+        #: Messages said so far (the deque keeps only the latest).
+        self.said = 0
         self.solution: Solution | None = None
         self.record: RunRecord | None = None
         self._acquisition: PoseAcquisition | None = None
@@ -145,6 +147,9 @@ class UnitRun:
         self._unit_output: list[Array] = []
         self._next_reconnect = 0.0
         self._wrong_pose_said: str | None = None
+        #: Whether the unit moved since the last capture (before it has, it still lies
+        #: in the pose just taken, which is no mistake).
+        self._moved = False
         self.verification_error_mg: float | None = None
         self.unit_output_error_mg: float | None = None
         self.writeback_error: float | None = None
@@ -164,6 +169,7 @@ class UnitRun:
     def say(self, level: str, text: str) -> None:
         """Tell the operator something (newest last)."""
         self.messages.append(Message(level, text))
+        self.said += 1
 
     # -- operator commands -----------------------------------------------------------
 
@@ -253,19 +259,16 @@ class UnitRun:
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
         matches = sensed.matches(target, self.settings.pose_tolerance_deg)
         was_capturing = self.live.progress >= 0.25
+        if verdict.motion:
+            self._moved = True
         if matches and not verdict.motion:
             self._still_samples += len(rows)
         else:
             if was_capturing and matches:
                 self.say("warn", f"moved during capture of {target.name}: hold the putter still")
             self._still_samples = 0
-        if not matches and not verdict.motion and self._wrong_pose_said != sensed.nearest.name:
-            self._wrong_pose_said = sensed.nearest.name
-            self.say(
-                "warn",
-                f"wrong pose: the putter lies {sensed.nearest.name}, "
-                f"pose {self.index + 1} is {target.name}",
-            )
+        if self._moved and not matches and not verdict.motion:
+            self._say_wrong_pose(sensed, target)
         self.live = LiveView(
             sensed=sensed,
             matches=matches,
@@ -273,6 +276,26 @@ class UnitRun:
             gyro_rate=window[:, 4:7].mean(axis=0),
             moving=verdict.motion,
             progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
+        )
+
+    def _say_wrong_pose(self, sensed: Sensed, target: Pose) -> None:
+        """Say once per place why the unit lying still there is not captured."""
+        if self._wrong_pose_said == sensed.nearest.name:
+            return
+        self._wrong_pose_said = sensed.nearest.name
+        for j, earlier in sorted(self.journal.captures.items()):
+            direction = sense(np.array(earlier.record.mean.as_tuple())).direction
+            if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
+                self.say(
+                    "warn",
+                    f"too close to pose {j + 1} ({self.sequence[j].name}), already taken: "
+                    f"pose {self.index + 1} is {target.name}",
+                )
+                return
+        self.say(
+            "warn",
+            f"wrong pose: the putter lies {sensed.nearest.name}, "
+            f"pose {self.index + 1} is {target.name}",
         )
 
     def _restart_acquisition(self) -> None:
@@ -286,21 +309,16 @@ class UnitRun:
 
     def _accept(self, result: PoseResult, target: Pose) -> None:
         sensed = sense(result.accel_mean)
-        if not sensed.matches(target, self.settings.pose_tolerance_deg):
-            self.say("warn", f"wrong pose: captured {sensed.nearest.name}, wanted {target.name}")
+        close_to_earlier = any(
+            angle_deg(sense(np.array(c.record.mean.as_tuple())).direction, sensed.direction)
+            < self.settings.min_pose_separation_deg
+            for c in self.journal.captures.values()
+        )
+        if close_to_earlier or not sensed.matches(target, self.settings.pose_tolerance_deg):
+            if self._moved:
+                self._say_wrong_pose(sensed, target)
             self._restart_acquisition()
             return
-        for j, earlier in self.journal.captures.items():
-            mean = earlier.record.mean
-            other = sense(np.array(mean.as_tuple()))
-            if angle_deg(other.direction, sensed.direction) < self.settings.min_pose_separation_deg:
-                self.say(
-                    "warn",
-                    f"pose {self.index + 1} is too close to pose {j + 1} "
-                    f"({self.sequence[j].name}): turn the putter to {target.name}",
-                )
-                self._restart_acquisition()
-                return
         index = self.index
         role = "verify" if index >= self.fit_count else "fit"
         record = PoseRecord(
@@ -330,6 +348,7 @@ class UnitRun:
         self.journal_file.save(self.journal)
         self.say("info", f"pose {index + 1} ({target.name}) captured")
         self._wrong_pose_said = None
+        self._moved = False
         self._still_samples = 0
         self.live = LiveView()
         self.index = self.journal.next_pose
