@@ -23,6 +23,7 @@ from sqlalchemy.exc import SQLAlchemyError
 from station import __version__
 from station.config import StationConfig
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
+from station.errors import CalstationError
 from station.journal import JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
@@ -345,7 +346,7 @@ class StationApp:
             if self._store is None:
                 self._store = self._open_store()
             result = self.outbox.sync(self._store)
-        except (SQLAlchemyError, OSError) as exc:
+        except (SQLAlchemyError, OSError, CalstationError) as exc:
             self._drop_store()
             self.store_note = (
                 f"results database unreachable ({type(exc).__name__}): runs wait in the outbox"

@@ -13,6 +13,8 @@ import tty
 from types import TracebackType
 from typing import Any, Protocol, Self
 
+CTRL_D = b"\x04"
+
 
 class KeySource(Protocol):
     """Where the station's keys come from."""
@@ -54,6 +56,8 @@ class TerminalKeys:
             if not data:
                 if chunks:
                     break
+                raise EOFError
+            if CTRL_D in data:  # in cbreak mode the terminal no longer turns it into EOF
                 raise EOFError
             chunks.append(data)
         return b"".join(chunks).decode("utf-8", errors="replace")
