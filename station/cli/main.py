@@ -8,6 +8,7 @@ its traceback.
 import typer
 
 from station import __version__
+from station.cli import gyro
 from station.cli.output import fail, out
 from station.errors import CalstationError
 
@@ -20,6 +21,9 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+
+
+app.add_typer(gyro.app, name="gyro")
 
 
 @app.callback()
