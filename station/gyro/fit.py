@@ -91,18 +91,30 @@ def _split(row: list[float | None]) -> tuple[float | None, Vector, Vector, Vecto
     return row[0], row[1:4], row[4:7], n_ppm
 
 
-def _sense_axis(values: Vector, errors: Vector, alpha: float) -> tuple[str | None, str | None]:
-    """Axis of the largest significant N term of one gyro, or None with the reason."""
-    candidates = [
-        (abs(v), j)
-        for j, (v, e) in enumerate(zip(values, errors, strict=True))
-        if v is not None and e is not None and e > 0 and 2 * special.ndtr(-abs(v) / e) < alpha
-    ]
-    if candidates:
-        return AXES[max(candidates)[1]], None
+def _sense_axis(
+    values: Vector, errors: Vector, comparison: AxisComparison
+) -> tuple[str | None, str | None]:
+    """Axis of the dominant N term of one gyro, or None with the reason.
+
+    Only when the comparison finds the N terms needed (N given B, or N against the
+    plain model when B cannot be fitted); then the largest |N_ij| among the terms that
+    differ from zero on their own, or else the one with the largest |N_ij|/σ.
+    """
     if all(v is None for v in values):
         return None, "no N term is estimable from this log"
-    return None, f"no N term differs from zero at level {alpha:g}"
+    tests = {(t.full, t.reduced): t.p_value for t in comparison.tests}
+    p_value = tests.get(("both", "bias"), tests.get(("scale-factor", "none")))
+    if p_value is None or p_value >= comparison.alpha:
+        return None, f"the N terms are not needed at level {comparison.alpha:g}"
+    scored = [
+        (abs(v), abs(v) / e, j)
+        for j, (v, e) in enumerate(zip(values, errors, strict=True))
+        if v is not None and e is not None and e > 0
+    ]
+    significant = [s for s in scored if 2 * special.ndtr(-s[1]) < comparison.alpha]
+    if significant:
+        return AXES[max(significant)[2]], None
+    return AXES[max(scored, key=lambda s: s[1])[2]], None
 
 
 def fit_log(log: GyroLog, alpha: float = DEFAULT_ALPHA) -> GyroFitReport:
@@ -136,7 +148,9 @@ def fit_log(log: GyroLog, alpha: float = DEFAULT_ALPHA) -> GyroFitReport:
         comparison.append(compare_axis(status, design, y, term_names(axis), alpha))
     parts = [_split(r) for r in rows]
     error_parts = [_split(r) for r in error_rows]
-    sense = [_sense_axis(p[3], e[3], alpha) for p, e in zip(parts, error_parts, strict=True)]
+    sense = [
+        _sense_axis(p[3], e[3], c) for p, e, c in zip(parts, error_parts, comparison, strict=True)
+    ]
     return GyroFitReport(
         dwells=len(log),
         bias_dps=[p[0] for p in parts],
