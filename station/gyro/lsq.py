@@ -35,6 +35,7 @@ def solve(design: FloatArray, y: FloatArray) -> LeastSquares:
     if p == 0:
         return LeastSquares(np.zeros(0), np.zeros(0), float(y @ y), 0, n)
     norms = np.linalg.norm(design, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
     z = normalised(design)
     coef_z, _, rank, _ = np.linalg.lstsq(z, y, rcond=RCOND)
     residual = y - z @ coef_z
