@@ -14,6 +14,7 @@ from rich.table import Table
 from station.cli.output import err, out, print_json
 from station.errors import InputError
 from station.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
+from station.gyro.identifiability import check_identifiability
 from station.gyro.log import read_log, write_log
 from station.gyro.simulate import (
     DEFAULT_SENSE_AXES,
@@ -80,7 +81,7 @@ def _print_report(report: GyroFitReport) -> None:
             f"{comparison.preferred_by_bic or '—'}; {tests}"
         )
     for term in report.unestimable:
-        out.print(f"not estimable: {term.term}: {term.reason}")
+        out.print(f"not estimable: {term.term}: {term.reason}", markup=False)
 
 
 @app.command()
@@ -113,6 +114,37 @@ def fit(
         print_json(report.to_dict())
     else:
         _print_report(report)
+
+
+@app.command()
+def check(
+    log_file: Annotated[
+        Path, typer.Argument(metavar="LOG.csv", help="Rate-table or centrifuge log.")
+    ],
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the findings as JSON.")
+    ] = False,
+) -> None:
+    """Check that a log can separate the model's terms and tell bias from scale-factor form.
+
+    Prints the findings; exits with status 2 when the form question cannot be answered.
+    """
+    report = check_identifiability(read_log(log_file))
+    if json_output:
+        print_json(report.model_dump(mode="json"))
+    else:
+        for axis in report.axes:
+            condition = _cell(axis.condition_number, ".3g")
+            out.print(
+                f"gyro {axis.axis}: {axis.dwells} dwells, rank {axis.rank} of "
+                f"{axis.excited_columns} excited terms, condition number {condition}"
+            )
+            for status in axis.terms:
+                if not status.estimable:
+                    out.print(f"  not estimable: {status.term}: {status.reason}", markup=False)
+            for caveat in axis.caveats:
+                out.print(f"  caveat: {caveat}", markup=False)
+    report.require_form_question()
 
 
 @app.command("simulate-centrifuge")

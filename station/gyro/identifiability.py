@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel
 
-from station.errors import CalstationError
+from station.errors import CalstationError, InputError
 from station.gyro.log import GyroLog
 from station.gyro.model import TERMS_PER_AXIS, FloatArray, regressors, term_names
 from station.sensor import AXES
@@ -204,10 +204,10 @@ def _axis(log: GyroLog, axis: int) -> AxisIdentifiability:
     pairs = [j for j in range(3) if terms[4 + j].estimable and terms[7 + j].estimable]
     form_reason = None
     if not pairs:
+        missing = ", ".join(t.term for t in terms[4:] if not t.estimable)
         form_reason = (
-            "no acceleration axis with both B and N estimable ("
-            + "; ".join(f"{t.term}: {t.reason}" for t in terms[4:] if not t.estimable)
-            + ")"
+            f"no acceleration axis j with both B_{a_i}j and N_{a_i}j estimable "
+            f"(not estimable: {missing})"
         )
     return AxisIdentifiability(
         axis=a_i,
@@ -224,4 +224,6 @@ def _axis(log: GyroLog, axis: int) -> AxisIdentifiability:
 
 def check_identifiability(log: GyroLog) -> IdentifiabilityReport:
     """Run the three rules (module docstring) on every gyro axis of ``log``."""
+    if len(log) == 0:
+        raise InputError("the log holds no dwells")
     return IdentifiabilityReport(axes=[_axis(log, axis) for axis in range(3)])

@@ -178,3 +178,26 @@ def test_fit_refuses_a_bad_plot_suffix(
         run_cli("gyro", "fit", str(centrifuge_log), "--plot", str(tmp_path / "f.jpg")),
         "must end in .png or .svg",
     )
+
+
+def test_check_accepts_the_full_plan(run_cli: CliRunner, centrifuge_log: Path) -> None:
+    result = run_cli("gyro", "check", str(centrifuge_log), "--json")
+    assert result.returncode == 0, result.stderr
+    axes = json.loads(result.stdout)["axes"]
+    assert [a["form_question"] for a in axes] == [True, True, True]
+
+
+def test_check_refuses_a_single_mount_log(run_cli: CliRunner, tmp_path: Path) -> None:
+    log = tmp_path / "single.csv"
+    assert (
+        run_cli("gyro", "simulate-centrifuge", "--single-mount", "--out", str(log)).returncode == 0
+    )
+    result = run_cli("gyro", "check", str(log))
+    assert "not estimable: N_xy: confounded with scale-factor non-linearity ω³" in result.stdout
+    _one_line_error(result, "cannot tell bias-form from scale-factor-form", "gyro x", "N_xy")
+
+
+def test_fit_refuses_a_bad_alpha(run_cli: CliRunner, centrifuge_log: Path) -> None:
+    _one_line_error(
+        run_cli("gyro", "fit", str(centrifuge_log), "--alpha", "1.5"), "--alpha: must lie between"
+    )

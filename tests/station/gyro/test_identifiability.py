@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from station.errors import InputError
 from station.gyro.identifiability import NotIdentifiableError, check_identifiability
 from station.gyro.log import GyroLog
 from station.gyro.model import GyroErrorModel
@@ -85,3 +86,9 @@ def test_exactly_collinear_columns_name_each_other(paper_model: GyroErrorModel) 
         assert partner in status.reason
     assert report.status("B_yx").estimable
     assert report.axes[1].condition_number is None
+
+
+def test_an_empty_log_is_refused() -> None:
+    empty = np.zeros((0, 3))
+    with pytest.raises(InputError, match="no dwells"):
+        check_identifiability(GyroLog(np.zeros(0), empty, empty, empty))
