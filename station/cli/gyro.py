@@ -56,21 +56,54 @@ def _cell(value: float | None, fmt: str) -> str:
     return "—" if value is None else format(value, fmt)
 
 
+def _estimate(value: float | None, error: float | None, fmt: str) -> str:
+    if value is None:
+        return "—"
+    return format(value, fmt) + ("" if error is None else " ± " + format(error, ".2g"))
+
+
 def _print_report(report: GyroFitReport) -> None:
+    se = report.standard_errors
     table = Table(title=f"Gyro error model ({report.dwells} dwells)")
-    for column in ("gyro", "bias deg/s", "S row", "B deg/s/g", "N ppm/g", "sense", "rms deg/s"):
+    for column in ("gyro", "bias deg/s", "sense axis", "residual rms deg/s"):
         table.add_column(column)
     for i, axis in enumerate(AXES):
         table.add_row(
             axis,
-            _cell(report.bias_dps[i], ".5f"),
-            " ".join(_cell(v, ".6f") for v in report.scale_matrix[i]),
-            " ".join(_cell(v, ".5f") for v in report.bias_g_sensitivity_dps_per_g[i]),
-            " ".join(_cell(v, ".1f") for v in report.g_sensitivity_ppm_per_g[i]),
+            _estimate(report.bias_dps[i], se.bias_dps[i], ".5f"),
             report.sense_axis[i] or "—",
             f"{report.residual_rms_dps[i]:.5f}",
         )
     out.print(table)
+    matrices = (
+        (
+            "S, scale factor and misalignment (row gyro, column rate)",
+            report.scale_matrix,
+            se.scale_matrix,
+            ".6f",
+        ),
+        (
+            "B, bias-form g-sensitivity, deg/s/g",
+            report.bias_g_sensitivity_dps_per_g,
+            se.bias_g_sensitivity_dps_per_g,
+            ".5f",
+        ),
+        (
+            "N, scale-factor-form g-sensitivity, ppm/g",
+            report.g_sensitivity_ppm_per_g,
+            se.g_sensitivity_ppm_per_g,
+            ".1f",
+        ),
+    )
+    for title, values, errors, fmt in matrices:
+        table = Table(title=title)
+        for column in ("gyro", *AXES):
+            table.add_column(column, justify="right")
+        for i, axis in enumerate(AXES):
+            table.add_row(
+                axis, *(_estimate(v, e, fmt) for v, e in zip(values[i], errors[i], strict=True))
+            )
+        out.print(table)
     for comparison in report.comparison:
         tests = ", ".join(
             f"{t.full} vs {t.reduced}: p={_cell(t.p_value, '.3g')}" for t in comparison.tests
