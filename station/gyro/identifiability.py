@@ -180,7 +180,7 @@ def _axis(log: GyroLog, axis: int) -> AxisIdentifiability:
         partners = _confounded(null, col_names, c)
         if partners is not None:
             reasons[names[k]] = (
-                f"confounded with {', '.join(partners) or 'nothing'} in this log"
+                f"confounded with {', '.join(partners)} in this log"
                 if partners
                 else "its regressor is (nearly) zero in this log"
             )
@@ -197,8 +197,8 @@ def _axis(log: GyroLog, axis: int) -> AxisIdentifiability:
             if partners is not None and any(p in _NONLINEARITY for p in partners):
                 reasons[names[k]] = (
                     f"confounded with {', '.join(partners)} of gyro {a_i}: the acceleration "
-                    "is tied to the rate (a = ω²r on one centrifuge mount); flip the mount "
-                    "and spin both ways"
+                    "follows the rate (as on a single centrifuge mount, where a = ω²r); "
+                    "flip the mount and spin both ways"
                 )
     terms = [TermStatus(term=n, estimable=n not in reasons, reason=reasons.get(n)) for n in names]
     pairs = [j for j in range(3) if terms[4 + j].estimable and terms[7 + j].estimable]

@@ -9,7 +9,8 @@ fitted by least squares (:mod:`station.gyro.lsq`). [Park2014]_ (section 2.2) say
 tuning-fork gyro's g-sensitivity is a scale-factor error, so K should be zero: the
 extra-sum-of-squares F-test of K_k· = 0 (3 and P − 4 degrees of freedom, residual
 variance from the poses themselves) says whether the slope is consistent with zero
-at level α. Bias is the mean over the poses; noise the RMS of the per-pose noise.
+at level α. Bias is the mean over the poses, checked against a limit when one is
+given; noise the RMS of the per-pose noise.
 """
 
 from typing import Any
@@ -37,6 +38,7 @@ class GyroAxisStill(BaseModel):
     slope_stderr_dps_per_g: list[float] | None
     slope_p_value: float | None
     slope_consistent_with_zero: bool | None
+    bias_within_limit: bool | None
     reason: str | None = None
 
 
@@ -45,7 +47,15 @@ class GyroStillSummary(BaseModel):
 
     poses: int
     alpha: float
+    bias_limit_dps: float | None
     axes: list[GyroAxisStill]
+
+    @property
+    def bias_pass(self) -> bool | None:
+        """Every gyro's |bias| within the limit (None without a limit)."""
+        if self.bias_limit_dps is None:
+            return None
+        return all(bool(axis.bias_within_limit) for axis in self.axes)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dictionary, for storage and the API."""
@@ -69,13 +79,20 @@ def _checked(name: str, value: FloatArray, poses: int | None) -> FloatArray:
 
 
 def summarize_still_poses(
-    gyro_means: FloatArray, pose_noise: FloatArray, gravity: FloatArray, alpha: float = 0.01
+    gyro_means: FloatArray,
+    pose_noise: FloatArray,
+    gravity: FloatArray,
+    alpha: float = 0.01,
+    bias_limit_dps: float | None = None,
 ) -> GyroStillSummary:
     """Bias, noise and bias-vs-gravity slope of each gyro (module docstring).
 
     ``gyro_means`` P-by-3 deg/s, ``pose_noise`` P-by-3 deg/s (standard deviation in each
     pose), ``gravity`` P-by-3 g (from the calibrated accelerometer); pose ``p`` is row p.
+    With ``bias_limit_dps`` each gyro's |bias| is checked against it.
     """
+    if bias_limit_dps is not None and not bias_limit_dps > 0:
+        raise InputError(f"bias limit: must be positive, got {bias_limit_dps:g} deg/s")
     means = _checked("gyro means", gyro_means, None)
     poses = means.shape[0]
     if poses == 0:
@@ -117,7 +134,8 @@ def summarize_still_poses(
                 slope_stderr_dps_per_g=stderr,
                 slope_p_value=p_value,
                 slope_consistent_with_zero=consistent,
+                bias_within_limit=None if bias_limit_dps is None else abs(bias) <= bias_limit_dps,
                 reason=reason,
             )
         )
-    return GyroStillSummary(poses=poses, alpha=alpha, axes=axes)
+    return GyroStillSummary(poses=poses, alpha=alpha, bias_limit_dps=bias_limit_dps, axes=axes)

@@ -70,7 +70,7 @@ def test_poses_in_one_plane_give_no_slope() -> None:
 def test_summary_round_trips_through_a_dict() -> None:
     summary = summarize_still_poses(_means(np.zeros((3, 3)), 2), np.full((6, 3), 0.05), SIX_POSES)
     data = summary.to_dict()
-    assert set(data) == {"poses", "alpha", "axes"}
+    assert set(data) == {"poses", "alpha", "bias_limit_dps", "axes"}
     assert set(data["axes"][0]) >= {"axis", "bias_dps", "noise_dps", "slope_dps_per_g"}
     assert GyroStillSummary.from_dict(data) == summary
 
@@ -95,3 +95,15 @@ def test_bad_inputs_are_named(
 ) -> None:
     with pytest.raises(InputError, match=message):
         summarize_still_poses(means, noise, gravity)
+
+
+def test_bias_is_checked_against_the_limit() -> None:
+    means = _means(np.zeros((3, 3)), 4)
+    summary = summarize_still_poses(means, np.zeros((6, 3)), SIX_POSES, bias_limit_dps=0.0175)
+    assert [a.bias_within_limit for a in summary.axes] == [False, True, True]  # 0.02, -0.015, 0.01
+    assert summary.bias_pass is False
+    unlimited = summarize_still_poses(means, np.zeros((6, 3)), SIX_POSES)
+    assert unlimited.bias_pass is None
+    assert [a.bias_within_limit for a in unlimited.axes] == [None, None, None]
+    with pytest.raises(InputError, match="bias limit: must be positive"):
+        summarize_still_poses(means, np.zeros((6, 3)), SIX_POSES, bias_limit_dps=0.0)
