@@ -133,7 +133,10 @@ def fit(
     if not 0.0 < alpha < 1.0:
         raise InputError(f"--alpha: must lie between 0 and 1, got {alpha:g}")
     log = read_log(log_file)
-    report = fit_log(log, alpha=alpha)
+    try:
+        report = fit_log(log, alpha=alpha)
+    except InputError as exc:
+        raise InputError(f"{log_file}: {exc}") from None
     if plot is not None:
         from station.gyro.plot import plot_g_sensitivity
 
@@ -162,7 +165,11 @@ def check(
 
     Prints the findings; exits with status 2 when the form question cannot be answered.
     """
-    report = check_identifiability(read_log(log_file))
+    log = read_log(log_file)
+    try:
+        report = check_identifiability(log)
+    except InputError as exc:
+        raise InputError(f"{log_file}: {exc}") from None
     if json_output:
         print_json(report.model_dump(mode="json"))
     else:

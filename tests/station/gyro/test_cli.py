@@ -153,7 +153,11 @@ def test_non_numeric_cell_names_file_line_and_column(run_cli: CliRunner, tmp_pat
 def test_too_few_rows(run_cli: CliRunner, tmp_path: Path) -> None:
     log = tmp_path / "short.csv"
     log.write_text(HEADER + "\n" + "\n".join([",".join(["1"] * 10)] * 5) + "\n", encoding="utf-8")
-    _one_line_error(run_cli("gyro", "fit", str(log)), "5 dwells in the log", "at least 11")
+    _one_line_error(
+        run_cli("gyro", "fit", str(log)), "short.csv: 5 dwells in the log", "at least 11"
+    )
+    log.write_text(HEADER + "\n", encoding="utf-8")
+    _one_line_error(run_cli("gyro", "check", str(log)), "short.csv: the log holds no dwells")
 
 
 @pytest.mark.parametrize(
