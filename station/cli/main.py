@@ -8,8 +8,10 @@ its traceback.
 import typer
 
 from station import __version__
-from station.cli import gyro
+from station.cli import gyro, solve, station
+from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
+from station.cli.serve import serve
 from station.errors import CalstationError
 
 EXIT_USER_ERROR = 2
@@ -21,8 +23,9 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-
-
+app.command(name="solve")(solve.solve_command)
+app.command(name="run")(station.run_command)
+app.command(name="demo")(station.demo_command)
 app.add_typer(gyro.app, name="gyro")
 
 
@@ -35,6 +38,11 @@ def _root() -> None:
 def version() -> None:
     """Print the software version."""
     out.print(__version__)
+
+
+app.command()(serve)
+app.add_typer(db_app, name="db")
+app.add_typer(keys_app, name="keys")
 
 
 def main() -> None:

@@ -1,0 +1,203 @@
+"""Taking one pose: stream samples until a still window, and summarise it."""
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
+from station.acquisition.stillness import StillnessDetector, StillnessThresholds, WindowVerdict
+from station.device.driver import PutterDriver
+from station.device.errors import DeviceTimeoutError
+from station.device.stats import LinkStats
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PoseResult:
+    """The record of one still pose.
+
+    Means, standard deviations and the sample count are over the accepted window:
+    accelerometer in ADC counts, gyros in deg/s, temperature in °C. ``duration_s`` is
+    the window's span and ``wait_s`` the time from the start of the acquisition to
+    acceptance, both in device time (sequence numbers over the sample rate);
+    ``link`` counts what happened on the link during the acquisition.
+    """
+
+    pose: str | None
+    accel_mean: Array
+    accel_std: Array
+    gyro_mean: Array
+    gyro_std: Array
+    temperature_c: float
+    temperature_std_c: float
+    sample_count: int
+    first_seq: int
+    last_seq: int
+    duration_s: float
+    wait_s: float
+    loss_fraction: float
+    link: LinkStats
+
+    @classmethod
+    def from_window(
+        cls,
+        window: Array,
+        *,
+        pose: str | None,
+        rate_hz: float,
+        wait_s: float,
+        link: LinkStats,
+        loss_fraction: float,
+    ) -> "PoseResult":
+        """Summarise an accepted window (rows as the driver hands them out)."""
+        return cls(
+            pose=pose,
+            accel_mean=window[:, 1:4].mean(axis=0),
+            accel_std=window[:, 1:4].std(axis=0, ddof=1),
+            gyro_mean=window[:, 4:7].mean(axis=0),
+            gyro_std=window[:, 4:7].std(axis=0, ddof=1),
+            temperature_c=float(window[:, 7].mean()),
+            temperature_std_c=float(window[:, 7].std(ddof=1)),
+            sample_count=len(window),
+            first_seq=int(window[0, 0]),
+            last_seq=int(window[-1, 0]),
+            duration_s=(window[-1, 0] - window[0, 0] + 1) / rate_hz,
+            wait_s=wait_s,
+            loss_fraction=loss_fraction,
+            link=link,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values for JSON and the database."""
+        return {
+            "pose": self.pose,
+            "accel_mean": self.accel_mean.tolist(),
+            "accel_std": self.accel_std.tolist(),
+            "gyro_mean": self.gyro_mean.tolist(),
+            "gyro_std": self.gyro_std.tolist(),
+            "temperature_c": self.temperature_c,
+            "temperature_std_c": self.temperature_std_c,
+            "sample_count": self.sample_count,
+            "first_seq": self.first_seq,
+            "last_seq": self.last_seq,
+            "duration_s": self.duration_s,
+            "wait_s": self.wait_s,
+            "loss_fraction": self.loss_fraction,
+            "link": self.link.to_dict(),
+        }
+
+
+class PoseAcquisition:
+    """Takes one pose without blocking: call :meth:`poll` from the interface's loop.
+
+    The driver must already be streaming raw samples. ``timeout_s`` is device time
+    (samples over the rate), so a faster-than-real-time simulator times out just as
+    a real unit would; ``stall_s`` is wall-clock time without any sample at all.
+    """
+
+    def __init__(
+        self,
+        driver: PutterDriver,
+        *,
+        pose: str | None = None,
+        limits: StillnessThresholds | None = None,
+        timeout_s: float = 30.0,
+        stall_s: float = 2.0,
+    ) -> None:
+        self.driver = driver
+        self.pose = pose
+        self.detector = StillnessDetector(limits)
+        self.timeout_s = timeout_s
+        self.stall_s = stall_s
+        self._rate = driver.rate_hz
+        self._first_seq: float | None = None
+        self._last_seq: float | None = None
+        self._stats0 = driver.stats
+        self._last_arrival = time.monotonic()
+        self.result: PoseResult | None = None
+        #: The rows the latest :meth:`poll` took in, for a live view of the unit.
+        self.recent: Array = np.empty((0, 8))
+
+    @property
+    def elapsed_s(self) -> float:
+        """Device time since the first sample of this acquisition."""
+        if self._first_seq is None or self._last_seq is None:
+            return 0.0
+        return (self._last_seq - self._first_seq + 1) / self._rate
+
+    @property
+    def last_verdict(self) -> WindowVerdict | None:
+        """The latest window's verdict: what keeps the pose from being taken."""
+        return self.detector.last
+
+    def poll(self) -> PoseResult | None:
+        """Take in the samples received so far; return the pose once a window is still.
+
+        Raises :class:`SaturatedAxisError` as soon as a window is still but for an
+        axis at a rail, :class:`NotStillError` or :class:`LinkQualityError` at the
+        timeout, :class:`~station.device.DeviceTimeoutError` when samples stop
+        coming, and the driver's own errors (e.g. disconnection).
+        """
+        if self.result is not None:
+            return self.result
+        rows = self.driver.drain()
+        self.recent = rows
+        now = time.monotonic()
+        if len(rows):
+            self._last_arrival = now
+            if self._first_seq is None:
+                self._first_seq = float(rows[0, 0])
+            self._last_seq = float(rows[-1, 0])
+            verdict = self.detector.feed(rows)
+            if verdict is not None:
+                self.result = PoseResult.from_window(
+                    verdict.window,
+                    pose=self.pose,
+                    rate_hz=self._rate,
+                    wait_s=self.elapsed_s,
+                    link=self.driver.stats - self._stats0,
+                    loss_fraction=verdict.loss_fraction,
+                )
+                return self.result
+            self._check(self.detector.last)
+        elif now - self._last_arrival > self.stall_s:
+            raise DeviceTimeoutError(
+                f"pose {self.pose}: no samples from {self.driver.url} for {self.stall_s:g} s"
+            )
+        return None
+
+    def _check(self, verdict: WindowVerdict | None) -> None:
+        if verdict is None:
+            return
+        if verdict.saturated_axes and not verdict.motion:
+            raise SaturatedAxisError(
+                f"accelerometer {', '.join(verdict.saturated_axes)} saturated "
+                "(stuck at the ADC rail while the unit is still)",
+                verdict.saturated_axes,
+                self.pose,
+            )
+        if self.elapsed_s < self.timeout_s:
+            return
+        summary = "; ".join(verdict.reasons)
+        if not verdict.motion and verdict.loss_fraction > self.detector.limits.max_loss_fraction:
+            raise LinkQualityError(f"bad link after {self.timeout_s:g} s: {summary}", self.pose)
+        raise NotStillError(f"not still after {self.timeout_s:g} s: {summary}", self.pose)
+
+
+def acquire_pose(
+    driver: PutterDriver,
+    *,
+    pose: str | None = None,
+    limits: StillnessThresholds | None = None,
+    timeout_s: float = 30.0,
+    poll_s: float = 0.02,
+) -> PoseResult:
+    """Blocking form of :class:`PoseAcquisition`, for scripts and tests."""
+    acquisition = PoseAcquisition(driver, pose=pose, limits=limits, timeout_s=timeout_s)
+    while (result := acquisition.poll()) is None:
+        time.sleep(poll_s)
+    return result

@@ -1,0 +1,43 @@
+"""The putter on the wire: protocol, driver, link statistics and errors.
+
+Public surface (everything else is private to the package)::
+
+    driver = PutterDriver.open("socket://127.0.0.1:5000")
+    driver.identify(expected_serial="PT000001")
+    driver.start_stream()
+    rows = driver.drain()          # N-by-8: SAMPLE_COLUMNS
+
+The protocol itself is documented in ``docs/protocol.md``.
+"""
+
+from station.device.driver import PutterDriver
+from station.device.errors import (
+    DeviceDisconnectedError,
+    DeviceError,
+    DeviceRejectedError,
+    DeviceTimeoutError,
+    NoReplyError,
+    ProtocolError,
+    SerialNumberMismatchError,
+)
+from station.device.messages import DeviceCalibration, Identity
+from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, PROTOCOL_VERSION, SAMPLE_COLUMNS
+from station.device.stats import LinkStats
+
+__all__ = [
+    "DEFAULT_BAUD",
+    "DEFAULT_RATE_HZ",
+    "PROTOCOL_VERSION",
+    "SAMPLE_COLUMNS",
+    "DeviceCalibration",
+    "DeviceDisconnectedError",
+    "DeviceError",
+    "DeviceRejectedError",
+    "DeviceTimeoutError",
+    "Identity",
+    "LinkStats",
+    "NoReplyError",
+    "ProtocolError",
+    "PutterDriver",
+    "SerialNumberMismatchError",
+]

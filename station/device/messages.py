@@ -1,0 +1,108 @@
+"""Typed contents of the command replies: who the unit is and what calibration it holds."""
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.device.protocol import (
+    CALIBRATION_REPLY_STRUCT,
+    CALIBRATION_STRUCT,
+    IDENTITY_STRUCT,
+    PROTOCOL_VERSION,
+    TEXT_FIELD_BYTES,
+    decode_text,
+    encode_text,
+)
+from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+
+
+@dataclass(frozen=True, slots=True)
+class Identity:
+    """The IDENTITY reply: serial number, firmware version, sensor part, protocol version."""
+
+    serial: str
+    firmware: str
+    sensor_part: str
+    protocol_version: int = PROTOCOL_VERSION
+
+    def encode(self) -> bytes:
+        """The IDENTITY payload."""
+        return IDENTITY_STRUCT.pack(
+            self.protocol_version,
+            encode_text(self.serial, TEXT_FIELD_BYTES["serial"]),
+            encode_text(self.firmware, TEXT_FIELD_BYTES["firmware"]),
+            encode_text(self.sensor_part, TEXT_FIELD_BYTES["sensor_part"]),
+        )
+
+    @classmethod
+    def decode(cls, payload: bytes) -> "Identity":
+        """Parse an IDENTITY payload."""
+        version, serial, firmware, part = IDENTITY_STRUCT.unpack(payload)
+        return cls(decode_text(serial), decode_text(firmware), decode_text(part), version)
+
+
+def _vector(value: NDArray[np.float64] | list[float]) -> NDArray[np.float64]:
+    return np.asarray(value, dtype=np.float32).astype(np.float64)
+
+
+@dataclass(frozen=True)
+class DeviceCalibration:
+    """Calibration coefficients as the unit stores them (IEEE-754 float32).
+
+    The unit turns counts into g with ``g = matrix @ (raw - offset)``: ``offset`` is
+    3 counts, ``matrix`` 3-by-3 in g/count. Values are rounded to float32 on
+    construction, so what is written compares exactly with what is read back.
+    ``written`` is False while the unit still holds its factory defaults.
+    """
+
+    offset: NDArray[np.float64]
+    matrix: NDArray[np.float64]
+    written: bool = True
+
+    def __post_init__(self) -> None:
+        offset = _vector(self.offset)
+        matrix = _vector(self.matrix)
+        if offset.shape != (3,) or matrix.shape != (3, 3):
+            raise ValueError(
+                f"calibration needs 3 offsets and a 3x3 matrix, got {offset.shape} "
+                f"and {matrix.shape}"
+            )
+        if not (np.isfinite(offset).all() and np.isfinite(matrix).all()):
+            raise ValueError("calibration coefficients must be finite")
+        object.__setattr__(self, "offset", offset)
+        object.__setattr__(self, "matrix", matrix)
+
+    @classmethod
+    def factory_default(cls) -> "DeviceCalibration":
+        """What a fresh unit holds: nominal offset and sensitivity, not written."""
+        return cls(
+            np.full(3, NOMINAL_OFFSET_COUNTS),
+            np.eye(3) / NOMINAL_SENSITIVITY_COUNTS_PER_G,
+            written=False,
+        )
+
+    def apply(self, raw: NDArray[np.float64]) -> NDArray[np.float64]:
+        """N-by-3 counts to N-by-3 g, as the unit does in calibrated mode."""
+        return (np.asarray(raw, dtype=np.float64) - self.offset) @ self.matrix.T
+
+    def encode(self) -> bytes:
+        """The WRITE_CAL payload: 3 offsets then the matrix row by row."""
+        return CALIBRATION_STRUCT.pack(*self.offset, *self.matrix.ravel())
+
+    def encode_reply(self) -> bytes:
+        """The CALIBRATION reply payload: written flag, then as :meth:`encode`."""
+        return CALIBRATION_REPLY_STRUCT.pack(int(self.written), *self.offset, *self.matrix.ravel())
+
+    @classmethod
+    def decode(cls, payload: bytes) -> "DeviceCalibration":
+        """Parse a WRITE_CAL payload (the unit's side)."""
+        values = np.array(CALIBRATION_STRUCT.unpack(payload))
+        return cls(values[:3], values[3:].reshape(3, 3))
+
+    @classmethod
+    def decode_reply(cls, payload: bytes) -> "DeviceCalibration":
+        """Parse a CALIBRATION reply payload."""
+        written, *rest = CALIBRATION_REPLY_STRUCT.unpack(payload)
+        values = np.array(rest)
+        return cls(values[:3], values[3:].reshape(3, 3), written=bool(written))

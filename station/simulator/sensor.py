@@ -1,0 +1,168 @@
+"""Sensor model of the virtual putter: accelerometer behind the ADC, and the gyros.
+
+Accelerometer (brief section 2, paper 1 eq. 5 extended by cross-axis coupling and
+temperature), per sample, in ADC counts::
+
+    a = o(T) + diag(s(T)) · C · f + n,      then rounded and clipped to 0…4095
+    o(T) = o₂₅ + k_o · (T − 25 °C)          s(T) = s₂₅ · (1 + k_s · (T − 25 °C))
+
+``f`` is the specific force in body axes (g), ``C`` the cross-axis matrix (unit
+diagonal, off-diagonal terms up to 2 %), ``n`` white noise. The unit's true
+counts-to-g map is therefore ``M = (diag(s) · C)⁻¹``, ``g = M · (a − o)``.
+
+Gyros (paper 2 eq. 4), per axis i, in deg/s::
+
+    ω̃_i = ω_i + β_i + Σ_{j≠i} β_ij ω_j + β_ii ω_i + G_ii · f_sense(i) · ω_i + n
+
+with ``f_sense(i)`` the specific force along gyro i's sense (detection) axis,
+:data:`GYRO_SENSE_AXIS`. Acceleration alone, or along another axis, gives no error,
+as the paper found on the centrifuge.
+"""
+
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.sensor import (
+    ADC_MAX,
+    ADC_MIN,
+    CROSS_AXIS_TYPICAL,
+    NOMINAL_OFFSET_COUNTS,
+    NOMINAL_SENSITIVITY_COUNTS_PER_G,
+    OFFSET_SPREAD_COUNTS,
+    SENSITIVITY_TOLERANCE,
+)
+
+Array = NDArray[np.float64]
+
+#: Sense axis of each gyro (x, y, z): the tuning forks detect along y, z and x.
+GYRO_SENSE_AXIS: Final = (1, 2, 0)
+REFERENCE_TEMPERATURE_C: Final = 25.0
+#: Accelerometer white noise, counts rms (KXM52 ~1 mg rms in the board's bandwidth).
+ACCEL_NOISE_COUNTS: Final = 1.0
+#: Gyro white noise, deg/s rms per sample.
+GYRO_NOISE_DPS: Final = 0.08
+#: Largest gyro bias drawn, deg/s (below the stillness detector's rate threshold).
+GYRO_BIAS_MAX_DPS: Final = 0.3
+#: Scale-factor g-sensitivity of paper 2 (X 581, Y 612, Z −613 ppm/g), nominal magnitude.
+GYRO_G_SENSITIVITY_PER_G: Final = 600e-6
+
+
+@dataclass(frozen=True)
+class SensorTruth:
+    """The true parameters of one virtual unit (at 25 °C), for checking a calibration."""
+
+    offset_counts: Array
+    sensitivity_counts_per_g: Array
+    cross_axis: Array
+    noise_counts: float
+    offset_tempco_counts_per_c: Array
+    sensitivity_tempco_per_c: Array
+    gyro_bias_dps: Array
+    gyro_scale_error: Array
+    gyro_misalignment: Array
+    gyro_g_sensitivity_per_g: Array
+    gyro_noise_dps: float
+
+    @property
+    def matrix(self) -> Array:
+        """The true counts-to-g matrix ``(diag(s) · C)⁻¹`` at 25 °C."""
+        return np.asarray(
+            np.linalg.inv(np.diag(self.sensitivity_counts_per_g) @ self.cross_axis),
+            dtype=np.float64,
+        )
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator) -> "SensorTruth":
+        """A unit as the line meets them: every parameter within its datasheet spread."""
+        cross = np.eye(3) + rng.uniform(-CROSS_AXIS_TYPICAL, CROSS_AXIS_TYPICAL, (3, 3)) * (
+            1 - np.eye(3)
+        )
+        misalignment = rng.uniform(-0.005, 0.005, (3, 3)) * (1 - np.eye(3))
+        return cls(
+            offset_counts=NOMINAL_OFFSET_COUNTS
+            + rng.uniform(-OFFSET_SPREAD_COUNTS, OFFSET_SPREAD_COUNTS, 3),
+            sensitivity_counts_per_g=NOMINAL_SENSITIVITY_COUNTS_PER_G
+            * (1 + rng.uniform(-SENSITIVITY_TOLERANCE, SENSITIVITY_TOLERANCE, 3)),
+            cross_axis=cross,
+            noise_counts=ACCEL_NOISE_COUNTS,
+            # ±100 mV over 60 °C is ±2 counts/°C at worst; typical units drift far less.
+            offset_tempco_counts_per_c=rng.uniform(-0.5, 0.5, 3),
+            # ±3 % over 60 °C at worst: ±0.05 %/°C; typical a fifth of it.
+            sensitivity_tempco_per_c=rng.uniform(-1e-4, 1e-4, 3),
+            gyro_bias_dps=rng.uniform(-GYRO_BIAS_MAX_DPS, GYRO_BIAS_MAX_DPS, 3),
+            gyro_scale_error=rng.uniform(-0.01, 0.01, 3),
+            gyro_misalignment=misalignment,
+            gyro_g_sensitivity_per_g=GYRO_G_SENSITIVITY_PER_G
+            * rng.uniform(0.95, 1.05, 3)
+            * rng.choice([-1.0, 1.0], 3),
+            gyro_noise_dps=GYRO_NOISE_DPS,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every parameter as plain lists, plus the derived counts-to-g ``matrix``."""
+        return {
+            "offset_counts": self.offset_counts.tolist(),
+            "sensitivity_counts_per_g": self.sensitivity_counts_per_g.tolist(),
+            "cross_axis": self.cross_axis.tolist(),
+            "matrix": self.matrix.tolist(),
+            "noise_counts": self.noise_counts,
+            "offset_tempco_counts_per_c": self.offset_tempco_counts_per_c.tolist(),
+            "sensitivity_tempco_per_c": self.sensitivity_tempco_per_c.tolist(),
+            "reference_temperature_c": REFERENCE_TEMPERATURE_C,
+            "gyro_bias_dps": self.gyro_bias_dps.tolist(),
+            "gyro_scale_error": self.gyro_scale_error.tolist(),
+            "gyro_misalignment": self.gyro_misalignment.tolist(),
+            "gyro_g_sensitivity_per_g": self.gyro_g_sensitivity_per_g.tolist(),
+            "gyro_sense_axis": list(GYRO_SENSE_AXIS),
+            "gyro_noise_dps": self.gyro_noise_dps,
+        }
+
+
+def accelerometer_counts(
+    truth: SensorTruth,
+    force_g: Array,
+    temperature_c: Array,
+    rng: np.random.Generator,
+) -> Array:
+    """ADC counts (N-by-3, integers as float) for specific force ``force_g`` (N-by-3, g)."""
+    dt = (temperature_c - REFERENCE_TEMPERATURE_C)[:, None]
+    offset = truth.offset_counts + truth.offset_tempco_counts_per_c * dt
+    sensitivity = truth.sensitivity_counts_per_g * (1 + truth.sensitivity_tempco_per_c * dt)
+    analog = (
+        offset
+        + (force_g @ truth.cross_axis.T) * sensitivity
+        + rng.normal(0.0, truth.noise_counts, force_g.shape)
+    )
+    return np.asarray(np.clip(np.rint(analog), ADC_MIN, ADC_MAX), dtype=np.float64)
+
+
+def gyro_rates(
+    truth: SensorTruth, rate_dps: Array, force_g: Array, rng: np.random.Generator
+) -> Array:
+    """Measured rates (N-by-3, deg/s) for true body rates ``rate_dps`` (paper 2 eq. 4)."""
+    sense_force = force_g[:, list(GYRO_SENSE_AXIS)]
+    return np.asarray(
+        rate_dps
+        + truth.gyro_bias_dps
+        + rate_dps @ truth.gyro_misalignment.T
+        + truth.gyro_scale_error * rate_dps
+        + truth.gyro_g_sensitivity_per_g * sense_force * rate_dps
+        + rng.normal(0.0, truth.gyro_noise_dps, rate_dps.shape),
+        dtype=np.float64,
+    )
+
+
+@dataclass(frozen=True)
+class Thermal:
+    """Board temperature: ambient plus self-heating with a first-order time constant."""
+
+    ambient_c: float = REFERENCE_TEMPERATURE_C
+    self_heating_c: float = 1.5
+    time_constant_s: float = 180.0
+
+    def at(self, t: Array) -> Array:
+        """Temperature (°C) at simulated times ``t`` (s since power-up)."""
+        return self.ambient_c + self.self_heating_c * (1 - np.exp(-t / self.time_constant_s))
