@@ -32,6 +32,7 @@ from station.acquisition.stillness import StillnessThresholds, WindowVerdict, ju
 from station.calibration import CalibrationError, Model, Solution, apply, solve
 from station.device import DeviceCalibration, DeviceError, PutterDriver
 from station.device.errors import DeviceDisconnectedError, DeviceTimeoutError
+from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
 from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, sense
@@ -475,14 +476,24 @@ class UnitRun:
         return reasons
 
     def _gyro_summary(self) -> GyroSummary | None:
+        """Bias and noise of each gyro over the fit poses, and their bias-vs-gravity slope."""
         fit = [
             self.journal.captures[i] for i in range(self.fit_count) if i in self.journal.captures
         ]
-        if not fit or any(c.record.gyro_mean is None for c in fit):
+        gyro_means = [c.record.gyro_mean for c in fit]
+        if not fit or any(m is None for m in gyro_means):
             return None
-        means = np.array([c.record.gyro_mean.as_tuple() for c in fit if c.record.gyro_mean])
+        means = np.array([m.as_tuple() for m in gyro_means if m is not None])
         stds = np.array([c.gyro_std.as_tuple() for c in fit])
-        return GyroSummary(bias=_vec(means.mean(axis=0)), noise=_vec(stds.mean(axis=0)))
+        still = None
+        if self.solution is not None and len(fit) == self.fit_count:
+            gravity = apply(self.solution.calibration, self._fit_means())
+            still = summarize_still_poses(means, stds, gravity)
+        return GyroSummary(
+            bias=_vec(means.mean(axis=0)),
+            noise=_vec(np.sqrt((stds**2).mean(axis=0))),
+            still=still,
+        )
 
     def _finish(self, *, store: bool) -> None:
         failures = self._checks() if not any(f.code == "aborted" for f in self._failures) else []
