@@ -100,6 +100,7 @@ class StationApp:
     def serve(self) -> list[RunRecord]:
         """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
         self._say_line(f"calstation {self.versions}")
+        self._check_store()
         self._sync()
         self._check_port()
         interrupted = self.journal_file.load()
@@ -363,6 +364,18 @@ class StationApp:
                 self.store_note = (
                     f"{result.refused} run(s) refused by the store: see {self.outbox.refused_dir}"
                 )
+
+    def _check_store(self) -> None:
+        """Connect to the store at start, so the first unit does not wait for it."""
+        try:
+            self._store = self._open_store()
+        except (SQLAlchemyError, OSError, CalstationError) as exc:
+            self.store_note = (
+                f"results database unreachable ({type(exc).__name__}): runs will wait in the outbox"
+            )
+            self._say_line(self.store_note)
+        else:
+            self._say_line("results database: connected")
 
     def _drop_store(self) -> None:
         if self._store is not None:
