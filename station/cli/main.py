@@ -9,6 +9,7 @@ import typer
 
 from station import __version__
 from station.cli.output import fail, out
+from station.cli.simulate import simulate
 from station.errors import CalstationError
 
 EXIT_USER_ERROR = 2
@@ -31,6 +32,9 @@ def _root() -> None:
 def version() -> None:
     """Print the software version."""
     out.print(__version__)
+
+
+app.command()(simulate)
 
 
 def main() -> None:

@@ -222,7 +222,6 @@ class VirtualPutter:
             target = pose(target)
         rotation = target.rotation if isinstance(target, Pose) else target
         with self._lock:
-            self._motion.never_settles = self.faults.never_settle
             start = self.clock.now() if at_s is None else at_s
             self._motion.move_to(rotation, start, duration_s)
             settled = self._motion.settled_at()
@@ -334,6 +333,7 @@ class VirtualPutter:
 
     def _sense(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Accelerometer counts, gyro and temperature fields (protocol counts) at ``t``."""
+        self._motion.never_settles = self.faults.never_settle
         kin = self._motion.evaluate(t)
         temperature = self.thermal.at(t)
         acc = accelerometer_counts(self._truth, kin.force_g, temperature, self._noise_rng)
