@@ -8,7 +8,10 @@ its traceback.
 import typer
 
 from station import __version__
+from station.cli import solve
+from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
+from station.cli.serve import serve
 from station.cli.simulate import simulate
 from station.errors import CalstationError
 
@@ -21,6 +24,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+app.command(name="solve")(solve.solve_command)
 
 
 @app.callback()
@@ -34,6 +38,9 @@ def version() -> None:
     out.print(__version__)
 
 
+app.command()(serve)
+app.add_typer(db_app, name="db")
+app.add_typer(keys_app, name="keys")
 app.command()(simulate)
 
 

@@ -1,0 +1,67 @@
+"""Every refused request ends as a 4xx with one clear ``detail`` line (never a 5xx).
+
+Answer bodies are ``{"detail": "..."}``; validation errors add ``errors``, one entry per
+offending field with its location.
+"""
+
+from collections.abc import Awaitable, Callable
+
+from fastapi import FastAPI, Request, status
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from sqlalchemy.exc import OperationalError
+
+from api.verification import CalibrationMismatchError
+from db import RunConflictError, SchemaOutOfDateError
+from station.errors import InputError
+
+#: How many field errors the one-line ``detail`` names.
+DETAIL_FIELDS = 3
+
+
+def _location(loc: tuple[int | str, ...]) -> str:
+    return ".".join(str(part) for part in loc)
+
+
+async def _validation_error(_request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, RequestValidationError)
+    errors = [
+        {"loc": _location(tuple(e["loc"])), "msg": str(e["msg"]), "type": str(e["type"])}
+        for e in exc.errors()
+    ]
+    shown = "; ".join(f"{e['loc']}: {e['msg']}" for e in errors[:DETAIL_FIELDS])
+    more = f" (and {len(errors) - DETAIL_FIELDS} more)" if len(errors) > DETAIL_FIELDS else ""
+    return JSONResponse(
+        {"detail": f"invalid request: {shown}{more}", "errors": errors},
+        status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
+    )
+
+
+Handler = Callable[[Request, Exception], Awaitable[JSONResponse]]
+
+
+def _answer(status_code: int) -> Handler:
+    async def handler(_request: Request, exc: Exception) -> JSONResponse:
+        return JSONResponse({"detail": str(exc)}, status_code=status_code)
+
+    return handler
+
+
+async def _database_unavailable(_request: Request, exc: Exception) -> JSONResponse:
+    return JSONResponse(
+        {"detail": "results database unavailable"},
+        status_code=status.HTTP_503_SERVICE_UNAVAILABLE,
+    )
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    """Map the product's errors to their HTTP answers."""
+    app.add_exception_handler(RequestValidationError, _validation_error)
+    app.add_exception_handler(InputError, _answer(status.HTTP_400_BAD_REQUEST))
+    app.add_exception_handler(RunConflictError, _answer(status.HTTP_409_CONFLICT))
+    app.add_exception_handler(
+        CalibrationMismatchError,
+        _answer(status.HTTP_422_UNPROCESSABLE_CONTENT),
+    )
+    app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
+    app.add_exception_handler(OperationalError, _database_unavailable)

@@ -1,0 +1,55 @@
+"""The server's own check of a submitted calibration: solve the poses again, compare.
+
+A station sends the mean counts of every pose and the coefficients it wrote into the
+unit; the server recomputes them with :func:`station.calibration.solve` from the ``fit``
+poses and refuses the run when they disagree beyond the tolerances below.
+"""
+
+import numpy as np
+
+from station.calibration import CalibrationError, solve
+from station.errors import CalstationError
+from station.records import RunRecord
+
+#: Offsets may differ by this much, counts (floating-point noise is ~1e-9).
+OFFSET_TOLERANCE_COUNTS = 1e-3
+#: Sensitivities and matrix entries may differ by this fraction.
+RELATIVE_TOLERANCE = 1e-6
+
+
+class CalibrationMismatchError(CalstationError):
+    """The submitted coefficients are not what the submitted poses give."""
+
+
+def check_coefficients(record: RunRecord) -> None:
+    """Raise :class:`CalibrationMismatchError` unless the poses give the submitted coefficients.
+
+    A failing run without coefficients (the station could not calibrate) has nothing to
+    check.
+    """
+    submitted = record.coefficients
+    if submitted is None:
+        return
+    poses = np.array([pose.mean.as_tuple() for pose in record.fit_poses()])
+    try:
+        recomputed = solve(poses, model=record.model).calibration
+    except CalibrationError as exc:
+        raise CalibrationMismatchError(
+            f"coefficients submitted but the fit poses give no calibration: {exc}"
+        ) from None
+    offset = np.array(submitted.offset.as_tuple())
+    sensitivity = np.array(submitted.sensitivity.as_tuple())
+    matrix = np.array(submitted.matrix)
+    checks = (
+        ("offset", offset, recomputed.offset, OFFSET_TOLERANCE_COUNTS, 0.0),
+        ("sensitivity", sensitivity, recomputed.sensitivity, 0.0, RELATIVE_TOLERANCE),
+        ("matrix", matrix, recomputed.matrix, 1e-12, RELATIVE_TOLERANCE),
+    )
+    for name, given, expected, atol, rtol in checks:
+        if not np.allclose(given, expected, atol=atol, rtol=rtol):
+            worst = np.unravel_index(np.argmax(np.abs(given - expected)), given.shape)
+            where = "".join(f"[{i}]" for i in worst)
+            raise CalibrationMismatchError(
+                f"{name}{where}: submitted {given[worst]:.6g}, the poses give "
+                f"{expected[worst]:.6g} ({record.model} model, {len(poses)} fit poses)"
+            )

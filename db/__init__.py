@@ -1,0 +1,26 @@
+"""The results database: every calibration run, per serial number, for the whole plant.
+
+Public surface::
+
+    open_database(url=None) -> Database     embedded SQLite by default, migrated on first use
+    RunRepository(session)                  submit and query runs, manage station keys
+    DatabaseSettings                        CALSTATION_DATABASE_URL / CALSTATION_DATA_DIR
+"""
+
+from db.engine import Database, make_engine, open_database
+from db.migrate import SchemaOutOfDateError
+from db.repository import RunConflictError, RunPage, RunQuery, RunRepository, SubmitOutcome
+from db.settings import DatabaseSettings
+
+__all__ = [
+    "Database",
+    "DatabaseSettings",
+    "RunConflictError",
+    "RunPage",
+    "RunQuery",
+    "RunRepository",
+    "SchemaOutOfDateError",
+    "SubmitOutcome",
+    "make_engine",
+    "open_database",
+]

@@ -1,0 +1,164 @@
+"""Between the run record (:mod:`station.records`) and the table rows (:mod:`db.models`)."""
+
+from datetime import datetime
+from typing import Any
+
+from db.models import Pose, Run, RunFailure
+from station.records import PoseRecord, RunRecord, RunSummary, StoredRun
+
+
+def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> dict[str, Any]:
+    """The ``runs`` row of ``record``."""
+    cal, quality = record.coefficients, record.quality
+    return {
+        "run_id": record.run_id,
+        "serial": record.serial,
+        "station_id": record.station_id,
+        "operator_id": record.operator_id,
+        "started_at": record.started_at,
+        "finished_at": record.finished_at,
+        "received_at": received_at,
+        "software_version": record.software_version,
+        "algorithm": record.algorithm,
+        "model": record.model,
+        "limits_name": record.limits.name,
+        "limits_version": record.limits.version,
+        "limits_sha256": record.limits.sha256,
+        "verdict": record.verdict,
+        "offset_x": cal.offset.x if cal else None,
+        "offset_y": cal.offset.y if cal else None,
+        "offset_z": cal.offset.z if cal else None,
+        "sensitivity_x": cal.sensitivity.x if cal else None,
+        "sensitivity_y": cal.sensitivity.y if cal else None,
+        "sensitivity_z": cal.sensitivity.z if cal else None,
+        "matrix": [list(row) for row in cal.matrix] if cal else None,
+        "residual_rms_mg": quality.residual_rms_mg if quality else None,
+        "residual_max_mg": quality.residual_max_mg if quality else None,
+        "condition_number": quality.condition_number if quality else None,
+        "verification_error_mg": quality.verification_error_mg if quality else None,
+        "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
+        "record_sha256": record_sha256,
+    }
+
+
+def pose_row(run_pk: int, pose: PoseRecord) -> dict[str, Any]:
+    """The ``poses`` row of one pose of run ``run_pk``."""
+    gyro = pose.gyro_mean
+    return {
+        "run_pk": run_pk,
+        "index": pose.index,
+        "name": pose.name,
+        "role": pose.role,
+        "mean_x": pose.mean.x,
+        "mean_y": pose.mean.y,
+        "mean_z": pose.mean.z,
+        "std_x": pose.std.x,
+        "std_y": pose.std.y,
+        "std_z": pose.std.z,
+        "sample_count": pose.sample_count,
+        "gyro_x": gyro.x if gyro else None,
+        "gyro_y": gyro.y if gyro else None,
+        "gyro_z": gyro.z if gyro else None,
+        "temperature_c": pose.temperature_c,
+        "crc_errors": pose.link.crc_errors,
+        "gaps": pose.link.gaps,
+        "resyncs": pose.link.resyncs,
+        "lost_samples": pose.link.lost_samples,
+        "replaced": [capture.model_dump(mode="json") for capture in pose.replaced],
+    }
+
+
+def failure_rows(run_pk: int, record: RunRecord) -> list[dict[str, Any]]:
+    """The ``run_failures`` rows of ``record``, in the order the station gave them."""
+    return [
+        {"run_pk": run_pk, "position": position, **failure.model_dump()}
+        for position, failure in enumerate(record.failures)
+    ]
+
+
+def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
+    has_cal = run.offset_x is not None
+    has_quality = run.residual_rms_mg is not None
+    return {
+        "run_id": run.run_id,
+        "serial": run.serial,
+        "station_id": run.station_id,
+        "operator_id": run.operator_id,
+        "started_at": run.started_at,
+        "finished_at": run.finished_at,
+        "received_at": run.received_at,
+        "software_version": run.software_version,
+        "algorithm": run.algorithm,
+        "model": run.model,
+        "limits": {
+            "name": run.limits_name,
+            "version": run.limits_version,
+            "sha256": run.limits_sha256,
+        },
+        "verdict": run.verdict,
+        "failures": [
+            {
+                "code": f.code,
+                "message": f.message,
+                "measured": f.measured,
+                "lower": f.lower,
+                "upper": f.upper,
+                "axis": f.axis,
+                "pose": f.pose,
+            }
+            for f in failures
+        ],
+        "coefficients": {
+            "offset": {"x": run.offset_x, "y": run.offset_y, "z": run.offset_z},
+            "sensitivity": {
+                "x": run.sensitivity_x,
+                "y": run.sensitivity_y,
+                "z": run.sensitivity_z,
+            },
+            "matrix": run.matrix,
+        }
+        if has_cal
+        else None,
+        "quality": {
+            "residual_rms_mg": run.residual_rms_mg,
+            "residual_max_mg": run.residual_max_mg,
+            "condition_number": run.condition_number,
+            "verification_error_mg": run.verification_error_mg,
+        }
+        if has_quality
+        else None,
+    }
+
+
+def summary_of(run: Run, failures: list[RunFailure]) -> RunSummary:
+    """The stored run ``run`` without its poses."""
+    return RunSummary.model_validate(_header(run, failures))
+
+
+def _pose(pose: Pose) -> dict[str, Any]:
+    return {
+        "index": pose.index,
+        "name": pose.name,
+        "role": pose.role,
+        "mean": {"x": pose.mean_x, "y": pose.mean_y, "z": pose.mean_z},
+        "std": {"x": pose.std_x, "y": pose.std_y, "z": pose.std_z},
+        "sample_count": pose.sample_count,
+        "gyro_mean": {"x": pose.gyro_x, "y": pose.gyro_y, "z": pose.gyro_z}
+        if pose.gyro_x is not None
+        else None,
+        "temperature_c": pose.temperature_c,
+        "link": {
+            "crc_errors": pose.crc_errors,
+            "gaps": pose.gaps,
+            "resyncs": pose.resyncs,
+            "lost_samples": pose.lost_samples,
+        },
+        "replaced": pose.replaced,
+    }
+
+
+def stored_run_of(run: Run, failures: list[RunFailure], poses: list[Pose]) -> StoredRun:
+    """The stored run ``run`` with every pose."""
+    return StoredRun.model_validate(
+        {**_header(run, failures), "gyro": run.gyro, "poses": [_pose(p) for p in poses]}
+    )

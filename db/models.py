@@ -1,0 +1,152 @@
+"""Tables of the results database.
+
+``runs`` is append-only: a retest is a new row, a unit's current verdict is its latest
+run's (by ``started_at``), its first run stays for first-pass yield. Each run owns its
+``poses`` and its ``run_failures``; ``station_keys`` holds the hashed API keys of the
+stations that submit over HTTP.
+"""
+
+import uuid
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import (
+    BigInteger,
+    CheckConstraint,
+    Double,
+    ForeignKey,
+    Index,
+    Integer,
+    String,
+    UniqueConstraint,
+    Uuid,
+)
+from sqlalchemy.orm import Mapped, mapped_column, relationship
+
+from db.base import Base, JsonDocument, UtcDateTime
+
+#: Primary keys: BIGINT on PostgreSQL; SQLite's rowid alias must be spelled INTEGER.
+BigId = BigInteger().with_variant(Integer(), "sqlite")
+
+NAME = 64
+
+
+class Run(Base):
+    """One calibration attempt of one unit at one station."""
+
+    __tablename__ = "runs"
+    __table_args__ = (
+        CheckConstraint("verdict IN ('pass', 'fail')", name="verdict"),
+        CheckConstraint("model IN ('six', 'nine')", name="model"),
+        Index("ix_runs_serial_started_at", "serial", "started_at", "id"),
+        Index("ix_runs_station_id_started_at", "station_id", "started_at", "id"),
+        Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
+        Index("ix_runs_started_at", "started_at", "id"),
+    )
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid(), unique=True)
+    serial: Mapped[str] = mapped_column(String(NAME))
+    station_id: Mapped[str] = mapped_column(String(NAME))
+    operator_id: Mapped[str] = mapped_column(String(NAME))
+    started_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    finished_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    received_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    software_version: Mapped[str] = mapped_column(String(NAME))
+    algorithm: Mapped[str] = mapped_column(String(NAME))
+    model: Mapped[str] = mapped_column(String(4))
+    limits_name: Mapped[str] = mapped_column(String(NAME))
+    limits_version: Mapped[str] = mapped_column(String(NAME))
+    limits_sha256: Mapped[str] = mapped_column(String(64))
+    verdict: Mapped[str] = mapped_column(String(4))
+    offset_x: Mapped[float | None] = mapped_column(Double())
+    offset_y: Mapped[float | None] = mapped_column(Double())
+    offset_z: Mapped[float | None] = mapped_column(Double())
+    sensitivity_x: Mapped[float | None] = mapped_column(Double())
+    sensitivity_y: Mapped[float | None] = mapped_column(Double())
+    sensitivity_z: Mapped[float | None] = mapped_column(Double())
+    matrix: Mapped[list[list[float]] | None] = mapped_column(JsonDocument)
+    residual_rms_mg: Mapped[float | None] = mapped_column(Double())
+    residual_max_mg: Mapped[float | None] = mapped_column(Double())
+    condition_number: Mapped[float | None] = mapped_column(Double())
+    verification_error_mg: Mapped[float | None] = mapped_column(Double())
+    gyro: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
+    #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
+    record_sha256: Mapped[str] = mapped_column(String(64))
+
+    poses: Mapped[list["Pose"]] = relationship(
+        back_populates="run", order_by="Pose.index", lazy="raise"
+    )
+    failures: Mapped[list["RunFailure"]] = relationship(
+        back_populates="run", order_by="RunFailure.position", lazy="raise"
+    )
+
+
+class Pose(Base):
+    """One still pose of a run: the accepted capture (counts, deg/s, °C) and link health."""
+
+    __tablename__ = "poses"
+    __table_args__ = (
+        UniqueConstraint("run_pk", "index"),
+        CheckConstraint("role IN ('fit', 'verify')", name="role"),
+    )
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    index: Mapped[int] = mapped_column(Integer())
+    name: Mapped[str] = mapped_column(String(NAME))
+    role: Mapped[str] = mapped_column(String(8))
+    mean_x: Mapped[float] = mapped_column(Double())
+    mean_y: Mapped[float] = mapped_column(Double())
+    mean_z: Mapped[float] = mapped_column(Double())
+    std_x: Mapped[float] = mapped_column(Double())
+    std_y: Mapped[float] = mapped_column(Double())
+    std_z: Mapped[float] = mapped_column(Double())
+    sample_count: Mapped[int] = mapped_column(Integer())
+    gyro_x: Mapped[float | None] = mapped_column(Double())
+    gyro_y: Mapped[float | None] = mapped_column(Double())
+    gyro_z: Mapped[float | None] = mapped_column(Double())
+    temperature_c: Mapped[float | None] = mapped_column(Double())
+    crc_errors: Mapped[int] = mapped_column(Integer())
+    gaps: Mapped[int] = mapped_column(Integer())
+    resyncs: Mapped[int] = mapped_column(Integer())
+    lost_samples: Mapped[int] = mapped_column(Integer())
+    #: Captures of this pose thrown away and taken again, for audit.
+    replaced: Mapped[list[dict[str, Any]]] = mapped_column(JsonDocument)
+
+    run: Mapped[Run] = relationship(back_populates="poses", lazy="raise")
+
+
+class RunFailure(Base):
+    """One reason a run failed: the check, the measured value and its bounds."""
+
+    __tablename__ = "run_failures"
+    __table_args__ = (
+        UniqueConstraint("run_pk", "position"),
+        Index("ix_run_failures_code", "code"),
+    )
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    position: Mapped[int] = mapped_column(Integer())
+    code: Mapped[str] = mapped_column(String(NAME))
+    message: Mapped[str] = mapped_column(String(500))
+    measured: Mapped[float | None] = mapped_column(Double())
+    lower: Mapped[float | None] = mapped_column(Double())
+    upper: Mapped[float | None] = mapped_column(Double())
+    axis: Mapped[str | None] = mapped_column(String(1))
+    pose: Mapped[int | None] = mapped_column(Integer())
+
+    run: Mapped[Run] = relationship(back_populates="failures", lazy="raise")
+
+
+class StationKey(Base):
+    """A station's API key, stored as its SHA-256 (the key itself is shown once)."""
+
+    __tablename__ = "station_keys"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    station_id: Mapped[str] = mapped_column(String(NAME), index=True)
+    key_sha256: Mapped[str] = mapped_column(String(64), unique=True)
+    created_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    revoked_at: Mapped[datetime | None] = mapped_column(UtcDateTime())

@@ -1,0 +1,231 @@
+"""Queries of the results database: submit runs, read a unit's state and history, list runs.
+
+Every query is one indexed SQL statement (no scan in Python): a unit's latest run walks
+``ix_runs_serial_started_at`` backwards, lists walk the index that matches their filter
+with keyset (cursor) pagination on ``(started_at, id)``.
+"""
+
+import base64
+import binascii
+import hashlib
+import secrets
+from collections import defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from typing import Any
+from uuid import UUID
+
+from sqlalchemy import insert, select, text, tuple_
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.orm import Session
+from sqlalchemy.sql.dml import ReturningInsert
+
+from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
+from db.models import Pose, Run, RunFailure, StationKey
+from station.errors import CalstationError, InputError
+from station.records import RunRecord, RunSummary, StoredRun, Verdict
+
+#: Largest page of a run list.
+MAX_PAGE = 500
+
+
+class RunConflictError(CalstationError):
+    """A run with this UUID is already stored with different content."""
+
+
+@dataclass(frozen=True)
+class SubmitOutcome:
+    """What a submission did: stored a new run, or found the same run already stored."""
+
+    created: bool
+    run: StoredRun
+
+
+@dataclass(frozen=True)
+class RunQuery:
+    """Filters of a run list; ``since`` inclusive, ``until`` exclusive, on ``started_at``."""
+
+    serial: str | None = None
+    station_id: str | None = None
+    verdict: Verdict | None = None
+    since: datetime | None = None
+    until: datetime | None = None
+    limit: int = 100
+    cursor: str | None = None
+
+
+@dataclass(frozen=True)
+class RunPage:
+    """One page of a run list, newest first; ``next_cursor`` is ``None`` on the last page."""
+
+    runs: list[RunSummary]
+    next_cursor: str | None
+
+
+def record_sha256(record: RunRecord) -> str:
+    """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash."""
+    return hashlib.sha256(record.model_dump_json().encode()).hexdigest()
+
+
+def key_sha256(key: str) -> str:
+    """How an API key is stored: its SHA-256 (keys are 256-bit random, not passwords)."""
+    return hashlib.sha256(key.encode()).hexdigest()
+
+
+def encode_cursor(started_at: datetime, pk: int) -> str:
+    """An opaque cursor pointing just past the run ``(started_at, pk)``."""
+    raw = f"{started_at.astimezone(UTC).isoformat()}|{pk}".encode()
+    return base64.urlsafe_b64encode(raw).decode().rstrip("=")
+
+
+def decode_cursor(cursor: str) -> tuple[datetime, int]:
+    """Undo :func:`encode_cursor`; :class:`InputError` for anything else."""
+    try:
+        raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4)).decode()
+        moment, pk = raw.split("|")
+        started_at = datetime.fromisoformat(moment)
+        if started_at.tzinfo is None:
+            raise ValueError("naive")
+        return started_at, int(pk)
+    except (ValueError, binascii.Error, UnicodeDecodeError):
+        raise InputError(f"cursor {cursor[:40]!r} is not one this server handed out") from None
+
+
+class RunRepository:
+    """Runs and station keys, in the caller's session (the caller commits)."""
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+
+    def ping(self) -> None:
+        """Raise if the database does not answer."""
+        self.session.execute(text("SELECT 1"))
+
+    # -- runs --------------------------------------------------------------------------
+
+    def submit(self, record: RunRecord, *, received_at: datetime | None = None) -> SubmitOutcome:
+        """Store ``record`` unless a run with its UUID is stored already.
+
+        The unique constraint on ``run_id`` decides (``INSERT … ON CONFLICT DO
+        NOTHING``), so concurrent duplicates cannot both land. A retry of the same record
+        returns the stored run; the same UUID with other content raises
+        :class:`RunConflictError`.
+        """
+        digest = record_sha256(record)
+        received_at = received_at or datetime.now(UTC)
+        row = run_row(record, received_at=received_at, record_sha256=digest)
+        pk = self.session.execute(self._insert_new_run(row)).scalar_one_or_none()
+        if pk is None:
+            stored_digest = self.session.scalars(
+                select(Run.record_sha256).where(Run.run_id == record.run_id)
+            ).one()
+            if stored_digest != digest:
+                raise RunConflictError(
+                    f"run {record.run_id} is already stored with different content"
+                )
+            stored = self.get(record.run_id)
+            assert stored is not None
+            return SubmitOutcome(created=False, run=stored)
+        self.session.execute(insert(Pose), [pose_row(pk, pose) for pose in record.poses])
+        if record.failures:
+            self.session.execute(insert(RunFailure), failure_rows(pk, record))
+        stored = StoredRun.model_validate({**record.model_dump(), "received_at": received_at})
+        return SubmitOutcome(created=True, run=stored)
+
+    def _insert_new_run(self, row: dict[str, Any]) -> ReturningInsert[int]:
+        """``INSERT … ON CONFLICT (run_id) DO NOTHING RETURNING id`` in the session's dialect."""
+        dialect = self.session.get_bind().dialect.name
+        if dialect == "postgresql":
+            stmt: postgresql.Insert | sqlite.Insert = postgresql.insert(Run)
+        elif dialect == "sqlite":
+            stmt = sqlite.insert(Run)
+        else:
+            raise CalstationError(f"database dialect {dialect!r} is not supported")
+        return stmt.values(row).on_conflict_do_nothing(index_elements=["run_id"]).returning(Run.id)
+
+    def get(self, run_id: UUID) -> StoredRun | None:
+        """One run with its poses and failure reasons."""
+        run = self.session.scalars(select(Run).where(Run.run_id == run_id)).one_or_none()
+        if run is None:
+            return None
+        poses = self.session.scalars(
+            select(Pose).where(Pose.run_pk == run.id).order_by(Pose.index)
+        ).all()
+        return stored_run_of(run, self._failures([run.id])[run.id], list(poses))
+
+    def latest_for_serial(self, serial: str) -> RunSummary | None:
+        """The unit's current state: its latest run (by start time)."""
+        run = self.session.scalars(
+            select(Run)
+            .where(Run.serial == serial)
+            .order_by(Run.started_at.desc(), Run.id.desc())
+            .limit(1)
+        ).one_or_none()
+        return None if run is None else self._summaries([run])[0]
+
+    def history(self, serial: str) -> list[RunSummary]:
+        """Every run of the unit, oldest first (the first one gives first-pass yield)."""
+        runs = self.session.scalars(
+            select(Run).where(Run.serial == serial).order_by(Run.started_at, Run.id)
+        ).all()
+        return self._summaries(runs)
+
+    def list_runs(self, query: RunQuery) -> RunPage:
+        """A page of runs matching ``query``, newest first."""
+        if not 1 <= query.limit <= MAX_PAGE:
+            raise InputError(f"limit must be 1…{MAX_PAGE}, got {query.limit}")
+        stmt = select(Run)
+        if query.serial is not None:
+            stmt = stmt.where(Run.serial == query.serial)
+        if query.station_id is not None:
+            stmt = stmt.where(Run.station_id == query.station_id)
+        if query.verdict is not None:
+            stmt = stmt.where(Run.verdict == query.verdict)
+        if query.since is not None:
+            stmt = stmt.where(Run.started_at >= query.since)
+        if query.until is not None:
+            stmt = stmt.where(Run.started_at < query.until)
+        if query.cursor is not None:
+            stmt = stmt.where(tuple_(Run.started_at, Run.id) < tuple_(*decode_cursor(query.cursor)))
+        stmt = stmt.order_by(Run.started_at.desc(), Run.id.desc()).limit(query.limit + 1)
+        runs = self.session.scalars(stmt).all()
+        page, more = runs[: query.limit], len(runs) > query.limit
+        cursor = encode_cursor(page[-1].started_at, page[-1].id) if more else None
+        return RunPage(runs=self._summaries(page), next_cursor=cursor)
+
+    def _failures(self, pks: Sequence[int]) -> dict[int, list[RunFailure]]:
+        by_run: dict[int, list[RunFailure]] = defaultdict(list)
+        if pks:
+            for failure in self.session.scalars(
+                select(RunFailure)
+                .where(RunFailure.run_pk.in_(pks))
+                .order_by(RunFailure.run_pk, RunFailure.position)
+            ):
+                by_run[failure.run_pk].append(failure)
+        return by_run
+
+    def _summaries(self, runs: Sequence[Run]) -> list[RunSummary]:
+        failed = [run.id for run in runs if run.verdict == "fail"]
+        failures = self._failures(failed)
+        return [summary_of(run, failures[run.id]) for run in runs]
+
+    # -- station keys ------------------------------------------------------------------
+
+    def create_key(self, station_id: str) -> str:
+        """A new API key for ``station_id``; only its hash is stored, so show it now."""
+        key = "csk_" + secrets.token_urlsafe(32)
+        self.session.add(
+            StationKey(
+                station_id=station_id, key_sha256=key_sha256(key), created_at=datetime.now(UTC)
+            )
+        )
+        return key
+
+    def station_for_key(self, key: str) -> str | None:
+        """The station a valid (not revoked) key belongs to."""
+        return self.session.scalars(
+            select(StationKey.station_id).where(
+                StationKey.key_sha256 == key_sha256(key), StationKey.revoked_at.is_(None)
+            )
+        ).one_or_none()

@@ -1,0 +1,59 @@
+"""Accelerometer calibration from still poses (brief section 3, paper 1).
+
+Public surface::
+
+    solve(poses, model)        the right method for the model and pose count
+    solve_paper(poses)         the paper's six-position eq. 10
+    solve_paper_batch(poses)   eq. 10 for K units at once, (K, 6, 3)
+    solve_least_squares(...)   6- or 9-parameter maximum-likelihood fit, N ≥ 6 / 9
+    solve_classic(plus, minus) the ±1 g baseline, eqs. 2 and 3
+    apply(calibration, raw)    counts → g
+"""
+
+from station.calibration.classic import solve_classic
+from station.calibration.errors import (
+    CalibrationError,
+    CoplanarPosesError,
+    DuplicatePoseError,
+    IllConditionedError,
+    InvalidValueError,
+    NonPositiveScaleError,
+    RailValueError,
+    TooFewPosesError,
+)
+from station.calibration.geometry import GeometryLimits, coverage, pair_angles_deg
+from station.calibration.least_squares import UNKNOWNS, solve_least_squares
+from station.calibration.model import Calibration, Model, apply
+from station.calibration.paper import Outcome, PaperBatch, solve_paper, solve_paper_batch
+from station.calibration.residual import MAX_CONDITION
+from station.calibration.solution import Quality, Solution, StandardErrors
+from station.calibration.solve import solve
+
+__all__ = [
+    "MAX_CONDITION",
+    "UNKNOWNS",
+    "Calibration",
+    "CalibrationError",
+    "CoplanarPosesError",
+    "DuplicatePoseError",
+    "GeometryLimits",
+    "IllConditionedError",
+    "InvalidValueError",
+    "Model",
+    "NonPositiveScaleError",
+    "Outcome",
+    "PaperBatch",
+    "Quality",
+    "RailValueError",
+    "Solution",
+    "StandardErrors",
+    "TooFewPosesError",
+    "apply",
+    "coverage",
+    "pair_angles_deg",
+    "solve",
+    "solve_classic",
+    "solve_least_squares",
+    "solve_paper",
+    "solve_paper_batch",
+]

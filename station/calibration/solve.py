@@ -1,0 +1,28 @@
+"""One entry point: the right method for the model and the number of poses."""
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from station.calibration.geometry import GeometryLimits
+from station.calibration.least_squares import solve_least_squares
+from station.calibration.model import Model
+from station.calibration.paper import PAPER_POSES, solve_paper
+from station.calibration.residual import MAX_CONDITION
+from station.calibration.solution import Solution
+
+
+def solve(
+    poses: ArrayLike,
+    model: Model = "six",
+    limits: GeometryLimits = GeometryLimits(),
+    max_condition: float = MAX_CONDITION,
+) -> Solution:
+    """Calibrate from N still poses, shape (N, 3), mean counts.
+
+    ``model="six"``: the paper's eq. 10 for exactly six poses, least squares for more.
+    ``model="nine"``: the 9-parameter least-squares fit (N ≥ 9).
+    """
+    p = np.asarray(poses, dtype=np.float64)
+    if model == "six" and p.ndim == 2 and p.shape[0] == PAPER_POSES:
+        return solve_paper(p, limits, max_condition)
+    return solve_least_squares(p, model, limits, max_condition)

@@ -1,0 +1,180 @@
+"""Limits profiles: named, versioned pass/fail bounds, read from TOML.
+
+A profile file holds one table per profile (``[profiles.NAME]``, see the shipped
+``station/profiles/limits.toml``). Each stored run carries its profile's name,
+version and SHA-256; the hash covers the profile's canonical JSON, so a change of any
+bound changes it while comments and layout do not.
+
+A check compares one measured value with one pair of bounds and, when it is outside,
+returns a typed :class:`station.records.FailureReason` (code, measured value, bounds,
+axis or pose) rather than free text.
+"""
+
+import hashlib
+import json
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Self
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from station.errors import InputError
+from station.records import Axis, FailureReason, LimitsRef
+
+DEFAULT_PROFILE = "kxm52-production"
+
+
+class Bounds(BaseModel):
+    """Closed interval [lower, upper]; a missing side is unbounded."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    lower: float | None = None
+    upper: float | None = None
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Self:
+        if self.lower is None and self.upper is None:
+            raise ValueError("give lower, upper or both")
+        if self.lower is not None and self.upper is not None and self.lower > self.upper:
+            raise ValueError(f"lower {self.lower} is above upper {self.upper}")
+        return self
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` lies within the bounds (NaN never does)."""
+        low = self.lower if self.lower is not None else -float("inf")
+        high = self.upper if self.upper is not None else float("inf")
+        return low <= value <= high
+
+    def describe(self) -> str:
+        """``[a, b]``, ``≤ b`` or ``≥ a``."""
+        if self.lower is None:
+            return f"≤ {self.upper:g}"
+        if self.upper is None:
+            return f"≥ {self.lower:g}"
+        return f"[{self.lower:g}, {self.upper:g}]"
+
+
+Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")]
+
+
+class LimitsProfile(BaseModel):
+    """The bounds one run is judged against."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    version: Name
+    description: str = ""
+    offset_counts: Bounds
+    sensitivity_counts_per_g: Bounds
+    verification_error_mg: Bounds
+    pose_noise_counts: Bounds
+    gyro_bias_dps: Bounds
+    link_loss: Bounds
+    writeback_relative_error: Bounds
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace)."""
+        canonical = json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(canonical.encode()).hexdigest()
+
+    @property
+    def ref(self) -> LimitsRef:
+        """What a stored run records of its profile."""
+        return LimitsRef(name=self.name, version=self.version, sha256=self.sha256)
+
+
+#: Check codes: one per kind of bound, each with the profile field it reads.
+CHECKS: dict[str, str] = {
+    "offset": "offset_counts",
+    "sensitivity": "sensitivity_counts_per_g",
+    "verification_error": "verification_error_mg",
+    "pose_noise": "pose_noise_counts",
+    "gyro_bias": "gyro_bias_dps",
+    "link_loss": "link_loss",
+    "writeback": "writeback_relative_error",
+}
+UNITS = {
+    "offset": "counts",
+    "sensitivity": "counts/g",
+    "verification_error": "mg",
+    "pose_noise": "counts",
+    "gyro_bias": "deg/s",
+    "link_loss": "",
+    "writeback": "",
+}
+
+
+def check(
+    profile: LimitsProfile,
+    code: str,
+    measured: float,
+    *,
+    axis: Axis | None = None,
+    pose: int | None = None,
+) -> FailureReason | None:
+    """Compare ``measured`` with the profile's bounds for ``code``.
+
+    Returns ``None`` when within bounds, else the failure reason.
+    """
+    bounds: Bounds = getattr(profile, CHECKS[code])
+    if bounds.contains(measured):
+        return None
+    where = "".join([f" {axis}" if axis else "", f" (pose {pose + 1})" if pose is not None else ""])
+    unit = f" {UNITS[code]}" if UNITS[code] else ""
+    return FailureReason(
+        code=code,
+        message=f"{code.replace('_', ' ')}{where} {measured:.6g}{unit} outside {bounds.describe()}",
+        measured=measured if math.isfinite(measured) else None,
+        lower=bounds.lower,
+        upper=bounds.upper,
+        axis=axis,
+        pose=pose,
+    )
+
+
+def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
+    """All profiles of a TOML file (the shipped file when ``path`` is None)."""
+    if path is None:
+        source = resources.files("station.profiles").joinpath("limits.toml")
+        text, shown = source.read_text(encoding="utf-8"), "station/profiles/limits.toml"
+    else:
+        shown = str(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise InputError(
+                f"{shown}: cannot read the limits file: {exc.strerror or exc}"
+            ) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{shown}: not valid TOML: {exc}") from None
+    tables = data.get("profiles")
+    if not isinstance(tables, dict) or not tables:
+        raise InputError(f"{shown}: no [profiles.NAME] tables")
+    profiles = {}
+    for name, table in tables.items():
+        try:
+            profiles[name] = LimitsProfile.model_validate({"name": name, **table})
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            field = ".".join(str(p) for p in first["loc"])
+            raise InputError(f"{shown}: profile {name}: {field}: {first['msg']}") from None
+    return profiles
+
+
+def load_profile(path: Path | None = None, name: str | None = None) -> LimitsProfile:
+    """One profile by name (default: the only one, or ``kxm52-production``)."""
+    profiles = load_profiles(path)
+    if name is None:
+        name = next(iter(profiles)) if len(profiles) == 1 else DEFAULT_PROFILE
+    try:
+        return profiles[name]
+    except KeyError:
+        known = ", ".join(sorted(profiles))
+        raise InputError(f"limits profile {name!r} not found (known: {known})") from None

@@ -1,0 +1,99 @@
+"""The API on each backend: in-process (``client``) and as a real uvicorn server (``live``)."""
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import httpx
+import pytest
+
+from db import Database, RunRepository
+from tests.conftest import REPO_ROOT
+
+STATION = "line1-st1"
+
+
+@pytest.fixture
+def station_key(database: Database) -> str:
+    """A valid API key of station ``line1-st1``."""
+    with database.session() as session, session.begin():
+        return RunRepository(session).create_key(STATION)
+
+
+def free_port() -> int:
+    """A TCP port nobody listens on right now."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+@contextmanager
+def serving(database_url: str, *, workers: int = 2, **settings: str) -> Iterator[str]:
+    """Run ``calstation serve`` as a real process on a free port; yield its base URL.
+
+    ``settings`` become ``CALSTATION_<NAME>`` variables of the server process.
+    """
+    port = free_port()
+    env = {
+        **{k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")},
+        **{f"CALSTATION_{name.upper()}": value for name, value in settings.items()},
+        "CALSTATION_DATABASE_URL": database_url,
+        "PYTHONPATH": str(REPO_ROOT),
+    }
+    command = ["serve", "--port", str(port), "--workers", str(workers)]
+    server = subprocess.Popen(
+        [sys.executable, "-m", "station", *command],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 30
+        while not _healthy(base):
+            if server.poll() is not None:
+                output = server.stdout.read() if server.stdout else ""
+                pytest.fail(f"calstation serve exited {server.returncode}: {output}")
+            if time.monotonic() > deadline:
+                pytest.fail("calstation serve did not answer /healthz within 30 s")
+            time.sleep(0.05)
+        yield base
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+        if server.stdout:
+            server.stdout.close()
+
+
+def _healthy(base: str) -> bool:
+    try:
+        return httpx.get(f"{base}/healthz", timeout=1).status_code == 200
+    except httpx.TransportError:
+        return False
+
+
+@pytest.fixture(scope="session")
+def live_url(migrated_database: Database, database_url: str) -> Iterator[str]:
+    """The server with default settings, on the session's database."""
+    with serving(database_url) as base:
+        yield base
+
+
+@pytest.fixture(scope="session")
+def keyed_url(migrated_database: Database, database_url: str) -> Iterator[str]:
+    """A server whose read endpoints need a station key too."""
+    with serving(database_url, workers=1, read_requires_key="true") as base:
+        yield base
+
+
+@pytest.fixture
+def client(database: Database, live_url: str) -> Iterator[httpx.Client]:
+    """An HTTP client of the live server; the database is emptied after the test."""
+    with httpx.Client(base_url=live_url, timeout=10) as client:
+        yield client

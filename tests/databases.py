@@ -1,0 +1,102 @@
+"""Database fixtures (a pytest plugin loaded by tests/conftest.py): SQLite and PostgreSQL.
+
+Every database test runs on both backends (``database_url`` is parametrised). The
+PostgreSQL URL comes from ``CALSTATION_TEST_POSTGRES_URL``; each test session works in a
+schema of its own (other sessions may share the database) and drops it at the end.
+Tests are isolated from each other: ``session`` rolls back an outer transaction,
+``database`` empties every table after the test.
+"""
+
+import os
+import secrets
+from collections.abc import Iterator
+
+import psycopg
+import pytest
+from sqlalchemy import Connection, make_url, text
+from sqlalchemy.orm import Session
+
+from db import Database, make_engine, open_database
+from db.base import Base
+
+POSTGRES_ENV = "CALSTATION_TEST_POSTGRES_URL"
+
+
+def _postgres_server_url() -> str:
+    url = os.environ.get(POSTGRES_ENV)
+    if not url:
+        pytest.skip(
+            f"PostgreSQL tests need {POSTGRES_ENV} (e.g. postgresql+psycopg://postgres@127.0.0.1:5432/test)"
+        )
+    try:
+        dsn = make_url(url).set(drivername="postgresql").render_as_string(hide_password=False)
+        psycopg.connect(dsn, connect_timeout=3).close()
+    except psycopg.OperationalError as exc:
+        pytest.skip(f"PostgreSQL at {POSTGRES_ENV} does not answer: {exc}".splitlines()[0])
+    return url
+
+
+@pytest.fixture(scope="session")
+def postgresql_url() -> Iterator[str]:
+    """A URL whose connections work in a fresh schema of the test database, dropped at the end."""
+    server_url = _postgres_server_url()
+    schema = f"calstation_test_{os.getpid()}_{secrets.token_hex(4)}"
+    admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'CREATE SCHEMA "{schema}"'))
+    url = make_url(server_url).update_query_dict({"options": f"-csearch_path={schema}"})
+    try:
+        yield url.render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as connection:
+            connection.execute(text(f'DROP SCHEMA "{schema}" CASCADE'))
+        admin.dispose()
+
+
+@pytest.fixture(scope="session")
+def sqlite_url(tmp_path_factory: pytest.TempPathFactory) -> str:
+    """A SQLite file for the session."""
+    return f"sqlite:///{tmp_path_factory.mktemp('db') / 'calstation.sqlite3'}"
+
+
+@pytest.fixture(
+    scope="session",
+    params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)],
+)
+def database_url(request: pytest.FixtureRequest) -> str:
+    """The URL of an empty database at the latest schema, once per backend."""
+    url: str = request.getfixturevalue(f"{request.param}_url")
+    return url
+
+
+@pytest.fixture(scope="session")
+def migrated_database(database_url: str) -> Iterator[Database]:
+    """The session's database, migrated to head."""
+    database = open_database(database_url, auto_migrate=True)
+    yield database
+    database.dispose()
+
+
+@pytest.fixture
+def database(migrated_database: Database) -> Iterator[Database]:
+    """The migrated database, emptied after the test."""
+    yield migrated_database
+    with migrated_database.engine.begin() as connection:
+        for table in reversed(Base.metadata.sorted_tables):
+            connection.execute(table.delete())
+
+
+@pytest.fixture
+def connection(migrated_database: Database) -> Iterator[Connection]:
+    """A connection inside an outer transaction that is rolled back after the test."""
+    with migrated_database.engine.connect() as connection:
+        outer = connection.begin()
+        yield connection
+        outer.rollback()
+
+
+@pytest.fixture
+def session(connection: Connection) -> Iterator[Session]:
+    """A session whose commits are savepoints of the rolled-back outer transaction."""
+    with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
+        yield session

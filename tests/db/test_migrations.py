@@ -1,0 +1,73 @@
+"""Migrations: an empty database reaches head matching the models; SQLite needs no set-up."""
+
+import os
+import secrets
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from alembic import command
+from alembic.autogenerate import compare_metadata
+from alembic.runtime.migration import MigrationContext
+from sqlalchemy import inspect, make_url, text
+
+from db import DatabaseSettings, SchemaOutOfDateError, make_engine, open_database
+from db.base import Base
+from db.migrate import alembic_config, current_revision, head_revision, upgrade
+
+
+@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
+def empty_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
+    """An empty database: a new SQLite file, or a new schema next to the session's."""
+    if request.param == "sqlite":
+        yield f"sqlite:///{tmp_path / 'empty.sqlite3'}"
+        return
+    session_url = make_url(request.getfixturevalue("postgresql_url"))
+    schema = f"calstation_empty_{os.getpid()}_{secrets.token_hex(4)}"
+    admin = make_engine(session_url.render_as_string(False), isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'CREATE SCHEMA "{schema}"'))
+    try:
+        url = session_url.update_query_dict({"options": f"-csearch_path={schema}"})
+        yield url.render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as connection:
+            connection.execute(text(f'DROP SCHEMA "{schema}" CASCADE'))
+        admin.dispose()
+
+
+def test_head_matches_the_models_with_no_autogenerate_diff(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    upgrade(engine)
+    with engine.connect() as connection:
+        context = MigrationContext.configure(connection, opts={"compare_type": True})
+        diff = compare_metadata(context, Base.metadata)
+    engine.dispose()
+    assert diff == []
+
+
+def test_downgrade_to_base_and_back_up(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    upgrade(engine)
+    with engine.begin() as connection:
+        command.downgrade(alembic_config(connection), "base")
+    assert set(inspect(engine).get_table_names()) <= {"alembic_version"}
+    upgrade(engine)
+    assert current_revision(engine) == head_revision()
+    engine.dispose()
+
+
+def test_the_embedded_database_is_created_and_migrated_on_first_use(tmp_path: Path) -> None:
+    settings = DatabaseSettings(database_url=None, data_dir=tmp_path / "nested" / "data")
+    database = open_database(settings.url())
+    assert (tmp_path / "nested" / "data" / "calstation.sqlite3").is_file()
+    assert current_revision(database.engine) == head_revision()
+    database.dispose()
+
+
+@pytest.mark.parametrize(
+    "empty_url", [pytest.param("postgresql", marks=pytest.mark.postgres)], indirect=True
+)
+def test_a_server_database_behind_head_is_refused_with_the_fix(empty_url: str) -> None:
+    with pytest.raises(SchemaOutOfDateError, match="calstation db upgrade"):
+        open_database(empty_url)

@@ -1,0 +1,133 @@
+"""The run repository on SQLite and PostgreSQL: submit, read back, history, lists, keys."""
+
+import uuid
+from datetime import timedelta
+
+import pytest
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from db import RunConflictError, RunQuery, RunRepository
+from db.models import Pose, StationKey
+from station.errors import InputError
+from station.records import StoredRun
+from tests.db.records import T0, make_record
+
+
+def test_a_submitted_run_reads_back_field_for_field(session: Session) -> None:
+    record = make_record(verdict="fail")
+    repo = RunRepository(session)
+    outcome = repo.submit(record)
+    session.commit()
+    stored = repo.get(record.run_id)
+    assert outcome.created
+    assert stored is not None
+    assert stored == outcome.run
+    assert stored.model_dump(exclude={"received_at"}) == record.model_dump()
+    assert stored.received_at.tzinfo is not None
+
+
+def test_every_pose_is_stored_with_its_replaced_captures(session: Session) -> None:
+    record = make_record()
+    RunRepository(session).submit(record)
+    poses = session.scalars(select(Pose).order_by(Pose.index)).all()
+    assert [p.name for p in poses] == [p.name for p in record.poses]
+    assert poses[0].replaced[0]["reason"] == "moved during capture"
+    assert poses[1].crc_errors == 1
+
+
+def test_a_retry_returns_the_stored_run_without_a_duplicate(session: Session) -> None:
+    record = make_record()
+    repo = RunRepository(session)
+    first = repo.submit(record)
+    again = repo.submit(record)
+    assert (first.created, again.created) == (True, False)
+    assert again.run == first.run
+    assert len(repo.history(record.serial)) == 1
+
+
+def test_the_same_uuid_with_other_content_is_a_conflict(session: Session) -> None:
+    record = make_record()
+    repo = RunRepository(session)
+    repo.submit(record)
+    clash = record.model_copy(update={"operator_id": "op-99"})
+    with pytest.raises(RunConflictError, match=str(record.run_id)):
+        repo.submit(clash)
+
+
+def test_current_state_is_the_latest_run_and_history_keeps_the_first(session: Session) -> None:
+    repo = RunRepository(session)
+    retest = make_record(verdict="pass", started_at=T0 + timedelta(hours=2))
+    first = make_record(verdict="fail", started_at=T0)
+    other_unit = make_record(serial="PT-000002", started_at=T0 + timedelta(hours=5))
+    for record in (retest, first, other_unit):  # the late run arrives first
+        repo.submit(record)
+    latest = repo.latest_for_serial("PT-000001")
+    assert latest is not None
+    assert (latest.run_id, latest.verdict) == (retest.run_id, "pass")
+    history = repo.history("PT-000001")
+    assert [r.run_id for r in history] == [first.run_id, retest.run_id]
+    assert history[0].failures[0].code == "sensitivity_out_of_range"
+    assert repo.latest_for_serial("PT-404") is None
+
+
+def test_list_filters_and_walks_every_page_once(session: Session) -> None:
+    repo = RunRepository(session)
+    records = [
+        make_record(
+            serial=f"PT-{i % 5:06d}",
+            station_id=f"line1-st{i % 2}",
+            verdict="pass" if i % 3 else "fail",
+            started_at=T0 + timedelta(minutes=i // 2),  # pairs share a start time
+        )
+        for i in range(23)
+    ]
+    for record in records:
+        repo.submit(record)
+    seen: list[uuid.UUID] = []
+    cursor = None
+    while True:
+        page = repo.list_runs(RunQuery(station_id="line1-st1", limit=4, cursor=cursor))
+        seen += [run.run_id for run in page.runs]
+        if page.next_cursor is None:
+            break
+        cursor = page.next_cursor
+    expected = [r for r in records if r.station_id == "line1-st1"]
+    assert sorted(seen) == sorted(r.run_id for r in expected)
+    assert len(seen) == len(set(seen))
+
+    fails = repo.list_runs(RunQuery(verdict="fail", since=T0 + timedelta(minutes=3))).runs
+    assert {r.run_id for r in fails} == {
+        r.run_id
+        for r in records
+        if r.verdict == "fail" and r.started_at >= T0 + timedelta(minutes=3)
+    }
+    window = repo.list_runs(RunQuery(serial="PT-000001", until=T0 + timedelta(minutes=6))).runs
+    assert [r.started_at for r in window] == sorted((r.started_at for r in window), reverse=True)
+    assert all(r.serial == "PT-000001" and r.started_at < T0 + timedelta(minutes=6) for r in window)
+
+
+@pytest.mark.parametrize("cursor", ["garbage", "bm90LWEtY3Vyc29y", ""])
+def test_a_foreign_cursor_is_refused(session: Session, cursor: str) -> None:
+    with pytest.raises(InputError, match="cursor"):
+        RunRepository(session).list_runs(RunQuery(cursor=cursor))
+
+
+def test_a_page_size_out_of_range_is_refused(session: Session) -> None:
+    with pytest.raises(InputError, match="limit"):
+        RunRepository(session).list_runs(RunQuery(limit=0))
+
+
+def test_station_keys_are_stored_hashed_and_resolve_to_their_station(session: Session) -> None:
+    repo = RunRepository(session)
+    key = repo.create_key("line1-st1")
+    session.flush()
+    stored = session.scalars(select(StationKey.key_sha256)).one()
+    assert key not in stored
+    assert repo.station_for_key(key) == "line1-st1"
+    assert repo.station_for_key(key + "x") is None
+
+
+def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:
+    outcome = RunRepository(session).submit(make_record())
+    assert StoredRun.model_validate_json(outcome.run.model_dump_json()) == outcome.run
