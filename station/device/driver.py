@@ -32,6 +32,7 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import (
     DEFAULT_BAUD,
     DEFAULT_RATE_HZ,
+    PROTOCOL_VERSION,
     RATE_STRUCT,
     SAMPLE_COLUMNS,
     ErrorCode,
@@ -259,6 +260,11 @@ class PutterDriver:
             identity = Identity.decode(reply.payload)
         except ValueError as exc:
             raise ProtocolError(f"putter at {self._name}: bad IDENTITY reply: {exc}") from exc
+        if identity.protocol_version != PROTOCOL_VERSION:
+            raise ProtocolError(
+                f"putter at {self._name} speaks protocol version {identity.protocol_version}; "
+                f"this station speaks version {PROTOCOL_VERSION}"
+            )
         if expected_serial is not None and identity.serial != expected_serial:
             raise SerialNumberMismatchError(expected_serial, identity.serial)
         return identity

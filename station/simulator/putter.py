@@ -22,6 +22,7 @@ from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
     DEFAULT_RATE_HZ,
     GYRO_DPS_PER_LSB,
+    MAX_CALIBRATED_RATE_HZ,
     MAX_RATE_HZ,
     PAYLOAD_LENGTHS,
     RATE_STRUCT,
@@ -285,6 +286,9 @@ class VirtualPutter:
             if mode not in (StreamMode.RAW, StreamMode.CALIBRATED):
                 self._error(link, kind, ErrorCode.BAD_VALUE, f"stream mode {mode}")
                 return
+            if mode == StreamMode.CALIBRATED and self._rate_hz > MAX_CALIBRATED_RATE_HZ:
+                self._error(link, kind, ErrorCode.BAD_VALUE, "rate too high for calibrated")
+                return
             self._mode = StreamMode(mode)
             self._restart_timing()
             self._seq = 0
@@ -295,6 +299,9 @@ class VirtualPutter:
             (rate,) = RATE_STRUCT.unpack(frame.payload)
             if not 1 <= rate <= MAX_RATE_HZ:
                 self._error(link, kind, ErrorCode.BAD_VALUE, f"rate {rate} not in 1..1000")
+                return
+            if self._mode == StreamMode.CALIBRATED and rate > MAX_CALIBRATED_RATE_HZ:
+                self._error(link, kind, ErrorCode.BAD_VALUE, "rate too high for calibrated")
                 return
             self._rate_hz = rate
             self._restart_timing()

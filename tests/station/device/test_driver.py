@@ -1,5 +1,7 @@
 """The driver against the virtual putter over a real pty and a real socket."""
 
+import socket
+import threading
 import time
 from collections.abc import Iterator
 
@@ -12,6 +14,7 @@ from station.device import (
     DeviceDisconnectedError,
     DeviceRejectedError,
     DeviceTimeoutError,
+    Identity,
     NoReplyError,
     ProtocolError,
     PutterDriver,
@@ -250,3 +253,42 @@ def test_the_putter_answers_unknown_and_malformed_commands_with_an_error(
     assert unknown[2:6] == bytes((FrameType.ERROR, 22, 0x1E, 1))
     assert unknown[6:-2] == b"unknown command 0x1e"
     assert short[2:6] == bytes((FrameType.ERROR, 16, FrameType.SET_RATE, 2))
+
+
+def test_a_unit_speaking_another_protocol_version_is_refused() -> None:
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def firmware_v2() -> None:
+        connection, _ = server.accept()
+        with connection:
+            connection.recv(64)
+            reply = Identity("PT000099", "2.0.0", "KXM52-1050", protocol_version=2).encode()
+            connection.sendall(encode_frame(FrameType.IDENTITY, reply))
+            connection.recv(64)
+
+    unit = threading.Thread(target=firmware_v2)
+    unit.start()
+    try:
+        with (
+            PutterDriver.open(f"socket://127.0.0.1:{port}") as drv,
+            pytest.raises(
+                ProtocolError, match="speaks protocol version 2; this station speaks version 1"
+            ),
+        ):
+            drv.identify()
+    finally:
+        unit.join(timeout=5)
+        server.close()
+
+
+def test_the_calibrated_stream_is_limited_to_what_the_baud_rate_carries(
+    driver: PutterDriver,
+) -> None:
+    driver.set_rate(1000)
+    with pytest.raises(DeviceRejectedError, match="START_STREAM: BAD_VALUE: rate too high"):
+        driver.start_stream(calibrated=True)
+    driver.set_rate(800)
+    driver.start_stream(calibrated=True)
+    with pytest.raises(DeviceRejectedError, match="SET_RATE: BAD_VALUE: rate too high"):
+        driver.set_rate(801)
