@@ -379,7 +379,9 @@ class PutterDriver:
                 waiting = port.in_waiting
                 data = port.read(waiting if waiting > 1 else READ_CHUNK)
                 if data:
-                    self._dispatch(self._parser.feed(data))
+                    with self._stats_lock:
+                        frames = self._parser.feed(data)
+                    self._dispatch(frames)
         except (serial.SerialException, OSError) as exc:
             if not self._stop.is_set():
                 self._fail(DeviceDisconnectedError(f"putter at {self._name} disconnected: {exc}"))

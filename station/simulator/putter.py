@@ -7,6 +7,7 @@ It runs in a thread of its own. Tests and demos script the operator through
 
 import contextlib
 import logging
+import math
 import select
 import threading
 from collections.abc import Callable
@@ -213,11 +214,13 @@ class VirtualPutter:
         *,
         wait: bool = False,
         at_s: float | None = None,
-    ) -> None:
+    ) -> int | None:
         """Have the operator move the unit to ``target`` over ``duration_s`` simulated seconds.
 
         The move starts now, or at simulated time ``at_s`` (for :meth:`trace`). With
-        ``wait``, return once the unit has settled (tremor below 1 %).
+        ``wait``, return once the unit has settled (tremor below 1 %). Returns the
+        sequence number (counted from 0 at the stream's start, as the driver unwraps
+        it) of the first sample the move can show in, or None when not streaming.
         """
         if isinstance(target, str):
             target = pose(target)
@@ -226,8 +229,13 @@ class VirtualPutter:
             start = self.clock.now() if at_s is None else at_s
             self._motion.move_to(rotation, start, duration_s)
             settled = self._motion.settled_at()
+            first: int | None = None
+            if self._mode is not None:
+                index = max(self._emitted, math.ceil((start - self._stream_t0) * self._rate_hz))
+                first = self._seq + index - self._emitted
         if wait:
             self.clock.sleep(settled - self.clock.now(), self._stop)
+        return first
 
     @property
     def settled_at_s(self) -> float:

@@ -11,6 +11,7 @@ from station.acquisition import (
     NotStillError,
     PoseAcquisition,
     SaturatedAxisError,
+    StillnessThresholds,
     acquire_pose,
 )
 from station.device import DeviceDisconnectedError, DeviceTimeoutError, PutterDriver
@@ -50,8 +51,10 @@ def test_a_whole_unit_of_seven_poses_matches_the_truth(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
     for name in (*CALIBRATION_POSES, VERIFICATION_POSE):
-        unit.move_to(name)
-        result = acquire_pose(driver, pose=name, timeout_s=20.0)
+        moved_at = unit.move_to(name)
+        assert moved_at is not None
+        result = acquire_pose(driver, pose=name, timeout_s=20.0, from_seq=moved_at)
+        assert result.first_seq > moved_at
         assert result.pose == name
         assert result.sample_count == 1024
         # The window starts after the move and its tremor: never before 1.5 s of handling.
@@ -59,7 +62,7 @@ def test_a_whole_unit_of_seven_poses_matches_the_truth(
         assert result.duration_s == pytest.approx(1024 / 500)
         # Temperature drift (up to 0.5 count/°C) and noise: within a count of the truth.
         np.testing.assert_allclose(result.accel_mean, reading(unit, name), atol=1.0)
-        assert np.all(result.accel_std < 2.0)
+        assert np.all(result.accel_std < StillnessThresholds().accel_std_max_counts)
         np.testing.assert_allclose(result.gyro_mean, unit.truth.gyro_bias_dps, atol=0.03)
         assert 24.0 < result.temperature_c < 27.0
         assert result.link.samples_lost == 0
@@ -90,19 +93,23 @@ def test_a_lossy_link_refuses_the_pose(unit: VirtualPutter, driver: PutterDriver
 def test_a_slightly_lossy_link_still_gives_the_pose(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
-    unit.faults.drop_rate = 0.002
+    unit.faults.drop_rate = 0.003
     result = acquire_pose(driver, pose="face_up", timeout_s=10.0)
     assert result.loss_fraction <= 0.01
-    assert result.link.samples_lost > 0
+    driver.wait_samples(3000, timeout=5.0)
+    # About one sample in 330 goes missing, and the driver sees it.
+    assert 0.0005 < driver.stats.loss_fraction < 0.01
 
 
 def test_pulling_the_cable_during_a_pose_is_a_disconnection(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
-    unit.move_to("shaft_up")
-    acquisition = PoseAcquisition(driver, pose="shaft_up")
+    moved_at = unit.move_to("shaft_up")
+    assert moved_at is not None
+    acquisition = PoseAcquisition(driver, pose="shaft_up", from_seq=moved_at)
     while acquisition.elapsed_s < 0.5:
         assert acquisition.poll() is None
+        time.sleep(0.005)
     unit.unplug()
     with pytest.raises(DeviceDisconnectedError):
         poll_until_done(acquisition)

