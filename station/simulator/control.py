@@ -4,7 +4,9 @@ A test that drives the station through a real terminal moves the unit from outsi
 by writing lines to ``calstation simulate``'s standard input; every line gets one
 reply line, ``ok [detail]`` or ``error <message>``::
 
-    pose NAME [SECONDS]   start moving to a named pose (default 1.5 s)
+    pose NAME [SECONDS]   start moving to a named pose (default 1.5 s); while
+                          streaming, answers "ok from_seq N": the first sample
+                          number the move can show in
     settle                wait until the last move's tremor has died down
     wait SECONDS          let simulated time pass
     unplug | replug       pull / plug back the cable (replug answers the URL)
@@ -87,8 +89,8 @@ class ControlChannel:
         seconds = _number(args[1], "move time") if len(args) == 2 else 1.5
         if seconds == 0:
             raise ValueError("move time must be positive")
-        self.putter.move_to(args[0], seconds)
-        return ""
+        first = self.putter.move_to(args[0], seconds)
+        return "" if first is None else f"from_seq {first}"
 
     def _settle(self, args: list[str]) -> str:
         self.putter.sleep(self.putter.settled_at_s - self.putter.clock.now())

@@ -73,9 +73,11 @@ def test_the_simulator_is_moved_and_faulted_from_outside(simulator: Simulator) -
     with PutterDriver.open(simulator.url) as driver:
         assert driver.identify(expected_serial="PT000808").sensor_part == "KXM52-1050"
         driver.start_stream()
-        assert simulator.send("pose toe_up 1.0") == "ok"
+        reply = simulator.send("pose toe_up 1.0")
+        assert reply.startswith("ok from_seq ")
         assert simulator.send("settle") == "ok"
-        result = acquire_pose(driver, pose="toe_up", timeout_s=10.0)
+        from_seq = int(reply.removeprefix("ok from_seq "))
+        result = acquire_pose(driver, pose="toe_up", timeout_s=10.0, from_seq=from_seq)
         expected = np.array(truth["offset_counts"]) + np.array(
             truth["sensitivity_counts_per_g"]
         ) * (np.array(truth["cross_axis"]) @ pose("toe_up").gravity_body)
