@@ -293,3 +293,16 @@ def test_the_calibrated_stream_is_limited_to_what_the_baud_rate_carries(
     driver.start_stream(calibrated=True)
     with pytest.raises(DeviceRejectedError, match="SET_RATE: BAD_VALUE: rate too high"):
         driver.set_rate(801)
+
+
+def test_an_undrained_buffer_keeps_the_newest_samples_and_counts_the_overrun() -> None:
+    port = serial.serial_for_url("loop://", timeout=0.01)
+    with PutterDriver(port, buffer_rows=50) as drv:
+        port.write(b"".join(encode_sample(s, (1, 2, 3), (0, 0, 0), 0) for s in range(120)))
+        deadline = time.monotonic() + 2.0
+        while drv.stats.samples < 120 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert drv.pending() == 50
+        rows = drv.drain()
+        assert drv.stats.buffer_overruns == 70
+    np.testing.assert_array_equal(rows[:, 0], np.arange(70, 120))
