@@ -8,6 +8,8 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 import serial
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from station.device import (
     DeviceCalibration,
@@ -306,3 +308,22 @@ def test_an_undrained_buffer_keeps_the_newest_samples_and_counts_the_overrun() -
         rows = drv.drain()
         assert drv.stats.buffer_overruns == 70
     np.testing.assert_array_equal(rows[:, 0], np.arange(70, 120))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    start=st.integers(0, 0xFFFF),
+    steps=st.lists(st.integers(1, 40), min_size=1, max_size=60),
+)
+def test_any_run_of_sequence_numbers_unwraps_and_counts_its_losses(
+    start: int, steps: list[int]
+) -> None:
+    counts = np.cumsum([0, *steps]) + start
+    port = serial.serial_for_url("loop://", timeout=0.01)
+    with PutterDriver(port) as drv:
+        port.write(b"".join(encode_sample(int(c), (1, 2, 3), (0, 0, 0), 0) for c in counts))
+        rows = drv.wait_samples(len(counts), timeout=2.0)
+        stats = drv.stats
+    np.testing.assert_array_equal(rows[:, 0], counts)
+    assert stats.samples_lost == sum(steps) - len(steps)
+    assert stats.seq_gaps == sum(1 for s in steps if s > 1)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from station.sensor import ADC_MAX
-from station.simulator import SensorTruth
+from station.simulator import SensorTruth, Thermal
 from station.simulator.sensor import GYRO_SENSE_AXIS, accelerometer_counts, gyro_rates
 
 
@@ -95,3 +95,11 @@ def test_g_sensitivity_is_a_scale_factor_error_on_the_sense_axis_only(
     assert error_ppm == pytest.approx(truth.gyro_g_sensitivity_per_g[gyro] * 1e6)
     assert 570 < abs(error_ppm) < 630
     assert along_input == pytest.approx(plain)
+
+
+def test_the_board_warms_up_towards_ambient_plus_self_heating() -> None:
+    thermal = Thermal(ambient_c=22.0, self_heating_c=3.0, time_constant_s=100.0)
+    t = np.array([0.0, 100.0, 1000.0])
+    np.testing.assert_allclose(
+        thermal.at(t), [22.0, 22.0 + 3.0 * (1 - np.exp(-1)), 25.0], atol=1e-3
+    )
