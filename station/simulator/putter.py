@@ -250,15 +250,19 @@ class VirtualPutter:
 
     def _run(self) -> None:
         while not self._stop.is_set():
-            with self._lock:
-                link = self._link
-                if link is not None:
-                    self._tick(link)
+            link = self._link
             if link is None:
                 self._stop.wait(0.005)
+                continue
+            try:
+                readable, _, _ = select.select([link], [], [], 0.002)
+            except (OSError, ValueError):  # unplugged while waiting
+                continue
+            with self._lock:
+                if self._link is link:
+                    self._tick(link, bool(readable))
 
-    def _tick(self, link: Link) -> None:
-        readable, _, _ = select.select([link], [], [], 0.002)
+    def _tick(self, link: Link, readable: bool) -> None:
         if readable:
             try:
                 data = link.receive()
