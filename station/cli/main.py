@@ -12,6 +12,7 @@ from station.cli import gyro, solve, station
 from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
 from station.cli.serve import serve
+from station.cli.simulate import simulate
 from station.errors import CalstationError
 
 EXIT_USER_ERROR = 2
@@ -43,6 +44,7 @@ def version() -> None:
 app.command()(serve)
 app.add_typer(db_app, name="db")
 app.add_typer(keys_app, name="keys")
+app.command()(simulate)
 
 
 def main() -> None:
