@@ -123,6 +123,8 @@ class PoseAcquisition:
         self._stats0 = driver.stats
         self._last_arrival = time.monotonic()
         self.result: PoseResult | None = None
+        #: The rows the latest :meth:`poll` took in, for a live view of the unit.
+        self.recent: Array = np.empty((0, 8))
 
     @property
     def elapsed_s(self) -> float:
@@ -147,6 +149,7 @@ class PoseAcquisition:
         if self.result is not None:
             return self.result
         rows = self.driver.drain()
+        self.recent = rows
         now = time.monotonic()
         if not len(rows):
             if now - self._last_arrival > self.stall_s:

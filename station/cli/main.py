@@ -8,7 +8,7 @@ its traceback.
 import typer
 
 from station import __version__
-from station.cli import solve
+from station.cli import gyro, solve, station
 from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
 from station.cli.serve import serve
@@ -25,6 +25,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.command(name="solve")(solve.solve_command)
+app.command(name="run")(station.run_command)
+app.command(name="demo")(station.demo_command)
+app.add_typer(gyro.app, name="gyro")
 
 
 @app.callback()
