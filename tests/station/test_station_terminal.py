@@ -3,7 +3,8 @@
 The unit under test is a virtual putter in this process, serving a pty under a fixed
 name; the station opens it through pyserial. The test plays the operator: it types the
 serial number and the keys, reads the screen, and moves the putter into the pose the
-screen asks for (with handling motion and settling tremor). Its clock runs 10× real time.
+screen asks for (with handling motion and settling tremor). Its clock runs 20× real time
+(5× where the test must see the capture progress).
 """
 
 import os
@@ -25,7 +26,7 @@ from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url
 
-SPEED = 10.0
+SPEED = 20.0
 POSE_ASKED = re.compile(r"pose (\d) of (\d): ([a-z ]+?)\x1b")
 VERDICT = re.compile(r"(PASS|FAIL)  unit (PT\d{6})")
 
@@ -42,6 +43,7 @@ class Station:
         faults: Faults | None = None,
         database_url: str | None = None,
         limits: Path | None = None,
+        speed: float = SPEED,
     ) -> None:
         self.tmp = tmp
         self.serial = serial
@@ -49,7 +51,7 @@ class Station:
         self.database = tmp / "results.sqlite3"
         self.database_url = database_url or f"sqlite:///{self.database}"
         self.limits = limits
-        self.putter = VirtualPutter(seed=seed, serial=serial, speed=SPEED, faults=faults)
+        self.putter = VirtualPutter(seed=seed, serial=serial, speed=speed, faults=faults)
         self.putter.serve_pty(self.port)
         self.child: pexpect.spawn | None = None
         self.asked: str | None = None
@@ -183,7 +185,7 @@ def test_wrong_pose_is_said_and_not_captured(station: Station) -> None:
 
 
 def test_motion_during_capture_is_said_at_once(tmp_path: Path) -> None:
-    station = Station(tmp_path)
+    station = Station(tmp_path, speed=5.0)
     try:
         child = station.start()
         station.scan()
