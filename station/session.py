@@ -23,7 +23,7 @@ from enum import StrEnum
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from station import __version__
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
@@ -36,7 +36,7 @@ from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
 from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, sense
-from station.poses import CALIBRATION_POSES, VERIFICATION_POSE, Pose, pose
+from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, Pose, pose
 from station.records import (
     Coefficients,
     FailureReason,
@@ -74,6 +74,15 @@ class RunSettings(BaseModel):
     stillness: StillnessThresholds = StillnessThresholds()
     pose_timeout_s: float = Field(30.0, gt=0, description="device time before 'not still'")
     model: Model = "six"
+
+    @field_validator("poses", "verification_pose")
+    @classmethod
+    def _known_poses(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
+        names = (value,) if isinstance(value, str) else value
+        unknown = [n for n in names if n not in POSES]
+        if unknown:
+            raise ValueError(f"unknown pose {unknown[0]!r}; known: {', '.join(POSES)}")
+        return value
 
 
 class Phase(StrEnum):
