@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)  ## the main job on the embedded defaults
-	$(VENV)/bin/calstation solve examples/paper_table2.csv
+	$(VENV)/bin/calstation demo
 
 test: $(STAMP)  ## the whole test suite
 	$(PY) -m pytest

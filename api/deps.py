@@ -1,38 +1,63 @@
-"""Dependencies of the routes, as ``Annotated`` aliases so signatures read as plain data."""
+"""Dependencies of the routes, as ``Annotated`` aliases so signatures read as plain data.
 
-from collections.abc import Iterator
-from typing import Annotated
+The routes are ``async``: each request's queries run through
+:meth:`AsyncSession.run_sync` on the one synchronous :class:`db.RunRepository`, in the
+event loop's own thread (no thread-pool hop per request).
+"""
+
+from collections.abc import AsyncIterator, Callable
+from typing import Annotated, TypeVar
 
 from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from api.settings import ApiSettings
-from db import Database, RunRepository
+from db import RunRepository
 
-
-def get_settings(request: Request) -> ApiSettings:
-    """The settings the app was created with."""
-    settings: ApiSettings = request.app.state.settings
-    return settings
+T = TypeVar("T")
 
 
-def get_database(request: Request) -> Database:
-    """The database opened at start-up."""
-    database: Database = request.app.state.database
-    return database
+class Repository:
+    """The run repository of one request's session."""
+
+    def __init__(self, session: AsyncSession) -> None:
+        self.session = session
+
+    async def run(self, work: Callable[[RunRepository], T]) -> T:
+        """``work(repository)`` on this session."""
+        return await self.session.run_sync(lambda session: work(RunRepository(session)))
 
 
-SettingsDep = Annotated[ApiSettings, Depends(get_settings)]
-DatabaseDep = Annotated[Database, Depends(get_database)]
+async def get_sessions(request: Request) -> async_sessionmaker[AsyncSession]:
+    """The factory of transactional sessions (for writes)."""
+    sessions: async_sessionmaker[AsyncSession] = request.app.state.sessions
+    return sessions
 
 
-def get_repository(database: DatabaseDep) -> Iterator[RunRepository]:
-    """A repository on a session that lives as long as the request."""
-    with database.session() as session:
-        yield RunRepository(session)
+async def get_readers(request: Request) -> async_sessionmaker[AsyncSession]:
+    """The factory of autocommit sessions (for reads)."""
+    readers: async_sessionmaker[AsyncSession] = request.app.state.readers
+    return readers
 
 
-RepositoryDep = Annotated[RunRepository, Depends(get_repository)]
+SessionsDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_sessions)]
+ReadersDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_readers)]
+
+
+async def get_repository(sessions: SessionsDep) -> AsyncIterator[Repository]:
+    """A repository on a transactional session that lives as long as the request."""
+    async with sessions() as session:
+        yield Repository(session)
+
+
+async def get_reader(readers: ReadersDep) -> AsyncIterator[Repository]:
+    """A repository on an autocommit session, for read-only requests."""
+    async with readers() as session:
+        yield Repository(session)
+
+
+RepositoryDep = Annotated[Repository, Depends(get_repository)]
+ReaderDep = Annotated[Repository, Depends(get_reader)]
 
 _bearer = HTTPBearer(
     auto_error=False,
@@ -41,7 +66,7 @@ _bearer = HTTPBearer(
 CredentialsDep = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
 
 
-def require_station(credentials: CredentialsDep, database: DatabaseDep) -> str:
+async def require_station(credentials: CredentialsDep, readers: ReadersDep) -> str:
     """The station whose API key authorises the request; 401 without a valid key."""
     if credentials is None:
         raise HTTPException(
@@ -49,9 +74,10 @@ def require_station(credentials: CredentialsDep, database: DatabaseDep) -> str:
             "a station API key is required: 'Authorization: Bearer <key>'",
             headers={"WWW-Authenticate": "Bearer"},
         )
-    # A short session of its own: the submission's transaction starts with its write.
-    with database.session() as session:
-        station = RunRepository(session).station_for_key(credentials.credentials)
+    async with readers() as session:
+        station = await Repository(session).run(
+            lambda repository: repository.station_for_key(credentials.credentials)
+        )
     if station is None:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
@@ -62,11 +88,3 @@ def require_station(credentials: CredentialsDep, database: DatabaseDep) -> str:
 
 
 StationDep = Annotated[str, Depends(require_station)]
-
-
-def require_reader(
-    settings: SettingsDep, credentials: CredentialsDep, database: DatabaseDep
-) -> None:
-    """Read endpoints are open unless ``read_requires_key`` is set."""
-    if settings.read_requires_key:
-        require_station(credentials, database)

@@ -3,13 +3,15 @@
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
-from fastapi import APIRouter, FastAPI
+from fastapi import APIRouter, Depends, FastAPI
+from sqlalchemy.ext.asyncio import async_sessionmaker
 
+from api.deps import require_station
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.routes import health, reports, runs, units
 from api.settings import ApiSettings
-from db import open_database
+from db import make_async_engine, open_database
 from station import __version__
 
 API_PREFIX = "/api/v1"
@@ -25,11 +27,19 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        app.state.database = open_database(settings.url())
+        url = settings.url()
+        open_database(url).dispose()  # creates/migrates SQLite, checks a server's schema
+        engine = make_async_engine(url, pool_size=10, max_overflow=10)
+        app.state.sessions = async_sessionmaker(engine, expire_on_commit=False)
+        # Reads need no transaction: runs are append-only, so each statement stands
+        # alone, and autocommit saves the BEGIN and ROLLBACK round trips.
+        app.state.readers = async_sessionmaker(
+            engine.execution_options(isolation_level="AUTOCOMMIT"), expire_on_commit=False
+        )
         try:
             yield
         finally:
-            app.state.database.dispose()
+            await engine.dispose()
 
     app = FastAPI(
         title="calstation results",
@@ -37,14 +47,15 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         version=__version__,
         lifespan=lifespan,
     )
-    app.state.settings = settings
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
+    reads = [Depends(require_station)] if settings.read_requires_key else []
     v1 = APIRouter(prefix=API_PREFIX)
-    v1.include_router(units.router)
-    v1.include_router(runs.router)
-    v1.include_router(reports.router)
+    v1.include_router(units.router, dependencies=reads)
+    v1.include_router(runs.router, dependencies=reads)
+    v1.include_router(runs.submissions)
+    v1.include_router(reports.router, dependencies=reads)
     app.include_router(health.router)
     app.include_router(v1)
-    app.include_router(reports.dashboard)
+    app.include_router(reports.dashboard, dependencies=reads)
     return app

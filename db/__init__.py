@@ -10,6 +10,7 @@ Public surface::
 from db.engine import (
     Database,
     DatabaseUnavailableError,
+    make_async_engine,
     make_engine,
     open_database,
     upgrade_database,
@@ -28,6 +29,7 @@ __all__ = [
     "RunRepository",
     "SchemaOutOfDateError",
     "SubmitOutcome",
+    "make_async_engine",
     "make_engine",
     "open_database",
     "upgrade_database",

@@ -13,10 +13,9 @@ from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any
 from uuid import UUID
 
-from sqlalchemy import insert, select, text, tuple_
+from sqlalchemy import insert, select, text, tuple_, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
@@ -30,6 +29,16 @@ from station.records import RunRecord, RunSummary, StoredRun, Verdict
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
 _POSES = Base.metadata.tables[Pose.__tablename__]
 _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
+
+# Built once, values bound at execution: the compiled statement is cached.
+_INSERT_NEW_RUN: dict[str, ReturningInsert[int]] = {
+    "postgresql": postgresql.insert(Run)
+    .on_conflict_do_nothing(index_elements=["run_id"])
+    .returning(Run.id),
+    "sqlite": sqlite.insert(Run)
+    .on_conflict_do_nothing(index_elements=["run_id"])
+    .returning(Run.id),
+}
 
 #: Largest page of a run list.
 MAX_PAGE = 500
@@ -103,9 +112,10 @@ class RunRepository:
     def __init__(self, session: Session) -> None:
         self.session = session
 
-    def ping(self) -> None:
-        """Raise if the database does not answer."""
+    def ping(self) -> str:
+        """Raise if the database does not answer; return its dialect's name."""
         self.session.execute(text("SELECT 1"))
+        return self.session.get_bind().dialect.name
 
     # -- runs --------------------------------------------------------------------------
 
@@ -120,7 +130,7 @@ class RunRepository:
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
         row = run_row(record, received_at=received_at, record_sha256=digest)
-        pk = self.session.execute(self._insert_new_run(row)).scalar_one_or_none()
+        pk = self.session.execute(self._insert_new_run(), row).scalar_one_or_none()
         if pk is None:
             stored_digest = self.session.scalars(
                 select(Run.record_sha256).where(Run.run_id == record.run_id)
@@ -139,16 +149,12 @@ class RunRepository:
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
         return SubmitOutcome(created=True, run=stored)
 
-    def _insert_new_run(self, row: dict[str, Any]) -> ReturningInsert[int]:
+    def _insert_new_run(self) -> ReturningInsert[int]:
         """``INSERT … ON CONFLICT (run_id) DO NOTHING RETURNING id`` in the session's dialect."""
         dialect = self.session.get_bind().dialect.name
-        if dialect == "postgresql":
-            stmt: postgresql.Insert | sqlite.Insert = postgresql.insert(Run)
-        elif dialect == "sqlite":
-            stmt = sqlite.insert(Run)
-        else:
+        if dialect not in _INSERT_NEW_RUN:
             raise CalstationError(f"database dialect {dialect!r} is not supported")
-        return stmt.values(row).on_conflict_do_nothing(index_elements=["run_id"]).returning(Run.id)
+        return _INSERT_NEW_RUN[dialect]
 
     def get(self, run_id: UUID) -> StoredRun | None:
         """One run with its poses and failure reasons."""
@@ -227,6 +233,16 @@ class RunRepository:
             )
         )
         return key
+
+    def revoke_keys(self, station_id: str) -> int:
+        """Revoke every valid key of ``station_id``; return how many there were."""
+        revoked = self.session.scalars(
+            update(StationKey)
+            .where(StationKey.station_id == station_id, StationKey.revoked_at.is_(None))
+            .values(revoked_at=datetime.now(UTC))
+            .returning(StationKey.id)
+        ).all()
+        return len(revoked)
 
     def station_for_key(self, key: str) -> str | None:
         """The station a valid (not revoked) key belongs to."""

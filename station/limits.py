@@ -97,6 +97,7 @@ CHECKS: dict[str, str] = {
     "gyro_bias": "gyro_bias_dps",
     "link_loss": "link_loss",
     "writeback": "writeback_relative_error",
+    "unit_output": "verification_error_mg",
 }
 UNITS = {
     "offset": "counts",
@@ -106,6 +107,7 @@ UNITS = {
     "gyro_bias": "deg/s",
     "link_loss": "",
     "writeback": "",
+    "unit_output": "mg",
 }
 
 

@@ -25,6 +25,8 @@ from pydantic import (
     model_validator,
 )
 
+from station.gyro.still import GyroStillSummary
+
 __all__ = [
     "SERIAL_PATTERN",
     "Coefficients",
@@ -180,13 +182,15 @@ class QualityMetrics(_Record):
 class GyroSummary(_Record):
     """Gyro figures over the still poses (deg/s); stored as one JSON document.
 
-    ``bias_g_slope`` is the fitted bias change per g of gravity along each axis: by the
-    g-sensitivity study it should be near zero for a still unit.
+    ``bias`` is each gyro's mean over the poses and ``noise`` its RMS spread; ``still``
+    the full analysis of :func:`station.gyro.summarize_still_poses`, with each gyro's
+    bias-vs-gravity slope (deg/s/g) and whether it is consistent with zero, as the
+    g-sensitivity study says it should be for a still unit.
     """
 
     bias: Vector3
     noise: Vector3
-    bias_g_slope: Vector3 | None = None
+    still: GyroStillSummary | None = None
 
 
 class LimitsRef(_Record):

@@ -4,7 +4,7 @@ Kionix KXM52-1050 accelerometer (±2 g, ratiometric, 3.3 V) behind a TI ADS7829
 12-bit ADC: 0…4095 counts over 0…3.3 V.
 """
 
-from typing import Final
+from typing import Final, Literal
 
 ADC_BITS: Final = 12
 ADC_MIN: Final = 0
@@ -24,4 +24,6 @@ CROSS_AXIS_TYPICAL: Final = 0.02
 #: Samples averaged per still pose in the paper.
 SAMPLES_PER_POSE: Final = 1024
 
-AXES: Final = ("x", "y", "z")
+#: An accelerometer or gyro axis of the unit's body frame.
+Axis = Literal["x", "y", "z"]
+AXES: Final[tuple[Axis, Axis, Axis]] = ("x", "y", "z")

@@ -22,7 +22,7 @@ from db.base import Base
 POSTGRES_ENV = "CALSTATION_TEST_POSTGRES_URL"
 
 
-def _postgres_server_url() -> str:
+def postgres_server_url() -> str:
     url = os.environ.get(POSTGRES_ENV)
     if not url:
         pytest.skip(
@@ -39,7 +39,7 @@ def _postgres_server_url() -> str:
 @pytest.fixture(scope="session")
 def postgresql_url() -> Iterator[str]:
     """A URL whose connections work in a fresh schema of the test database, dropped at the end."""
-    server_url = _postgres_server_url()
+    server_url = postgres_server_url()
     schema = f"calstation_test_{os.getpid()}_{secrets.token_hex(4)}"
     admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
     with admin.connect() as connection:

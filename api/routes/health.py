@@ -2,14 +2,14 @@
 
 from fastapi import APIRouter
 
-from api.deps import RepositoryDep
+from api.deps import ReaderDep
 from api.schemas import Health
 
 router = APIRouter(tags=["health"])
 
 
 @router.get("/healthz", responses={503: {"description": "the database does not answer"}})
-def healthz(repository: RepositoryDep) -> Health:
+async def healthz(repository: ReaderDep) -> Health:
     """The server is up and its database answers."""
-    repository.ping()
-    return Health(status="ok", database=repository.session.get_bind().dialect.name)
+    dialect = await repository.run(lambda r: r.ping())
+    return Health(status="ok", database=dialect)

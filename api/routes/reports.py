@@ -7,14 +7,15 @@
 from datetime import UTC, datetime
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Depends, HTTPException, Path, Query, status
+from fastapi import APIRouter, HTTPException, Path, Query, status
 from fastapi.responses import HTMLResponse, Response
 
-from api.deps import RepositoryDep, require_reader
+from api.deps import ReaderDep, RepositoryDep
 from api.schemas import Problem
+from db import RunRepository
 from db.reports import eol_report
 from station.limits import load_profiles
-from station.records import SERIAL_PATTERN
+from station.records import SERIAL_PATTERN, StoredRun
 from station.report.bounds import choose_profile
 from station.report.html import certificate_page, dashboard_page
 from station.report.model import ReportFilter
@@ -25,8 +26,8 @@ from station.report.render import MEDIA_TYPES, render
 DASHBOARD_UNITS = 20
 DASHBOARD_CHART_POINTS = 60
 
-router = APIRouter(tags=["reports"], dependencies=[Depends(require_reader)])
-dashboard = APIRouter(tags=["reports"], dependencies=[Depends(require_reader)])
+router = APIRouter(tags=["reports"])
+dashboard = APIRouter(tags=["reports"])
 
 
 @router.get(
@@ -39,7 +40,7 @@ dashboard = APIRouter(tags=["reports"], dependencies=[Depends(require_reader)])
         400: {"model": Problem, "description": "a bound is not a date or time"},
     },
 )
-def get_eol_report(
+async def get_eol_report(
     repository: RepositoryDep,
     since: Annotated[
         str | None, Query(alias="from", description="start, ISO date or time (UTC if no zone)")
@@ -57,8 +58,14 @@ def get_eol_report(
         station_id=station,
         operator_id=operator,
     )
-    report = eol_report(repository.session, report_filter, unit_limit=units)
+    # A transactional session: the report sets its PostgreSQL planner options locally.
+    report = await repository.run(lambda r: eol_report(r.session, report_filter, unit_limit=units))
     return Response(render(report, format), media_type=MEDIA_TYPES[format])
+
+
+def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
+    latest = repository.latest_for_serial(serial)
+    return repository.get(latest.run_id) if latest is not None else None
 
 
 @router.get(
@@ -66,13 +73,12 @@ def get_eol_report(
     response_class=HTMLResponse,
     responses={404: {"model": Problem, "description": "no run of this serial number"}},
 )
-def get_certificate(
+async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
-    repository: RepositoryDep,
+    repository: ReaderDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run, coefficients, poses, limits."""
-    latest = repository.latest_for_serial(serial)
-    run = repository.get(latest.run_id) if latest is not None else None
+    run = await repository.run(lambda r: _latest_run(r, serial))
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
     profile, _ = choose_profile([run.limits], load_profiles())
@@ -80,14 +86,16 @@ def get_certificate(
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
-def get_dashboard(repository: RepositoryDep) -> HTMLResponse:
+async def get_dashboard(repository: RepositoryDep) -> HTMLResponse:
     """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
     now = datetime.now(UTC)
-    report = eol_report(
-        repository.session,
-        ReportFilter(since=start_of_day(now)),
-        unit_limit=DASHBOARD_UNITS,
-        chart_points=DASHBOARD_CHART_POINTS,
-        now=now,
+    report = await repository.run(
+        lambda r: eol_report(
+            r.session,
+            ReportFilter(since=start_of_day(now)),
+            unit_limit=DASHBOARD_UNITS,
+            chart_points=DASHBOARD_CHART_POINTS,
+            now=now,
+        )
     )
     return HTMLResponse(dashboard_page(report))

@@ -3,22 +3,26 @@
 from typing import Annotated
 from uuid import UUID
 
-from fastapi import APIRouter, Depends, HTTPException, Query, Response, status
+from fastapi import APIRouter, HTTPException, Query, Response, status
 from pydantic import AwareDatetime
 
-from api.deps import RepositoryDep, StationDep, require_reader
+from api.deps import ReaderDep, RepositoryDep, StationDep
+from api.responses import json_response
 from api.schemas import Problem, RunList
 from api.verification import check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
 from station.records import SERIAL_PATTERN, RunRecord, StoredRun, Verdict
 
+#: Reads (open, or key-protected by the app's settings).
 router = APIRouter(prefix="/runs", tags=["runs"])
+#: Submissions: always need a station key.
+submissions = APIRouter(prefix="/runs", tags=["runs"])
 
 
-@router.get("", dependencies=[Depends(require_reader)])
-def list_runs(
-    repository: RepositoryDep,
+@router.get("", response_model=RunList)
+async def list_runs(
+    repository: ReaderDep,
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
     station_id: Annotated[str | None, Query(max_length=64)] = None,
     verdict: Verdict | None = None,
@@ -26,38 +30,36 @@ def list_runs(
     until: Annotated[AwareDatetime | None, Query(description="started before")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
     cursor: Annotated[str | None, Query(max_length=200)] = None,
-) -> RunList:
+) -> Response:
     """Runs matching every given filter, newest first, one page at a time."""
-    page = repository.list_runs(
-        RunQuery(
-            serial=serial,
-            station_id=station_id,
-            verdict=verdict,
-            since=since,
-            until=until,
-            limit=limit,
-            cursor=cursor,
-        )
+    query = RunQuery(
+        serial=serial,
+        station_id=station_id,
+        verdict=verdict,
+        since=since,
+        until=until,
+        limit=limit,
+        cursor=cursor,
     )
-    return RunList(data=page.runs, count=len(page.runs), next_cursor=page.next_cursor)
+    page = await repository.run(lambda r: r.list_runs(query))
+    return json_response(
+        RunList(data=page.runs, count=len(page.runs), next_cursor=page.next_cursor)
+    )
 
 
-@router.get(
-    "/{run_id}",
-    dependencies=[Depends(require_reader)],
-    responses={404: {"model": Problem}},
-)
-def get_run(run_id: UUID, repository: RepositoryDep) -> StoredRun:
+@router.get("/{run_id}", response_model=StoredRun, responses={404: {"model": Problem}})
+async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
     """One run with every pose."""
-    run = repository.get(run_id)
+    run = await repository.run(lambda r: r.get(run_id))
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no run {run_id}")
-    return run
+    return json_response(run)
 
 
-@router.post(
+@submissions.post(
     "",
     status_code=status.HTTP_201_CREATED,
+    response_model=StoredRun,
     responses={
         200: {"model": StoredRun, "description": "already stored: the stored run"},
         401: {"model": Problem},
@@ -67,9 +69,7 @@ def get_run(run_id: UUID, repository: RepositoryDep) -> StoredRun:
         422: {"model": Problem, "description": "invalid, or the poses give other coefficients"},
     },
 )
-def submit_run(
-    record: RunRecord, station: StationDep, repository: RepositoryDep, response: Response
-) -> StoredRun:
+async def submit_run(record: RunRecord, station: StationDep, repository: RepositoryDep) -> Response:
     """Store a station's run; a retry of a stored run returns it (200) unchanged."""
     if record.station_id != station:
         raise HTTPException(
@@ -77,9 +77,11 @@ def submit_run(
             f"this API key belongs to station {station}, the run to {record.station_id}",
         )
     check_coefficients(record)
-    with repository.session.begin():
-        outcome = repository.submit(record)
-    response.headers["Location"] = f"/api/v1/runs/{record.run_id}"
-    if not outcome.created:
-        response.status_code = status.HTTP_200_OK
-    return outcome.run
+    async with repository.session.begin():
+        outcome = await repository.run(lambda r: r.submit(record))
+    answer = json_response(
+        outcome.run,
+        status.HTTP_201_CREATED if outcome.created else status.HTTP_200_OK,
+    )
+    answer.headers["Location"] = f"/api/v1/runs/{record.run_id}"
+    return answer

@@ -2,16 +2,16 @@
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, HTTPException, Path, status
+from fastapi import APIRouter, HTTPException, Path, Response, status
 
-from api.deps import RepositoryDep, require_reader
+from api.deps import ReaderDep
+from api.responses import json_response
 from api.schemas import Problem, RunList, UnitCalibration
 from station.records import SERIAL_PATTERN
 
 router = APIRouter(
     prefix="/units",
     tags=["units"],
-    dependencies=[Depends(require_reader)],
     responses={404: {"model": Problem, "description": "no run of this serial number"}},
 )
 
@@ -22,19 +22,19 @@ def _unknown(serial: str) -> HTTPException:
     return HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
 
 
-@router.get("/{serial}")
-def get_unit(serial: SerialPath, repository: RepositoryDep) -> UnitCalibration:
+@router.get("/{serial}", response_model=UnitCalibration)
+async def get_unit(serial: SerialPath, repository: ReaderDep) -> Response:
     """The unit's current calibration: the verdict and coefficients of its latest run."""
-    latest = repository.latest_for_serial(serial)
+    latest = await repository.run(lambda r: r.latest_for_serial(serial))
     if latest is None:
         raise _unknown(serial)
-    return UnitCalibration.of(latest)
+    return json_response(UnitCalibration.of(latest))
 
 
-@router.get("/{serial}/runs")
-def get_unit_runs(serial: SerialPath, repository: RepositoryDep) -> RunList:
+@router.get("/{serial}/runs", response_model=RunList)
+async def get_unit_runs(serial: SerialPath, repository: ReaderDep) -> Response:
     """Every run of the unit, oldest first (the first one counts for first-pass yield)."""
-    runs = repository.history(serial)
+    runs = await repository.run(lambda r: r.history(serial))
     if not runs:
         raise _unknown(serial)
-    return RunList(data=runs, count=len(runs))
+    return json_response(RunList(data=runs, count=len(runs)))

@@ -94,9 +94,11 @@ class PoseResult:
 class PoseAcquisition:
     """Takes one pose without blocking: call :meth:`poll` from the interface's loop.
 
-    The driver must already be streaming raw samples. ``timeout_s`` is device time
-    (samples over the rate), so a faster-than-real-time simulator times out just as
-    a real unit would; ``stall_s`` is wall-clock time without any sample at all.
+    The driver must already be streaming raw samples. Samples numbered below
+    ``from_seq`` (taken before the operator was asked to move, say) are skipped.
+    ``timeout_s`` is device time (samples over the rate), so a faster-than-real-time
+    simulator times out just as a real unit would; ``stall_s`` is wall-clock time
+    without any sample at all.
     """
 
     def __init__(
@@ -107,8 +109,10 @@ class PoseAcquisition:
         limits: StillnessThresholds | None = None,
         timeout_s: float = 30.0,
         stall_s: float = 2.0,
+        from_seq: int = 0,
     ) -> None:
         self.driver = driver
+        self.from_seq = from_seq
         self.pose = pose
         self.detector = StillnessDetector(limits)
         self.timeout_s = timeout_s
@@ -119,6 +123,8 @@ class PoseAcquisition:
         self._stats0 = driver.stats
         self._last_arrival = time.monotonic()
         self.result: PoseResult | None = None
+        #: The rows the latest :meth:`poll` took in, for a live view of the unit.
+        self.recent: Array = np.empty((0, 8))
 
     @property
     def elapsed_s(self) -> float:
@@ -143,29 +149,34 @@ class PoseAcquisition:
         if self.result is not None:
             return self.result
         rows = self.driver.drain()
+        self.recent = rows
         now = time.monotonic()
-        if len(rows):
-            self._last_arrival = now
-            if self._first_seq is None:
-                self._first_seq = float(rows[0, 0])
-            self._last_seq = float(rows[-1, 0])
-            verdict = self.detector.feed(rows)
-            if verdict is not None:
-                self.result = PoseResult.from_window(
-                    verdict.window,
-                    pose=self.pose,
-                    rate_hz=self._rate,
-                    wait_s=self.elapsed_s,
-                    link=self.driver.stats - self._stats0,
-                    loss_fraction=verdict.loss_fraction,
+        if not len(rows):
+            if now - self._last_arrival > self.stall_s:
+                raise DeviceTimeoutError(
+                    f"pose {self.pose}: no samples from {self.driver.url} for {self.stall_s:g} s"
                 )
-                return self.result
+            return None
+        self._last_arrival = now
+        rows = rows[rows[:, 0] >= self.from_seq]
+        if not len(rows):
+            return None
+        if self._first_seq is None:
+            self._first_seq = float(rows[0, 0])
+        self._last_seq = float(rows[-1, 0])
+        verdict = self.detector.feed(rows)
+        if verdict is None:
             self._check(self.detector.last)
-        elif now - self._last_arrival > self.stall_s:
-            raise DeviceTimeoutError(
-                f"pose {self.pose}: no samples from {self.driver.url} for {self.stall_s:g} s"
-            )
-        return None
+            return None
+        self.result = PoseResult.from_window(
+            verdict.window,
+            pose=self.pose,
+            rate_hz=self._rate,
+            wait_s=self.elapsed_s,
+            link=self.driver.stats - self._stats0,
+            loss_fraction=verdict.loss_fraction,
+        )
+        return self.result
 
     def _check(self, verdict: WindowVerdict | None) -> None:
         if verdict is None:
@@ -192,9 +203,12 @@ def acquire_pose(
     limits: StillnessThresholds | None = None,
     timeout_s: float = 30.0,
     poll_s: float = 0.02,
+    from_seq: int = 0,
 ) -> PoseResult:
     """Blocking form of :class:`PoseAcquisition`, for scripts and tests."""
-    acquisition = PoseAcquisition(driver, pose=pose, limits=limits, timeout_s=timeout_s)
+    acquisition = PoseAcquisition(
+        driver, pose=pose, limits=limits, timeout_s=timeout_s, from_seq=from_seq
+    )
     while (result := acquisition.poll()) is None:
         time.sleep(poll_s)
     return result

@@ -61,3 +61,23 @@ def keys_create(
         database.dispose()
     err.print(f"API key for station {station} (shown once, store it on the station):")
     out.print(key)
+
+
+@keys_app.command("revoke")
+def keys_revoke(
+    station: Annotated[
+        str,
+        typer.Option(
+            "--station", help="The station whose keys stop working.", callback=_station_id
+        ),
+    ],
+    database_url: DatabaseUrlOption = None,
+) -> None:
+    """Revoke every API key of a station (a lost or replaced station)."""
+    database = open_database(database_url)
+    try:
+        with database.session() as session, session.begin():
+            revoked = RunRepository(session).revoke_keys(station)
+    finally:
+        database.dispose()
+    out.print(f"revoked {revoked} API key(s) of station {station}")

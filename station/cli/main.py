@@ -8,11 +8,12 @@ its traceback.
 import typer
 
 from station import __version__
-from station.cli import solve
+from station.cli import gyro, solve, station
 from station.cli.db import db_app, keys_app
 from station.cli.output import fail, out
 from station.cli.report import report
 from station.cli.serve import serve
+from station.cli.simulate import simulate
 from station.errors import CalstationError
 
 EXIT_USER_ERROR = 2
@@ -25,6 +26,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.command(name="solve")(solve.solve_command)
+app.command(name="run")(station.run_command)
+app.command(name="demo")(station.demo_command)
+app.add_typer(gyro.app, name="gyro")
 
 
 @app.callback()
@@ -42,6 +46,7 @@ app.command()(serve)
 app.command()(report)
 app.add_typer(db_app, name="db")
 app.add_typer(keys_app, name="keys")
+app.command()(simulate)
 
 
 def main() -> None:

@@ -32,7 +32,7 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import (
     DEFAULT_BAUD,
     DEFAULT_RATE_HZ,
-    MAX_RATE_HZ,
+    PROTOCOL_VERSION,
     RATE_STRUCT,
     SAMPLE_COLUMNS,
     ErrorCode,
@@ -65,8 +65,9 @@ class _SequenceTracker:
         self.lost = 0
         self.gaps = 0
 
-    def reset(self) -> None:
-        self.last = None
+    def restart(self) -> None:
+        """The unit restarts counting at 0: a first sample numbered 3 means 3 lost."""
+        self.last = -1
 
     def unwrap(self, seq16: NDArray[np.float64]) -> NDArray[np.float64]:
         """Replace 16-bit sequence numbers by a running count; account for gaps.
@@ -242,9 +243,12 @@ class PutterDriver:
         return buffer.drain(count)
 
     def _take(self, buffer: SampleBuffer, max_rows: int | None) -> NDArray[np.float64]:
+        # Read the failure first: the reader stores its last samples before it fails, so
+        # a failure seen here means the drain below holds everything received.
+        failure = self._failure
         rows = buffer.drain(max_rows)
-        if not len(rows) and self._failure is not None:
-            raise self._failure
+        if not len(rows) and failure is not None:
+            raise failure
         return rows
 
     # -- commands ---------------------------------------------------------------------
@@ -256,14 +260,23 @@ class PutterDriver:
             identity = Identity.decode(reply.payload)
         except ValueError as exc:
             raise ProtocolError(f"putter at {self._name}: bad IDENTITY reply: {exc}") from exc
+        if identity.protocol_version != PROTOCOL_VERSION:
+            raise ProtocolError(
+                f"putter at {self._name} speaks protocol version {identity.protocol_version}; "
+                f"this station speaks version {PROTOCOL_VERSION}"
+            )
         if expected_serial is not None and identity.serial != expected_serial:
             raise SerialNumberMismatchError(expected_serial, identity.serial)
         return identity
 
     def set_rate(self, rate_hz: int) -> None:
-        """Set the stream's sample rate, 1 to 1000 samples/s."""
-        if not 1 <= rate_hz <= MAX_RATE_HZ:
-            raise ValueError(f"sample rate must be 1…{MAX_RATE_HZ} samples/s, got {rate_hz}")
+        """Set the stream's sample rate; the unit accepts 1 to 1000 samples/s.
+
+        The unit is the judge of the range: it refuses others with
+        :class:`DeviceRejectedError`.
+        """
+        if not 0 <= rate_hz <= 0xFFFF:
+            raise ValueError(f"sample rate {rate_hz} does not fit the 16-bit field")
         self._command(FrameType.SET_RATE, RATE_STRUCT.pack(rate_hz), FrameType.ACK)
         self._rate_hz = rate_hz
 
@@ -274,7 +287,7 @@ class PutterDriver:
         """
         mode = StreamMode.CALIBRATED if calibrated else StreamMode.RAW
         with self._stats_lock:
-            self._seq.reset()
+            self._seq.restart()
         self._command(FrameType.START_STREAM, bytes((mode,)), FrameType.ACK)
 
     def stop_stream(self) -> None:
@@ -366,7 +379,9 @@ class PutterDriver:
                 waiting = port.in_waiting
                 data = port.read(waiting if waiting > 1 else READ_CHUNK)
                 if data:
-                    self._dispatch(self._parser.feed(data))
+                    with self._stats_lock:
+                        frames = self._parser.feed(data)
+                    self._dispatch(frames)
         except (serial.SerialException, OSError) as exc:
             if not self._stop.is_set():
                 self._fail(DeviceDisconnectedError(f"putter at {self._name} disconnected: {exc}"))

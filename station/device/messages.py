@@ -46,7 +46,7 @@ def _vector(value: NDArray[np.float64] | list[float]) -> NDArray[np.float64]:
     return np.asarray(value, dtype=np.float32).astype(np.float64)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DeviceCalibration:
     """Calibration coefficients as the unit stores them (IEEE-754 float32).
 
@@ -72,6 +72,18 @@ class DeviceCalibration:
             raise ValueError("calibration coefficients must be finite")
         object.__setattr__(self, "offset", offset)
         object.__setattr__(self, "matrix", matrix)
+
+    def __eq__(self, other: object) -> bool:
+        """Same coefficients, bit for bit (both are float32 values), and same flag."""
+        if not isinstance(other, DeviceCalibration):
+            return NotImplemented
+        return (
+            self.written == other.written
+            and np.array_equal(self.offset, other.offset)
+            and np.array_equal(self.matrix, other.matrix)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
 
     @classmethod
     def factory_default(cls) -> "DeviceCalibration":

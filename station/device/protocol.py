@@ -36,6 +36,8 @@ TEMP_C_PER_LSB: Final = 0.01
 #: Largest sample rate the firmware accepts, samples/s.
 MAX_RATE_HZ: Final = 1000
 DEFAULT_RATE_HZ: Final = 500
+#: Largest rate of the calibrated stream: its 28-byte frames fill 230,400 baud at 822/s.
+MAX_CALIBRATED_RATE_HZ: Final = 800
 #: Baud rate of the link (8N1: 10 bits on the wire per byte).
 DEFAULT_BAUD: Final = 230_400
 TEXT_FIELD_BYTES: Final = {"serial": 16, "firmware": 8, "sensor_part": 16}

@@ -7,6 +7,7 @@ It runs in a thread of its own. Tests and demos script the operator through
 
 import contextlib
 import logging
+import math
 import select
 import threading
 from collections.abc import Callable
@@ -22,6 +23,7 @@ from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
     DEFAULT_RATE_HZ,
     GYRO_DPS_PER_LSB,
+    MAX_CALIBRATED_RATE_HZ,
     MAX_RATE_HZ,
     PAYLOAD_LENGTHS,
     RATE_STRUCT,
@@ -212,22 +214,28 @@ class VirtualPutter:
         *,
         wait: bool = False,
         at_s: float | None = None,
-    ) -> None:
+    ) -> int | None:
         """Have the operator move the unit to ``target`` over ``duration_s`` simulated seconds.
 
         The move starts now, or at simulated time ``at_s`` (for :meth:`trace`). With
-        ``wait``, return once the unit has settled (tremor below 1 %).
+        ``wait``, return once the unit has settled (tremor below 1 %). Returns the
+        sequence number (counted from 0 at the stream's start, as the driver unwraps
+        it) of the first sample the move can show in, or None when not streaming.
         """
         if isinstance(target, str):
             target = pose(target)
         rotation = target.rotation if isinstance(target, Pose) else target
         with self._lock:
-            self._motion.never_settles = self.faults.never_settle
             start = self.clock.now() if at_s is None else at_s
             self._motion.move_to(rotation, start, duration_s)
             settled = self._motion.settled_at()
+            first: int | None = None
+            if self._mode is not None:
+                index = max(self._emitted, math.ceil((start - self._stream_t0) * self._rate_hz))
+                first = self._seq + index - self._emitted
         if wait:
             self.clock.sleep(settled - self.clock.now(), self._stop)
+        return first
 
     @property
     def settled_at_s(self) -> float:
@@ -242,15 +250,19 @@ class VirtualPutter:
 
     def _run(self) -> None:
         while not self._stop.is_set():
-            with self._lock:
-                link = self._link
-                if link is not None:
-                    self._tick(link)
+            link = self._link
             if link is None:
                 self._stop.wait(0.005)
+                continue
+            try:
+                readable, _, _ = select.select([link], [], [], 0.002)
+            except (OSError, ValueError):  # unplugged while waiting
+                continue
+            with self._lock:
+                if self._link is link:
+                    self._tick(link, bool(readable))
 
-    def _tick(self, link: Link) -> None:
-        readable, _, _ = select.select([link], [], [], 0.002)
+    def _tick(self, link: Link, readable: bool) -> None:
         if readable:
             try:
                 data = link.receive()
@@ -286,6 +298,9 @@ class VirtualPutter:
             if mode not in (StreamMode.RAW, StreamMode.CALIBRATED):
                 self._error(link, kind, ErrorCode.BAD_VALUE, f"stream mode {mode}")
                 return
+            if mode == StreamMode.CALIBRATED and self._rate_hz > MAX_CALIBRATED_RATE_HZ:
+                self._error(link, kind, ErrorCode.BAD_VALUE, "rate too high for calibrated")
+                return
             self._mode = StreamMode(mode)
             self._restart_timing()
             self._seq = 0
@@ -296,6 +311,9 @@ class VirtualPutter:
             (rate,) = RATE_STRUCT.unpack(frame.payload)
             if not 1 <= rate <= MAX_RATE_HZ:
                 self._error(link, kind, ErrorCode.BAD_VALUE, f"rate {rate} not in 1..1000")
+                return
+            if self._mode == StreamMode.CALIBRATED and rate > MAX_CALIBRATED_RATE_HZ:
+                self._error(link, kind, ErrorCode.BAD_VALUE, "rate too high for calibrated")
                 return
             self._rate_hz = rate
             self._restart_timing()
@@ -334,6 +352,7 @@ class VirtualPutter:
 
     def _sense(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Accelerometer counts, gyro and temperature fields (protocol counts) at ``t``."""
+        self._motion.never_settles = self.faults.never_settle
         kin = self._motion.evaluate(t)
         temperature = self.thermal.at(t)
         acc = accelerometer_counts(self._truth, kin.force_g, temperature, self._noise_rng)

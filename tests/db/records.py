@@ -108,7 +108,6 @@ def make_record(
         "gyro": {
             "bias": {"x": 0.01, "y": -0.02, "z": 0.005},
             "noise": {"x": 0.05, "y": 0.05, "z": 0.06},
-            "bias_g_slope": {"x": 0.001, "y": 0.0, "z": -0.001},
         },
         "poses": poses,
     }

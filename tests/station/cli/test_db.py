@@ -66,3 +66,21 @@ def test_keys_create_refuses_a_bad_station_id(run_cli: CliRunner, tmp_path: Path
     )
     assert result.returncode == 2
     assert "--station" in result.stderr
+
+
+def test_keys_revoke_stops_every_key_of_the_station(
+    run_cli: CliRunner, database: Database, database_url: str
+) -> None:
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        keys = [repository.create_key("line3-st2") for _ in range(2)]
+        other = repository.create_key("line3-st3")
+    result = run_cli(
+        "keys", "revoke", "--station", "line3-st2", "--database-url", database_url, env=_env()
+    )
+    assert result.returncode == 0, result.stderr
+    assert "revoked 2 API key(s)" in result.stdout
+    with database.session() as session:
+        repository = RunRepository(session)
+        assert [repository.station_for_key(key) for key in keys] == [None, None]
+        assert repository.station_for_key(other) == "line3-st3"

@@ -1,0 +1,79 @@
+"""The station's configuration: who and where it is, and how it runs units.
+
+Values come, last one winning, from the defaults here, a TOML file (``--config``),
+``CALSTATION_*`` environment variables, and the command line's flags.
+"""
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, ValidationError, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from db.settings import default_data_dir
+from station.errors import InputError
+from station.session import RunSettings
+
+#: Serial numbers on the putters' labels: PT and six digits.
+SERIAL_PATTERN = r"^PT\d{6}$"
+
+
+class StationConfig(BaseSettings):
+    """One calibration station."""
+
+    model_config = SettingsConfigDict(env_prefix="CALSTATION_", extra="forbid")
+
+    station_id: str = Field("station-1", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    operator_id: str = Field("operator", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    port: str | None = None
+    limits_file: Path | None = None
+    limits_profile: str | None = None
+    serial_pattern: str = SERIAL_PATTERN
+    data_dir: Path = default_data_dir()
+    database_url: str | None = None
+    server_url: str | None = None
+    api_key: str | None = None
+    run: RunSettings = RunSettings()
+
+    @field_validator("serial_pattern")
+    @classmethod
+    def _compiles(cls, value: str) -> str:
+        try:
+            re.compile(value)
+        except re.error as exc:
+            raise ValueError(f"not a regular expression: {exc}") from None
+        return value
+
+    @property
+    def journal_path(self) -> Path:
+        """The journal of the run in progress."""
+        return self.data_dir.expanduser() / f"journal-{self.station_id}.json"
+
+    @property
+    def outbox_dir(self) -> Path:
+        """Where finished runs wait to be stored."""
+        return self.data_dir.expanduser() / "outbox"
+
+
+def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
+    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top."""
+    values: dict[str, Any] = {}
+    if path is not None:
+        try:
+            values = tomllib.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(
+                f"{path}: cannot read the station configuration: {exc.strerror}"
+            ) from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"{path}: not valid TOML: {exc}") from None
+    values.update({k: v for k, v in overrides.items() if v is not None})
+    try:
+        return StationConfig(**values)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = f"{path}: " if path is not None else ""
+        field = ".".join(str(p) for p in first["loc"])
+        raise InputError(f"{where}station configuration: {field}: {first['msg']}") from None

@@ -1,0 +1,63 @@
+"""The operator's keys, read without blocking the station's loop.
+
+On a terminal the station puts it in cbreak mode (each key arrives at once, nothing
+echoed) and restores it on exit; a barcode scanner is a keyboard that types the
+serial number and Enter. Without a terminal (a pipe), whatever arrived is read as is.
+"""
+
+import os
+import select
+import sys
+import termios
+import tty
+from types import TracebackType
+from typing import Any, Protocol, Self
+
+CTRL_D = b"\x04"
+
+
+class KeySource(Protocol):
+    """Where the station's keys come from."""
+
+    def read(self) -> str:
+        """The characters typed since the last call ('' for none); never blocks.
+
+        Raises :class:`EOFError` once the source is closed.
+        """
+        ...
+
+
+class TerminalKeys:
+    """Keys from standard input, in cbreak mode while used as a context manager."""
+
+    def __init__(self) -> None:
+        self.fd = sys.stdin.fileno()
+        self._saved: list[Any] | None = None
+
+    def __enter__(self) -> Self:
+        if os.isatty(self.fd):
+            self._saved = termios.tcgetattr(self.fd)
+            tty.setcbreak(self.fd)
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if self._saved is not None:
+            termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
+
+    def read(self) -> str:
+        chunks: list[bytes] = []
+        while select.select([self.fd], [], [], 0)[0]:
+            data = os.read(self.fd, 1024)
+            if not data:
+                if chunks:
+                    break
+                raise EOFError
+            if CTRL_D in data:  # in cbreak mode the terminal no longer turns it into EOF
+                raise EOFError
+            chunks.append(data)
+        return b"".join(chunks).decode("utf-8", errors="replace")

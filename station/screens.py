@@ -1,0 +1,160 @@
+"""What the operator sees: rich renderables built from the station's state.
+
+Pure functions of their arguments (no I/O), so the same screens serve the live
+terminal, the demo's scripted operator and the tests.
+"""
+
+from rich.align import Align
+from rich.console import Group, RenderableType
+from rich.panel import Panel
+from rich.progress_bar import ProgressBar
+from rich.table import Table
+from rich.text import Text
+
+from station.poses import Pose
+from station.records import RunRecord
+from station.session import Phase, UnitRun
+
+#: Small drawings of the putter in each named pose (head ▣, shaft ║ or ═, grip ▓).
+DRAWINGS: dict[str, str] = {
+    "face_up": "   face ↑\n ▣═════════▓\n (lying on its back)",
+    "face_down": " ▣═════════▓\n   face ↓\n (lying face down)",
+    "toe_up": "  toe ↑\n  ▣═════════▓\n  heel on the table",
+    "toe_down": "  heel ↑\n  ▣═════════▓\n  toe on the table",
+    "shaft_up": "  ▓\n  ║\n  ║\n  ▣  head down, shaft up",
+    "shaft_down": "  ▣  head up, grip down\n  ║\n  ║\n  ▓",
+    "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   tilted cradle",
+}
+
+BANNER = {
+    "pass": (
+        "█▀█ ▄▀█ █▀ █▀",
+        "█▀▀ █▀█ ▄█ ▄█",
+    ),
+    "fail": (
+        "█▀▀ ▄▀█ █ █  ",
+        "█▀  █▀█ █ █▄▄",
+    ),
+}
+
+KEYS_HELP = "keys: r redo last pose · 1-9 redo that pose · a abort unit · h help"
+HELP = """\
+The station asks for one pose at a time. Put the putter in the pose shown, let go,
+and keep hands off: the capture starts by itself once it lies still in that pose.
+
+  r      redo the last pose taken
+  1…9    redo pose number N (its old capture is kept for audit)
+  a      abort this unit (press a, then y to confirm)
+  h, ?   show or hide this help
+
+At the serial prompt: scan the label (or type it and press Enter); type quit to stop."""
+
+
+def header(station_id: str, operator_id: str, versions: str, backlog: int) -> RenderableType:
+    """The top line: who, which versions, how many runs wait in the outbox."""
+    backlog_text = f"outbox {backlog}" if backlog else "outbox empty"
+    style = "bold yellow" if backlog else "green"
+    line = Text.assemble(
+        ("calstation ", "bold"),
+        f"station {station_id} · operator {operator_id} · {versions} · ",
+        (backlog_text, style),
+    )
+    return line
+
+
+def _meter(value: float, limit: float, label: str, unit: str) -> Text:
+    ratio = min(value / limit, 2.0) if limit > 0 else 0.0
+    filled = round(ratio * 10)
+    style = "green" if ratio <= 1 else "red"
+    bar = "▇" * min(filled, 20) + "·" * max(0, 10 - filled)
+    return Text.assemble(f"{label:<6}", (bar, style), f" {value:5.2f} / {limit:g} {unit}")
+
+
+def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
+    """The screen while a unit is calibrated."""
+    total = len(run.sequence)
+    target: Pose | None = run.requested
+    parts: list[RenderableType] = []
+    title = f"unit {run.journal.serial}"
+    if run.phase is Phase.RECONNECT:
+        parts.append(
+            Text("CABLE PULLED — plug the unit back in; the poses taken are kept", style="bold red")
+        )
+    elif run.phase is Phase.UNIT_OUTPUT:
+        parts.append(
+            Text("checking the unit's own calibrated output — keep it still", style="bold")
+        )
+    elif target is not None:
+        step = Text.assemble(
+            (f"pose {run.index + 1} of {total}: {target.name.replace('_', ' ')}", "bold cyan"),
+            f" — {target.instruction}",
+        )
+        parts.append(step)
+        parts.append(Text(DRAWINGS.get(target.name, ""), style="cyan"))
+        live = run.live
+        if live.sensed is not None:
+            ok = "✓ matches" if live.matches else "✗ not the pose asked for"
+            parts.append(
+                Text.assemble(
+                    "station sees: ",
+                    (live.sensed.nearest.name.replace("_", " "), "bold"),
+                    f" ({live.sensed.nearest_deg:.0f}° off)  ",
+                    (ok, "green" if live.matches else "red"),
+                )
+            )
+        limits = run.settings.stillness
+        parts.append(
+            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, "accel", "counts")
+        )
+        parts.append(
+            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, "gyro", "deg/s")
+        )
+        state = "moving" if live.moving else "still"
+        parts.append(Text(f"capture ({state}): {live.progress:4.0%}"))
+        parts.append(ProgressBar(total=1.0, completed=live.progress, width=40))
+    poses = Text()
+    for i, p in enumerate(run.sequence):
+        mark = "✓" if i in run.journal.captures else ("▶" if i == run.index else "·")
+        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
+        poses.append(f" {mark}{i + 1} {p.name}", style=style)
+    parts.append(poses)
+    for message in run.messages:
+        style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
+        parts.append(Text(message.text, style=style))
+    parts.append(Text(HELP if show_help else KEYS_HELP, style="dim"))
+    return Panel(Group(*parts), title=title, border_style="cyan")
+
+
+def verdict_screen(record: RunRecord) -> RenderableType:
+    """The large PASS or FAIL banner with every failing check named."""
+    style = "bold white on green" if record.verdict == "pass" else "bold white on red"
+    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="center")
+    lines: list[RenderableType] = [
+        Align.center(big),
+        Text(f"{record.verdict.upper()}  unit {record.serial}", style="bold", justify="center"),
+    ]
+    if record.coefficients is not None:
+        c = record.coefficients
+        table = Table(box=None, show_header=True, pad_edge=False)
+        table.add_column("axis")
+        table.add_column("offset (counts)", justify="right")
+        table.add_column("sensitivity (counts/g)", justify="right")
+        for axis in ("x", "y", "z"):
+            table.add_row(
+                axis, f"{getattr(c.offset, axis):.2f}", f"{getattr(c.sensitivity, axis):.2f}"
+            )
+        lines.append(Align.center(table))
+    for failure in record.failures:
+        lines.append(Text(f"✗ {failure.code}: {failure.message}", style="red"))
+    lines.append(Text(f"run {record.run_id}", style="dim", justify="center"))
+    return Panel(Group(*lines), border_style="green" if record.verdict == "pass" else "red")
+
+
+def serial_prompt(typed: str, note: str | None) -> RenderableType:
+    """The prompt for the next unit's serial number."""
+    parts: list[RenderableType] = [
+        Text.assemble(("Scan the next unit's serial number: ", "bold"), typed, ("█", "blink"))
+    ]
+    if note:
+        parts.append(Text(note, style="yellow"))
+    return Group(*parts)

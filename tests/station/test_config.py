@@ -1,0 +1,52 @@
+"""Station configuration: file, environment and flags; bad values named."""
+
+from pathlib import Path
+
+import pytest
+
+from station.config import load_config
+from station.errors import InputError
+from tests.conftest import CliRunner
+
+
+def test_flags_override_the_file_and_the_environment(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "station.toml"
+    path.write_text(
+        'station_id = "line1-st3"\noperator_id = "ann"\n[run]\npose_tolerance_deg = 20\n'
+    )
+    monkeypatch.setenv("CALSTATION_OPERATOR_ID", "bob")
+    config = load_config(path, {"operator_id": "carl", "port": None})
+    assert config.station_id == "line1-st3"
+    assert config.operator_id == "carl"
+    assert config.run.pose_tolerance_deg == 20
+    assert config.journal_path.name == "journal-line1-st3.json"
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ('[run]\nposes = ["face_up", "head_up"]\n', "run.poses"),
+        (
+            '[run]\nposes = ["face_up", "face_down", "toe_up", "toe_down", "shaft_up", '
+            '"head_up"]\n',
+            "head_up",
+        ),
+        ('serial_pattern = "(["\n', "serial_pattern: Value error, not a regular expression"),
+        ('station_id = "has space"\n', "station_id"),
+        ("bogus = 1\n", "bogus"),
+        ("not toml [", "not valid TOML"),
+    ],
+)
+def test_bad_configuration_is_one_line_naming_the_field(
+    run_cli: CliRunner, tmp_path: Path, content: str, message: str
+) -> None:
+    path = tmp_path / "station.toml"
+    path.write_text(content)
+    with pytest.raises(InputError, match=message.replace("[", r"\[").replace("(", r"\(")):
+        load_config(path, {})
+    result = run_cli("run", "--config", str(path), "--port", "/dev/null")
+    assert result.returncode == 2
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert str(path) in result.stderr
