@@ -1,12 +1,13 @@
 """Aggregation queries of the end-of-line report, one SQL statement per section.
 
-Nothing here walks runs in Python: counts and yields come from one grouped query over a
-window (``row_number``/``lead`` per unit, ordered by start time), the Pareto from the
+Nothing here walks runs in Python: counts and yields come from one grouped query over
+windows (``row_number``/``lead`` per unit, ordered by start time), the Pareto from the
 first failure reason of each failing run grouped by code, station and operator, the
-parameter statistics and histograms from one grouped query per table (each parameter
-an unpivoted row, grouped by parameter and bin), the control-chart limits from ``lag``
-over the runs in time order. Python only combines the grouped rows (a few hundred) and
-applies the capability formulas of :mod:`station.report.capability`.
+parameter statistics and histograms from one grouped query per limits family (grouped
+by the histogram bin of each axis), the control-chart limits from ``lag`` over the runs
+in time order, the unit list from ``row_number`` per serial. Python only merges the
+grouped rows (stations, bins: a few hundred) and applies the capability formulas of
+:mod:`station.report.capability`.
 """
 
 from collections import defaultdict
@@ -79,8 +80,9 @@ class ReportQueries:
         self.filter = filter
         self.dialect = session.get_bind().dialect.name
         if self.dialect == "postgresql":
-            # The report's statements are short scans with long expressions: compiling
-            # them (JIT) costs seconds and saves nothing.
+            # The report's statements are scans with long expressions: compiling them
+            # (JIT) cost seconds and saved nothing; its sorts and hashes of a million
+            # rows spill to disk with the default 4 MB of work memory.
             session.execute(text("SET LOCAL jit = off"))
             session.execute(text("SET LOCAL work_mem = '256MB'"))
 
@@ -119,7 +121,9 @@ class ReportQueries:
         station, so the ``line_*`` columns add up across stations to the line's counts.
         """
         order = (Run.started_at, Run.id)
-        at_station, on_line = [Run.station_id, Run.serial], [Run.serial]
+        # Serial first: sorts compare serial numbers with abbreviated keys, and the
+        # station window can reuse the line window's order (incremental sort).
+        at_station, on_line = [Run.serial, Run.station_id], [Run.serial]
         ranked = (
             select(
                 Run.station_id,
@@ -210,9 +214,13 @@ class ReportQueries:
         values = select(*picked)
         if specs[0].source == "poses":
             values = values.select_from(Pose).join(Run, Pose.run_pk == Run.id)
-        # OFFSET 0 keeps PostgreSQL from inlining the values into every aggregate
-        # (a gyro bias would be read out of its JSON document thirty times a row).
-        v = values.where(*self.conditions()).offset(0).subquery("v")
+        values = values.where(*self.conditions())
+        if family == "gyro_bias":
+            # OFFSET 0 keeps PostgreSQL from inlining the values into every aggregate (a
+            # bias would be read out of its JSON document thirty times a row); columns
+            # are inlined, which keeps the scan parallel.
+            values = values.offset(0)
+        v = values.subquery("v")
         groups: list[ColumnElement[Any]] = []
         columns: list[ColumnElement[Any]] = []
         for i in range(len(specs)):
