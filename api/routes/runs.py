@@ -5,7 +5,6 @@ from typing import Annotated
 from uuid import UUID
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
-from pydantic import AwareDatetime
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
 from api.responses import json_response
@@ -13,7 +12,7 @@ from api.schemas import Problem, RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
-from station.records import SERIAL_PATTERN, RunRecord, StoredRun, Verdict
+from station.records import SERIAL_PATTERN, RunRecord, StoredRun, UtcDatetime, Verdict
 
 log = logging.getLogger(__name__)
 
@@ -29,8 +28,8 @@ async def list_runs(
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
     station_id: Annotated[str | None, Query(max_length=64)] = None,
     verdict: Verdict | None = None,
-    since: Annotated[AwareDatetime | None, Query(description="started at or after")] = None,
-    until: Annotated[AwareDatetime | None, Query(description="started before")] = None,
+    since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
+    until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
     cursor: Annotated[str | None, Query(max_length=200)] = None,
 ) -> Response:
