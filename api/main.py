@@ -29,17 +29,18 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         url = settings.url()
         open_database(url).dispose()  # creates/migrates SQLite, checks a server's schema
-        engine = make_async_engine(url, pool_size=10, max_overflow=10)
-        app.state.sessions = async_sessionmaker(engine, expire_on_commit=False)
+        writer = make_async_engine(url, pool_size=2, max_overflow=6)
         # Reads need no transaction: runs are append-only, so each statement stands
-        # alone, and autocommit saves the BEGIN and ROLLBACK round trips.
-        app.state.readers = async_sessionmaker(
-            engine.execution_options(isolation_level="AUTOCOMMIT"), expire_on_commit=False
-        )
+        # alone. A pool of autocommit connections saves the BEGIN and ROLLBACK round
+        # trips and the isolation switch on every checkout.
+        reader = make_async_engine(url, pool_size=6, max_overflow=4, isolation_level="AUTOCOMMIT")
+        app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
+        app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
         try:
             yield
         finally:
-            await engine.dispose()
+            await writer.dispose()
+            await reader.dispose()
 
     app = FastAPI(
         title="calstation results",

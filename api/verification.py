@@ -33,7 +33,8 @@ def check_coefficients(record: RunRecord) -> None:
     poses = np.array([pose.mean.as_tuple() for pose in record.fit_poses()])
     try:
         recomputed = solve(poses, model=record.model).calibration
-    except CalibrationError as exc:
+    except (CalibrationError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        # Numerical failures on absurd poses are the poses' fault too, not the server's.
         raise CalibrationMismatchError(
             f"coefficients submitted but the fit poses give no calibration: {exc}"
         ) from None

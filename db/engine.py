@@ -29,6 +29,12 @@ def _sqlite_begin(connection: Connection) -> None:
         connection.exec_driver_sql("BEGIN")
 
 
+def _sqlite_events(engine: Engine, *, autocommit: bool) -> None:
+    event.listen(engine, "connect", _sqlite_connect)
+    if not autocommit:
+        event.listen(engine, "begin", _sqlite_begin)
+
+
 #: Async drivers of the supported backends (psycopg 3 speaks both ways).
 _ASYNC_DRIVERS = {"sqlite": "sqlite+aiosqlite", "postgresql": "postgresql+psycopg"}
 
@@ -42,8 +48,7 @@ def make_async_engine(url: str | URL, **kwargs: Any) -> AsyncEngine:
     parsed = parsed.set(drivername=_ASYNC_DRIVERS[backend])
     engine = create_async_engine(parsed, **kwargs)
     if backend == "sqlite":
-        event.listen(engine.sync_engine, "connect", _sqlite_connect)
-        event.listen(engine.sync_engine, "begin", _sqlite_begin)
+        _sqlite_events(engine.sync_engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
     return engine
 
 
@@ -54,8 +59,7 @@ def make_engine(url: str, **kwargs: Any) -> Engine:
         if parsed.database and parsed.database != ":memory:":
             Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(parsed, **kwargs)
-        event.listen(engine, "connect", _sqlite_connect)
-        event.listen(engine, "begin", _sqlite_begin)
+        _sqlite_events(engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
         return engine
     return create_engine(parsed, **kwargs)
 

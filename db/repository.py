@@ -98,10 +98,10 @@ def decode_cursor(cursor: str) -> tuple[datetime, int]:
     try:
         raw = base64.urlsafe_b64decode(cursor + "=" * (-len(cursor) % 4)).decode()
         moment, pk = raw.split("|")
-        started_at = datetime.fromisoformat(moment)
-        if started_at.tzinfo is None:
-            raise ValueError("naive")
-        return started_at, int(pk)
+        started_at, run_pk = datetime.fromisoformat(moment), int(pk)
+        if started_at.tzinfo is None or not 0 < run_pk < 2**63:
+            raise ValueError("not a cursor")
+        return started_at, run_pk
     except (ValueError, binascii.Error, UnicodeDecodeError):
         raise InputError(f"cursor {cursor[:40]!r} is not one this server handed out") from None
 

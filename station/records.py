@@ -26,10 +26,12 @@ from pydantic import (
 )
 
 from station.gyro.still import GyroStillSummary
+from station.sensor import ADC_MAX, ADC_MIN
 
 __all__ = [
     "SERIAL_PATTERN",
     "Coefficients",
+    "Counts3",
     "FailureReason",
     "GyroSummary",
     "LimitsRef",
@@ -43,6 +45,7 @@ __all__ = [
     "RunRecord",
     "RunSummary",
     "StoredRun",
+    "UtcDatetime",
     "Vector3",
     "Verdict",
 ]
@@ -80,7 +83,10 @@ Count = Annotated[int, Field(ge=0, le=_INT32_MAX)]
 
 
 def _utc(moment: datetime) -> datetime:
-    return moment.astimezone(UTC)
+    try:
+        return moment.astimezone(UTC)
+    except OverflowError:
+        raise ValueError("is outside the years 1…9999 in UTC") from None
 
 
 UtcDatetime = Annotated[AwareDatetime, AfterValidator(_utc)]
@@ -105,6 +111,16 @@ class Vector3(_Record):
         return (self.x, self.y, self.z)
 
 
+def _within_adc(counts: Vector3) -> Vector3:
+    if not all(ADC_MIN <= value <= ADC_MAX for value in counts.as_tuple()):
+        raise ValueError(f"counts must lie within the ADC range {ADC_MIN}…{ADC_MAX}")
+    return counts
+
+
+Counts3 = Annotated[Vector3, AfterValidator(_within_adc)]
+"""One ADC reading per axis, within the converter's range (counts)."""
+
+
 class LinkStats(_Record):
     """Health of the serial link while a pose was captured."""
 
@@ -119,7 +135,7 @@ class ReplacedCapture(_Record):
 
     captured_at: UtcDatetime
     reason: Text
-    mean: Vector3
+    mean: Counts3
     std: Vector3
     sample_count: Count
 
@@ -130,7 +146,7 @@ class PoseRecord(_Record):
     index: Count
     name: Identifier
     role: PoseRole = "fit"
-    mean: Vector3
+    mean: Counts3
     std: Vector3
     sample_count: Annotated[int, Field(ge=1, le=_INT32_MAX)]
     gyro_mean: Vector3 | None = None

@@ -4,6 +4,7 @@ import os
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -46,29 +47,29 @@ def serving(database_url: str, *, workers: int = 1, **settings: str) -> Iterator
         "PYTHONPATH": str(REPO_ROOT),
     }
     command = ["serve", "--port", str(port), "--workers", str(workers)]
-    server = subprocess.Popen(
-        [sys.executable, "-m", "station", *command],
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 30
-        while not _healthy(base):
-            if server.poll() is not None:
-                output = server.stdout.read() if server.stdout else ""
-                pytest.fail(f"calstation serve exited {server.returncode}: {output}")
-            if time.monotonic() > deadline:
-                pytest.fail("calstation serve did not answer /healthz within 30 s")
-            time.sleep(0.05)
-        yield base
-    finally:
-        server.terminate()
-        server.wait(timeout=10)
-        if server.stdout:
-            server.stdout.close()
+    # The server's log goes to a file: a pipe nobody reads would fill and block it.
+    with tempfile.TemporaryFile() as log:
+        server = subprocess.Popen(
+            [sys.executable, "-m", "station", *command],
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        base = f"http://127.0.0.1:{port}"
+        try:
+            deadline = time.monotonic() + 30
+            while not _healthy(base):
+                if server.poll() is not None:
+                    log.seek(0)
+                    output = log.read().decode(errors="replace")
+                    pytest.fail(f"calstation serve exited {server.returncode}: {output}")
+                if time.monotonic() > deadline:
+                    pytest.fail("calstation serve did not answer /healthz within 30 s")
+                time.sleep(0.05)
+            yield base
+        finally:
+            server.terminate()
+            server.wait(timeout=10)
 
 
 def _healthy(base: str) -> bool:

@@ -1,18 +1,20 @@
 """``/api/v1/runs``: list and read runs; stations submit theirs."""
 
+import logging
 from typing import Annotated
 from uuid import UUID
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
-from pydantic import AwareDatetime
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
 from api.responses import json_response
 from api.schemas import Problem, RunList
-from api.verification import check_coefficients
+from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
-from station.records import SERIAL_PATTERN, RunRecord, StoredRun, Verdict
+from station.records import SERIAL_PATTERN, RunRecord, StoredRun, UtcDatetime, Verdict
+
+log = logging.getLogger(__name__)
 
 #: Reads (open, or key-protected by the app's settings).
 router = APIRouter(prefix="/runs", tags=["runs"])
@@ -26,8 +28,8 @@ async def list_runs(
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
     station_id: Annotated[str | None, Query(max_length=64)] = None,
     verdict: Verdict | None = None,
-    since: Annotated[AwareDatetime | None, Query(description="started at or after")] = None,
-    until: Annotated[AwareDatetime | None, Query(description="started before")] = None,
+    since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
+    until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
     cursor: Annotated[str | None, Query(max_length=200)] = None,
 ) -> Response:
@@ -76,9 +78,23 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
             status.HTTP_403_FORBIDDEN,
             f"this API key belongs to station {station}, the run to {record.station_id}",
         )
-    check_coefficients(record)
+    try:
+        check_coefficients(record)
+    except CalibrationMismatchError as exc:
+        log.warning(
+            "run %s serial=%s station=%s refused: %s", record.run_id, record.serial, station, exc
+        )
+        raise
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
+    log.info(
+        "run %s serial=%s station=%s verdict=%s %s",
+        record.run_id,
+        record.serial,
+        station,
+        record.verdict,
+        "stored" if outcome.created else "already stored",
+    )
     answer = json_response(
         outcome.run,
         status.HTTP_201_CREATED if outcome.created else status.HTTP_200_OK,

@@ -1,13 +1,21 @@
 """``calstation serve``: the results server (REST API) under uvicorn."""
 
+import copy
 import os
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 import uvicorn
 
 from api.settings import ApiSettings
 from db import open_database
+
+
+def _log_config() -> dict[str, Any]:
+    """Uvicorn's logging, plus one line per submitted run from the ``api`` loggers."""
+    config = copy.deepcopy(uvicorn.config.LOGGING_CONFIG)
+    config["loggers"]["api"] = {"handlers": ["default"], "level": "INFO", "propagate": False}
+    return config
 
 
 def serve(
@@ -35,6 +43,7 @@ def serve(
         host=host,
         port=port,
         workers=workers,
-        log_level="warning",
+        log_config=_log_config(),
+        log_level="info",
         access_log=False,
     )

@@ -76,6 +76,8 @@ def test_an_unknown_serial_is_a_404_naming_it(client: httpx.Client, path: str) -
         ("/api/v1/runs?limit=0", 422),
         ("/api/v1/runs?limit=100000", 422),
         ("/api/v1/runs?cursor=garbage", 400),
+        ("/api/v1/runs?since=0001-01-01T00:00:00%2B14:00", 422),
+        ("/api/v1/runs?until=9999-12-31T23:59:59-14:00", 422),
         ("/api/v1/runs/6f1b0c8e-8a52-4f4a-9d43-0c8f6f1e1a11", 404),
         ("/api/v1/nowhere", 404),
     ],

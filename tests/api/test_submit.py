@@ -167,3 +167,24 @@ def test_no_body_ever_gets_a_5xx(
     )
     assert answer.status_code < 500, answer.text
     assert answer.is_success or answer.json()["detail"]
+
+
+#: Pose means: mostly ADC counts, sometimes any float at all.
+any_count = st.one_of(
+    st.floats(min_value=0.0, max_value=4095.0),
+    st.floats(allow_nan=False, allow_infinity=False),
+)
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(means=st.lists(st.tuples(any_count, any_count, any_count), min_size=7, max_size=7))
+def test_any_pose_means_get_an_answer_never_a_5xx(
+    client: httpx.Client, station_key: str, means: list[tuple[float, float, float]]
+) -> None:
+    body = make_record(run_id=uuid.uuid4()).model_dump(mode="json")
+    for pose, mean in zip(body["poses"], means, strict=True):
+        pose["mean"] = dict(zip("xyz", mean, strict=True))
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code in (201, 422), answer.text

@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session
 
 from db import RunConflictError, RunQuery, RunRepository
 from db.models import Pose, StationKey
+from db.repository import encode_cursor
 from station.errors import InputError
 from station.records import StoredRun
 from tests.db.records import T0, make_record
@@ -107,7 +108,15 @@ def test_list_filters_and_walks_every_page_once(session: Session) -> None:
     assert all(r.serial == "PT-000001" and r.started_at < T0 + timedelta(minutes=6) for r in window)
 
 
-@pytest.mark.parametrize("cursor", ["garbage", "bm90LWEtY3Vyc29y", ""])
+@pytest.mark.parametrize(
+    "cursor",
+    [
+        "garbage",
+        "bm90LWEtY3Vyc29y",
+        "",
+        encode_cursor(T0, 2**70),  # a run key no database column holds
+    ],
+)
 def test_a_foreign_cursor_is_refused(session: Session, cursor: str) -> None:
     with pytest.raises(InputError, match="cursor"):
         RunRepository(session).list_runs(RunQuery(cursor=cursor))

@@ -10,12 +10,13 @@ from pydantic import ValidationError
 from station.records import RunRecord
 from tests.db.records import T0, make_record
 
-finite = st.floats(allow_nan=False, allow_infinity=False, min_value=-1e9, max_value=1e9)
+#: Offsets and sensitivities that keep every pose mean inside the ADC range.
+offsets = st.floats(min_value=1700.0, max_value=2400.0)
 
 
 @given(
-    offset=st.tuples(finite, finite, finite),
-    sensitivity=st.tuples(*[st.floats(min_value=1.0, max_value=5000.0)] * 3),
+    offset=st.tuples(offsets, offsets, offsets),
+    sensitivity=st.tuples(*[st.floats(min_value=600.0, max_value=1000.0)] * 3),
     verdict=st.sampled_from(["pass", "fail"]),
     minutes=st.integers(min_value=0, max_value=10**7),
 )
@@ -51,6 +52,7 @@ def _payload(**changes: object) -> dict[str, object]:
     ("changes", "message"),
     [
         ({"started_at": "2026-11-02T08:00:00"}, "timezone"),
+        ({"started_at": "0001-01-01T00:00:00+14:00"}, "outside the years"),
         ({"serial": "PT 01"}, "serial"),
         ({"serial": "PT\x0001"}, "serial"),
         ({"verdict": "maybe"}, "verdict"),
@@ -66,6 +68,15 @@ def _payload(**changes: object) -> dict[str, object]:
 def test_inconsistent_records_are_refused(changes: dict[str, object], message: str) -> None:
     with pytest.raises(ValidationError, match=message):
         RunRecord.model_validate(_payload(**changes))
+
+
+def test_pose_means_must_be_adc_counts() -> None:
+    payload = _payload()
+    poses = payload["poses"]
+    assert isinstance(poses, list)
+    poses[2]["mean"]["y"] = 4096.0
+    with pytest.raises(ValidationError, match="ADC range 0…4095"):
+        RunRecord.model_validate(payload)
 
 
 def test_pose_indexes_must_number_the_poses() -> None:
