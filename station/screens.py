@@ -140,7 +140,7 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
 def verdict_screen(record: RunRecord) -> RenderableType:
     """The large PASS or FAIL banner with every failing check named."""
     style = "bold white on green" if record.verdict == "pass" else "bold white on red"
-    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="center")
+    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="left", no_wrap=True)
     lines: list[RenderableType] = [
         Align.center(big),
         Text(f"{record.verdict.upper()}  unit {record.serial}", style="bold", justify="center"),
