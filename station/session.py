@@ -35,7 +35,7 @@ from station.device.errors import DeviceDisconnectedError, DeviceTimeoutError
 from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
-from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, sense
+from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, gravity_direction, sense
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, Pose, pose
 from station.records import (
     Coefficients,
@@ -325,8 +325,7 @@ class UnitRun:
         if self._wrong_pose_said == sensed.nearest.name:
             return
         self._wrong_pose_said = sensed.nearest.name
-        for j, earlier in sorted(self.journal.captures.items()):
-            direction = sense(np.array(earlier.record.mean.as_tuple())).direction
+        for j, direction in self._captured_directions():
             if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
                 self.say(
                     "warn",
@@ -340,6 +339,13 @@ class UnitRun:
             f"pose {self.index + 1} is {target.name}",
         )
 
+    def _captured_directions(self) -> list[tuple[int, Array]]:
+        """Sensed gravity direction of every pose taken, by pose index."""
+        return [
+            (i, gravity_direction(np.array(c.record.mean.as_tuple())))
+            for i, c in sorted(self.journal.captures.items())
+        ]
+
     def _restart_acquisition(self) -> None:
         target = self.requested
         self._acquisition = PoseAcquisition(
@@ -352,9 +358,8 @@ class UnitRun:
     def _accept(self, result: PoseResult, target: Pose) -> None:
         sensed = sense(result.accel_mean)
         close_to_earlier = any(
-            angle_deg(sense(np.array(c.record.mean.as_tuple())).direction, sensed.direction)
-            < self.settings.min_pose_separation_deg
-            for c in self.journal.captures.values()
+            angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
+            for _, direction in self._captured_directions()
         )
         if close_to_earlier or not sensed.matches(target, self.settings.pose_tolerance_deg):
             if self._moved:
