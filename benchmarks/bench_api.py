@@ -173,7 +173,12 @@ def server(url: str, workers: int, port: int) -> Iterator[tuple[str, int]]:
     """``calstation serve`` as a real process; yields its base URL and pid once it answers."""
     env = {**os.environ, "CALSTATION_DATABASE_URL": url, "PYTHONPATH": str(ROOT)}
     command = [sys.executable, "-m", "station", "serve", "--port", str(port)]
-    process = subprocess.Popen([*command, "--workers", str(workers)], env=env)
+    process = subprocess.Popen(  # its log (a line per submission) is not the result
+        [*command, "--workers", str(workers)],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     base = f"http://127.0.0.1:{port}"
     try:
         deadline = time.monotonic() + 60
