@@ -38,7 +38,6 @@ class TimedOperator(ScriptedOperator):
     _last: str | None = None
 
     def read(self) -> str:
-        before = len(self.done)
         keys = super().read()
         if keys.endswith("\n"):
             self.scanned_at.append(time.perf_counter())
@@ -48,7 +47,6 @@ class TimedOperator(ScriptedOperator):
             self._last = self._moved_to
             putter = current.putter
             self.handling_s.append(max(0.0, putter.settled_at_s - putter.clock.now()))
-        del before
         return keys
 
 

@@ -7,7 +7,6 @@ terminal, the demo's scripted operator and the tests.
 from rich.align import Align
 from rich.console import Group, RenderableType
 from rich.panel import Panel
-from rich.progress_bar import ProgressBar
 from rich.table import Table
 from rich.text import Text
 
@@ -28,12 +27,18 @@ DRAWINGS: dict[str, str] = {
 
 BANNER = {
     "pass": (
-        "█▀█ ▄▀█ █▀ █▀",
-        "█▀▀ █▀█ ▄█ ▄█",
+        " ████   ███   ████  ████ ",
+        " █   █ █   █ █     █     ",
+        " ████  █████  ███   ███  ",
+        " █     █   █     █     █ ",
+        " █     █   █ ████  ████  ",
     ),
     "fail": (
-        "█▀▀ ▄▀█ █ █  ",
-        "█▀  █▀█ █ █▄▄",
+        " █████  ███  ███ █     ",
+        " █     █   █  █  █     ",
+        " ████  █████  █  █     ",
+        " █     █   █  █  █     ",
+        " █     █   █ ███ █████ ",
     ),
 }
 
@@ -51,15 +56,15 @@ At the serial prompt: scan the label (or type it and press Enter); type quit to 
 
 
 def header(station_id: str, operator_id: str, versions: str, backlog: int) -> RenderableType:
-    """The top line: who, which versions, how many runs wait in the outbox."""
+    """The top lines: who, how many runs wait in the outbox, which versions."""
     backlog_text = f"outbox {backlog}" if backlog else "outbox empty"
     style = "bold yellow" if backlog else "green"
-    line = Text.assemble(
-        ("calstation ", "bold"),
-        f"station {station_id} · operator {operator_id} · {versions} · ",
+    who = Text.assemble(
+        ("calstation", "bold"),
+        f" · station {station_id} · operator {operator_id} · ",
         (backlog_text, style),
     )
-    return line
+    return Group(who, Text(versions, style="dim"))
 
 
 def _meter(value: float, limit: float, label: str, unit: str) -> Text:
@@ -110,8 +115,15 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
             _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, "gyro", "deg/s")
         )
         state = "moving" if live.moving else "still"
-        parts.append(Text(f"capture ({state}): {live.progress:4.0%}"))
-        parts.append(ProgressBar(total=1.0, completed=live.progress, width=40))
+        filled = round(live.progress * 30)
+        parts.append(
+            Text.assemble(
+                f"capture ({state}) ",
+                ("█" * filled, "green"),
+                ("░" * (30 - filled), "dim"),
+                f" {live.progress:4.0%}",
+            )
+        )
     poses = Text()
     for i, p in enumerate(run.sequence):
         mark = "✓" if i in run.journal.captures else ("▶" if i == run.index else "·")
@@ -128,7 +140,7 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
 def verdict_screen(record: RunRecord) -> RenderableType:
     """The large PASS or FAIL banner with every failing check named."""
     style = "bold white on green" if record.verdict == "pass" else "bold white on red"
-    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="center")
+    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="left", no_wrap=True)
     lines: list[RenderableType] = [
         Align.center(big),
         Text(f"{record.verdict.upper()}  unit {record.serial}", style="bold", justify="center"),

@@ -35,7 +35,7 @@ from station.device.errors import DeviceDisconnectedError, DeviceTimeoutError
 from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
-from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, sense
+from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, gravity_direction, sense
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, Pose, pose
 from station.records import (
     Coefficients,
@@ -58,6 +58,8 @@ LIVE_SAMPLES = 128
 UNIT_OUTPUT_SAMPLES = 256
 #: Wall-clock seconds between attempts to reach a unit whose cable was pulled.
 RECONNECT_EVERY_S = 0.5
+#: Wall-clock seconds without a sample before the unit counts as gone.
+STALL_S = 2.0
 
 
 class RunSettings(BaseModel):
@@ -156,6 +158,9 @@ class UnitRun:
         self._failures: list[FailureReason] = []
         self._unit_output: list[Array] = []
         self._next_reconnect = 0.0
+        self._last_arrival = 0.0
+        #: The live window that failed the unit before its pose was captured.
+        self._evidence: PoseRecord | None = None
         self._wrong_pose_said: str | None = None
         #: Whether the unit moved since the last capture (before it has, it still lies
         #: in the pose just taken, which is no mistake).
@@ -185,7 +190,10 @@ class UnitRun:
 
     def redo(self, index: int) -> None:
         """Take pose ``index`` again; its current capture is kept for audit."""
-        if self.phase is Phase.DONE or not 0 <= index < len(self.sequence):
+        if not 0 <= index < len(self.sequence):
+            return
+        if self.phase not in (Phase.POSE, Phase.RECONNECT):
+            self.say("warn", "too late to redo a pose: the coefficients are being written")
             return
         capture = self.journal.captures.pop(index, None)
         if capture is not None:
@@ -254,6 +262,8 @@ class UnitRun:
             self._restart_acquisition()
             return
         self._update_live(acquisition.recent, target)
+        if self.phase is Phase.DONE:
+            return
         if result is None:
             if not self.live.matches:
                 self._restart_acquisition()
@@ -267,6 +277,28 @@ class UnitRun:
         window = self._recent
         sensed = sense(window[:, 1:4].mean(axis=0))
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
+        if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
+            axes = ", ".join(verdict.saturated_axes)
+            self._evidence = PoseRecord(
+                index=self.index,
+                name=target.name,
+                role="verify" if self.index >= self.fit_count else "fit",
+                mean=_vec(window[:, 1:4].mean(axis=0)),
+                std=_vec(window[:, 1:4].std(axis=0, ddof=1)),
+                sample_count=len(window),
+                gyro_mean=_vec(window[:, 4:7].mean(axis=0)),
+                temperature_c=float(window[:, 7].mean()),
+            )
+            self._failures.append(
+                FailureReason(
+                    code="saturated",
+                    message=f"accelerometer {axes} stuck at the ADC rail while the unit is still",
+                    pose=self.index,
+                    axis=verdict.saturated_axes[0] if len(verdict.saturated_axes) == 1 else None,
+                )
+            )
+            self._finish(store=True)
+            return
         matches = sensed.matches(target, self.settings.pose_tolerance_deg)
         was_capturing = self.live.progress >= 0.25
         if verdict.motion:
@@ -293,8 +325,7 @@ class UnitRun:
         if self._wrong_pose_said == sensed.nearest.name:
             return
         self._wrong_pose_said = sensed.nearest.name
-        for j, earlier in sorted(self.journal.captures.items()):
-            direction = sense(np.array(earlier.record.mean.as_tuple())).direction
+        for j, direction in self._captured_directions():
             if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
                 self.say(
                     "warn",
@@ -308,6 +339,13 @@ class UnitRun:
             f"pose {self.index + 1} is {target.name}",
         )
 
+    def _captured_directions(self) -> list[tuple[int, Array]]:
+        """Sensed gravity direction of every pose taken, by pose index."""
+        return [
+            (i, gravity_direction(np.array(c.record.mean.as_tuple())))
+            for i, c in sorted(self.journal.captures.items())
+        ]
+
     def _restart_acquisition(self) -> None:
         target = self.requested
         self._acquisition = PoseAcquisition(
@@ -320,9 +358,8 @@ class UnitRun:
     def _accept(self, result: PoseResult, target: Pose) -> None:
         sensed = sense(result.accel_mean)
         close_to_earlier = any(
-            angle_deg(sense(np.array(c.record.mean.as_tuple())).direction, sensed.direction)
-            < self.settings.min_pose_separation_deg
-            for c in self.journal.captures.values()
+            angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
+            for _, direction in self._captured_directions()
         )
         if close_to_earlier or not sensed.matches(target, self.settings.pose_tolerance_deg):
             if self._moved:
@@ -364,7 +401,9 @@ class UnitRun:
         self.index = self.journal.next_pose
         if self.index >= self.fit_count and self.solution is None:
             self._solve()
-        if self.phase is Phase.POSE and self.index >= len(self.sequence):
+        if self.phase is not Phase.POSE:
+            return
+        if self.index >= len(self.sequence):
             self._write_back()
         else:
             self._restart_acquisition()
@@ -412,11 +451,20 @@ class UnitRun:
         self.writeback_error = relative
         self.driver.start_stream(calibrated=True)
         self._unit_output = []
+        self._last_arrival = time.monotonic()
         self.phase = Phase.UNIT_OUTPUT
         self.say("info", "coefficients written and read back: checking the unit's own output")
 
     def _step_unit_output(self) -> None:
-        self._unit_output.append(self.driver.drain_calibrated())
+        rows = self.driver.drain_calibrated()
+        now = time.monotonic()
+        if len(rows):
+            self._unit_output.append(rows)
+            self._last_arrival = now
+        elif now - self._last_arrival > STALL_S:
+            raise DeviceTimeoutError(
+                f"no calibrated samples from {self.driver.url} for {STALL_S:g} s"
+            )
         got = np.concatenate(self._unit_output) if self._unit_output else np.empty((0, 4))
         if len(got) < UNIT_OUTPUT_SAMPLES:
             return
@@ -444,8 +492,11 @@ class UnitRun:
         self.driver = driver
         self.phase = Phase.POSE
         self._recent = np.empty((0, 8))
-        self._restart_acquisition()
         self.say("info", "the unit is back: carry on")
+        if self.index >= len(self.sequence):  # it went while its coefficients were written
+            self._write_back()
+        else:
+            self._restart_acquisition()
 
     # -- the verdict -------------------------------------------------------------------
 
@@ -504,6 +555,20 @@ class UnitRun:
             still=still,
         )
 
+    def _pose_records(self) -> tuple[PoseRecord, ...]:
+        """Every pose taken (plus the window that failed the unit, if not taken), in order.
+
+        A run that ends with a pose missing (aborted after a redo) is numbered without
+        the gap; the names still say which pose each one is.
+        """
+        taken = [self.journal.captures[i].record for i in sorted(self.journal.captures)]
+        evidence = self._evidence
+        if evidence is not None and evidence.index not in self.journal.captures:
+            taken = sorted((*taken, evidence), key=lambda p: p.index)
+        return tuple(
+            p if p.index == i else p.model_copy(update={"index": i}) for i, p in enumerate(taken)
+        )
+
     def _finish(self, *, store: bool) -> None:
         failures = self._checks() if not any(f.code == "aborted" for f in self._failures) else []
         failures = self._failures + [f for f in failures if f not in self._failures]
@@ -544,5 +609,5 @@ class UnitRun:
             coefficients=coefficients,
             quality=quality,
             gyro=self._gyro_summary(),
-            poses=tuple(self.journal.captures[i].record for i in sorted(self.journal.captures)),
+            poses=self._pose_records(),
         )

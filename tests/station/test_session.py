@@ -1,0 +1,160 @@
+"""One unit's run, stepped in-process against a virtual putter over a real pty."""
+
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.device import PutterDriver
+from station.journal import JournalFile, RunJournal
+from station.limits import load_profile
+from station.session import Phase, RunSettings, UnitRun
+from station.simulator.faults import Faults
+from station.simulator.putter import VirtualPutter
+
+SERIAL = "PT000077"
+
+
+class Bench:
+    """A virtual putter on a pty, a driver on it, and a run of that unit."""
+
+    def __init__(self, tmp: Path, faults: Faults | None = None, seed: int = 11) -> None:
+        self.putter = VirtualPutter(seed=seed, serial=SERIAL, speed=20.0, faults=faults)
+        self.port = tmp / "putter"
+        self.putter.serve_pty(self.port)
+        settings = RunSettings()
+        self.journal_file = JournalFile(tmp / "journal.json")
+        journal = RunJournal(
+            run_id=uuid.uuid4(),
+            serial=SERIAL,
+            station_id="st",
+            operator_id="op",
+            started_at=datetime.now(UTC),
+            poses=(*settings.poses, settings.verification_pose),
+        )
+        self.run = UnitRun(
+            driver=self.open(),
+            journal=journal,
+            journal_file=self.journal_file,
+            profile=load_profile(),
+            settings=settings,
+            reopen=self.open,
+        )
+        self.moved_to: str | None = None
+
+    def open(self) -> PutterDriver:
+        driver = PutterDriver.open(str(self.port))
+        try:
+            driver.identify(expected_serial=SERIAL)
+            driver.start_stream()
+        except BaseException:
+            driver.close()
+            raise
+        return driver
+
+    def drive(self, until: Callable[[UnitRun], bool], timeout: float = 60.0) -> None:
+        """Step the run, moving the unit as asked, until ``until`` holds."""
+        deadline = time.monotonic() + timeout
+        while not until(self.run):
+            assert time.monotonic() < deadline, [m.text for m in self.run.messages]
+            target = self.run.requested
+            if target is not None and target.name != self.moved_to and self.run.phase is Phase.POSE:
+                self.moved_to = target.name
+                self.putter.move_to(target.name, 1.0)
+            self.run.step()
+            time.sleep(0.01)
+
+    def close(self) -> None:
+        self.run.driver.close()
+        self.putter.close()
+
+
+@pytest.fixture
+def bench(tmp_path: Path) -> Iterator[Bench]:
+    b = Bench(tmp_path)
+    yield b
+    b.close()
+
+
+def done(run: UnitRun) -> bool:
+    return run.phase is Phase.DONE
+
+
+def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
+    bench.drive(done)
+    record = bench.run.record
+    assert record is not None
+    assert record.verdict == "pass", record.failures
+    assert [p.role for p in record.poses] == ["fit"] * 6 + ["verify"]
+    stored = bench.putter.stored_calibration
+    assert record.coefficients is not None
+    np.testing.assert_allclose(stored.offset, record.coefficients.offset.as_tuple(), rtol=1e-6)
+    truth = bench.putter.truth
+    np.testing.assert_allclose(record.coefficients.offset.as_tuple(), truth.offset_counts, atol=1.0)
+    assert record.quality is not None
+    assert record.quality.verification_error_mg is not None
+    assert bench.run.unit_output_error_mg is not None
+    assert record.gyro is not None
+    assert record.gyro.still is not None
+    assert all(axis.slope_consistent_with_zero for axis in record.gyro.still.axes)
+
+
+def test_the_journal_holds_every_pose_taken(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 3)
+    saved = bench.journal_file.load()
+    assert saved is not None
+    assert sorted(saved.captures) == [0, 1, 2]
+    assert saved.next_pose == 3
+
+
+def test_unplugged_while_writing_back_it_writes_again_once_back(bench: Bench) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    bench.putter.unplug()
+    bench.drive(lambda run: run.phase is Phase.RECONNECT)
+    bench.putter.replug()
+    bench.drive(done)
+    assert bench.run.record is not None
+    assert bench.run.record.verdict == "pass", bench.run.record.failures
+
+
+def test_redo_is_refused_once_the_coefficients_are_being_written(bench: Bench) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    bench.run.redo(2)
+    assert bench.run.messages[-1].text.startswith("too late to redo")
+    assert 2 in bench.run.journal.captures
+
+
+def test_a_saturated_axis_fails_the_unit_at_once(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(saturate_axis="y"))
+    try:
+        bench.drive(done, timeout=20)
+        record = bench.run.record
+        assert record is not None
+        assert record.verdict == "fail"
+        assert [(f.code, f.axis) for f in record.failures] == [("saturated", "y")]
+    finally:
+        bench.close()
+
+
+def test_a_unit_that_never_settles_is_said_and_can_be_aborted(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(never_settle=True))
+    try:
+        bench.drive(lambda run: any("not still" in m.text for m in run.messages), timeout=30)
+        assert bench.run.abort() is None  # no pose taken: nothing to record
+        assert bench.run.phase is Phase.DONE
+    finally:
+        bench.close()
+
+
+def test_abort_after_a_redo_records_the_poses_still_held(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 3)
+    bench.run.redo(1)
+    record = bench.run.abort()
+    assert record is not None
+    assert [p.name for p in record.poses] == ["face_up", "toe_up"]
+    assert [p.index for p in record.poses] == [0, 1]
+    assert [f.code for f in record.failures] == ["aborted"]
