@@ -9,7 +9,7 @@ from sqlalchemy.ext.asyncio import async_sessionmaker
 from api.deps import require_station
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
-from api.routes import health, reports, runs, units
+from api.routes import gyro, health, reports, runs, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from station import __version__
@@ -55,6 +55,8 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     v1.include_router(units.router, dependencies=reads)
     v1.include_router(runs.router, dependencies=reads)
     v1.include_router(runs.submissions)
+    v1.include_router(gyro.router, dependencies=reads)
+    v1.include_router(gyro.submissions)
     v1.include_router(reports.router, dependencies=reads)
     app.include_router(health.router)
     app.include_router(v1)

@@ -6,8 +6,11 @@ from uuid import UUID
 
 from pydantic import BaseModel, Field
 
+from station.gyro.fit import GyroFitReport
 from station.records import (
     FailureReason,
+    GyroFitRecord,
+    GyroSummary,
     LimitsRef,
     Matrix3,
     Model,
@@ -48,6 +51,10 @@ class UnitCalibration(BaseModel):
     matrix: Annotated[Matrix3 | None, Field(description="counts → g, g = M·(raw − offset)")]
     quality: QualityMetrics | None
     failures: tuple[FailureReason, ...]
+    gyro: Annotated[
+        GyroSummary | None,
+        Field(description="the gyros over the latest run's still poses: bias, noise, slope vs g"),
+    ]
 
     @classmethod
     def of(cls, run: RunSummary) -> "UnitCalibration":
@@ -68,6 +75,7 @@ class UnitCalibration(BaseModel):
             matrix=cal.matrix if cal else None,
             quality=run.quality,
             failures=run.failures,
+            gyro=run.gyro,
         )
 
 
@@ -77,3 +85,25 @@ class RunList(BaseModel):
     data: list[RunSummary]
     count: int
     next_cursor: str | None = None
+
+
+class GyroFitSubmission(BaseModel):
+    """``POST /api/v1/units/{serial}/gyro``: a fit made in the lab, and the log it came from."""
+
+    source: Annotated[
+        str, Field(min_length=1, max_length=255, description="the log it was fitted to")
+    ]
+    report: GyroFitReport
+
+
+class UnitGyro(BaseModel):
+    """``GET /api/v1/units/{serial}/gyro``: the unit's gyro calibration.
+
+    ``fit`` is the latest rate-table / centrifuge fit (bias, scale-factor matrix, bias-form
+    and scale-factor-form g-sensitivity), to compensate the unit's gyros with; ``still``
+    the gyros over the latest run's still poses.
+    """
+
+    serial: str
+    fit: GyroFitRecord | None
+    still: GyroSummary | None

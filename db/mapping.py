@@ -96,6 +96,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
             "sha256": run.limits_sha256,
         },
         "verdict": run.verdict,
+        "gyro": run.gyro,
         "failures": [
             {
                 "code": f.code,
@@ -159,6 +160,4 @@ def _pose(pose: Pose) -> dict[str, Any]:
 
 def stored_run_of(run: Run, failures: list[RunFailure], poses: list[Pose]) -> StoredRun:
     """The stored run ``run`` with every pose."""
-    return StoredRun.model_validate(
-        {**_header(run, failures), "gyro": run.gyro, "poses": [_pose(p) for p in poses]}
-    )
+    return StoredRun.model_validate({**_header(run, failures), "poses": [_pose(p) for p in poses]})

@@ -140,6 +140,23 @@ class RunFailure(Base):
     run: Mapped[Run] = relationship(back_populates="failures", lazy="raise")
 
 
+class GyroFit(Base):
+    """A fit of the gyro error model to a unit's rate-table / centrifuge log.
+
+    ``report`` is the whole :class:`station.gyro.fit.GyroFitReport` (the JSON of
+    ``calstation gyro fit --json``); a unit's current fit is its latest.
+    """
+
+    __tablename__ = "gyro_fits"
+    __table_args__ = (Index("ix_gyro_fits_serial_fitted_at", "serial", "fitted_at", "id"),)
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    serial: Mapped[str] = mapped_column(String(NAME))
+    fitted_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    source: Mapped[str] = mapped_column(String(255))
+    report: Mapped[dict[str, Any]] = mapped_column(JsonDocument)
+
+
 class StationKey(Base):
     """A station's API key, stored as its SHA-256 (the key itself is shown once)."""
 

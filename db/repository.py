@@ -22,9 +22,9 @@ from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
-from db.models import Pose, Run, RunFailure, StationKey
+from db.models import GyroFit, Pose, Run, RunFailure, StationKey
 from station.errors import CalstationError, InputError
-from station.records import RunRecord, RunSummary, StoredRun, Verdict
+from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
 _POSES = Base.metadata.tables[Pose.__tablename__]
@@ -251,3 +251,36 @@ class RunRepository:
                 StationKey.key_sha256 == key_sha256(key), StationKey.revoked_at.is_(None)
             )
         ).one_or_none()
+
+    # -- gyro error-model fits ----------------------------------------------------------
+
+    def add_gyro_fit(self, fit: GyroFitRecord) -> None:
+        """Store a unit's gyro fit; the latest one is the unit's current."""
+        self.session.add(
+            GyroFit(
+                serial=fit.serial,
+                fitted_at=fit.fitted_at,
+                source=fit.source,
+                report=fit.report.to_dict(),
+            )
+        )
+        self.session.flush()
+
+    def latest_gyro_fit(self, serial: str) -> GyroFitRecord | None:
+        """The unit's latest gyro fit, or None."""
+        row = self.session.scalars(
+            select(GyroFit)
+            .where(GyroFit.serial == serial)
+            .order_by(GyroFit.fitted_at.desc(), GyroFit.id.desc())
+            .limit(1)
+        ).one_or_none()
+        if row is None:
+            return None
+        return GyroFitRecord.model_validate(
+            {
+                "serial": row.serial,
+                "fitted_at": row.fitted_at,
+                "source": row.source,
+                "report": row.report,
+            }
+        )

@@ -25,6 +25,7 @@ from pydantic import (
     model_validator,
 )
 
+from station.gyro.fit import GyroFitReport
 from station.gyro.still import GyroStillSummary
 from station.sensor import ADC_MAX, ADC_MIN
 
@@ -33,6 +34,7 @@ __all__ = [
     "Coefficients",
     "Counts3",
     "FailureReason",
+    "GyroFitRecord",
     "GyroSummary",
     "LimitsRef",
     "LinkStats",
@@ -234,6 +236,7 @@ class _RunHeader(_Record):
     failures: tuple[FailureReason, ...] = ()
     coefficients: Coefficients | None = None
     quality: QualityMetrics | None = None
+    gyro: GyroSummary | None = None
 
     @model_validator(mode="after")
     def _consistent_outcome(self) -> Self:
@@ -251,7 +254,6 @@ class _RunHeader(_Record):
 class RunRecord(_RunHeader):
     """One calibration attempt of one unit at one station: what the station submits."""
 
-    gyro: GyroSummary | None = None
     poses: Annotated[tuple[PoseRecord, ...], Field(min_length=1, max_length=64)]
 
     @model_validator(mode="after")
@@ -276,3 +278,14 @@ class StoredRun(RunRecord):
     """A run as the plant's record holds it: the submitted record and when it arrived."""
 
     received_at: UtcDatetime
+
+
+class GyroFitRecord(_Record):
+    """A unit's gyro error-model fit from a rate-table / centrifuge log, as stored."""
+
+    serial: Serial
+    fitted_at: UtcDatetime
+    source: Annotated[
+        str, StringConstraints(min_length=1, max_length=255), AfterValidator(_printable)
+    ]
+    report: GyroFitReport

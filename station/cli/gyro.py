@@ -4,13 +4,16 @@ matplotlib is imported inside ``fit --plot`` only, so that no other ``calstation
 command pays for it at start-up.
 """
 
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
+from pydantic import ValidationError
 from rich.table import Table
 
+from db import RunRepository, open_database
 from station.cli.output import err, out, print_json
 from station.errors import InputError
 from station.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
@@ -25,6 +28,7 @@ from station.gyro.simulate import (
     paper_truth,
     simulate_log,
 )
+from station.records import GyroFitRecord
 from station.sensor import AXES
 
 app = typer.Typer(
@@ -127,6 +131,13 @@ def fit(
         Path | None, typer.Option(metavar="FILE", help="Write the scale-factor plot (.png, .svg).")
     ] = None,
     alpha: Annotated[float, typer.Option(help="Significance level of the tests.")] = DEFAULT_ALPHA,
+    store: Annotated[
+        str | None,
+        typer.Option(
+            metavar="SERIAL",
+            help="Store the fit as this unit's gyro calibration in the results database.",
+        ),
+    ] = None,
 ) -> None:
     """Fit bias, scale factor, misalignment and both forms of g-sensitivity to a log."""
 
@@ -146,6 +157,8 @@ def fit(
             for i, s in enumerate(report.sense_axis)
         ]
         plot_g_sensitivity(log, model, sense, plot)
+    if store is not None:
+        _store_fit(store, log_file, report)
     if json_output:
         print_json(report.to_dict())
     else:
@@ -244,3 +257,20 @@ def simulate_centrifuge(
     except OSError as exc:
         raise InputError(f"{out_file}: cannot write ({exc.strerror})") from None
     err.print(f"wrote {len(log)} rows to {out_file}", markup=False)
+
+
+def _store_fit(serial: str, log_file: Path, report: GyroFitReport) -> None:
+    """Keep ``report`` as the unit's gyro calibration (``GET /api/v1/units/SERIAL/gyro``)."""
+    try:
+        record = GyroFitRecord(
+            serial=serial, fitted_at=datetime.now(UTC), source=log_file.name, report=report
+        )
+    except ValidationError:
+        raise InputError(f"--store: {serial!r} is not a serial number") from None
+    database = open_database()
+    try:
+        with database.session() as session, session.begin():
+            RunRepository(session).add_gyro_fit(record)
+    finally:
+        database.dispose()
+    err.print(f"gyro fit stored for {serial}", markup=False)

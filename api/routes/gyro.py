@@ -1,0 +1,53 @@
+"""``/api/v1/units/{serial}/gyro``: a unit's gyro error-model fit and still-pose figures."""
+
+from datetime import UTC, datetime
+
+from fastapi import APIRouter, HTTPException, Response, status
+
+from api.deps import ReaderDep, RepositoryDep, StationDep
+from api.responses import json_response
+from api.routes.units import SerialPath
+from api.schemas import GyroFitSubmission, Problem, UnitGyro
+from station.records import GyroFitRecord
+
+router = APIRouter(prefix="/units", tags=["gyro"])
+submissions = APIRouter(prefix="/units", tags=["gyro"])
+
+
+@router.get(
+    "/{serial}/gyro",
+    response_model=UnitGyro,
+    responses={404: {"model": Problem, "description": "no gyro fit and no run of this serial"}},
+)
+async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
+    """The unit's latest gyro fit (for compensation) and its latest run's still-pose gyros."""
+    fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
+    latest = await repository.run(lambda r: r.latest_for_serial(serial))
+    if fit is None and latest is None:
+        raise HTTPException(status.HTTP_404_NOT_FOUND, f"no gyro fit and no run of serial {serial}")
+    return json_response(UnitGyro(serial=serial, fit=fit, still=latest.gyro if latest else None))
+
+
+@submissions.post(
+    "/{serial}/gyro",
+    status_code=status.HTTP_201_CREATED,
+    response_model=GyroFitRecord,
+    responses={401: {"model": Problem}, 413: {"model": Problem}, 422: {"model": Problem}},
+)
+async def submit_unit_gyro(
+    serial: SerialPath,
+    submission: GyroFitSubmission,
+    station: StationDep,
+    repository: RepositoryDep,
+) -> Response:
+    """Store a gyro fit of the unit (``calstation gyro fit LOG --json`` as ``report``)."""
+    del station  # any station's key may store a lab fit
+    fit = GyroFitRecord(
+        serial=serial,
+        fitted_at=datetime.now(UTC),
+        source=submission.source,
+        report=submission.report,
+    )
+    async with repository.session.begin():
+        await repository.run(lambda r: r.add_gyro_fit(fit))
+    return json_response(fit, status.HTTP_201_CREATED)

@@ -1,0 +1,101 @@
+"""A unit's gyro calibration: the lab fit stored per serial, and the still-pose figures."""
+
+import json
+import os
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+
+import httpx
+import pytest
+
+from db import Database, RunRepository, open_database
+from station.gyro import fit_log, paper_truth, read_log, simulate_log
+from station.gyro.log import write_log
+from station.records import GyroFitRecord
+from tests.conftest import CliRunner
+from tests.db.records import make_record
+
+
+@pytest.fixture(scope="module")
+def centrifuge_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("gyro") / "centrifuge.csv"
+    log, segments = simulate_log(paper_truth(), seed=3)
+    with path.open("w") as handle:
+        write_log(handle, log, segments)
+    return path
+
+
+def test_the_latest_fit_is_the_units_and_survives_a_round_trip(
+    database: Database, centrifuge_log: Path
+) -> None:
+    report = fit_log(read_log(centrifuge_log))
+    old = GyroFitRecord(
+        serial="PT000001",
+        fitted_at=datetime(2026, 1, 1, tzinfo=UTC),
+        source="old.csv",
+        report=report,
+    )
+    new = old.model_copy(
+        update={"fitted_at": old.fitted_at + timedelta(days=1), "source": "new.csv"}
+    )
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        repository.add_gyro_fit(new)
+        repository.add_gyro_fit(old)
+    with database.session() as session:
+        latest = RunRepository(session).latest_gyro_fit("PT000001")
+        assert RunRepository(session).latest_gyro_fit("PT000002") is None
+    assert latest is not None
+    assert latest.source == "new.csv"
+    assert latest.report.g_sensitivity_ppm_per_g == report.g_sensitivity_ppm_per_g
+
+
+def test_api_serves_the_fit_and_the_latest_runs_gyros(
+    client: httpx.Client, database: Database, station_key: str, centrifuge_log: Path
+) -> None:
+    record = make_record(serial="PT000009")
+    with database.session() as session, session.begin():
+        RunRepository(session).submit(record)
+    answer = client.get("/api/v1/units/PT000009/gyro")
+    assert answer.status_code == 200
+    assert answer.json()["fit"] is None
+    assert record.gyro is not None
+    assert answer.json()["still"]["bias"] == record.gyro.bias.model_dump()
+    report = fit_log(read_log(centrifuge_log)).to_dict()
+    refused = client.post("/api/v1/units/PT000009/gyro", json={"source": "c.csv", "report": report})
+    assert refused.status_code == 401
+    headers = {"Authorization": f"Bearer {station_key}"}
+    bad = client.post(
+        "/api/v1/units/PT000009/gyro",
+        json={"source": "c.csv", "report": {"dwells": 1}},
+        headers=headers,
+    )
+    assert bad.status_code == 422
+    stored = client.post(
+        "/api/v1/units/PT000009/gyro", json={"source": "c.csv", "report": report}, headers=headers
+    )
+    assert stored.status_code == 201, stored.text
+    unit = client.get("/api/v1/units/PT000009/gyro").json()
+    assert unit["fit"]["source"] == "c.csv"
+    assert unit["fit"]["report"]["g_sensitivity_ppm_per_g"] == report["g_sensitivity_ppm_per_g"]
+    assert client.get("/api/v1/units/PT000404/gyro").status_code == 404
+    assert client.get("/api/v1/units/PT000009").json()["gyro"] == unit["still"]
+
+
+def test_gyro_fit_store_puts_the_fit_where_the_api_reads_it(
+    run_cli: CliRunner, centrifuge_log: Path, tmp_path: Path
+) -> None:
+    env = {**os.environ, "CALSTATION_DATABASE_URL": f"sqlite:///{tmp_path}/r.sqlite3"}
+    result = run_cli("gyro", "fit", str(centrifuge_log), "--json", "--store", "PT000123", env=env)
+    assert result.returncode == 0, result.stderr
+    printed = json.loads(result.stdout)
+    database = open_database(env["CALSTATION_DATABASE_URL"])
+    with database.session() as session:
+        stored = RunRepository(session).latest_gyro_fit("PT000123")
+    database.dispose()
+    assert stored is not None
+    assert stored.source == "centrifuge.csv"
+    assert stored.report.to_dict()["bias_dps"] == printed["bias_dps"]
+    bad = run_cli("gyro", "fit", str(centrifuge_log), "--store", "not a serial", env=env)
+    assert bad.returncode == 2
+    assert "--store: 'not a serial' is not a serial number" in bad.stderr
