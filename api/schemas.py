@@ -7,6 +7,7 @@ from uuid import UUID
 from pydantic import BaseModel, Field
 
 from station.gyro.fit import GyroFitReport
+from station.gyro.log import GyroDwells
 from station.records import (
     FailureReason,
     GyroFitRecord,
@@ -94,6 +95,7 @@ class GyroFitSubmission(BaseModel):
         str, Field(min_length=1, max_length=255, description="the log it was fitted to")
     ]
     report: GyroFitReport
+    dwells: Annotated[GyroDwells | None, Field(description="the log's dwells, for the plot")] = None
 
 
 class UnitGyro(BaseModel):

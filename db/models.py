@@ -143,8 +143,9 @@ class RunFailure(Base):
 class GyroFit(Base):
     """A fit of the gyro error model to a unit's rate-table / centrifuge log.
 
-    ``report`` is the whole :class:`station.gyro.fit.GyroFitReport` (the JSON of
-    ``calstation gyro fit --json``); a unit's current fit is its latest.
+    ``document`` holds the whole :class:`station.gyro.fit.GyroFitReport` (the JSON of
+    ``calstation gyro fit --json``) and the log's dwells; a unit's current fit is its
+    latest.
     """
 
     __tablename__ = "gyro_fits"
@@ -154,7 +155,8 @@ class GyroFit(Base):
     serial: Mapped[str] = mapped_column(String(NAME))
     fitted_at: Mapped[datetime] = mapped_column(UtcDateTime())
     source: Mapped[str] = mapped_column(String(255))
-    report: Mapped[dict[str, Any]] = mapped_column(JsonDocument)
+    #: ``{"report": …, "dwells": …}``: the fit and the log's dwells it came from.
+    document: Mapped[dict[str, Any]] = mapped_column(JsonDocument)
 
 
 class StationKey(Base):

@@ -261,7 +261,7 @@ class RunRepository:
                 serial=fit.serial,
                 fitted_at=fit.fitted_at,
                 source=fit.source,
-                report=fit.report.to_dict(),
+                document=fit.model_dump(mode="json", include={"report", "dwells"}),
             )
         )
         self.session.flush()
@@ -281,6 +281,6 @@ class RunRepository:
                 "serial": row.serial,
                 "fitted_at": row.fitted_at,
                 "source": row.source,
-                "report": row.report,
+                **row.document,
             }
         )

@@ -26,6 +26,7 @@ from pydantic import (
 )
 
 from station.gyro.fit import GyroFitReport
+from station.gyro.log import GyroDwells
 from station.gyro.still import GyroStillSummary
 from station.sensor import ADC_MAX, ADC_MIN
 
@@ -289,3 +290,5 @@ class GyroFitRecord(_Record):
         str, StringConstraints(min_length=1, max_length=255), AfterValidator(_printable)
     ]
     report: GyroFitReport
+    #: The log's dwells, kept to draw the fit's scale-factor plot (certificate).
+    dwells: GyroDwells | None = None

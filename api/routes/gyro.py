@@ -47,6 +47,7 @@ async def submit_unit_gyro(
         fitted_at=datetime.now(UTC),
         source=submission.source,
         report=submission.report,
+        dwells=submission.dwells,
     )
     async with repository.session.begin():
         await repository.run(lambda r: r.add_gyro_fit(fit))

@@ -82,7 +82,8 @@ async def get_certificate(
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
     profile, _ = choose_profile([run.limits], load_profiles())
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC)))
+    gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
+    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit))
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

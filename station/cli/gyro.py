@@ -18,7 +18,7 @@ from station.cli.output import err, out, print_json
 from station.errors import InputError
 from station.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
 from station.gyro.identifiability import check_identifiability
-from station.gyro.log import read_log, write_log
+from station.gyro.log import GyroDwells, GyroLog, read_log, write_log
 from station.gyro.simulate import (
     DEFAULT_SENSE_AXES,
     PAPER_PPM_PER_G,
@@ -149,16 +149,13 @@ def fit(
     except InputError as exc:
         raise InputError(f"{log_file}: {exc}") from None
     if plot is not None:
-        from station.gyro.plot import plot_g_sensitivity
+        from station.gyro.plot import plot_g_sensitivity, sense_axes_of
 
         model = report.error_model()
-        sense = [
-            AXES.index(s) if s is not None else int(np.argmax(np.abs(model.n_g[i])))
-            for i, s in enumerate(report.sense_axis)
-        ]
+        sense = sense_axes_of(report, model)
         plot_g_sensitivity(log, model, sense, plot)
     if store is not None:
-        _store_fit(store, log_file, report)
+        _store_fit(store, log_file, report, log)
     if json_output:
         print_json(report.to_dict())
     else:
@@ -259,11 +256,15 @@ def simulate_centrifuge(
     err.print(f"wrote {len(log)} rows to {out_file}", markup=False)
 
 
-def _store_fit(serial: str, log_file: Path, report: GyroFitReport) -> None:
+def _store_fit(serial: str, log_file: Path, report: GyroFitReport, log: GyroLog) -> None:
     """Keep ``report`` as the unit's gyro calibration (``GET /api/v1/units/SERIAL/gyro``)."""
     try:
         record = GyroFitRecord(
-            serial=serial, fitted_at=datetime.now(UTC), source=log_file.name, report=report
+            serial=serial,
+            fitted_at=datetime.now(UTC),
+            source=log_file.name,
+            report=report,
+            dwells=GyroDwells.of(log),
         )
     except ValidationError:
         raise InputError(f"--store: {serial!r} is not a serial number") from None

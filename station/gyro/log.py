@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import IO, Final
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.errors import InputError
 from station.gyro.model import FloatArray
@@ -31,6 +32,8 @@ ACC_COLUMNS: Final = tuple(f"acc_{a}" for a in AXES)
 GYRO_COLUMNS: Final = tuple(f"gyro_{a}" for a in AXES)
 NUMERIC_COLUMNS: Final = ("t", *RATE_COLUMNS, *ACC_COLUMNS, *GYRO_COLUMNS)
 SEGMENT_COLUMN: Final = "segment"
+#: Most dwells stored with a fit (a test plan has a few hundred).
+MAX_STORED_DWELLS: Final = 20_000
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,39 @@ class GyroLog:
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
+
+
+class GyroDwells(BaseModel):
+    """A log's dwells as plain lists, to store beside its fit (and plot it again later)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    t: list[float] = Field(max_length=MAX_STORED_DWELLS)
+    rate: list[tuple[float, float, float]] = Field(max_length=MAX_STORED_DWELLS)
+    acc: list[tuple[float, float, float]] = Field(max_length=MAX_STORED_DWELLS)
+    gyro: list[tuple[float, float, float]] = Field(max_length=MAX_STORED_DWELLS)
+
+    @model_validator(mode="after")
+    def _same_length(self) -> "GyroDwells":
+        if not len(self.t) == len(self.rate) == len(self.acc) == len(self.gyro):
+            raise ValueError("t, rate, acc and gyro need one entry per dwell each")
+        return self
+
+    @classmethod
+    def of(cls, log: GyroLog) -> "GyroDwells":
+        """The dwells of ``log``."""
+        return cls(
+            t=log.t.tolist(), rate=log.rate.tolist(), acc=log.acc.tolist(), gyro=log.gyro.tolist()
+        )
+
+    def to_log(self) -> GyroLog:
+        """Back to arrays."""
+        return GyroLog(
+            t=np.array(self.t, dtype=np.float64),
+            rate=np.array(self.rate, dtype=np.float64).reshape(-1, 3),
+            acc=np.array(self.acc, dtype=np.float64).reshape(-1, 3),
+            gyro=np.array(self.gyro, dtype=np.float64).reshape(-1, 3),
+        )
 
 
 def read_log(path: Path) -> GyroLog:

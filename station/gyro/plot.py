@@ -7,6 +7,7 @@ calibration); "after" the full model, N included. The line is the fitted N_is in
 ppm/g. Drawn by matplotlib's Agg canvas (no display), to PNG or SVG by the suffix.
 """
 
+import io
 from pathlib import Path
 from typing import Final
 
@@ -16,6 +17,7 @@ from matplotlib.figure import Figure
 
 from station.errors import InputError
 from station.gyro.compensation import compensate
+from station.gyro.fit import GyroFitReport
 from station.gyro.log import GyroLog
 from station.gyro.model import PPM, GyroErrorModel
 from station.sensor import AXES
@@ -24,12 +26,36 @@ MIN_RATE_DPS: Final = 10.0
 FORMATS: Final = (".png", ".svg")
 
 
+def sense_axes_of(report: GyroFitReport, model: GyroErrorModel) -> list[int]:
+    """Each gyro's sense axis: the fit's, else the axis of its largest N term."""
+    return [
+        AXES.index(s) if s is not None else int(np.argmax(np.abs(model.n_g[i])))
+        for i, s in enumerate(report.sense_axis)
+    ]
+
+
 def plot_g_sensitivity(
     log: GyroLog, model: GyroErrorModel, sense_axes: list[int], path: Path
 ) -> None:
     """Write the three-panel scale-factor-error plot of ``log`` under ``model`` to ``path``."""
     if path.suffix.lower() not in FORMATS:
         raise InputError(f"{path}: the plot file must end in .png or .svg")
+    figure = _figure(log, model, sense_axes)
+    try:
+        figure.savefig(path, dpi=100)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the plot ({exc.strerror})") from None
+
+
+def svg_g_sensitivity(log: GyroLog, model: GyroErrorModel, sense_axes: list[int]) -> str:
+    """The same plot as an SVG document, to embed in a page."""
+    buffer = io.StringIO()
+    _figure(log, model, sense_axes).savefig(buffer, format="svg")
+    text = buffer.getvalue()
+    return text[text.index("<svg") :]
+
+
+def _figure(log: GyroLog, model: GyroErrorModel, sense_axes: list[int]) -> Figure:
     ordinary = GyroErrorModel(model.bias, model.scale, model.bias_g, np.zeros((3, 3)))
     before = compensate(ordinary, log.gyro, log.acc)
     after = compensate(model, log.gyro, log.acc)
@@ -51,7 +77,4 @@ def plot_g_sensitivity(
         axes.legend(loc="best", fontsize="small")
     figure.axes[0].set_ylabel("scale-factor error (ppm)")
     figure.suptitle("G-sensitivity scale-factor error, before and after compensation")
-    try:
-        figure.savefig(path, dpi=100)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write the plot ({exc.strerror})") from None
+    return figure

@@ -10,8 +10,9 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
+from station.gyro.plot import sense_axes_of, svg_g_sensitivity
 from station.limits import LimitsProfile
-from station.records import StoredRun
+from station.records import GyroFitRecord, StoredRun
 from station.report import formatting, svg
 from station.report.bounds import profile_bounds
 from station.report.model import EolReport
@@ -57,16 +58,31 @@ def dashboard_page(report: EolReport, *, refresh_s: int = DASHBOARD_REFRESH_S) -
     return _env.get_template("dashboard.html").render(report=report, refresh_s=refresh_s)
 
 
-def certificate_page(run: StoredRun, profile: LimitsProfile, issued_at: datetime) -> str:
+def certificate_page(
+    run: StoredRun,
+    profile: LimitsProfile,
+    issued_at: datetime,
+    gyro_fit: GyroFitRecord | None = None,
+) -> str:
     """The calibration certificate of the unit whose latest run is ``run``.
 
     ``profile`` is the limits profile shown next to the coefficients: the run's own
     when it is known (same hash), else the default one, which the page says.
+    ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
+    dwells were kept, the scale-factor error plot before and after compensation.
     """
+    plot = None
+    if gyro_fit is not None and gyro_fit.dwells is not None and not gyro_fit.report.unestimable:
+        model = gyro_fit.report.error_model()
+        plot = svg_g_sensitivity(
+            gyro_fit.dwells.to_log(), model, sense_axes_of(gyro_fit.report, model)
+        )
     return _env.get_template("certificate.html").render(
         run=run,
         profile=profile,
         bounds=profile_bounds(profile),
         own_profile=profile.sha256 == run.limits.sha256,
         issued_at=issued_at,
+        gyro_fit=gyro_fit,
+        gyro_plot=Markup(plot) if plot is not None else None,
     )

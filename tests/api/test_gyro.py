@@ -10,7 +10,7 @@ import pytest
 
 from db import Database, RunRepository, open_database
 from station.gyro import fit_log, paper_truth, read_log, simulate_log
-from station.gyro.log import write_log
+from station.gyro.log import GyroDwells, write_log
 from station.records import GyroFitRecord
 from tests.conftest import CliRunner
 from tests.db.records import make_record
@@ -61,7 +61,8 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     assert answer.json()["fit"] is None
     assert record.gyro is not None
     assert answer.json()["still"]["bias"] == record.gyro.bias.model_dump()
-    report = fit_log(read_log(centrifuge_log)).to_dict()
+    log = read_log(centrifuge_log)
+    report = fit_log(log).to_dict()
     refused = client.post("/api/v1/units/PT000009/gyro", json={"source": "c.csv", "report": report})
     assert refused.status_code == 401
     headers = {"Authorization": f"Bearer {station_key}"}
@@ -71,8 +72,11 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
         headers=headers,
     )
     assert bad.status_code == 422
+    dwells = GyroDwells.of(log).model_dump()
     stored = client.post(
-        "/api/v1/units/PT000009/gyro", json={"source": "c.csv", "report": report}, headers=headers
+        "/api/v1/units/PT000009/gyro",
+        json={"source": "c.csv", "report": report, "dwells": dwells},
+        headers=headers,
     )
     assert stored.status_code == 201, stored.text
     unit = client.get("/api/v1/units/PT000009/gyro").json()
@@ -80,6 +84,13 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     assert unit["fit"]["report"]["g_sensitivity_ppm_per_g"] == report["g_sensitivity_ppm_per_g"]
     assert client.get("/api/v1/units/PT000404/gyro").status_code == 404
     assert client.get("/api/v1/units/PT000009").json()["gyro"] == unit["still"]
+    certificate = client.get("/api/v1/units/PT000009/certificate")
+    assert certificate.status_code == 200
+    page = certificate.text
+    assert "Gyro error model" in page
+    plot = page[page.index('<figure class="chart gyro-plot">') :]
+    assert plot.index("<svg") < plot.index("</figure>")
+    assert "+581 ppm/g" in plot  # the fitted line's legend, x gyro
 
 
 def test_gyro_fit_store_puts_the_fit_where_the_api_reads_it(
@@ -95,6 +106,8 @@ def test_gyro_fit_store_puts_the_fit_where_the_api_reads_it(
     database.dispose()
     assert stored is not None
     assert stored.source == "centrifuge.csv"
+    assert stored.dwells is not None
+    assert len(stored.dwells.t) == stored.report.dwells
     assert stored.report.to_dict()["bias_dps"] == printed["bias_dps"]
     bad = run_cli("gyro", "fit", str(centrifuge_log), "--store", "not a serial", env=env)
     assert bad.returncode == 2

@@ -29,7 +29,7 @@ def upgrade() -> None:
         sa.Column("serial", sa.String(length=64), nullable=False),
         sa.Column("fitted_at", UtcDateTime(), nullable=False),
         sa.Column("source", sa.String(length=255), nullable=False),
-        sa.Column("report", JsonDocument, nullable=False),
+        sa.Column("document", JsonDocument, nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_gyro_fits")),
     )
     with op.batch_alter_table("gyro_fits", schema=None) as batch_op:
