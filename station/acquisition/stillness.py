@@ -65,11 +65,12 @@ class StillnessThresholds(BaseModel):
         "contributes 0.1 count",
     )
     gravity_tolerance_g: float = Field(
-        0.4,
+        0.5,
         gt=0,
-        description="|a| with nominal scaling may differ from 1 g by offset (up to 207 "
-        "counts, 0.25 g) and sensitivity (5 %) errors before calibration; beyond 0.4 g "
-        "the unit is accelerating, falling or an axis is dead",
+        description="|a| with nominal scaling may differ from 1 g by offset and "
+        "sensitivity errors before calibration: up to 207 counts (0.25 g) on each axis, "
+        "0.44 g when all three sit at the same extreme, plus 5 % of sensitivity; beyond "
+        "0.5 g the unit is accelerating, falling or an axis is dead",
     )
     gyro_rate_max_dps: float = Field(
         1.0,

@@ -124,6 +124,8 @@ def screen(poses: FloatArray, limits: GeometryLimits = GeometryLimits()) -> Scre
     rail = (flat <= ADC_MIN) | (flat >= ADC_MAX)
     first = rail.argmax(axis=1)
     mark(Finding.AT_RAIL, rail[units, first], first // 3, first % 3)
+    if rail.any():  # values beyond the ADC's range would only overflow what follows
+        flat = np.where(rail, NOMINAL_OFFSET_COUNTS, flat)
 
     clean = flat.reshape(k, n, 3)
     earlier, later = np.triu_indices(n, 1)

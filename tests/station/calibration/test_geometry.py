@@ -75,3 +75,24 @@ def test_spacing_and_coverage_ignore_the_offset(seed: int, offset: float) -> Non
     assert coverage(poses + offset) == pytest.approx(coverage(poses), abs=1e-9)
     cos = np.clip(directions @ directions.T, -1, 1)
     np.testing.assert_allclose(pair_angles_deg(poses), np.degrees(np.arccos(cos)), atol=1e-5)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    poses=st.lists(
+        st.tuples(*[st.floats(1.0, 4094.0) | st.floats(allow_nan=False)] * 3),
+        min_size=6,
+        max_size=12,
+    ),
+    model=st.sampled_from(["six", "nine"]),
+)
+def test_any_poses_give_a_calibration_or_a_refusal(
+    poses: list[tuple[float, float, float]], model: str
+) -> None:
+    try:
+        solution = solve(np.array(poses), model)  # type: ignore[arg-type]
+    except CalibrationError as exc:
+        assert str(exc)
+    else:
+        assert np.all(np.isfinite(solution.calibration.matrix))
+        assert np.all(solution.calibration.sensitivity > 0)
