@@ -167,7 +167,6 @@ class UnitRun:
         self._moved = False
         self.verification_error_mg: float | None = None
         self.unit_output_error_mg: float | None = None
-        self.writeback_error: float | None = None
 
     # -- what the interface shows --------------------------------------------------
 
@@ -251,11 +250,10 @@ class UnitRun:
         assert acquisition is not None
         try:
             result = acquisition.poll()
-        except SaturatedAxisError as exc:
-            self._failures.append(
-                FailureReason(code="saturated", message=str(exc), pose=self.index)
-            )
-            self._finish(store=True)
+        except SaturatedAxisError:
+            verdict = acquisition.last_verdict
+            assert verdict is not None  # the error comes from a judged window
+            self._fail_saturated(target, verdict)
             return
         except (NotStillError, LinkQualityError) as exc:
             self.say("warn", str(exc))
@@ -278,26 +276,7 @@ class UnitRun:
         sensed = sense(window[:, 1:4].mean(axis=0))
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
         if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
-            axes = ", ".join(verdict.saturated_axes)
-            self._evidence = PoseRecord(
-                index=self.index,
-                name=target.name,
-                role="verify" if self.index >= self.fit_count else "fit",
-                mean=_vec(window[:, 1:4].mean(axis=0)),
-                std=_vec(window[:, 1:4].std(axis=0, ddof=1)),
-                sample_count=len(window),
-                gyro_mean=_vec(window[:, 4:7].mean(axis=0)),
-                temperature_c=float(window[:, 7].mean()),
-            )
-            self._failures.append(
-                FailureReason(
-                    code="saturated",
-                    message=f"accelerometer {axes} stuck at the ADC rail while the unit is still",
-                    pose=self.index,
-                    axis=verdict.saturated_axes[0] if len(verdict.saturated_axes) == 1 else None,
-                )
-            )
-            self._finish(store=True)
+            self._fail_saturated(target, verdict)
             return
         matches = sensed.matches(target, self.settings.pose_tolerance_deg)
         was_capturing = self.live.progress >= 0.25
@@ -319,6 +298,34 @@ class UnitRun:
             moving=verdict.motion,
             progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
         )
+
+    def _fail_saturated(self, target: Pose, verdict: WindowVerdict) -> None:
+        """An axis sits at an ADC rail while the unit is still: the unit fails at once.
+
+        The window that showed it is kept as the pose's record, as evidence.
+        """
+        window = verdict.window
+        self._evidence = PoseRecord(
+            index=self.index,
+            name=target.name,
+            role="verify" if self.index >= self.fit_count else "fit",
+            mean=_vec(window[:, 1:4].mean(axis=0)),
+            std=_vec(window[:, 1:4].std(axis=0, ddof=1)),
+            sample_count=len(window),
+            gyro_mean=_vec(window[:, 4:7].mean(axis=0)),
+            temperature_c=float(window[:, 7].mean()),
+        )
+        axes = verdict.saturated_axes
+        self._failures.append(
+            FailureReason(
+                code="saturated",
+                message=f"accelerometer {', '.join(axes)} stuck at the ADC rail "
+                "while the unit is still",
+                pose=self.index,
+                axis=axes[0] if len(axes) == 1 else None,
+            )
+        )
+        self._finish(store=True)
 
     def _say_wrong_pose(self, sensed: Sensed, target: Pose) -> None:
         """Say once per place why the unit lying still there is not captured."""
@@ -448,7 +455,6 @@ class UnitRun:
         relative = float(np.max(np.abs(diff) / np.where(scale > 0, scale, 1.0)))
         if (reason := check(self.profile, "writeback", relative)) is not None:
             self._failures.append(reason)
-        self.writeback_error = relative
         self.driver.start_stream(calibrated=True)
         self._unit_output = []
         self._last_arrival = time.monotonic()
