@@ -43,6 +43,18 @@ ENTER = ("\r", "\n")
 BACKSPACE = ("\x7f", "\b")
 
 
+def open_unit(port: str, serial: str) -> PutterDriver:
+    """Open the unit on ``port``, check it is ``serial``, start its raw stream."""
+    driver = PutterDriver.open(port)
+    try:
+        driver.identify(expected_serial=serial)
+        driver.start_stream()
+    except BaseException:
+        driver.close()
+        raise
+    return driver
+
+
 class State(StrEnum):
     """What the station waits for."""
 
@@ -267,14 +279,7 @@ class StationApp:
         port = self.config.port
         if port is None:
             raise DeviceError("no putter port configured (--port)")
-        driver = PutterDriver.open(port)
-        try:
-            driver.identify(expected_serial=serial)
-            driver.start_stream()
-        except BaseException:
-            driver.close()
-            raise
-        return driver
+        return open_unit(port, serial)
 
     def _start_unit(self, serial: str, journal: RunJournal | None) -> None:
         self.last_record = None

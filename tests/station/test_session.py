@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from station.app import open_unit
 from station.device import PutterDriver
 from station.journal import JournalFile, RunJournal
 from station.limits import load_profile
@@ -47,14 +48,7 @@ class Bench:
         self.moved_to: str | None = None
 
     def open(self) -> PutterDriver:
-        driver = PutterDriver.open(str(self.port))
-        try:
-            driver.identify(expected_serial=SERIAL)
-            driver.start_stream()
-        except BaseException:
-            driver.close()
-            raise
-        return driver
+        return open_unit(str(self.port), SERIAL)
 
     def drive(self, until: Callable[[UnitRun], bool], timeout: float = 60.0) -> None:
         """Step the run, moving the unit as asked, until ``until`` holds."""
