@@ -88,7 +88,7 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     assert certificate.status_code == 200
     page = certificate.text
     assert "Gyro error model" in page
-    plot = page[page.index('<figure class="chart gyro-plot">') :]
+    plot = page[page.index('<figure class="chart gyro-plot"') :]
     assert plot.index("<svg") < plot.index("</figure>")
     assert "+581 ppm/g" in plot  # the fitted line's legend, x gyro
 
