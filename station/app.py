@@ -100,6 +100,8 @@ class StationApp:
         self._said = 0
         self._next_sync = 0.0
         self.store_note: str | None = None
+        #: Runs waiting in the outbox (counted at every sync, kept up to date between).
+        self.backlog = 0
 
     # -- start and loop ------------------------------------------------------------------
 
@@ -161,11 +163,7 @@ class StationApp:
             self._echo_messages(self.run)
             if self.run.phase is Phase.DONE:
                 self._finish_unit(self.run)
-        if (
-            self.state is not State.UNIT
-            and time.monotonic() >= self._next_sync
-            and self.outbox.count()
-        ):
+        if self.state is not State.UNIT and time.monotonic() >= self._next_sync and self.backlog:
             self._sync()
 
     # -- screens -------------------------------------------------------------------------
@@ -173,9 +171,7 @@ class StationApp:
     def screen(self) -> RenderableType:
         """The whole screen as it stands."""
         parts: list[RenderableType] = [
-            header(
-                self.config.station_id, self.config.operator_id, self.versions, self.outbox.count()
-            )
+            header(self.config.station_id, self.config.operator_id, self.versions, self.backlog)
         ]
         if self.store_note:
             parts.append(Text(self.store_note, style="yellow"))
@@ -322,6 +318,7 @@ class StationApp:
         record = run.record
         if record is not None:
             self.outbox.put(record)
+            self.backlog += 1
         self.journal_file.clear()
         self.run = None
         self.state = State.SERIAL
@@ -345,13 +342,15 @@ class StationApp:
 
     def _sync(self) -> None:
         self._next_sync = time.monotonic() + SYNC_EVERY_S
-        if not self.outbox.count():
+        self.backlog = self.outbox.count()
+        if not self.backlog:
             self.store_note = None
             return
         try:
             if self._store is None:
                 self._store = self._open_store()
             result = self.outbox.sync(self._store)
+            self.backlog = result.pending
         except (SQLAlchemyError, OSError, CalstationError) as exc:
             self._drop_store()
             self.store_note = (
