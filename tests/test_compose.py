@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from api.settings import ApiSettings
-from station.cli.main import app
+from station.cli.main import build_app
 from tests.conftest import REPO_ROOT
 
 COMPOSE = REPO_ROOT / "docker-compose.yml"
@@ -62,7 +62,9 @@ def test_the_api_waits_for_a_healthy_database_and_a_finished_migration(
 
 def test_the_serve_command_takes_the_options_compose_gives(services: dict[str, Any]) -> None:
     serve = next(
-        c for c in app.registered_commands if c.callback and c.callback.__name__ == "serve"
+        c
+        for c in build_app("serve").registered_commands
+        if c.callback and c.callback.__name__ == "serve"
     )
     assert serve.callback is not None
     options = {f"--{name.replace('_', '-')}" for name in serve.callback.__annotations__}
