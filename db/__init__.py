@@ -16,7 +16,14 @@ from db.engine import (
     upgrade_database,
 )
 from db.migrate import SchemaOutOfDateError
-from db.repository import RunConflictError, RunPage, RunQuery, RunRepository, SubmitOutcome
+from db.repository import (
+    RunConflictError,
+    RunPage,
+    RunQuery,
+    RunRepository,
+    SubmitOutcome,
+    repository_transaction,
+)
 from db.settings import DatabaseSettings
 
 __all__ = [
@@ -32,5 +39,6 @@ __all__ = [
     "make_async_engine",
     "make_engine",
     "open_database",
+    "repository_transaction",
     "upgrade_database",
 ]

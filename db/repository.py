@@ -10,7 +10,8 @@ import binascii
 import hashlib
 import secrets
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from uuid import UUID
@@ -21,6 +22,7 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
+from db.engine import open_database
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey
 from station.errors import CalstationError, InputError
@@ -284,3 +286,18 @@ class RunRepository:
                 **row.document,
             }
         )
+
+
+@contextmanager
+def repository_transaction(url: str | None = None) -> Iterator[RunRepository]:
+    """A repository in one transaction on the database at ``url``, for one-off commands.
+
+    Opens the database (as :func:`db.open_database`), commits when the block ends
+    normally, and disposes of the connections either way.
+    """
+    database = open_database(url)
+    try:
+        with database.session() as session, session.begin():
+            yield RunRepository(session)
+    finally:
+        database.dispose()

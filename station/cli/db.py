@@ -6,8 +6,7 @@ import typer
 from pydantic import TypeAdapter, ValidationError
 from sqlalchemy import make_url
 
-from db import DatabaseSettings, open_database, upgrade_database
-from db.repository import RunRepository
+from db import DatabaseSettings, repository_transaction, upgrade_database
 from station.cli.output import err, out
 from station.records import Identifier
 
@@ -53,12 +52,8 @@ def keys_create(
     database_url: DatabaseUrlOption = None,
 ) -> None:
     """Create an API key for a station and print it (only its hash is stored)."""
-    database = open_database(database_url)
-    try:
-        with database.session() as session, session.begin():
-            key = RunRepository(session).create_key(station)
-    finally:
-        database.dispose()
+    with repository_transaction(database_url) as repository:
+        key = repository.create_key(station)
     err.print(f"API key for station {station} (shown once, store it on the station):")
     out.print(key)
 
@@ -74,10 +69,6 @@ def keys_revoke(
     database_url: DatabaseUrlOption = None,
 ) -> None:
     """Revoke every API key of a station (a lost or replaced station)."""
-    database = open_database(database_url)
-    try:
-        with database.session() as session, session.begin():
-            revoked = RunRepository(session).revoke_keys(station)
-    finally:
-        database.dispose()
+    with repository_transaction(database_url) as repository:
+        revoked = repository.revoke_keys(station)
     out.print(f"revoked {revoked} API key(s) of station {station}")

@@ -13,7 +13,7 @@ import typer
 from pydantic import ValidationError
 from rich.table import Table
 
-from db import RunRepository, open_database
+from db import repository_transaction
 from station.cli.output import err, out, print_json
 from station.errors import InputError
 from station.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
@@ -268,10 +268,6 @@ def _store_fit(serial: str, log_file: Path, report: GyroFitReport, log: GyroLog)
         )
     except ValidationError:
         raise InputError(f"--store: {serial!r} is not a serial number") from None
-    database = open_database()
-    try:
-        with database.session() as session, session.begin():
-            RunRepository(session).add_gyro_fit(record)
-    finally:
-        database.dispose()
+    with repository_transaction() as repository:
+        repository.add_gyro_fit(record)
     err.print(f"gyro fit stored for {serial}", markup=False)
