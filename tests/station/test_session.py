@@ -94,7 +94,12 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     assert bench.run.unit_output_error_mg is not None
     assert record.gyro is not None
     assert record.gyro.still is not None
-    assert all(axis.slope_consistent_with_zero for axis in record.gyro.still.axes)
+    # The virtual gyros have no bias-form g-sensitivity. A pose's gyro mean carries
+    # about 0.01 deg/s of noise (0.3 deg/s over √1024 samples), so over poses 1 g apart
+    # each slope is known to about 0.01 deg/s/g: all stay well under 0.1 deg/s/g.
+    for axis in record.gyro.still.axes:
+        assert axis.slope_dps_per_g is not None
+        assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
 
 
 def test_the_journal_holds_every_pose_taken(bench: Bench) -> None:
