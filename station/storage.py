@@ -10,9 +10,7 @@ Errors tell the outbox what to do::
         └── SubmissionRefusedError  the record itself is refused (4xx): retrying will not help
 """
 
-from abc import ABC, abstractmethod
-from types import TracebackType
-from typing import Protocol, Self
+from typing import Protocol
 
 import httpx
 from sqlalchemy.exc import OperationalError
@@ -25,6 +23,7 @@ from db import (
     SubmitOutcome,
     open_database,
 )
+from station.closing import Closing
 from station.errors import CalstationError
 from station.records import RunRecord, StoredRun
 
@@ -65,26 +64,7 @@ class RunStore(Protocol):
         ...
 
 
-class _Closing(ABC):
-    """A store used as a context manager closes itself."""
-
-    @abstractmethod
-    def close(self) -> None:
-        """Release connections."""
-
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-
-class DatabaseStore(_Closing):
+class DatabaseStore(Closing):
     """Store runs straight into the results database (default: the embedded SQLite file)."""
 
     def __init__(self, url: str | None = None, *, database: Database | None = None) -> None:
@@ -107,7 +87,7 @@ class DatabaseStore(_Closing):
         self.database.dispose()
 
 
-class HttpStore(_Closing):
+class HttpStore(Closing):
     """Submit runs to the results server's ``POST /api/v1/runs`` with a station API key."""
 
     def __init__(

@@ -12,12 +12,12 @@ import logging
 import queue
 import threading
 import time
-from types import TracebackType
 
 import numpy as np
 import serial
 from numpy.typing import NDArray
 
+from station.closing import Closing
 from station.device.buffer import SampleBuffer
 from station.device.errors import (
     DeviceDisconnectedError,
@@ -92,7 +92,7 @@ class _SequenceTracker:
         return unwrapped.astype(np.float64)
 
 
-class PutterDriver:
+class PutterDriver(Closing):
     """A putter on a serial link.
 
     Open it with :meth:`open`; use it as a context manager or call :meth:`close`.
@@ -159,17 +159,6 @@ class PutterDriver:
         self._stop.set()
         self._reader.join(timeout=2.0)
         self._port.close()
-
-    def __enter__(self) -> "PutterDriver":
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     @property
     def url(self) -> str:

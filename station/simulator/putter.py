@@ -12,12 +12,12 @@ import select
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from types import TracebackType
 from typing import Final
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from station.closing import Closing
 from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
@@ -67,7 +67,7 @@ def _int16(values: np.ndarray, lsb: float) -> np.ndarray:
     return np.clip(np.rint(values / lsb), -32768, 32767)
 
 
-class VirtualPutter:
+class VirtualPutter(Closing):
     """A simulated putter: sensor model, motion model, firmware and a serial port.
 
     ``seed`` fixes the unit's parameters and its noise; ``serial`` is the serial
@@ -147,17 +147,6 @@ class VirtualPutter:
             if self._link is not None:
                 self._link.close()
                 self._link = None
-
-    def __enter__(self) -> "VirtualPutter":
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
     def unplug(self) -> None:
         """Pull the cable: the port goes away, the stream stops."""
