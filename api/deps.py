@@ -10,7 +10,7 @@ from typing import Annotated, TypeVar
 
 from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
-from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
+from sqlalchemy.ext.asyncio import AsyncEngine, AsyncSession, async_sessionmaker
 
 from db import RunRepository
 
@@ -40,8 +40,15 @@ async def get_readers(request: Request) -> async_sessionmaker[AsyncSession]:
     return readers
 
 
+async def get_reader_engine(request: Request) -> AsyncEngine:
+    """The pool of autocommit connections, for reads of one Core statement."""
+    engine: AsyncEngine = request.app.state.reader_engine
+    return engine
+
+
 SessionsDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_sessions)]
 ReadersDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_readers)]
+ReaderEngineDep = Annotated[AsyncEngine, Depends(get_reader_engine)]
 
 
 async def get_repository(sessions: SessionsDep) -> AsyncIterator[Repository]:

@@ -1,5 +1,6 @@
 """The results server's application factory (``uvicorn --factory api.main:create_app``)."""
 
+import gc
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
@@ -29,13 +30,29 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         url = settings.url()
         open_database(url).dispose()  # creates/migrates SQLite, checks a server's schema
-        writer = make_async_engine(url, pool_size=2, max_overflow=6)
+        # Fixed pools, no overflow: under load an overflow connection is opened for one
+        # request and closed after it, a new server process each time on PostgreSQL.
+        # Requests beyond the pool wait for a connection instead.
+        writer = make_async_engine(url, pool_size=settings.write_pool_size, max_overflow=0)
         # Reads need no transaction: runs are append-only, so each statement stands
         # alone. A pool of autocommit connections saves the BEGIN and ROLLBACK round
         # trips and the isolation switch on every checkout.
-        reader = make_async_engine(url, pool_size=6, max_overflow=4, isolation_level="AUTOCOMMIT")
+        # Nothing to reset when a connection goes back either: it never opens a transaction.
+        reader = make_async_engine(
+            url,
+            pool_size=settings.read_pool_size,
+            max_overflow=0,
+            isolation_level="AUTOCOMMIT",
+            pool_reset_on_return=None,
+        )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
+        app.state.reader_engine = reader
+        # What start-up allocated (modules, routes, models) lives as long as the process:
+        # keep it out of the collector's full passes, which otherwise walk it all and
+        # stall requests for milliseconds at a time.
+        gc.collect()
+        gc.freeze()
         try:
             yield
         finally:

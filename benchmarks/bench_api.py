@@ -6,10 +6,14 @@
 Needs a PostgreSQL server (``--postgres-url``, default ``CALSTATION_TEST_POSTGRES_URL``
 or ``postgresql+psycopg://postgres@127.0.0.1:5432/test``). Works in a schema of its own,
 created, migrated, seeded in SQL (``generate_series``: every run with seven poses, the
-failed ones with a failure reason) and dropped at the end.
+failed ones with a failure reason; then each unit's current state, as the migration
+that adds it fills it) and dropped at the end.
 
 Measures, with ``--clients`` concurrent keep-alive HTTP clients (default 32):
-(a) ``GET /api/v1/units/{serial}`` of random serials: p50/p99 latency and requests/s;
+(a) ``GET /api/v1/units/{serial}`` of random serials: requests/s and latency with every
+    client sending as fast as it is answered (the throughput), then p50/p99 latency at an
+    offered ``--rate`` (default 1,000/s) spread over the same clients, each request timed
+    from when it was due;
 (b) ``POST /api/v1/runs`` of new runs (each recomputed by the server): submissions/s;
 (c) list queries (``GET /api/v1/runs`` filtered by station, verdict and time, serial;
     the second page through the cursor) and ``GET /api/v1/runs/{id}``: p50/p99.
@@ -159,11 +163,18 @@ def seed(url: str, runs: int) -> tuple[str, int]:
         )
         connection.execute(text(SEED_POSES_SQL))
         connection.execute(text(SEED_FAILURES_SQL))
+    seeded = time.perf_counter()
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        repository.fill_units()  # each unit's current state, as the migration fills it
+        key = repository.create_key("line1-st1")
+    filled = time.perf_counter()
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:
         c.execute(text("VACUUM ANALYZE"))
-    with database.session() as session, session.begin():
-        key = RunRepository(session).create_key("line1-st1")
-    print(f"seeded {runs:,} runs ({7 * runs:,} poses) in {time.perf_counter() - started:.0f} s")
+    print(
+        f"seeded {runs:,} runs ({7 * runs:,} poses) in {seeded - started:.0f} s, "
+        f"their {units:,} units' current state in {filled - seeded:.0f} s"
+    )
     database.dispose()
     return key, units
 
@@ -245,8 +256,17 @@ def load(
     expect: tuple[int, ...] = (200,),
     total: int | None = None,
     headers: dict[str, str] | None = None,
+    rate: float | None = None,
 ) -> Result:
-    """``clients`` keep-alive connections issuing calls for ``seconds`` (or ``total`` calls)."""
+    """``clients`` keep-alive connections issuing calls for ``seconds`` (or ``total`` calls).
+
+    Without ``rate``, each connection sends its next request as soon as the answer to the
+    last one is in (closed loop: the server's throughput). With ``rate``, the
+    connections send ``rate`` requests per second between them on a fixed schedule, and
+    a request's latency counts from when it was due, not from when a late connection
+    got round to sending it (open loop: latency at a given load, without coordinated
+    omission).
+    """
 
     async def main() -> Result:
         latencies: list[float] = []
@@ -255,20 +275,26 @@ def load(
         for connection in connections:
             assert await connection.send(("GET", "/healthz", b"")) == 200
         issued = 0
-        stop = time.perf_counter() + seconds
+        began, server0, client0 = time.perf_counter(), tree_cpu_s(server_pid), time.process_time()
+        stop = began + seconds
 
         async def worker(connection: Connection, seed: int) -> None:
             nonlocal errors, issued
             rng = random.Random(seed)
+            interval = clients / rate if rate else 0.0
+            due = began + interval * seed / clients
             while time.perf_counter() < stop and (total is None or issued < total):
                 issued += 1
-                started = time.perf_counter()
+                if rate:
+                    await asyncio.sleep(max(0.0, due - time.perf_counter()))
+                    started, due = due, due + interval
+                else:
+                    started = time.perf_counter()
                 if await connection.send(call(rng)) in expect:
                     latencies.append(time.perf_counter() - started)
                 else:
                     errors += 1
 
-        began, server0, client0 = time.perf_counter(), tree_cpu_s(server_pid), time.process_time()
         await asyncio.gather(*(worker(c, i) for i, c in enumerate(connections)))
         result = Result(
             latencies,
@@ -332,6 +358,9 @@ def main() -> None:
     parser.add_argument("--clients", type=int, default=32)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seconds", type=float, default=15.0)
+    parser.add_argument(
+        "--rate", type=float, default=1000.0, help="offered unit lookups/s of the paced run"
+    )
     parser.add_argument("--port", type=int, default=8765)
     parser.add_argument(
         "--postgres-url", default=os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
@@ -342,13 +371,12 @@ def main() -> None:
     with bench_schema(args.postgres_url) as url:
         key, units = seed(url, args.runs)
         with server(url, args.workers, args.port) as (base, pid):
-            unit = load(
-                base,
-                pid,
-                args.clients,
-                args.seconds,
-                lambda rng: ("GET", f"/api/v1/units/PT-{rng.randrange(units):07d}", b""),
-            )
+
+            def lookup(rng: random.Random) -> Call:
+                return ("GET", f"/api/v1/units/PT-{rng.randrange(units):07d}", b"")
+
+            unit = load(base, pid, args.clients, args.seconds, lookup)
+            paced = load(base, pid, args.clients, args.seconds, lookup, rate=args.rate)
             np_rng = np.random.default_rng(7)
             rng = random.Random(7)
             posts = [new_record(rng, np_rng, i).model_dump_json().encode() for i in range(3000)]
@@ -417,7 +445,8 @@ def main() -> None:
         "| server CPU ms/req | client CPU ms/req | errors |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
-    print(unit.row("GET /api/v1/units/{serial}", args.clients))
+    print(unit.row("GET /api/v1/units/{serial}, as fast as answered", args.clients))
+    print(paced.row(f"GET /api/v1/units/{{serial}} at {args.rate:,.0f}/s", args.clients))
     print(post.row("POST /api/v1/runs", args.clients))
     for name, result in list_results.items():
         print(result.row(name, 8))

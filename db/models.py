@@ -2,8 +2,9 @@
 
 ``runs`` is append-only: a retest is a new row, a unit's current verdict is its latest
 run's (by ``started_at``), its first run stays for first-pass yield. Each run owns its
-``poses`` and its ``run_failures``; ``station_keys`` holds the hashed API keys of the
-stations that submit over HTTP.
+``poses`` and its ``run_failures``; ``units`` holds each unit's current calibration,
+ready to serve, kept in step with ``runs`` at every submission; ``station_keys`` holds
+the hashed API keys of the stations that submit over HTTP.
 """
 
 import uuid
@@ -18,6 +19,7 @@ from sqlalchemy import (
     Index,
     Integer,
     String,
+    Text,
     UniqueConstraint,
     Uuid,
 )
@@ -138,6 +140,23 @@ class RunFailure(Base):
     pose: Mapped[int | None] = mapped_column(Integer())
 
     run: Mapped[Run] = relationship(back_populates="failures", lazy="raise")
+
+
+class Unit(Base):
+    """A unit's current state: which run is its latest, and that run's answer, serialised.
+
+    ``calibration`` is the JSON of :class:`station.records.UnitCalibration` for the run
+    ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
+    ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
+    the run (:mod:`db.units`), so a unit lookup reads one row by primary key.
+    """
+
+    __tablename__ = "units"
+
+    serial: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    started_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    calibration: Mapped[str] = mapped_column(Text())
 
 
 class GyroFit(Base):

@@ -25,6 +25,7 @@ from db.base import Base
 from db.engine import open_database
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey
+from db.units import latest_run_pks, record_latest
 from station.errors import CalstationError, InputError
 from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
@@ -149,6 +150,7 @@ class RunRepository:
             self.session.execute(insert(_FAILURES), failure_rows(pk, record))
         # Already validated: build the answer without validating it again.
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
+        record_latest(self.session, [(pk, stored)])
         return SubmitOutcome(created=True, run=stored)
 
     def _insert_new_run(self) -> ReturningInsert[int]:
@@ -207,6 +209,21 @@ class RunRepository:
         page, more = runs[: query.limit], len(runs) > query.limit
         cursor = encode_cursor(page[-1].started_at, page[-1].id) if more else None
         return RunPage(runs=self._summaries(page), next_cursor=cursor)
+
+    def fill_units(self, batch: int = 2000) -> int:
+        """Write every unit's current state from ``runs``; return the number of units.
+
+        For a ``units`` table that lacks them: just created by its migration, or after
+        runs were loaded in bulk. Works ``batch`` runs per statement.
+        """
+        pks = latest_run_pks(self.session)
+        for start in range(0, len(pks), batch):
+            chunk = self.session.scalars(select(Run).where(Run.id.in_(pks[start : start + batch])))
+            runs = list(chunk)
+            pairs = zip((run.id for run in runs), self._summaries(runs), strict=True)
+            record_latest(self.session, list(pairs))
+            self.session.expunge_all()
+        return len(pks)
 
     def _failures(self, pks: Sequence[int]) -> dict[int, list[RunFailure]]:
         by_run: dict[int, list[RunFailure]] = defaultdict(list)

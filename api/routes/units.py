@@ -4,10 +4,11 @@ from typing import Annotated
 
 from fastapi import APIRouter, HTTPException, Path, Response, status
 
-from api.deps import ReaderDep
+from api.deps import ReaderDep, ReaderEngineDep
 from api.responses import json_response
-from api.schemas import Problem, RunList, UnitCalibration
-from station.records import SERIAL_PATTERN
+from api.schemas import Problem, RunList
+from db.units import current_calibration
+from station.records import SERIAL_PATTERN, UnitCalibration
 
 router = APIRouter(
     prefix="/units",
@@ -23,12 +24,13 @@ def _unknown(serial: str) -> HTTPException:
 
 
 @router.get("/{serial}", response_model=UnitCalibration)
-async def get_unit(serial: SerialPath, repository: ReaderDep) -> Response:
+async def get_unit(serial: SerialPath, readers: ReaderEngineDep) -> Response:
     """The unit's current calibration: the verdict and coefficients of its latest run."""
-    latest = await repository.run(lambda r: r.latest_for_serial(serial))
-    if latest is None:
+    async with readers.connect() as connection:
+        calibration = await current_calibration(connection, serial)
+    if calibration is None:
         raise _unknown(serial)
-    return json_response(UnitCalibration.of(latest))
+    return Response(calibration, media_type="application/json")
 
 
 @router.get("/{serial}/runs", response_model=RunList)

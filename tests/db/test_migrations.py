@@ -3,17 +3,29 @@
 import os
 import secrets
 from collections.abc import Iterator
+from datetime import timedelta
 from pathlib import Path
 
 import pytest
 from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
-from sqlalchemy import inspect, make_url, text
+from sqlalchemy import insert, inspect, make_url, select, text
 
-from db import DatabaseSettings, SchemaOutOfDateError, make_engine, open_database
+from db import (
+    Database,
+    DatabaseSettings,
+    RunRepository,
+    SchemaOutOfDateError,
+    make_engine,
+    open_database,
+)
 from db.base import Base
+from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
+from db.models import Run, RunFailure, Unit
+from db.units import calibration_json
+from tests.db.records import T0, make_record
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
@@ -71,3 +83,28 @@ def test_the_embedded_database_is_created_and_migrated_on_first_use(tmp_path: Pa
 def test_a_server_database_behind_head_is_refused_with_the_fix(empty_url: str) -> None:
     with pytest.raises(SchemaOutOfDateError, match="calstation db upgrade"):
         open_database(empty_url)
+
+
+def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    upgrade(engine, "0002")
+    first = make_record(verdict="fail", started_at=T0)
+    retest = make_record(verdict="pass", started_at=T0 + timedelta(hours=1))
+    other = make_record(serial="PT-000002", started_at=T0 + timedelta(hours=2))
+    with engine.begin() as connection:  # runs stored by the software of revision 0002
+        for record in (retest, first, other):
+            row = run_row(record, received_at=T0, record_sha256="0" * 64)
+            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
+            if record.failures:
+                connection.execute(insert(RunFailure), failure_rows(pk, record))
+    upgrade(engine)
+    database = Database(engine)
+    with database.session() as session:
+        repo = RunRepository(session)
+        stored = {s: c for s, c in session.execute(select(Unit.serial, Unit.calibration))}
+        latest = {serial: repo.latest_for_serial(serial) for serial in ("PT-000001", "PT-000002")}
+    assert stored == {
+        serial: calibration_json(run) for serial, run in latest.items() if run is not None
+    }
+    assert f'"run_id":"{retest.run_id}"' in stored["PT-000001"]
+    engine.dispose()

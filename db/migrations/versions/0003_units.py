@@ -1,0 +1,45 @@
+"""Each unit's current calibration, ready to serve (``units``), filled from ``runs``.
+
+Revision ID: 0003
+Revises: 0002
+"""
+
+from collections.abc import Sequence
+
+import sqlalchemy as sa
+from alembic import op
+from sqlalchemy.orm import Session
+
+from db.base import UtcDateTime
+from db.repository import RunRepository
+
+revision: str = "0003"
+down_revision: str | None = "0002"
+branch_labels: str | Sequence[str] | None = None
+depends_on: str | Sequence[str] | None = None
+
+
+def upgrade() -> None:
+    op.create_table(
+        "units",
+        sa.Column("serial", sa.String(length=64), nullable=False),
+        sa.Column(
+            "run_pk",
+            sa.BigInteger().with_variant(sa.Integer(), "sqlite"),
+            nullable=False,
+        ),
+        sa.Column("started_at", UtcDateTime(), nullable=False),
+        sa.Column("calibration", sa.Text(), nullable=False),
+        sa.ForeignKeyConstraint(
+            ["run_pk"], ["runs.id"], name=op.f("fk_units_run_pk_runs"), ondelete="CASCADE"
+        ),
+        sa.PrimaryKeyConstraint("serial", name=op.f("pk_units")),
+    )
+    # The answers are built by the same code as at every submission.
+    session = Session(bind=op.get_bind())
+    RunRepository(session).fill_units()
+    session.flush()
+
+
+def downgrade() -> None:
+    op.drop_table("units")

@@ -1,0 +1,87 @@
+"""Each unit's stored current state equals its latest run, whatever order runs arrive in."""
+
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from datetime import timedelta
+
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from sqlalchemy import delete, select
+from sqlalchemy.orm import Session
+
+from db import Database, RunRepository
+from db.models import Run, Unit
+from db.units import calibration_json
+from tests.db.records import T0, make_record
+
+#: One submission: which of three units, minutes after T0 (ties happen), passed or not.
+submissions = st.lists(
+    st.tuples(st.integers(0, 2), st.integers(0, 4), st.sampled_from(["pass", "fail"])),
+    min_size=1,
+    max_size=12,
+)
+
+
+@contextmanager
+def rolled_back(database: Database) -> Iterator[Session]:
+    """A session in a transaction that is rolled back at the end."""
+    with database.engine.connect() as connection:
+        outer = connection.begin()
+        with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
+            yield session
+        outer.rollback()
+
+
+def units_of(session: Session, serials: set[str]) -> dict[str, tuple[int, str]]:
+    """The stored ``units`` rows of ``serials``: run key and answer."""
+    rows = session.execute(
+        select(Unit.serial, Unit.run_pk, Unit.calibration).where(Unit.serial.in_(serials))
+    )
+    return {serial: (run_pk, calibration) for serial, run_pk, calibration in rows}
+
+
+@settings(
+    max_examples=30,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(submissions)
+def test_the_stored_state_is_the_latest_run_in_any_arrival_order(
+    migrated_database: Database, arrivals: list[tuple[int, int, str]]
+) -> None:
+    prefix = f"PT-{uuid.uuid4().hex[:8]}-"
+    with rolled_back(migrated_database) as session:
+        repo = RunRepository(session)
+        for unit, minute, verdict in arrivals:
+            repo.submit(
+                make_record(
+                    serial=f"{prefix}{unit}",
+                    verdict=verdict,
+                    started_at=T0 + timedelta(minutes=minute),
+                    sensitivity=(813.95 + minute, 815.66, 820.17 + unit),
+                )
+            )
+        serials = {f"{prefix}{unit}" for unit, _, _ in arrivals}
+        stored = units_of(session, serials)
+        # The definition: the unit's latest run by (started_at, id), read from runs.
+        for serial in serials:
+            latest = repo.latest_for_serial(serial)
+            assert latest is not None
+            latest_pk = session.scalars(select(Run.id).where(Run.run_id == latest.run_id)).one()
+            assert stored[serial] == (latest_pk, calibration_json(latest))
+        # Rebuilt from runs alone (the migration's and a bulk load's path): the same rows.
+        session.execute(delete(Unit).where(Unit.serial.in_(serials)))
+        repo.fill_units()
+        assert units_of(session, serials) == stored
+
+
+def test_a_late_older_run_leaves_the_current_state_alone(session: Session) -> None:
+    repo = RunRepository(session)
+    retest = make_record(verdict="pass", started_at=T0 + timedelta(hours=1))
+    first = make_record(verdict="fail", started_at=T0)
+    repo.submit(retest)
+    repo.submit(first)  # delivered late by the station's outbox
+    (calibration,) = units_of(session, {retest.serial}).values()
+    assert f'"run_id":"{retest.run_id}"' in calibration[1]
+    assert '"verdict":"pass"' in calibration[1]
