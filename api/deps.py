@@ -10,9 +10,10 @@ from typing import Annotated, TypeVar
 
 from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
-from sqlalchemy.ext.asyncio import AsyncEngine, AsyncSession, async_sessionmaker
+from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from db import RunRepository
+from db.units import UnitLookups
 
 T = TypeVar("T")
 
@@ -40,15 +41,15 @@ async def get_readers(request: Request) -> async_sessionmaker[AsyncSession]:
     return readers
 
 
-async def get_reader_engine(request: Request) -> AsyncEngine:
-    """The pool of autocommit connections, for reads of one Core statement."""
-    engine: AsyncEngine = request.app.state.reader_engine
-    return engine
+async def get_unit_lookups(request: Request) -> UnitLookups:
+    """The server process's reader of units' current calibrations."""
+    lookups: UnitLookups = request.app.state.unit_lookups
+    return lookups
 
 
 SessionsDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_sessions)]
 ReadersDep = Annotated[async_sessionmaker[AsyncSession], Depends(get_readers)]
-ReaderEngineDep = Annotated[AsyncEngine, Depends(get_reader_engine)]
+UnitLookupsDep = Annotated[UnitLookups, Depends(get_unit_lookups)]
 
 
 async def get_repository(sessions: SessionsDep) -> AsyncIterator[Repository]:

@@ -13,6 +13,7 @@ from api.limits import BodySizeLimit
 from api.routes import gyro, health, reports, runs, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
+from db.units import UnitLookups
 from station import __version__
 
 API_PREFIX = "/api/v1"
@@ -47,7 +48,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
-        app.state.reader_engine = reader
+        app.state.unit_lookups = UnitLookups(reader)
         # What start-up allocated (modules, routes, models) lives as long as the process:
         # keep it out of the collector's full passes, which otherwise walk it all and
         # stall requests for milliseconds at a time.

@@ -4,10 +4,9 @@ from typing import Annotated
 
 from fastapi import APIRouter, HTTPException, Path, Response, status
 
-from api.deps import ReaderDep, ReaderEngineDep
+from api.deps import ReaderDep, UnitLookupsDep
 from api.responses import json_response
 from api.schemas import Problem, RunList
-from db.units import current_calibration
 from station.records import SERIAL_PATTERN, UnitCalibration
 
 router = APIRouter(
@@ -24,10 +23,9 @@ def _unknown(serial: str) -> HTTPException:
 
 
 @router.get("/{serial}", response_model=UnitCalibration)
-async def get_unit(serial: SerialPath, readers: ReaderEngineDep) -> Response:
+async def get_unit(serial: SerialPath, lookups: UnitLookupsDep) -> Response:
     """The unit's current calibration: the verdict and coefficients of its latest run."""
-    async with readers.connect() as connection:
-        calibration = await current_calibration(connection, serial)
+    calibration = await lookups.get(serial)
     if calibration is None:
         raise _unknown(serial)
     return Response(calibration, media_type="application/json")
