@@ -166,7 +166,7 @@ def seed(url: str, runs: int) -> tuple[str, int]:
     seeded = time.perf_counter()
     with database.session() as session, session.begin():
         repository = RunRepository(session)
-        repository.fill_units()  # each unit's current state, as the migration fills it
+        repository.refresh_units()  # each unit's current state, as the migration fills it
         key = repository.create_key("line1-st1")
     filled = time.perf_counter()
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:

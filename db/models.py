@@ -148,7 +148,9 @@ class Unit(Base):
     ``calibration`` is the JSON of :class:`station.records.UnitCalibration` for the run
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
-    the run (:mod:`db.units`), so a unit lookup reads one row by primary key.
+    the run (:mod:`db.units`), so a unit lookup reads one row by primary key. A new
+    shape of the answer comes with a migration that rewrites the rows
+    (:meth:`db.RunRepository.refresh_units`).
     """
 
     __tablename__ = "units"

@@ -210,11 +210,12 @@ class RunRepository:
         cursor = encode_cursor(page[-1].started_at, page[-1].id) if more else None
         return RunPage(runs=self._summaries(page), next_cursor=cursor)
 
-    def fill_units(self, batch: int = 2000) -> int:
+    def refresh_units(self, batch: int = 2000) -> int:
         """Write every unit's current state from ``runs``; return the number of units.
 
-        For a ``units`` table that lacks them: just created by its migration, or after
-        runs were loaded in bulk. Works ``batch`` runs per statement.
+        The migration that adds ``units`` fills it with this, and so does a bulk load of
+        runs; a new shape of the stored answer (:class:`station.records.UnitCalibration`)
+        needs a migration that calls it again. Works ``batch`` runs per statement.
         """
         pks = latest_run_pks(self.session)
         for start in range(0, len(pks), batch):

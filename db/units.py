@@ -27,13 +27,17 @@ from station.records import RunSummary, StoredRun, UnitCalibration
 
 
 def _latest_wins(dialect: Any) -> Any:
-    """``INSERT … ON CONFLICT (serial) DO UPDATE`` only where the new run is later."""
+    """``INSERT … ON CONFLICT (serial) DO UPDATE`` unless the stored run is later.
+
+    The same run is written again: that is how :meth:`db.RunRepository.refresh_units`
+    rewrites the stored answers.
+    """
     stmt = dialect.insert(Unit)
     new = stmt.excluded
     return stmt.on_conflict_do_update(
         index_elements=[Unit.serial],
         set_={"run_pk": new.run_pk, "started_at": new.started_at, "calibration": new.calibration},
-        where=tuple_(Unit.started_at, Unit.run_pk) < tuple_(new.started_at, new.run_pk),
+        where=tuple_(Unit.started_at, Unit.run_pk) <= tuple_(new.started_at, new.run_pk),
     )
 
 

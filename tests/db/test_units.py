@@ -72,7 +72,7 @@ def test_the_stored_state_is_the_latest_run_in_any_arrival_order(
             assert stored[serial] == (latest_pk, calibration_json(latest))
         # Rebuilt from runs alone (the migration's and a bulk load's path): the same rows.
         session.execute(delete(Unit).where(Unit.serial.in_(serials)))
-        repo.fill_units()
+        repo.refresh_units()
         assert units_of(session, serials) == stored
 
 

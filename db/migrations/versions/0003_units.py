@@ -37,7 +37,7 @@ def upgrade() -> None:
     )
     # The answers are built by the same code as at every submission.
     session = Session(bind=op.get_bind())
-    RunRepository(session).fill_units()
+    RunRepository(session).refresh_units()
     session.flush()
 
 
