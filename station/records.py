@@ -227,6 +227,8 @@ class _RunHeader(_Record):
     serial: Serial
     station_id: Identifier
     operator_id: Identifier
+    #: The unit's production lot, when the station was told it (``calstation run --lot``).
+    lot: Identifier | None = None
     started_at: UtcDatetime
     finished_at: UtcDatetime
     software_version: Identifier

@@ -3,17 +3,22 @@
 import os
 import secrets
 from collections.abc import Iterator
+from datetime import timedelta
 from pathlib import Path
 
 import pytest
 from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
-from sqlalchemy import inspect, make_url, text
+from sqlalchemy import func, inspect, make_url, select, text
+from sqlalchemy.orm import Session
 
-from db import DatabaseSettings, SchemaOutOfDateError, make_engine, open_database
+from db import DatabaseSettings, RunRepository, SchemaOutOfDateError, make_engine, open_database
 from db.base import Base
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
+from db.models import ReportCounts
+from tests.db.records import T0, make_record
+from tests.db.test_rollups import rollup_rows
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
@@ -71,3 +76,27 @@ def test_the_embedded_database_is_created_and_migrated_on_first_use(tmp_path: Pa
 def test_a_server_database_behind_head_is_refused_with_the_fix(empty_url: str) -> None:
     with pytest.raises(SchemaOutOfDateError, match="calstation db upgrade"):
         open_database(empty_url)
+
+
+def test_the_report_migration_builds_the_roll_ups_of_the_runs_already_stored(
+    empty_url: str,
+) -> None:
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine)
+        with Session(engine) as session:
+            for hour, serial in enumerate(["U1", "U2", "U1"]):
+                RunRepository(session).submit(
+                    make_record(serial=serial, started_at=T0 + timedelta(hours=hour))
+                )
+            session.commit()
+            submitted = rollup_rows(session)
+        with engine.begin() as connection:
+            command.downgrade(alembic_config(connection), "0002")
+        assert "run_facts" not in inspect(engine).get_table_names()
+        upgrade(engine)
+        with Session(engine) as session:
+            assert rollup_rows(session) == submitted
+            assert session.scalar(select(func.sum(ReportCounts.poses))) == 3 * 7
+    finally:
+        engine.dispose()
