@@ -40,6 +40,7 @@ import uvloop
 from sqlalchemy import make_url, text
 
 from db import RunRepository, make_engine, open_database
+from db.rollups import rebuild
 from station.calibration import solve
 from station.calibration.synthetic import pose_means, random_unit, six_directions
 from station.records import RunRecord
@@ -159,6 +160,7 @@ def seed(url: str, runs: int) -> tuple[str, int]:
         )
         connection.execute(text(SEED_POSES_SQL))
         connection.execute(text(SEED_FAILURES_SQL))
+        rebuild(connection)  # the report's facts and roll-ups, as the migration builds them
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:
         c.execute(text("VACUUM ANALYZE"))
     with database.session() as session, session.begin():

@@ -73,17 +73,15 @@ from db.models import (
 )
 from station.limits import load_profile
 from station.report.bounds import COEFFICIENTS, PARAMETERS, Bounds, ParameterSpec, profile_bounds
-from station.report.capability import histogram_bins, marginal_zones, tolerance
+from station.report.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
 
-#: Seconds per roll-up bucket: one UTC day.
-DAY_SECONDS = 86_400
-
-#: The key columns of every roll-up table, and each table's own.
+#: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
+#: adds the limits profile.
 BUCKET = ("day", "station_id", "operator_id", "lot")
 LIMITS = ("limits_name", "limits_version", "limits_sha256")
 
 #: Histogram bin columns of ``report_parameters``.
-HISTOGRAM = tuple(f"h{i:02d}" for i in range(30))
+HISTOGRAM = tuple(f"h{i:02d}" for i in range(HISTOGRAM_BINS))
 
 #: How each value column merges across rows: ``sum``, ``min`` or ``max``.
 COUNT_VALUES: dict[str, str] = {
@@ -436,15 +434,19 @@ def stored_bounds(connection: Connection) -> Bounds:
     return {family: (lower, upper) for family, lower, upper in rows}
 
 
+def _store_bounds(connection: Connection, bounds: Bounds) -> None:
+    connection.execute(
+        insert(ReportBounds),
+        [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
+    )
+
+
 def _bounds_for_rollup(connection: Connection) -> Bounds:
     """The stored bounds; on an empty database, the default profile's, stored now."""
     bounds = stored_bounds(connection)
     if not bounds:
         bounds = profile_bounds(load_profile())
-        connection.execute(
-            insert(ReportBounds),
-            [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
-        )
+        _store_bounds(connection, bounds)
     return bounds
 
 
@@ -551,10 +553,7 @@ def rebuild(connection: Connection, bounds: Bounds | None = None) -> None:
     bounds = bounds or profile_bounds(load_profile())
     for table in (ReportParameters, ReportFailures, ReportCounts, RunFacts, ReportBounds):
         connection.execute(delete(table))
-    connection.execute(
-        insert(ReportBounds),
-        [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
-    )
+    _store_bounds(connection, bounds)
     connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([])))
     connection.execute(
         insert(ReportCounts).from_select(
