@@ -463,8 +463,8 @@ def lock_submissions(connection: Connection) -> None:
 class _Submission:
     """The statements of :func:`record_run`, built once per dialect and bounds.
 
-    Bound parameters: ``run_pk`` the new run; ``changed`` the stored runs whose facts
-    it may change; ``both`` those and the new run.
+    Bound parameters: ``run_pk``, ``serial`` and ``started_at`` of the new run;
+    ``changed`` the stored runs whose facts it may change; ``both`` those and the new run.
     """
 
     changed: Executable
@@ -483,17 +483,17 @@ def _submission(
     run_pk = bindparam("run_pk", type_=Run.id.type)
     changed: BindParameter[int] = bindparam("changed", expanding=True)
     both: BindParameter[int] = bindparam("both", expanding=True)
-    this = aliased(Run, name="this")
-    after_this = tuple_(Run.started_at, Run.id) > tuple_(this.started_at, this.id)
+    # The new run's start and serial as values, so both walk their index.
+    started_at = bindparam("started_at", type_=Run.started_at.type)
+    after_this = tuple_(Run.started_at, Run.id) > tuple_(started_at, run_pk)
     following = (
         select(Run.id)
-        .join(this, this.id == run_pk)
         .where(Run.offset_x.is_not(None), after_this)
         .order_by(Run.started_at, Run.id)
         .limit(1)
         .subquery("following")
     )
-    same_unit = select(Run.id).join(this, this.id == run_pk).where(Run.serial == this.serial)
+    same_unit = select(Run.id).where(Run.serial == bindparam("serial", type_=Run.serial.type))
     keys, failures = [*BUCKET, *LIMITS], [*BUCKET, "code"]
     new = [Run.id == run_pk]
     rows = union_all(*parameter_contributions(BUCKET, new, dict(bounds))).subquery("parameters")
@@ -534,7 +534,13 @@ def record_run(connection: Connection, run_pk: int) -> None:
     """
     bounds = _bounds_for_rollup(connection)
     do = _submission(connection.dialect.name, tuple(sorted(bounds.items())))
-    changed = sorted(set(connection.scalars(do.changed, {"run_pk": run_pk})) - {run_pk})
+    serial, started_at = connection.execute(
+        select(Run.serial, Run.started_at).where(Run.id == run_pk)
+    ).one()
+    found = connection.scalars(
+        do.changed, {"run_pk": run_pk, "serial": serial, "started_at": started_at}
+    )
+    changed = sorted(set(found) - {run_pk})
     if changed:
         connection.execute(do.take_out, {"changed": changed})
         connection.execute(do.forget, {"changed": changed})
