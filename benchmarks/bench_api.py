@@ -6,8 +6,8 @@
 Needs a PostgreSQL server (``--postgres-url``, default ``CALSTATION_TEST_POSTGRES_URL``
 or ``postgresql+psycopg://postgres@127.0.0.1:5432/test``). Works in a schema of its own,
 created, migrated, seeded in SQL (``generate_series``: every run with seven poses, the
-failed ones with a failure reason; then each unit's current state, as the migration
-that adds it fills it) and dropped at the end.
+failed ones with a failure reason; then the report's roll-ups and each unit's current
+state, as their migrations build them) and dropped at the end.
 
 Measures, with ``--clients`` concurrent keep-alive HTTP clients (default 32):
 (a) ``GET /api/v1/units/{serial}`` of random serials: requests/s and latency with every
@@ -44,6 +44,7 @@ import uvloop
 from sqlalchemy import make_url, text
 
 from db import RunRepository, make_engine, open_database
+from db.rollups import rebuild
 from station.calibration import solve
 from station.calibration.synthetic import pose_means, random_unit, six_directions
 from station.records import RunRecord
@@ -163,17 +164,18 @@ def seed(url: str, runs: int) -> tuple[str, int]:
         )
         connection.execute(text(SEED_POSES_SQL))
         connection.execute(text(SEED_FAILURES_SQL))
+        rebuild(connection)  # the report's facts and roll-ups, as the migration builds them
     seeded = time.perf_counter()
     with database.session() as session, session.begin():
         repository = RunRepository(session)
-        repository.refresh_units()  # each unit's current state, as the migration fills it
+        repository.refresh_units()  # each unit's current state, as its migration fills it
         key = repository.create_key("line1-st1")
     filled = time.perf_counter()
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:
         c.execute(text("VACUUM ANALYZE"))
     print(
-        f"seeded {runs:,} runs ({7 * runs:,} poses) in {seeded - started:.0f} s, "
-        f"their {units:,} units' current state in {filled - seeded:.0f} s"
+        f"seeded {runs:,} runs ({7 * runs:,} poses) and their report roll-ups in "
+        f"{seeded - started:.0f} s, their {units:,} units' current state in {filled - seeded:.0f} s"
     )
     database.dispose()
     return key, units

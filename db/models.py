@@ -5,6 +5,9 @@ run's (by ``started_at``), its first run stays for first-pass yield. Each run ow
 ``poses`` and its ``run_failures``; ``units`` holds each unit's current calibration,
 ready to serve, kept in step with ``runs`` at every submission; ``station_keys`` holds
 the hashed API keys of the stations that submit over HTTP.
+
+``run_facts`` and the ``report_*`` tables hold what the end-of-line report derives from
+those rows (per-run facts, daily roll-ups); :mod:`db.rollups` builds and maintains them.
 """
 
 import uuid
@@ -13,6 +16,7 @@ from typing import Any
 
 from sqlalchemy import (
     BigInteger,
+    Boolean,
     CheckConstraint,
     Double,
     ForeignKey,
@@ -26,6 +30,7 @@ from sqlalchemy import (
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from db.base import Base, JsonDocument, UtcDateTime
+from station.report.capability import HISTOGRAM_BINS
 
 #: Primary keys: BIGINT on PostgreSQL; SQLite's rowid alias must be spelled INTEGER.
 BigId = BigInteger().with_variant(Integer(), "sqlite")
@@ -44,6 +49,7 @@ class Run(Base):
         Index("ix_runs_station_id_started_at", "station_id", "started_at", "id"),
         Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
         Index("ix_runs_started_at", "started_at", "id"),
+        Index("ix_runs_lot_started_at", "lot", "started_at", "id"),
     )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
@@ -51,6 +57,8 @@ class Run(Base):
     serial: Mapped[str] = mapped_column(String(NAME))
     station_id: Mapped[str] = mapped_column(String(NAME))
     operator_id: Mapped[str] = mapped_column(String(NAME))
+    #: The unit's production lot, when the station knows it.
+    lot: Mapped[str | None] = mapped_column(String(NAME))
     started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     finished_at: Mapped[datetime] = mapped_column(UtcDateTime())
     received_at: Mapped[datetime] = mapped_column(UtcDateTime())
@@ -190,3 +198,116 @@ class StationKey(Base):
     key_sha256: Mapped[str] = mapped_column(String(64), unique=True)
     created_at: Mapped[datetime] = mapped_column(UtcDateTime())
     revoked_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
+
+
+class RunFacts(Base):
+    """What the report derives from one run and the runs around it (:mod:`db.rollups`).
+
+    Order is ``(started_at, id)``. ``line_first``: no earlier run of the unit;
+    ``line_latest``: no later one; ``line_final_pass``: ``line_first`` and the unit's
+    latest run passed; ``unit_runs``: how many runs the unit has. ``station_*``: the
+    same among the unit's runs at the run's station. ``chart_previous``, for a run with
+    coefficients: the latest earlier run of the line with coefficients (the other end of
+    this run's moving range).
+    """
+
+    __tablename__ = "run_facts"
+
+    run_pk: Mapped[int] = mapped_column(
+        ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True, autoincrement=False
+    )
+    first_failure: Mapped[str | None] = mapped_column(String(NAME))
+    poses: Mapped[int] = mapped_column(Integer())
+    gyro_bias_x: Mapped[float | None] = mapped_column(Double())
+    gyro_bias_y: Mapped[float | None] = mapped_column(Double())
+    gyro_bias_z: Mapped[float | None] = mapped_column(Double())
+    line_first: Mapped[bool] = mapped_column(Boolean())
+    line_latest: Mapped[bool] = mapped_column(Boolean())
+    line_final_pass: Mapped[bool] = mapped_column(Boolean())
+    unit_runs: Mapped[int] = mapped_column(Integer())
+    station_first: Mapped[bool] = mapped_column(Boolean())
+    station_final_pass: Mapped[bool] = mapped_column(Boolean())
+    chart_previous: Mapped[int | None] = mapped_column(BigId)
+
+
+class _Bucket:
+    """The key of a roll-up row: a UTC day (days since 1970-01-01), station, operator, lot.
+
+    A run without a lot is counted under the lot ``''``.
+    """
+
+    day: Mapped[int] = mapped_column(Integer(), primary_key=True)
+    station_id: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    operator_id: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    lot: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+
+
+class ReportCounts(_Bucket, Base):
+    """Per bucket and limits profile: the runs' counts, times and unit flags (sums)."""
+
+    __tablename__ = "report_counts"
+
+    limits_name: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    limits_version: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    limits_sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    runs: Mapped[int] = mapped_column(Integer())
+    runs_passed: Mapped[int] = mapped_column(Integer())
+    duration_ms: Mapped[int] = mapped_column(BigInteger())
+    poses: Mapped[int] = mapped_column(Integer())
+    first_start: Mapped[datetime] = mapped_column(UtcDateTime())
+    last_finish: Mapped[datetime] = mapped_column(UtcDateTime())
+    line_units: Mapped[int] = mapped_column(Integer())
+    line_first_pass: Mapped[int] = mapped_column(Integer())
+    line_final_pass: Mapped[int] = mapped_column(Integer())
+    listed: Mapped[int] = mapped_column(Integer())
+    units: Mapped[int] = mapped_column(Integer())
+    first_pass: Mapped[int] = mapped_column(Integer())
+    final_pass: Mapped[int] = mapped_column(Integer())
+    charted: Mapped[int] = mapped_column(Integer())
+    mr_offset_x: Mapped[float] = mapped_column(Double())
+    mr_offset_y: Mapped[float] = mapped_column(Double())
+    mr_offset_z: Mapped[float] = mapped_column(Double())
+    mr_sensitivity_x: Mapped[float] = mapped_column(Double())
+    mr_sensitivity_y: Mapped[float] = mapped_column(Double())
+    mr_sensitivity_z: Mapped[float] = mapped_column(Double())
+
+
+class ReportFailures(_Bucket, Base):
+    """Per bucket and first failure reason: failing runs."""
+
+    __tablename__ = "report_failures"
+
+    code: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    runs: Mapped[int] = mapped_column(Integer())
+
+
+class ReportParameters(_Bucket, Base):
+    """Per bucket and parameter: n, Σ(x − c), Σ(x − c)², min, max, out of limits, marginal
+    and the 30 histogram bins ``h00…h29``, with bins and c from ``report_bounds``."""
+
+    __tablename__ = "report_parameters"
+
+    parameter: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    n: Mapped[int] = mapped_column(Integer())
+    sum: Mapped[float] = mapped_column(Double())
+    squares: Mapped[float] = mapped_column(Double())
+    min: Mapped[float] = mapped_column(Double())
+    max: Mapped[float] = mapped_column(Double())
+    outside: Mapped[int] = mapped_column(Integer())
+    marginal: Mapped[int] = mapped_column(Integer())
+
+
+for _bin in range(HISTOGRAM_BINS):
+    setattr(
+        ReportParameters, f"h{_bin:02d}", mapped_column(f"h{_bin:02d}", Integer(), nullable=False)
+    )
+
+
+class ReportBounds(Base):
+    """The limits (per limits family) the ``report_parameters`` bins were counted with."""
+
+    __tablename__ = "report_bounds"
+
+    family: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    lower: Mapped[float | None] = mapped_column(Double())
+    upper: Mapped[float | None] = mapped_column(Double())

@@ -1,45 +1,51 @@
 """Aggregation queries of the end-of-line report, one SQL statement per section.
 
-Nothing here walks runs in Python: counts and yields come from one grouped query over
-windows (``row_number``/``lead`` per unit, ordered by start time), the Pareto from the
-first failure reason of each failing run grouped by code, station and operator, the
-parameter statistics and histograms from one grouped query per limits family (grouped
-by the histogram bin of each axis), the control-chart limits from ``lag`` over the runs
-in time order, the unit list from ``row_number`` per serial. Python only merges the
-grouped rows (stations, bins: a few hundred) and applies the capability formulas of
+Nothing here walks runs in Python. Counts and yields, the Pareto and the parameter
+statistics and histograms add up the daily roll-ups of :mod:`db.rollups` over the
+whole days in range and the same aggregates over the runs of the partial days at its
+ends, in one statement per section (``UNION ALL``, then grouped). The control-chart
+limits add up the stored moving ranges; the control-chart points and the unit list
+walk ``ix_runs_started_at`` backwards. Python only merges the grouped rows (stations,
+profiles: a few dozen) and applies the capability formulas of
 :mod:`station.report.capability`.
 """
 
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from sqlalchemy import (
     ColumnElement,
-    Float,
-    Integer,
     Row,
+    RowMapping,
+    Select,
     and_,
-    case,
-    cast,
-    extract,
-    false,
     func,
     or_,
     select,
     text,
-    type_coerce,
+    union_all,
 )
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, aliased
 
-from db.models import Pose, Run, RunFailure
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts
+from db.rollups import (
+    COUNT_VALUES,
+    FAILURE_VALUES,
+    HISTOGRAM,
+    LIMITS,
+    PARAMETER_VALUES,
+    count_contributions,
+    failure_contributions,
+    parameter_contributions,
+    stored_bounds,
+)
 from station.limits import LimitsProfile, load_profiles
 from station.records import LimitsRef
 from station.report.bounds import (
     COEFFICIENTS,
-    FAMILIES,
     PARAMETERS,
     Bounds,
     ParameterSpec,
@@ -51,7 +57,6 @@ from station.report.capability import (
     cpk,
     histogram_bins,
     individuals_limits,
-    marginal_zones,
     shifted_moments,
     tolerance,
 )
@@ -71,22 +76,43 @@ from station.report.model import (
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
 
+#: Day 0 of the roll-ups, and their length.
+EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
+DAY = timedelta(days=1)
+
 
 class ReportQueries:
-    """The report's queries over the runs ``filter`` selects, in the caller's session."""
+    """The report's queries over the runs ``filter`` selects, in the caller's session.
+
+    The days the range covers whole come from the roll-ups of :mod:`db.rollups`, the
+    partial days at its ends from the same aggregates computed over their runs; a
+    statement adds both up.
+    """
 
     def __init__(self, session: Session, filter: ReportFilter) -> None:
         self.session = session
         self.filter = filter
         self.dialect = session.get_bind().dialect.name
+        self.days, self.edges = split_days(filter.since, filter.until)
         if self.dialect == "postgresql":
-            # The report's statements are scans with long expressions: compiling them
-            # (JIT) cost seconds and saved nothing; its sorts and hashes of a million
-            # rows spill to disk with the default 4 MB of work memory.
+            # The raw statements are scans with long expressions: compiling them (JIT)
+            # cost seconds and saved nothing; their sorts and hashes spill to disk with
+            # the default 4 MB of work memory.
             session.execute(text("SET LOCAL jit = off"))
             session.execute(text("SET LOCAL work_mem = '256MB'"))
 
     # -- helpers -----------------------------------------------------------------------
+
+    def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
+        """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
+        f, where = self.filter, []
+        if f.station_id is not None:
+            where.append(columns.station_id == f.station_id)
+        if f.operator_id is not None:
+            where.append(columns.operator_id == f.operator_id)
+        if f.lot is not None:
+            where.append(columns.lot == f.lot)
+        return where
 
     def conditions(self) -> list[ColumnElement[bool]]:
         """The ``WHERE`` clauses on ``runs`` of the filter."""
@@ -95,170 +121,121 @@ class ReportQueries:
             where.append(Run.started_at >= f.since)
         if f.until is not None:
             where.append(Run.started_at < f.until)
-        if f.station_id is not None:
-            where.append(Run.station_id == f.station_id)
-        if f.operator_id is not None:
-            where.append(Run.operator_id == f.operator_id)
+        return [*where, *self._dimensions(Run)]
+
+    def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
+        """The runs of the partial days at the range's ends; ``None`` when there are none."""
+        if not self.edges:
+            return None
+        spans = [and_(Run.started_at >= a, Run.started_at < b) for a, b in self.edges]
+        return [or_(*spans), *self._dimensions(Run)]
+
+    def _rolled_conditions(self, table: Any) -> list[ColumnElement[bool]] | None:
+        """The roll-up rows of the whole days in range; ``None`` when there are none."""
+        if self.days is None:
+            return None
+        first, end = self.days
+        where = self._dimensions(table)
+        if first is not None:
+            where.append(table.day >= first)
+        if end is not None:
+            where.append(table.day < end)
         return where
 
-    def _seconds(self) -> ColumnElement[float]:
-        """A run's duration in seconds."""
-        if self.dialect == "postgresql":
-            return type_coerce(extract("epoch", Run.finished_at - Run.started_at), Float)
-        # julianday() carries about 10 µs; round to the millisecond.
-        days = func.julianday(Run.finished_at) - func.julianday(Run.started_at)
-        return func.round(days * 86400.0, 3)
+    def _merged(
+        self,
+        table: Any,
+        values: Mapping[str, str],
+        group: Sequence[str],
+        rolled: list[ColumnElement[bool]] | None,
+        raw: Sequence[Select[Any]],
+    ) -> list[Row[Any]]:
+        """Rows of ``table`` (``rolled`` selects them) and ``raw`` contributions with the
+        same columns, merged per ``group``: sums added, minima and maxima kept."""
+        parts = list(raw)
+        if rolled is not None:
+            parts.append(
+                select(
+                    *(getattr(table, g) for g in group), *(getattr(table, v) for v in values)
+                ).where(*rolled)
+            )
+        if not parts:
+            return []
+        merged = union_all(*parts).subquery("merged")
+        keys = [merged.c[g] for g in group]
+        stmt = select(
+            *keys, *(getattr(func, how)(merged.c[v]).label(v) for v, how in values.items())
+        ).group_by(*keys)
+        return [row for row in self.session.execute(stmt)]
 
     # -- counts and yields -------------------------------------------------------------
 
     def station_counts(self) -> list[Row[Any]]:
-        """Per station: runs, passes, station time, and units with their first and final
-        passes, both within the station and on the whole line (``line_*``).
+        """Per station and limits profile: the sums of ``report_counts`` over the range.
 
-        Each run is ranked within its unit at the station and within its unit on the
-        line by ``(started_at, id)``: rank 1 is the unit's first run, a run without a
-        ``lead`` its latest. A unit's first (latest) run on the line is at exactly one
-        station, so the ``line_*`` columns add up across stations to the line's counts.
+        Runs, passes and station time; units counted at their first run on the line
+        (``line_*``) and at their first run at the station, with first and final passes;
+        units listed (latest runs); runs with coefficients and their moving ranges.
         """
-        order = (Run.started_at, Run.id)
-        # Serial first: sorts compare serial numbers with abbreviated keys, and the
-        # station window can reuse the line window's order (incremental sort).
-        at_station, on_line = [Run.serial, Run.station_id], [Run.serial]
-        ranked = (
-            select(
-                Run.station_id,
-                Run.verdict,
-                Run.started_at,
-                Run.finished_at,
-                self._seconds().label("seconds"),
-                func.row_number().over(partition_by=at_station, order_by=order).label("nth"),
-                func.lead(Run.id).over(partition_by=at_station, order_by=order).label("next"),
-                func.row_number().over(partition_by=on_line, order_by=order).label("line_nth"),
-                func.lead(Run.id).over(partition_by=on_line, order_by=order).label("line_next"),
-            )
-            .where(*self.conditions())
-            .subquery("ranked")
+        group = ["station_id", *LIMITS]
+        edges = self._edge_conditions()
+        raw = [] if edges is None else [count_contributions(group, edges)]
+        rows = self._merged(
+            ReportCounts, COUNT_VALUES, group, self._rolled_conditions(ReportCounts), raw
         )
-        c = ranked.c
-        passed = c.verdict == "pass"
-
-        def count_if(*conditions: ColumnElement[bool]) -> ColumnElement[int]:
-            return func.sum(case((and_(*conditions), 1), else_=0))
-
-        stmt = (
-            select(
-                c.station_id,
-                func.count().label("runs"),
-                count_if(passed).label("runs_passed"),
-                func.sum(c.seconds).label("seconds"),
-                func.min(c.started_at).label("first_start"),
-                func.max(c.finished_at).label("last_finish"),
-                count_if(c.nth == 1).label("units"),
-                count_if(c.nth == 1, passed).label("first_pass"),
-                count_if(c.next.is_(None), passed).label("final_pass"),
-                count_if(c.line_nth == 1).label("line_units"),
-                count_if(c.line_nth == 1, passed).label("line_first_pass"),
-                count_if(c.line_next.is_(None), passed).label("line_final_pass"),
-            )
-            .group_by(c.station_id)
-            .order_by(c.station_id)
-        )
-        return list(self.session.execute(stmt).all())
+        return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
     # -- failures ----------------------------------------------------------------------
 
-    def first_failures(self) -> list[Row[str, str, str, int]]:
+    def first_failures(self) -> list[Row[Any]]:
         """Failing runs per (first failure code, station, operator)."""
-        stmt = (
-            select(RunFailure.code, Run.station_id, Run.operator_id, func.count().label("n"))
-            .join(Run, RunFailure.run_pk == Run.id)
-            .where(RunFailure.position == 0, Run.verdict == "fail", *self.conditions())
-            .group_by(RunFailure.code, Run.station_id, Run.operator_id)
+        group = ["code", "station_id", "operator_id"]
+        edges = self._edge_conditions()
+        raw = [] if edges is None else [failure_contributions(group, edges)]
+        return self._merged(
+            ReportFailures, FAILURE_VALUES, group, self._rolled_conditions(ReportFailures), raw
         )
-        return list(self.session.execute(stmt).all())
 
     # -- parameters --------------------------------------------------------------------
 
-    def _value(self, spec: ParameterSpec) -> ColumnElement[float]:
-        if spec.source == "poses":
-            column: ColumnElement[float] = getattr(Pose, spec.column)
-            return column
-        if spec.family == "gyro_bias":
-            bias: ColumnElement[float] = Run.gyro[("bias", spec.column)].as_float()
-            return bias
-        run_column: ColumnElement[float] = getattr(Run, spec.column)
-        return run_column
+    def parameters(self, bounds: Bounds) -> list[Row[Any]]:
+        """Per parameter: n, Σ(x − c), Σ(x − c)², min, max, out of limits, marginal and
+        histogram bins against ``bounds`` (:func:`db.rollups.parameter_contributions`).
 
-    def family_bins(self, family: str, bounds: Bounds) -> list[Row[Any]]:
-        """The parameters of one limits family (up to three axes), in one scan.
-
-        Grouped by the histogram bin of every axis at once (bins ``b0, b1, …``), each
-        group holds per axis ``i``: count ``n{i}``, Σ(x − c) ``sum{i}``, Σ(x − c)²
-        ``squares{i}`` (c the centre of the tolerance), ``min{i}``, ``max{i}``, values out
-        of limits ``outside{i}`` and marginal values ``marginal{i}``. Sums, counts, minima
-        and maxima add up across groups, so the caller merges the groups (at most 30³,
-        in practice a few hundred) into each axis' statistics and histogram. Poses are
-        grouped by station as well, which gives the pose count per station.
+        The roll-ups answer when they were counted with ``bounds``; otherwise every run
+        in range is aggregated.
         """
-        specs = _of_family(family)
-        lower, upper = bounds[family]
-        start, width, bins = histogram_bins(lower, upper)
-        zone_low, zone_high = marginal_zones(lower, upper)
-        low, high = tolerance(lower, upper)
-        centre = (low + high) / 2
-        picked: list[ColumnElement[Any]] = [
-            self._value(spec).label(f"x{i}") for i, spec in enumerate(specs)
-        ]
-        if specs[0].source == "poses":
-            picked.append(Run.station_id.label("station_id"))
-        values = select(*picked)
-        if specs[0].source == "poses":
-            values = values.select_from(Pose).join(Run, Pose.run_pk == Run.id)
-        values = values.where(*self.conditions())
-        if family == "gyro_bias":
-            # OFFSET 0 keeps PostgreSQL from inlining the values into every aggregate (a
-            # bias would be read out of its JSON document thirty times a row); columns
-            # are inlined, which keeps the scan parallel.
-            values = values.offset(0)
-        v = values.subquery("v")
-        groups: list[ColumnElement[Any]] = []
-        columns: list[ColumnElement[Any]] = []
-        for i in range(len(specs)):
-            x = v.c[f"x{i}"]
-            groups.append(
-                case(
-                    (x < start, 0),
-                    (x >= start + width * bins, bins - 1),
-                    else_=cast(func.floor((x - start) / width), Integer),
-                ).label(f"b{i}")
-            )
-            outside = or_(
-                false() if lower is None else x < lower, false() if upper is None else x > upper
-            )
-            near = or_(
-                false() if lower is None else x < zone_low,
-                false() if upper is None else x > zone_high,
-            )
-            deviation = x - centre
-            columns += [
-                func.count(x).label(f"n{i}"),
-                func.sum(deviation).label(f"sum{i}"),
-                func.sum(deviation * deviation).label(f"squares{i}"),
-                func.min(x).label(f"min{i}"),
-                func.max(x).label(f"max{i}"),
-                func.sum(case((outside, 1), else_=0)).label(f"outside{i}"),
-                func.sum(case((and_(~outside, near), 1), else_=0)).label(f"marginal{i}"),
-            ]
-        if specs[0].source == "poses":
-            # Grouped by station too: the pose counts per station come with it.
-            groups.append(v.c.station_id)
-        stmt = select(*groups, *columns).group_by(*groups)
-        return list(self.session.execute(stmt).all())
+        if stored_bounds(self.session.connection()) == bounds:
+            rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
+        else:
+            rolled, raw = None, self.conditions()
+        selects = [] if raw is None else parameter_contributions([], raw, bounds)
+        return self._merged(ReportParameters, PARAMETER_VALUES, ["parameter"], rolled, selects)
 
     # -- control charts ----------------------------------------------------------------
 
+    def first_moving_ranges(self) -> Row[Any] | None:
+        """The moving ranges of the first run in range with coefficients (to the run
+        before the range)."""
+        previous = aliased(Run, name="previous")
+        stmt = (
+            select(
+                *(
+                    func.abs(getattr(Run, name) - getattr(previous, name)).label(name)
+                    for name in COEFFICIENTS
+                )
+            )
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .outerjoin(previous, previous.id == RunFacts.chart_previous)
+            .where(Run.offset_x.is_not(None), *self.conditions())
+            .order_by(Run.started_at, Run.id)
+            .limit(1)
+        )
+        return self.session.execute(stmt).one_or_none()
+
     def chart_limits(self) -> Row[Any]:
-        """Count, mean and mean moving range of every coefficient, in time order."""
+        """Count, mean and mean moving range of every coefficient, in time order, over
+        the runs in range (for a range narrowed by station, operator or lot)."""
         order = (Run.started_at, Run.id)
         columns = [getattr(Run, name) for name in COEFFICIENTS]
         lagged = (
@@ -309,44 +286,45 @@ class ReportQueries:
     # -- units -------------------------------------------------------------------------
 
     def latest_runs(self, limit: int | None) -> list[Row[Any]]:
-        """Each unit's latest run with its run count and first failure code, newest first."""
-        ranked = (
-            select(
-                Run.id,
-                Run.serial,
-                Run.verdict,
-                Run.started_at,
-                Run.station_id,
-                Run.operator_id,
-                func.row_number()
-                .over(partition_by=Run.serial, order_by=(Run.started_at.desc(), Run.id.desc()))
-                .label("nth"),
-                func.count().over(partition_by=Run.serial).label("runs"),
-            )
-            .where(*self.conditions())
-            .subquery("ranked")
-        )
+        """The units whose latest run is in range, with that run, their run count and its
+        first failure code, newest first."""
+        columns: list[Any] = [
+            Run.id,
+            Run.serial,
+            Run.verdict,
+            Run.started_at,
+            Run.station_id,
+            Run.operator_id,
+            RunFacts.unit_runs.label("runs"),
+            RunFacts.first_failure.label("code"),
+        ]
         stmt = (
-            select(ranked, RunFailure.code)
-            .outerjoin(RunFailure, and_(RunFailure.run_pk == ranked.c.id, RunFailure.position == 0))
-            .where(ranked.c.nth == 1)
-            .order_by(ranked.c.started_at.desc(), ranked.c.id.desc())
+            select(*columns)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .where(RunFacts.line_latest, *self.conditions())
+            .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
         )
         return list(self.session.execute(stmt).all())
 
-    def limits_profiles(self) -> list[LimitsRef]:
-        """The limits profiles the runs in range were judged by."""
-        stmt = (
-            select(Run.limits_name, Run.limits_version, Run.limits_sha256)
-            .where(*self.conditions())
-            .distinct()
-            .order_by(Run.limits_name, Run.limits_version, Run.limits_sha256)
-        )
-        return [
-            LimitsRef(name=name, version=version, sha256=sha)
-            for name, version, sha in self.session.execute(stmt)
-        ]
+
+def split_days(
+    since: datetime | None, until: datetime | None
+) -> tuple[tuple[int | None, int | None] | None, list[tuple[datetime, datetime]]]:
+    """The whole UTC days in ``[since, until)`` as ``(first, end)`` day numbers (``None``
+    for an open side; ``None`` altogether when no day is whole) and the partial days at
+    the ends as time spans."""
+    first = None if since is None else -((EPOCH - since) // DAY)
+    end = None if until is None else (until - EPOCH) // DAY
+    edges = []
+    if since is not None and first is not None:
+        if until is not None and end is not None and first >= end:
+            return None, [(since, until)] if since < until else []
+        if since < EPOCH + first * DAY:
+            edges.append((since, EPOCH + first * DAY))
+    if until is not None and end is not None and EPOCH + end * DAY < until:
+        edges.append((EPOCH + end * DAY, until))
+    return (first, end), edges
 
 
 # -- assembling the report -------------------------------------------------------------
@@ -369,27 +347,21 @@ class _Counts:
     poses: int
 
 
-def _station(row: Row[Any], poses: int) -> _Counts:
-    return _Counts(
-        runs=int(row.runs),
-        runs_passed=int(row.runs_passed),
-        units=int(row.units),
-        first_pass=int(row.first_pass),
-        final_pass=int(row.final_pass),
-        seconds=float(row.seconds),
-        poses=poses,
-    )
+def _total(rows: Sequence[Row[Any]], column: str) -> int:
+    return sum(int(row._mapping[column]) for row in rows)
 
 
-def _line(rows: Sequence[Row[Any]], poses: int) -> _Counts:
+def _counts(rows: Sequence[Row[Any]], prefix: str) -> _Counts:
+    """The counts of ``rows`` of :meth:`ReportQueries.station_counts`, units counted by
+    the ``prefix`` columns (``line_``: on the line, ``''``: at the station)."""
     return _Counts(
-        runs=sum(int(r.runs) for r in rows),
-        runs_passed=sum(int(r.runs_passed) for r in rows),
-        units=sum(int(r.line_units) for r in rows),
-        first_pass=sum(int(r.line_first_pass) for r in rows),
-        final_pass=sum(int(r.line_final_pass) for r in rows),
-        seconds=sum(float(r.seconds) for r in rows) if rows else None,
-        poses=poses,
+        runs=_total(rows, "runs"),
+        runs_passed=_total(rows, "runs_passed"),
+        units=_total(rows, f"{prefix}units"),
+        first_pass=_total(rows, f"{prefix}first_pass"),
+        final_pass=_total(rows, f"{prefix}final_pass"),
+        seconds=_total(rows, "duration_ms") / 1000 if rows else None,
+        poses=_total(rows, "poses"),
     )
 
 
@@ -425,11 +397,12 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     return float((end - start).total_seconds() / 3600)
 
 
-def _pareto(rows: Sequence[Row[str, str, str, int]]) -> list[ParetoEntry]:
+def _pareto(rows: Sequence[Row[Any]]) -> list[ParetoEntry]:
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
-    for code, station, operator, n in rows:
+    for row in rows:
+        code, station, operator, n = row.code, row.station_id, row.operator_id, int(row.runs)
         counts[code] += n
         stations[code][station] += n
         operators[code][operator] += n
@@ -449,23 +422,16 @@ def _pareto(rows: Sequence[Row[str, str, str, int]]) -> list[ParetoEntry]:
     return entries
 
 
-def _parameter(
-    spec: ParameterSpec, axis: int, bounds: Bounds, groups: Sequence[Row[Any]]
-) -> ParameterStats:
-    """Merge the grouped rows of :meth:`ReportQueries.family_bins` for one axis."""
+def _parameter(spec: ParameterSpec, bounds: Bounds, row: RowMapping | None) -> ParameterStats:
+    """One parameter's statistics from its row of :meth:`ReportQueries.parameters`."""
     lower, upper = bounds[spec.family]
-    start, width, n_bins = histogram_bins(lower, upper)
+    start, width, _ = histogram_bins(lower, upper)
     low, high = tolerance(lower, upper)
-    counts = [0] * n_bins
-    rows = [row._mapping for row in groups if row._mapping[f"n{axis}"]]
-    for row in rows:
-        counts[row[f"b{axis}"]] += int(row[f"n{axis}"])
-    count = sum(counts)
-    mean, std = shifted_moments(
-        count,
-        sum(float(row[f"sum{axis}"]) for row in rows),
-        sum(float(row[f"squares{axis}"]) for row in rows),
-        (low + high) / 2,
+    count = 0 if row is None else int(row["n"])
+    mean, std = (
+        shifted_moments(count, float(row["sum"]), float(row["squares"]), (low + high) / 2)
+        if row is not None and count
+        else (None, None)
     )
     return ParameterStats(
         name=spec.name,
@@ -476,26 +442,66 @@ def _parameter(
         count=count,
         mean=mean,
         std=std,
-        min=min((float(row[f"min{axis}"]) for row in rows), default=None),
-        max=max((float(row[f"max{axis}"]) for row in rows), default=None),
+        min=None if row is None else float(row["min"]),
+        max=None if row is None else float(row["max"]),
         cp=cp(std, lower, upper),
         cpk=cpk(mean, std, lower, upper),
-        out_of_limits=sum(int(row[f"outside{axis}"]) for row in rows),
-        marginal=sum(int(row[f"marginal{axis}"]) for row in rows),
-        histogram=Histogram(start=start, width=width, counts=counts),
+        out_of_limits=0 if row is None else int(row["outside"]),
+        marginal=0 if row is None else int(row["marginal"]),
+        histogram=Histogram(
+            start=start,
+            width=width,
+            counts=[0 if row is None else int(row[h]) for h in HISTOGRAM],
+        ),
     )
 
 
-def _of_family(family: str) -> list[ParameterSpec]:
-    return [spec for spec in PARAMETERS if spec.family == family]
+@dataclass(frozen=True)
+class _ChartLimits:
+    """What the control charts' limits are computed from: runs with coefficients, and
+    per coefficient its mean and mean moving range (``None``: fewer than two runs)."""
+
+    count: int
+    means: Mapping[str, float | None]
+    mr_bars: Mapping[str, float | None]
 
 
-def _charts(limits: Row[Any], points: Sequence[Row[Any]]) -> list[ControlChart]:
-    charts = []
-    units = {name: spec.unit for name, spec in ((s.name, s) for s in PARAMETERS)}
+def _chart_limits(
+    queries: ReportQueries, counts: Sequence[Row[Any]], stats: Mapping[str, ParameterStats]
+) -> _ChartLimits:
+    """The control-chart limits of the runs in range, in their time order.
+
+    A range narrowed only in time holds consecutive runs of the line: their moving
+    ranges are the stored ones (each run's to the line's previous run with
+    coefficients) but the first run's, whose previous run lies before the range. Runs
+    narrowed by station, operator or lot are ordered and differenced in SQL.
+    """
+    f = queries.filter
+    if f.station_id is not None or f.operator_id is not None or f.lot is not None:
+        row = queries.chart_limits()._mapping
+        return _ChartLimits(
+            count=int(row["n"]),
+            means={name: row[name] for name in COEFFICIENTS},
+            mr_bars={name: row[f"mr_{name}"] for name in COEFFICIENTS},
+        )
+    n = _total(counts, "charted")
+    first = queries.first_moving_ranges() if n > 1 else None
+    mr_bars: dict[str, float | None] = {}
     for name in COEFFICIENTS:
-        mean, mr_bar = getattr(limits, name), getattr(limits, f"mr_{name}")
-        if mean is None:
+        total = sum(float(row._mapping[f"mr_{name}"]) for row in counts)
+        before = None if first is None else first._mapping[name]
+        mr_bars[name] = (total - (before or 0.0)) / (n - 1) if n > 1 else None
+    return _ChartLimits(
+        count=n, means={name: stats[name].mean for name in COEFFICIENTS}, mr_bars=mr_bars
+    )
+
+
+def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlChart]:
+    charts = []
+    units = {spec.name: spec.unit for spec in PARAMETERS}
+    for name in COEFFICIENTS:
+        mean, mr_bar = limits.means[name], limits.mr_bars[name]
+        if mean is None or not limits.count:
             continue
         lcl = ucl = mr_ucl = None
         if mr_bar is not None:
@@ -504,7 +510,7 @@ def _charts(limits: Row[Any], points: Sequence[Row[Any]]) -> list[ControlChart]:
             ControlChart(
                 name=name,
                 unit=units[name],
-                count=int(limits.n),
+                count=limits.count,
                 mean=float(mean),
                 mr_bar=None if mr_bar is None else float(mr_bar),
                 lcl=lcl,
@@ -540,16 +546,21 @@ def eol_report(
     range; ``unit_limit`` cuts the unit list to the latest units.
     """
     queries = ReportQueries(session, filter)
-    used = queries.limits_profiles()
+    counts = queries.station_counts()
+    used = [
+        LimitsRef(name=name, version=version, sha256=sha)
+        for name, version, sha in sorted(
+            {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
+        )
+    ]
     profile, bounds_source = choose_profile(used, profiles or load_profiles())
     bounds = profile_bounds(profile)
-    stations = queries.station_counts()
-    hours = _hours(filter, stations)
-    families = {family: queries.family_bins(family, bounds) for family in FAMILIES}
-    poses: dict[str, int] = defaultdict(int)
-    for row in families["pose_noise"]:
-        poses[row.station_id] += row.n0
-    axes = {spec.name: i for family in FAMILIES for i, spec in enumerate(_of_family(family))}
+    hours = _hours(filter, counts)
+    rows = {row.parameter: row._mapping for row in queries.parameters(bounds)}
+    parameters = [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS]
+    by_station: dict[str, list[Row[Any]]] = defaultdict(list)
+    for row in counts:
+        by_station[row.station_id].append(row)
     units = [
         UnitVerdict(
             serial=row.serial,
@@ -563,24 +574,20 @@ def eol_report(
         )
         for row in queries.latest_runs(unit_limit)
     ]
+    limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
-        summary=_summary(_line(stations, sum(poses.values())), hours),
+        summary=_summary(_counts(counts, "line_"), hours),
         stations=[
-            StationSummary(
-                station_id=row.station_id,
-                summary=_summary(_station(row, poses[row.station_id]), hours),
-            )
-            for row in stations
+            StationSummary(station_id=station, summary=_summary(_counts(rows_, ""), hours))
+            for station, rows_ in sorted(by_station.items())
         ],
         pareto=_pareto(queries.first_failures()),
-        parameters=[
-            _parameter(spec, axes[spec.name], bounds, families[spec.family]) for spec in PARAMETERS
-        ],
-        control_charts=_charts(queries.chart_limits(), queries.chart_points(chart_points)),
+        parameters=parameters,
+        control_charts=_charts(limits, queries.chart_points(chart_points)),
         units=units,
-        units_total=sum(int(row.line_units) for row in stations),
+        units_total=_total(counts, "listed"),
     )

@@ -25,6 +25,7 @@ from db.base import Base
 from db.engine import open_database
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey
+from db.rollups import lock_submissions, record_run
 from db.units import latest_run_pks, record_latest
 from station.errors import CalstationError, InputError
 from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
@@ -65,6 +66,7 @@ class RunQuery:
 
     serial: str | None = None
     station_id: str | None = None
+    lot: str | None = None
     verdict: Verdict | None = None
     since: datetime | None = None
     until: datetime | None = None
@@ -81,8 +83,13 @@ class RunPage:
 
 
 def record_sha256(record: RunRecord) -> str:
-    """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash."""
-    return hashlib.sha256(record.model_dump_json().encode()).hexdigest()
+    """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
+
+    A record without a lot is hashed without the field, as before the field existed, so
+    a retry from an older station matches the run it stored.
+    """
+    unset = {"lot"} if record.lot is None else None
+    return hashlib.sha256(record.model_dump_json(exclude=unset).encode()).hexdigest()
 
 
 def key_sha256(key: str) -> str:
@@ -128,11 +135,14 @@ class RunRepository:
         The unique constraint on ``run_id`` decides (``INSERT … ON CONFLICT DO
         NOTHING``), so concurrent duplicates cannot both land. A retry of the same record
         returns the stored run; the same UUID with other content raises
-        :class:`RunConflictError`.
+        :class:`RunConflictError`. A new run brings the report's facts and roll-ups up to
+        date in the same transaction (:func:`db.rollups.record_run`); submissions are
+        serialised for that (:func:`db.rollups.lock_submissions`).
         """
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
         row = run_row(record, received_at=received_at, record_sha256=digest)
+        lock_submissions(self.session.connection())
         pk = self.session.execute(self._insert_new_run(), row).scalar_one_or_none()
         if pk is None:
             stored_digest = self.session.scalars(
@@ -148,6 +158,7 @@ class RunRepository:
         self.session.execute(insert(_POSES), [pose_row(pk, pose) for pose in record.poses])
         if record.failures:
             self.session.execute(insert(_FAILURES), failure_rows(pk, record))
+        record_run(self.session.connection(), pk)
         # Already validated: build the answer without validating it again.
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
         record_latest(self.session, [(pk, stored)])
@@ -196,6 +207,8 @@ class RunRepository:
             stmt = stmt.where(Run.serial == query.serial)
         if query.station_id is not None:
             stmt = stmt.where(Run.station_id == query.station_id)
+        if query.lot is not None:
+            stmt = stmt.where(Run.lot == query.lot)
         if query.verdict is not None:
             stmt = stmt.where(Run.verdict == query.verdict)
         if query.since is not None:

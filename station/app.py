@@ -296,6 +296,7 @@ class StationApp:
                 serial=serial,
                 station_id=self.config.station_id,
                 operator_id=self.config.operator_id,
+                lot=self.config.lot,
                 started_at=datetime.now(UTC),
                 poses=(*run_settings.poses, run_settings.verification_pose),
             )

@@ -27,6 +27,8 @@ class StationConfig(BaseSettings):
 
     station_id: str = Field("station-1", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
     operator_id: str = Field("operator", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    #: The production lot of the units being calibrated; recorded on every run.
+    lot: str | None = Field(None, pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
     port: str | None = None
     limits_file: Path | None = None
     limits_profile: str | None = None

@@ -37,6 +37,7 @@ class RunJournal(BaseModel):
     serial: str
     station_id: str
     operator_id: str
+    lot: str | None = None
     started_at: datetime
     poses: tuple[str, ...]
     captures: dict[int, Capture] = {}

@@ -228,6 +228,8 @@ class _RunHeader(_Record):
     serial: Serial
     station_id: Identifier
     operator_id: Identifier
+    #: The unit's production lot, when the station was told it (``calstation run --lot``).
+    lot: Identifier | None = None
     started_at: UtcDatetime
     finished_at: UtcDatetime
     software_version: Identifier
@@ -295,6 +297,7 @@ class UnitCalibration(_Record):
     calibrated_at: Annotated[datetime, Field(description="when the latest run finished (UTC)")]
     station_id: str
     operator_id: str
+    lot: Annotated[str | None, Field(description="the unit's production lot, if known")]
     software_version: str
     model: Model
     limits: LimitsRef
@@ -319,6 +322,7 @@ class UnitCalibration(_Record):
             calibrated_at=run.finished_at,
             station_id=run.station_id,
             operator_id=run.operator_id,
+            lot=run.lot,
             software_version=run.software_version,
             model=run.model,
             limits=run.limits,

@@ -604,6 +604,7 @@ class UnitRun:
             serial=self.journal.serial,
             station_id=self.journal.station_id,
             operator_id=self.journal.operator_id,
+            lot=self.journal.lot,
             started_at=self.journal.started_at,
             finished_at=_now(),
             software_version=__version__,

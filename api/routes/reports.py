@@ -48,6 +48,7 @@ async def get_eol_report(
     until: Annotated[str | None, Query(alias="to", description="end (exclusive)")] = None,
     station: Annotated[str | None, Query(description="only this station")] = None,
     operator: Annotated[str | None, Query(description="only this operator")] = None,
+    lot: Annotated[str | None, Query(description="only this production lot")] = None,
     format: Literal["json", "csv", "html"] = "json",
     units: Annotated[int | None, Query(ge=1, description="list only the latest N units")] = None,
 ) -> Response:
@@ -57,6 +58,7 @@ async def get_eol_report(
         until=parse_moment(until, name="to") if until else None,
         station_id=station,
         operator_id=operator,
+        lot=lot,
     )
     # A transactional session: the report sets its PostgreSQL planner options locally.
     report = await repository.run(lambda r: eol_report(r.session, report_filter, unit_limit=units))

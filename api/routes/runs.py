@@ -27,6 +27,9 @@ async def list_runs(
     repository: ReaderDep,
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
     station_id: Annotated[str | None, Query(max_length=64)] = None,
+    lot: Annotated[
+        str | None, Query(max_length=64, description="the unit's production lot")
+    ] = None,
     verdict: Verdict | None = None,
     since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
     until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
@@ -37,6 +40,7 @@ async def list_runs(
     query = RunQuery(
         serial=serial,
         station_id=station_id,
+        lot=lot,
         verdict=verdict,
         since=since,
         until=until,

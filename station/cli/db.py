@@ -1,16 +1,24 @@
-"""``calstation db upgrade`` and ``calstation keys create``: the results database by hand."""
+"""``calstation db upgrade``, ``calstation db rebuild-report`` and ``calstation keys
+create``: the results database by hand."""
 
+from pathlib import Path
 from typing import Annotated
 
 import typer
 from pydantic import TypeAdapter, ValidationError
-from sqlalchemy import make_url
+from sqlalchemy import func, make_url, select
 
-from db import DatabaseSettings, repository_transaction, upgrade_database
+from db import DatabaseSettings, open_database, repository_transaction, upgrade_database
+from db.models import Run
+from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
+from station.limits import load_profile
 from station.records import Identifier
+from station.report.bounds import profile_bounds
 
-db_app = typer.Typer(help="The results database: schema migrations.", no_args_is_help=True)
+db_app = typer.Typer(
+    help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True
+)
 keys_app = typer.Typer(help="API keys of the stations that submit over HTTP.", no_args_is_help=True)
 
 DatabaseUrlOption = Annotated[
@@ -25,6 +33,38 @@ DatabaseUrlOption = Annotated[
 
 def _shown(url: str) -> str:
     return make_url(url).render_as_string(hide_password=True)
+
+
+@db_app.command("rebuild-report")
+def db_rebuild_report(
+    limits: Annotated[
+        Path | None,
+        typer.Option("--limits", help="Limits profiles file (default: the shipped profiles)."),
+    ] = None,
+    profile: Annotated[
+        str | None, typer.Option("--profile", help="Profile to bin the parameters against.")
+    ] = None,
+    database_url: DatabaseUrlOption = None,
+) -> None:
+    """Rebuild the end-of-line report's facts and roll-ups from the stored runs.
+
+    The parameter roll-ups are binned against the profile's limits (default: the
+    shipped default profile): run it when reports measure against other limits.
+    """
+    chosen = load_profile(limits, profile)
+    url = database_url or DatabaseSettings().url()
+    database = open_database(url)
+    try:
+        with database.engine.begin() as connection:
+            lock_submissions(connection)
+            rebuild(connection, profile_bounds(chosen))
+            runs = connection.scalar(select(func.count()).select_from(Run))
+    finally:
+        database.dispose()
+    out.print(
+        f"report roll-ups of {_shown(url)} rebuilt from {runs} runs, "
+        f"parameters binned against {chosen.name} v{chosen.version}"
+    )
 
 
 @db_app.command("upgrade")

@@ -25,6 +25,7 @@ def report(
     until: Annotated[str | None, typer.Option("--to", help="End (exclusive).")] = None,
     station: Annotated[str | None, typer.Option(help="Only this station.")] = None,
     operator: Annotated[str | None, typer.Option(help="Only this operator.")] = None,
+    lot: Annotated[str | None, typer.Option(help="Only this production lot.")] = None,
     format: Annotated[
         str, typer.Option("--format", help=f"One of: {', '.join(FORMATS)}.")
     ] = "text",
@@ -53,6 +54,7 @@ def report(
         until=parse_moment(until, name="--to") if until else None,
         station_id=station,
         operator_id=operator,
+        lot=lot,
     )
     profiles = load_profiles(limits)
     url = database_url or DatabaseSettings().url()

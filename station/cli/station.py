@@ -18,6 +18,9 @@ ConfigOption = Annotated[
 ]
 StationOption = Annotated[str | None, typer.Option("--station", help="Station id.")]
 OperatorOption = Annotated[str | None, typer.Option("--operator", help="Operator id.")]
+LotOption = Annotated[
+    str | None, typer.Option("--lot", help="Production lot of the units (recorded on each run).")
+]
 LimitsOption = Annotated[Path | None, typer.Option("--limits", help="Limits profiles file (TOML).")]
 ProfileOption = Annotated[str | None, typer.Option("--profile", help="Limits profile name.")]
 ServerOption = Annotated[
@@ -45,6 +48,7 @@ def run_command(
     config_file: ConfigOption = None,
     station: StationOption = None,
     operator: OperatorOption = None,
+    lot: LotOption = None,
     limits: LimitsOption = None,
     profile: ProfileOption = None,
     server: ServerOption = None,
@@ -58,6 +62,7 @@ def run_command(
             "port": port,
             "station_id": station,
             "operator_id": operator,
+            "lot": lot,
             "limits_file": limits,
             "limits_profile": profile,
             "server_url": server,
@@ -89,11 +94,16 @@ def demo_command(
     config_file: ConfigOption = None,
     station: StationOption = None,
     operator: OperatorOption = None,
+    lot: LotOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     config = load_config(
         config_file,
-        {"station_id": station or "demo-station", "operator_id": operator or "demo-operator"},
+        {
+            "station_id": station or "demo-station",
+            "operator_id": operator or "demo-operator",
+            "lot": lot or "demo-lot",
+        },
     )
     port = config.data_dir.expanduser() / "demo" / "putter"
     config = config.model_copy(update={"port": str(port)})

@@ -20,31 +20,35 @@ class _Part(BaseModel):
 
 
 class ReportFilter(_Part):
-    """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time)."""
+    """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time),
+    and only this station, operator or production lot when given."""
 
     since: AwareDatetime | None = None
     until: AwareDatetime | None = None
     station_id: str | None = None
     operator_id: str | None = None
+    lot: str | None = None
 
 
 class Summary(_Part):
     """Counts and yields of the runs in range.
 
-    A unit's first and latest run are its first and latest *in range* (and at the station,
-    in a per-station summary).
+    A unit's first and latest run are its first and latest run *ever* (on the line; at
+    the station, in a per-station summary), by start time. The units are those whose
+    first run is in range (the cohort of first-pass and final yield); retests are the
+    runs in range that are not a unit's first.
     """
 
     runs: int
     runs_passed: int
-    units_tested: int
+    units_tested: int = Field(description="units whose first run is in range")
     units_passed: int = Field(description="units whose latest run passed")
     units_failed: int
     first_pass_units: int = Field(description="units whose first run passed")
     report_yield: float | None = Field(description="passing runs / runs")
     first_pass_yield: float | None = Field(description="units whose first run passed / units")
     final_yield: float | None = Field(description="units whose latest run passed / units")
-    retests: int = Field(description="runs beyond each unit's first")
+    retests: int = Field(description="runs that are not a unit's first")
     retest_rate: float | None = Field(description="retests / units")
     hours: float | None = Field(description="length of the range, hours")
     units_per_hour: float | None
@@ -124,7 +128,8 @@ class ControlChart(_Part):
 
 
 class UnitVerdict(_Part):
-    """A unit's final state for the ship/hold decision."""
+    """A unit's final state for the ship/hold decision: its latest run (``runs``: every
+    run of the unit)."""
 
     serial: str
     disposition: Disposition
@@ -149,4 +154,6 @@ class EolReport(_Part):
     parameters: list[ParameterStats]
     control_charts: list[ControlChart]
     units: list[UnitVerdict]
-    units_total: int = Field(description="units in range (the list may be cut to the latest)")
+    units_total: int = Field(
+        description="units whose latest run is in range (the list may be cut to the latest)"
+    )

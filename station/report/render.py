@@ -116,6 +116,7 @@ def as_text(report: EolReport) -> str:
             ("to", moment(f.until) if f.until else None),
             ("station", f.station_id),
             ("operator", f.operator_id),
+            ("lot", f.lot),
         )
         if value
     )

@@ -25,7 +25,9 @@ def test_health_answers_when_the_database_does(client: httpx.Client) -> None:
 
 def test_a_unit_shows_its_latest_run(client: httpx.Client, database: Database) -> None:
     first = make_record(verdict="fail", started_at=T0)
-    retest = make_record(offset=(2050.0, 2040.0, 2030.0), started_at=T0 + timedelta(hours=1))
+    retest = make_record(
+        offset=(2050.0, 2040.0, 2030.0), started_at=T0 + timedelta(hours=1), lot="L2611-07"
+    )
     _store(database, retest, first)
     unit = client.get(f"/api/v1/units/{first.serial}").json()
     assert unit["serial"] == first.serial
@@ -35,6 +37,7 @@ def test_a_unit_shows_its_latest_run(client: httpx.Client, database: Database) -
     assert unit["matrix"][0][0] == pytest.approx(1 / 813.95)
     assert unit["calibrated_at"] == "2026-11-02T09:01:35Z"
     assert unit["station_id"] == retest.station_id
+    assert unit["lot"] == "L2611-07"
     assert unit["failures"] == []
     history = client.get(f"/api/v1/units/{first.serial}/runs").json()
     assert [r["run_id"] for r in history["data"]] == [str(first.run_id), str(retest.run_id)]

@@ -3,12 +3,14 @@
 import csv
 import io
 import re
+from datetime import timedelta
 
 import httpx
 import pytest
 
-from db import Database
+from db import Database, RunRepository
 from tests.db.eol_data import insert_line_history
+from tests.db.records import T0, make_record
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
 
@@ -95,3 +97,23 @@ def test_dashboard_reloads_itself_and_draws_its_charts(client: httpx.Client) -> 
     assert '<meta http-equiv="refresh" content="30">' in page
     assert "Line dashboard" in page
     assert "<svg" in page  # the Pareto, even with no run today
+
+
+def test_lot_filters_the_report_and_the_run_list_and_shows_on_the_pages(
+    client: httpx.Client, database: Database
+) -> None:
+    with database.session() as session:
+        repository = RunRepository(session)
+        for i, lot in enumerate(["L-7", "L-8", None]):
+            repository.submit(
+                make_record(serial=f"U{i}", lot=lot, started_at=T0 + timedelta(minutes=i))
+            )
+        session.commit()
+    report = client.get("/api/v1/reports/eol", params={**RANGE, "lot": "L-7"}).json()
+    assert (report["summary"]["runs"], report["filter"]["lot"]) == (1, "L-7")
+    assert [u["serial"] for u in report["units"]] == ["U0"]
+    runs = client.get("/api/v1/runs", params={"lot": "L-8"}).json()
+    assert [(r["serial"], r["lot"]) for r in runs["data"]] == [("U1", "L-8")]
+    html = client.get("/api/v1/reports/eol", params={**RANGE, "lot": "L-7", "format": "html"})
+    assert "· lot L-7" in html.text
+    assert "<tr><th>lot</th><td>L-8</td></tr>" in client.get("/api/v1/units/U1/certificate").text

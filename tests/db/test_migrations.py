@@ -10,7 +10,8 @@ import pytest
 from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
-from sqlalchemy import insert, inspect, make_url, select, text
+from sqlalchemy import func, insert, inspect, make_url, select, text
+from sqlalchemy.orm import Session
 
 from db import (
     Database,
@@ -23,9 +24,10 @@ from db import (
 from db.base import Base
 from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
-from db.models import Run, RunFailure, Unit
+from db.models import ReportCounts, Run, RunFailure, Unit
 from db.units import calibration_json
 from tests.db.records import T0, make_record
+from tests.db.test_rollups import rollup_rows
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
@@ -87,11 +89,11 @@ def test_a_server_database_behind_head_is_refused_with_the_fix(empty_url: str) -
 
 def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> None:
     engine = make_engine(empty_url)
-    upgrade(engine, "0002")
+    upgrade(engine, "0003")
     first = make_record(verdict="fail", started_at=T0)
     retest = make_record(verdict="pass", started_at=T0 + timedelta(hours=1))
     other = make_record(serial="PT-000002", started_at=T0 + timedelta(hours=2))
-    with engine.begin() as connection:  # runs stored by the software of revision 0002
+    with engine.begin() as connection:  # runs stored before the units table existed
         for record in (retest, first, other):
             row = run_row(record, received_at=T0, record_sha256="0" * 64)
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
@@ -108,3 +110,27 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
     }
     assert f'"run_id":"{retest.run_id}"' in stored["PT-000001"]
     engine.dispose()
+
+
+def test_the_report_migration_builds_the_roll_ups_of_the_runs_already_stored(
+    empty_url: str,
+) -> None:
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine)
+        with Session(engine) as session:
+            for hour, serial in enumerate(["U1", "U2", "U1"]):
+                RunRepository(session).submit(
+                    make_record(serial=serial, started_at=T0 + timedelta(hours=hour))
+                )
+            session.commit()
+            submitted = rollup_rows(session)
+        with engine.begin() as connection:
+            command.downgrade(alembic_config(connection), "0002")
+        assert "run_facts" not in inspect(engine).get_table_names()
+        upgrade(engine)
+        with Session(engine) as session:
+            assert rollup_rows(session) == submitted
+            assert session.scalar(select(func.sum(ReportCounts.poses))) == 3 * 7
+    finally:
+        engine.dispose()

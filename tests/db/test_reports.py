@@ -3,14 +3,17 @@
 import itertools
 import math
 import statistics
+from datetime import timedelta
 
 import pytest
 from sqlalchemy.orm import Session
 
+from db import RunQuery, RunRepository
 from db.reports import eol_report
 from station.report.bounds import default_bounds
 from station.report.model import EolReport, ReportFilter
 from tests.db.eol_data import IN_RANGE, SINCE, UNTIL, insert_line_history
+from tests.db.records import T0, make_record
 
 RUN_SECONDS = 95.0  # every test run lasts 95 s
 POSES_PER_RUN = 7
@@ -161,3 +164,45 @@ def test_an_empty_range_reports_zeros_and_no_ratios(session: Session) -> None:
     assert (s.report_yield, s.first_pass_yield, s.units_per_hour) == (None, None, None)
     assert report.pareto == report.units == report.control_charts == []
     assert all(p.count == 0 and p.mean is None for p in report.parameters)
+
+
+def test_a_unit_counts_where_its_first_run_is_and_lists_where_its_latest_is(
+    session: Session,
+) -> None:
+    repository = RunRepository(session)
+    day = timedelta(days=1)
+    # U1 fails on day 1 and passes its retest on day 2, a run that arrives first.
+    repository.submit(make_record(serial="U1", started_at=T0 + day))
+    repository.submit(make_record(serial="U1", verdict="fail", started_at=T0))
+    session.commit()
+    first = eol_report(session, ReportFilter(since=SINCE, until=SINCE + day))
+    s = first.summary
+    assert (s.runs, s.units_tested, s.first_pass_units, s.units_passed, s.retests) == (
+        1,
+        1,
+        0,
+        1,
+        0,
+    )
+    assert (first.units, first.units_total) == ([], 0)
+    second = eol_report(session, ReportFilter(since=SINCE + day, until=SINCE + 2 * day))
+    s = second.summary
+    assert (s.runs, s.units_tested, s.retests) == (1, 0, 1)
+    assert [(u.serial, u.disposition, u.runs) for u in second.units] == [("U1", "ship", 2)]
+
+
+def test_filters_by_lot(session: Session) -> None:
+    repository = RunRepository(session)
+    for minute, lot in enumerate(["L1", "L2", None, "L1"]):
+        repository.submit(
+            make_record(
+                serial=f"U{minute}", lot=lot, started_at=T0 + timedelta(minutes=10 * minute)
+            )
+        )
+    session.commit()
+    l1 = eol_report(session, ReportFilter(since=SINCE, until=UNTIL, lot="L1"))
+    assert (l1.summary.runs, l1.units_total) == (2, 2)
+    assert {u.serial for u in l1.units} == {"U0", "U3"}
+    assert l1.filter.lot == "L1"
+    listed = repository.list_runs(RunQuery(lot="L2"))
+    assert [(r.serial, r.lot) for r in listed.runs] == [("U1", "L2")]

@@ -1,5 +1,7 @@
 """The run repository on SQLite and PostgreSQL: submit, read back, history, lists, keys."""
 
+import hashlib
+import json
 import uuid
 from datetime import timedelta
 
@@ -9,7 +11,7 @@ from sqlalchemy.orm import Session
 
 from db import RunConflictError, RunQuery, RunRepository
 from db.models import Pose, StationKey
-from db.repository import encode_cursor
+from db.repository import encode_cursor, record_sha256
 from station.errors import InputError
 from station.records import StoredRun
 from tests.db.records import T0, make_record
@@ -140,3 +142,12 @@ def test_station_keys_are_stored_hashed_and_resolve_to_their_station(session: Se
 def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:
     outcome = RunRepository(session).submit(make_record())
     assert StoredRun.model_validate_json(outcome.run.model_dump_json()) == outcome.run
+
+
+def test_a_record_without_a_lot_hashes_as_before_the_lot_existed() -> None:
+    record = make_record()
+    document = json.loads(record.model_dump_json())
+    del document["lot"]
+    before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
+    assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
+    assert record_sha256(make_record(lot="L1")) != record_sha256(record)

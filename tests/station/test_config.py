@@ -17,7 +17,8 @@ def test_flags_override_the_file_and_the_environment(
         'station_id = "line1-st3"\noperator_id = "ann"\n[run]\npose_tolerance_deg = 20\n'
     )
     monkeypatch.setenv("CALSTATION_OPERATOR_ID", "bob")
-    config = load_config(path, {"operator_id": "carl", "port": None})
+    config = load_config(path, {"operator_id": "carl", "port": None, "lot": "L2611-04"})
+    assert config.lot == "L2611-04"
     assert config.station_id == "line1-st3"
     assert config.operator_id == "carl"
     assert config.run.pose_tolerance_deg == 20
@@ -35,6 +36,7 @@ def test_flags_override_the_file_and_the_environment(
         ),
         ('serial_pattern = "(["\n', "serial_pattern: Value error, not a regular expression"),
         ('station_id = "has space"\n', "station_id"),
+        ('lot = "L 7"\n', "lot"),
         ("bogus = 1\n", "bogus"),
         ("not toml [", "not valid TOML"),
     ],

@@ -27,8 +27,8 @@ def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Pat
             assert abs(ratio - 1) < 1e-3
     assert "PASS" in result.stderr  # the screens went to stderr
     with sqlite3.connect(env_dir / "calstation.sqlite3") as db:
-        stored = db.execute("select run_id, verdict from runs order by started_at").fetchall()
-    assert [(u["run_id"].replace("-", ""), u["verdict"]) for u in units] == [
-        (run_id.replace("-", ""), verdict) for run_id, verdict in stored
+        stored = db.execute("select run_id, verdict, lot from runs order by started_at").fetchall()
+    assert [(u["run_id"].replace("-", ""), u["verdict"], "demo-lot") for u in units] == [
+        (run_id.replace("-", ""), verdict, lot) for run_id, verdict, lot in stored
     ]
     assert np.isfinite([u["estimate"]["offset"]["x"] for u in units]).all()

@@ -1,14 +1,16 @@
 """``calstation db upgrade`` and ``calstation keys create`` as real processes."""
 
 import os
+from datetime import timedelta
 from pathlib import Path
 
-from sqlalchemy import select
+from sqlalchemy import delete, func, select
 
 from db import Database, RunRepository
 from db.migrate import head_revision
-from db.models import StationKey
+from db.models import ReportCounts, StationKey
 from tests.conftest import CliRunner
+from tests.db.records import T0, make_record
 
 UNREACHABLE = "postgresql+psycopg://nobody@127.0.0.1:1/none?connect_timeout=2"
 
@@ -85,3 +87,20 @@ def test_keys_revoke_stops_every_key_of_the_station(
         repository = RunRepository(session)
         assert [repository.station_for_key(key) for key in keys] == [None, None]
         assert repository.station_for_key(other) == "line3-st3"
+
+
+def test_db_rebuild_report_restores_the_roll_ups_from_the_runs(
+    run_cli: CliRunner, database: Database, database_url: str
+) -> None:
+    with database.session() as session:
+        for minute in range(3):
+            RunRepository(session).submit(
+                make_record(serial=f"U{minute}", started_at=T0 + timedelta(minutes=minute))
+            )
+        session.execute(delete(ReportCounts))
+        session.commit()
+    result = run_cli("db", "rebuild-report", "--database-url", database_url, env=_env())
+    assert result.returncode == 0, result.stderr
+    assert "rebuilt from 3 runs, parameters binned against kxm52-production" in result.stdout
+    with database.session() as session:
+        assert session.scalar(select(func.sum(ReportCounts.runs))) == 3

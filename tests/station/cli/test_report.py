@@ -66,6 +66,17 @@ def test_json_to_a_file_with_station_and_operator_filters(
     assert report["filter"]["operator_id"] == "op-a"
 
 
+@pytest.mark.usefixtures("line")
+def test_lot_filter_leaves_out_the_runs_without_a_lot(
+    run_cli: CliRunner, database_url: str
+) -> None:
+    result = run_cli("report", *RANGE, "--lot", "L-7", "--database-url", database_url, env=_env())
+    assert result.returncode == 0, result.stderr
+    assert "lot L-7" in result.stdout.splitlines()[0]
+    all_row = next(line for line in result.stdout.splitlines() if line.startswith("all "))
+    assert all_row.split()[1:5] == ["0", "0", "0", "0"]
+
+
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [

@@ -1,7 +1,7 @@
 """Each unit's current calibration, ready to serve (``units``), filled from ``runs``.
 
-Revision ID: 0003
-Revises: 0002
+Revision ID: 0004
+Revises: 0003
 """
 
 from collections.abc import Sequence
@@ -13,8 +13,8 @@ from sqlalchemy.orm import Session
 from db.base import UtcDateTime
 from db.repository import RunRepository
 
-revision: str = "0003"
-down_revision: str | None = "0002"
+revision: str = "0004"
+down_revision: str | None = "0003"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 

@@ -1,0 +1,134 @@
+"""A lot per run; the end-of-line report's per-run facts and daily roll-ups.
+
+Revision ID: 0003
+Revises: 0002
+
+Adds ``runs.lot`` (and ``ix_runs_lot_started_at``), the tables of :mod:`db.rollups`, and
+fills them from the runs already stored (:func:`db.rollups.rebuild`).
+"""
+
+from collections.abc import Sequence
+from typing import Any
+
+import sqlalchemy as sa
+from alembic import op
+
+from db.base import UtcDateTime
+from db.rollups import COUNT_VALUES, HISTOGRAM, rebuild
+
+revision: str = "0003"
+down_revision: str | None = "0002"
+branch_labels: str | Sequence[str] | None = None
+depends_on: str | Sequence[str] | None = None
+
+BigId = sa.BigInteger().with_variant(sa.Integer(), "sqlite")
+
+
+def _bucket() -> list[sa.Column[object]]:
+    return [
+        sa.Column("day", sa.Integer(), nullable=False),
+        sa.Column("station_id", sa.String(length=64), nullable=False),
+        sa.Column("operator_id", sa.String(length=64), nullable=False),
+        sa.Column("lot", sa.String(length=64), nullable=False),
+    ]
+
+
+def _count_type(name: str) -> sa.types.TypeEngine[Any]:
+    """The type of a ``report_counts`` value column."""
+    if name in ("first_start", "last_finish"):
+        return UtcDateTime()
+    if name == "duration_ms":
+        return sa.BigInteger()
+    return sa.Double() if name.startswith("mr_") else sa.Integer()
+
+
+def upgrade() -> None:
+    # Plain ALTER TABLE, no batch copy: on SQLite a copy would drop ``runs`` and with it,
+    # by ON DELETE CASCADE, every pose and failure reason.
+    op.add_column("runs", sa.Column("lot", sa.String(length=64), nullable=True))
+    op.create_index("ix_runs_lot_started_at", "runs", ["lot", "started_at", "id"], unique=False)
+    op.create_table(
+        "run_facts",
+        sa.Column("run_pk", BigId, autoincrement=False, nullable=False),
+        sa.Column("first_failure", sa.String(length=64), nullable=True),
+        sa.Column("poses", sa.Integer(), nullable=False),
+        sa.Column("gyro_bias_x", sa.Double(), nullable=True),
+        sa.Column("gyro_bias_y", sa.Double(), nullable=True),
+        sa.Column("gyro_bias_z", sa.Double(), nullable=True),
+        sa.Column("line_first", sa.Boolean(), nullable=False),
+        sa.Column("line_latest", sa.Boolean(), nullable=False),
+        sa.Column("line_final_pass", sa.Boolean(), nullable=False),
+        sa.Column("unit_runs", sa.Integer(), nullable=False),
+        sa.Column("station_first", sa.Boolean(), nullable=False),
+        sa.Column("station_final_pass", sa.Boolean(), nullable=False),
+        sa.Column("chart_previous", BigId, nullable=True),
+        sa.ForeignKeyConstraint(
+            ["run_pk"], ["runs.id"], name=op.f("fk_run_facts_run_pk_runs"), ondelete="CASCADE"
+        ),
+        sa.PrimaryKeyConstraint("run_pk", name=op.f("pk_run_facts")),
+    )
+    limits = ("limits_name", "limits_version", "limits_sha256")
+    op.create_table(
+        "report_counts",
+        *_bucket(),
+        sa.Column("limits_name", sa.String(length=64), nullable=False),
+        sa.Column("limits_version", sa.String(length=64), nullable=False),
+        sa.Column("limits_sha256", sa.String(length=64), nullable=False),
+        *(
+            sa.Column(
+                name,
+                _count_type(name),
+                nullable=False,
+            )
+            for name in COUNT_VALUES
+        ),
+        sa.PrimaryKeyConstraint(
+            *limits, "day", "station_id", "operator_id", "lot", name=op.f("pk_report_counts")
+        ),
+    )
+    op.create_table(
+        "report_failures",
+        sa.Column("code", sa.String(length=64), nullable=False),
+        sa.Column("runs", sa.Integer(), nullable=False),
+        *_bucket(),
+        sa.PrimaryKeyConstraint(
+            "code", "day", "station_id", "operator_id", "lot", name=op.f("pk_report_failures")
+        ),
+    )
+    op.create_table(
+        "report_parameters",
+        sa.Column("parameter", sa.String(length=64), nullable=False),
+        sa.Column("n", sa.Integer(), nullable=False),
+        sa.Column("sum", sa.Double(), nullable=False),
+        sa.Column("squares", sa.Double(), nullable=False),
+        sa.Column("min", sa.Double(), nullable=False),
+        sa.Column("max", sa.Double(), nullable=False),
+        sa.Column("outside", sa.Integer(), nullable=False),
+        sa.Column("marginal", sa.Integer(), nullable=False),
+        *_bucket(),
+        *(sa.Column(name, sa.Integer(), nullable=False) for name in HISTOGRAM),
+        sa.PrimaryKeyConstraint(
+            "parameter",
+            "day",
+            "station_id",
+            "operator_id",
+            "lot",
+            name=op.f("pk_report_parameters"),
+        ),
+    )
+    op.create_table(
+        "report_bounds",
+        sa.Column("family", sa.String(length=64), nullable=False),
+        sa.Column("lower", sa.Double(), nullable=True),
+        sa.Column("upper", sa.Double(), nullable=True),
+        sa.PrimaryKeyConstraint("family", name=op.f("pk_report_bounds")),
+    )
+    rebuild(op.get_bind())
+
+
+def downgrade() -> None:
+    for table in ("report_bounds", "report_parameters", "report_failures", "report_counts"):
+        op.drop_table(table)
+    op.drop_table("run_facts")
+    op.drop_index("ix_runs_lot_started_at", table_name="runs")
+    op.drop_column("runs", "lot")

@@ -1,0 +1,577 @@
+"""The end-of-line report's derived data: per-run facts and daily roll-ups, kept exact.
+
+Every table here is a function of ``runs``, ``poses`` and ``run_failures``, defined once
+as SQL in this module and computed by that SQL in three places: :func:`rebuild` (every
+run: the migration, the benchmark), :func:`record_run` (one submission, in its
+transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
+
+- ``run_facts``: per run, its first failure code, pose count, gyro bias, whether it is
+  its unit's first or latest run (on the line, at its station), whether the unit's latest
+  run passed (on its first run), the unit's run count and the previous run of the line
+  with coefficients.
+- ``report_counts``, ``report_failures``, ``report_parameters``: per day (UTC) × station ×
+  operator × lot, the sums, minima and maxima of what each run contributes (counts,
+  first and final passes, moving ranges; failing runs by first reason; n, Σ(x − c),
+  Σ(x − c)², min, max and histogram bins of every parameter).
+
+A submission can change facts of runs stored before it: a late run becomes its unit's
+first, a retest makes the previous run no longer the latest, a run slotted in between
+changes the next charted run's moving range. :func:`record_run` takes those runs'
+contributions out of the roll-ups, recomputes their facts and adds them back, so the
+roll-ups always equal the aggregate of the facts. Counts and times are integers
+(station time in milliseconds), so taking out and adding back is exact.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+from sqlalchemy import (
+    BigInteger,
+    BindParameter,
+    ColumnElement,
+    Connection,
+    Double,
+    Executable,
+    FromClause,
+    Integer,
+    Select,
+    String,
+    and_,
+    bindparam,
+    case,
+    cast,
+    delete,
+    exists,
+    func,
+    insert,
+    literal,
+    or_,
+    select,
+    text,
+    true,
+    tuple_,
+    union,
+    union_all,
+)
+from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.ext.compiler import compiles
+from sqlalchemy.orm import InstrumentedAttribute, aliased
+from sqlalchemy.sql.compiler import SQLCompiler
+from sqlalchemy.sql.functions import FunctionElement
+
+from db.models import (
+    Pose,
+    ReportBounds,
+    ReportCounts,
+    ReportFailures,
+    ReportParameters,
+    Run,
+    RunFacts,
+    RunFailure,
+)
+from station.limits import load_profile
+from station.report.bounds import COEFFICIENTS, PARAMETERS, Bounds, ParameterSpec, profile_bounds
+from station.report.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
+
+#: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
+#: adds the limits profile.
+BUCKET = ("day", "station_id", "operator_id", "lot")
+LIMITS = ("limits_name", "limits_version", "limits_sha256")
+
+#: Histogram bin columns of ``report_parameters``.
+HISTOGRAM = tuple(f"h{i:02d}" for i in range(HISTOGRAM_BINS))
+
+#: How each value column merges across rows: ``sum``, ``min`` or ``max``.
+COUNT_VALUES: dict[str, str] = {
+    "runs": "sum",
+    "runs_passed": "sum",
+    "duration_ms": "sum",
+    "poses": "sum",
+    "first_start": "min",
+    "last_finish": "max",
+    "line_units": "sum",
+    "line_first_pass": "sum",
+    "line_final_pass": "sum",
+    "listed": "sum",
+    "units": "sum",
+    "first_pass": "sum",
+    "final_pass": "sum",
+    "charted": "sum",
+    **{f"mr_{name}": "sum" for name in COEFFICIENTS},
+}
+FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
+PARAMETER_VALUES: dict[str, str] = {
+    "n": "sum",
+    "sum": "sum",
+    "squares": "sum",
+    "min": "min",
+    "max": "max",
+    "outside": "sum",
+    "marginal": "sum",
+    **dict.fromkeys(HISTOGRAM, "sum"),
+}
+
+
+class utc_day(FunctionElement[int]):  # noqa: N801 (an SQL function)
+    """Days from 1970-01-01 to the UTC date of a moment (the roll-ups' ``day``)."""
+
+    type = Integer()
+    inherit_cache = True
+
+
+@compiles(utc_day, "postgresql")
+def _utc_day_pg(element: utc_day, compiler: SQLCompiler, **kw: Any) -> str:
+    moment = compiler.process(element.clauses, **kw)
+    return f"((({moment}) AT TIME ZONE 'UTC')::date - DATE '1970-01-01')"
+
+
+@compiles(utc_day, "sqlite")
+def _utc_day_sqlite(element: utc_day, compiler: SQLCompiler, **kw: Any) -> str:
+    moment = compiler.process(element.clauses, **kw)
+    return f"CAST(julianday(date({moment})) - 2440587.5 AS INTEGER)"
+
+
+class duration_ms(FunctionElement[int]):  # noqa: N801 (an SQL function)
+    """Milliseconds from the first moment to the second, rounded."""
+
+    type = BigInteger()
+    inherit_cache = True
+
+
+@compiles(duration_ms, "postgresql")
+def _duration_ms_pg(element: duration_ms, compiler: SQLCompiler, **kw: Any) -> str:
+    start, end = (compiler.process(c, **kw) for c in element.clauses)
+    return f"round(extract(epoch FROM ({end}) - ({start})) * 1000)::bigint"
+
+
+@compiles(duration_ms, "sqlite")
+def _duration_ms_sqlite(element: duration_ms, compiler: SQLCompiler, **kw: Any) -> str:
+    start, end = (compiler.process(c, **kw) for c in element.clauses)
+    return f"CAST(round((julianday({end}) - julianday({start})) * 86400000.0) AS INTEGER)"
+
+
+class smaller(FunctionElement[Any]):  # noqa: N801 (an SQL function)
+    """The smaller of two values (``least`` / two-argument ``min``)."""
+
+    inherit_cache = True
+
+
+class larger(FunctionElement[Any]):  # noqa: N801 (an SQL function)
+    """The larger of two values (``greatest`` / two-argument ``max``)."""
+
+    inherit_cache = True
+
+
+#: The pairwise functions' names: on PostgreSQL, on SQLite.
+_PAIRWISE = {smaller: ("least", "min"), larger: ("greatest", "max")}
+
+
+@compiles(smaller)
+@compiles(larger)
+def _pairwise(element: smaller | larger, compiler: SQLCompiler, **kw: Any) -> str:
+    on_postgresql, on_sqlite = _PAIRWISE[type(element)]
+    name = on_postgresql if compiler.dialect.name == "postgresql" else on_sqlite
+    return f"{name}({compiler.process(element.clauses, **kw)})"
+
+
+# -- per-run facts ---------------------------------------------------------------------
+
+
+def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
+    """The ``run_facts`` rows of the runs ``where`` selects (see :class:`RunFacts`)."""
+    other = aliased(Run, name="other")
+    earlier = tuple_(other.started_at, other.id) < tuple_(Run.started_at, Run.id)
+    later = tuple_(other.started_at, other.id) > tuple_(Run.started_at, Run.id)
+    unit = other.serial == Run.serial
+    at_station = and_(unit, other.station_id == Run.station_id)
+    newest = (other.started_at.desc(), other.id.desc())
+
+    def latest_passed(*among: ColumnElement[bool]) -> ColumnElement[bool]:
+        verdict = select(other.verdict).where(*among).order_by(*newest).limit(1)
+        return verdict.scalar_subquery() == "pass"
+
+    line_first = ~exists().where(unit, earlier)
+    station_first = ~exists().where(at_station, earlier)
+    bias = {a: Run.gyro[("bias", a)].as_float() for a in "xyz"}
+    return select(
+        Run.id,
+        select(RunFailure.code)
+        .where(RunFailure.run_pk == Run.id, RunFailure.position == 0)
+        .scalar_subquery(),
+        select(func.count()).select_from(Pose).where(Pose.run_pk == Run.id).scalar_subquery(),
+        bias["x"],
+        bias["y"],
+        bias["z"],
+        line_first,
+        ~exists().where(unit, later),
+        and_(line_first, latest_passed(unit)),
+        select(func.count()).select_from(other).where(unit).scalar_subquery(),
+        station_first,
+        and_(station_first, latest_passed(at_station)),
+        case(
+            (
+                Run.offset_x.is_not(None),
+                select(other.id)
+                .where(other.offset_x.is_not(None), earlier)
+                .order_by(*newest)
+                .limit(1)
+                .scalar_subquery(),
+            ),
+        ),
+    ).where(*where)
+
+
+_FACT_COLUMNS = (
+    "run_pk",
+    "first_failure",
+    "poses",
+    "gyro_bias_x",
+    "gyro_bias_y",
+    "gyro_bias_z",
+    "line_first",
+    "line_latest",
+    "line_final_pass",
+    "unit_runs",
+    "station_first",
+    "station_final_pass",
+    "chart_previous",
+)
+
+
+# -- contributions: what runs add to each roll-up ----------------------------------------
+
+
+def _keys(names: Sequence[str], extra: dict[str, Any]) -> list[ColumnElement[Any]]:
+    columns: dict[str, Any] = {
+        "day": utc_day(Run.started_at),
+        "station_id": Run.station_id,
+        "operator_id": Run.operator_id,
+        "lot": func.coalesce(Run.lot, ""),
+        **{name: getattr(Run, name) for name in LIMITS},
+        **extra,
+    }
+    return [columns[name].label(name) for name in names]
+
+
+def _count_if(condition: ColumnElement[bool] | InstrumentedAttribute[bool]) -> ColumnElement[int]:
+    return func.coalesce(func.sum(case((condition, 1), else_=0)), 0)
+
+
+def count_contributions(
+    keys: Sequence[str], where: Sequence[ColumnElement[bool]], sign: int = 1
+) -> Select[Any]:
+    """Per ``keys`` (of :data:`BUCKET` and :data:`LIMITS`): the columns of
+    ``report_counts`` over the runs ``where`` selects, sums times ``sign``."""
+    previous = aliased(Run, name="previous")
+    passed = Run.verdict == "pass"
+    facts = RunFacts
+    sums: dict[str, ColumnElement[Any]] = {
+        "runs": func.count(),
+        "runs_passed": _count_if(passed),
+        "duration_ms": func.sum(duration_ms(Run.started_at, Run.finished_at)),
+        "poses": func.sum(facts.poses),
+        "line_units": _count_if(facts.line_first),
+        "line_first_pass": _count_if(and_(facts.line_first, passed)),
+        "line_final_pass": _count_if(facts.line_final_pass),
+        "listed": _count_if(facts.line_latest),
+        "units": _count_if(facts.station_first),
+        "first_pass": _count_if(and_(facts.station_first, passed)),
+        "final_pass": _count_if(facts.station_final_pass),
+        "charted": func.count(Run.offset_x),
+        **{
+            f"mr_{name}": func.coalesce(
+                func.sum(func.abs(getattr(Run, name) - getattr(previous, name))), 0.0
+            )
+            for name in COEFFICIENTS
+        },
+    }
+    columns = {
+        **{name: (value * sign if sign != 1 else value) for name, value in sums.items()},
+        "first_start": func.min(Run.started_at),
+        "last_finish": func.max(Run.finished_at),
+    }
+    picked = _keys(keys, {})
+    return (
+        select(*picked, *(columns[name].label(name) for name in COUNT_VALUES))
+        .select_from(Run)
+        .join(facts, facts.run_pk == Run.id)
+        .outerjoin(previous, previous.id == facts.chart_previous)
+        .where(*where)
+        .group_by(*picked)
+    )
+
+
+def failure_contributions(keys: Sequence[str], where: Sequence[ColumnElement[bool]]) -> Select[Any]:
+    """Per ``keys`` (of :data:`BUCKET` and ``code``): failing runs by first reason."""
+    picked = _keys(keys, {"code": RunFacts.first_failure})
+    return (
+        select(*picked, func.count().label("runs"))
+        .select_from(Run)
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .where(Run.verdict == "fail", RunFacts.first_failure.is_not(None), *where)
+        .group_by(*picked)
+    )
+
+
+def _value(spec: ParameterSpec) -> Any:
+    """Where a parameter's values are: a column of ``runs``, ``run_facts`` or ``poses``."""
+    if spec.source == "poses":
+        return getattr(Pose, spec.column)
+    if spec.family == "gyro_bias":
+        return getattr(RunFacts, f"gyro_bias_{spec.column}")
+    return getattr(Run, spec.column)
+
+
+def _limits_of(specs: Sequence[ParameterSpec], bounds: Bounds) -> FromClause:
+    """One row per parameter: its limits, marginal zones, histogram range and centre."""
+    limits: list[Select[Any]] = []
+    for spec in specs:
+        lower, upper = bounds[spec.family]
+        start, width, bins = histogram_bins(lower, upper)
+        zone_low, zone_high = marginal_zones(lower, upper)
+        low, high = tolerance(lower, upper)
+        numbers = {
+            "lower": lower,
+            "upper": upper,
+            "zone_low": None if lower is None else zone_low,
+            "zone_high": None if upper is None else zone_high,
+            "start": start,
+            "width": width,
+            "end": start + width * bins,
+            "centre": (low + high) / 2,
+        }
+        columns: list[ColumnElement[Any]] = [literal(spec.name, String()).label("parameter")]
+        columns += [cast(literal(v, Double()), Double()).label(k) for k, v in numbers.items()]
+        limits.append(select(*columns))
+    return union_all(*limits).subquery("limits")
+
+
+def parameter_contributions(
+    keys: Sequence[str], where: Sequence[ColumnElement[bool]], bounds: Bounds
+) -> list[Select[Any]]:
+    """Per parameter and ``keys`` (of :data:`BUCKET`): the columns of
+    ``report_parameters`` over the runs ``where`` selects, against ``bounds``.
+
+    ``c`` is the centre of the tolerance, bins those of
+    :func:`station.report.capability.histogram_bins`, marginal and out-of-limits as
+    :func:`station.report.capability.marginal_zones` says. One scan of the runs (with
+    their facts) for the per-run parameters, one of their poses for pose noise, each
+    paired with the parameters' limits.
+    """
+    selects = []
+    runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
+    poses = Pose.__table__.join(Run.__table__, Pose.run_pk == Run.id)
+    for source, rows in (("runs", runs), ("poses", poses)):
+        specs = [spec for spec in PARAMETERS if spec.source == source]
+        limits = _limits_of(specs, bounds)
+        value = case(*((limits.c.parameter == spec.name, _value(spec)) for spec in specs))
+        bins = len(HISTOGRAM)
+        # OFFSET 0: PostgreSQL keeps value and bin columns instead of inlining their
+        # expressions into every aggregate.
+        v = (
+            select(
+                limits,
+                *_keys(keys, {}),
+                value.label("x"),
+                case(
+                    (value < limits.c.start, 0),
+                    (value >= limits.c.end, bins - 1),
+                    else_=cast(func.floor((value - limits.c.start) / limits.c.width), Integer),
+                ).label("bin"),
+            )
+            .select_from(rows)
+            .join(limits, true())
+            .where(value.is_not(None), *where)
+            .offset(0)
+            .subquery("v")
+        )
+        x, c = v.c.x, v.c
+        outside = or_(
+            and_(c.lower.is_not(None), x < c.lower), and_(c.upper.is_not(None), x > c.upper)
+        )
+        near = or_(
+            and_(c.zone_low.is_not(None), x < c.zone_low),
+            and_(c.zone_high.is_not(None), x > c.zone_high),
+        )
+        deviation = x - c.centre
+        grouped = [c.parameter, *(c[name] for name in keys)]
+        selects.append(
+            select(
+                *grouped,
+                func.count(x).label("n"),
+                func.sum(deviation).label("sum"),
+                func.sum(deviation * deviation).label("squares"),
+                func.min(x).label("min"),
+                func.max(x).label("max"),
+                _count_if(outside).label("outside"),
+                _count_if(and_(~outside, near)).label("marginal"),
+                *(_count_if(c.bin == i).label(h) for i, h in enumerate(HISTOGRAM)),
+            ).group_by(*grouped)
+        )
+    return selects
+
+
+# -- keeping the roll-ups -----------------------------------------------------------------
+
+
+def _upsert(
+    dialect: str, table: Any, keys: Sequence[str], values: dict[str, str], rows: Select[Any]
+) -> Executable:
+    """Add ``rows`` into ``table``: sums added, minima and maxima kept."""
+    stmt = (postgresql.insert if dialect == "postgresql" else sqlite.insert)(table)
+    stmt = stmt.from_select([*keys, *values], rows)
+    current, added = table.__table__.c, stmt.excluded
+    merges = {"sum": lambda a, b: a + b, "min": smaller, "max": larger}
+    merged = {name: merges[merge](current[name], added[name]) for name, merge in values.items()}
+    return stmt.on_conflict_do_update(index_elements=list(keys), set_=merged)
+
+
+def stored_bounds(connection: Connection) -> Bounds:
+    """The bounds ``report_parameters`` was counted with (empty before any)."""
+    rows = connection.execute(select(ReportBounds.family, ReportBounds.lower, ReportBounds.upper))
+    return {family: (lower, upper) for family, lower, upper in rows}
+
+
+def _store_bounds(connection: Connection, bounds: Bounds) -> None:
+    connection.execute(
+        insert(ReportBounds),
+        [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
+    )
+
+
+def _bounds_for_rollup(connection: Connection) -> Bounds:
+    """The stored bounds; on an empty database, the default profile's, stored now."""
+    bounds = stored_bounds(connection)
+    if not bounds:
+        bounds = profile_bounds(load_profile())
+        _store_bounds(connection, bounds)
+    return bounds
+
+
+def lock_submissions(connection: Connection) -> None:
+    """Serialise submissions: each one derives facts from every run stored before it.
+
+    PostgreSQL: a transaction-scoped advisory lock; SQLite serialises writers already.
+    """
+    if connection.dialect.name == "postgresql":
+        connection.execute(text("SELECT pg_advisory_xact_lock(hashtext('calstation.runs'))"))
+
+
+@dataclass(frozen=True)
+class _Submission:
+    """The statements of :func:`record_run`, built once per dialect and bounds.
+
+    Bound parameters: ``run_pk``, ``serial`` and ``started_at`` of the new run;
+    ``changed`` the stored runs whose facts it may change; ``both`` those and the new run.
+    """
+
+    changed: Executable
+    take_out: Executable
+    forget: Executable
+    facts: Executable
+    counts: Executable
+    failures: Executable
+    parameters: Executable
+
+
+@cache
+def _submission(
+    dialect: str, bounds: tuple[tuple[str, tuple[float | None, float | None]], ...]
+) -> _Submission:
+    run_pk = bindparam("run_pk", type_=Run.id.type)
+    changed: BindParameter[int] = bindparam("changed", expanding=True)
+    both: BindParameter[int] = bindparam("both", expanding=True)
+    # The new run's start and serial as values, so both walk their index.
+    started_at = bindparam("started_at", type_=Run.started_at.type)
+    after_this = tuple_(Run.started_at, Run.id) > tuple_(started_at, run_pk)
+    following = (
+        select(Run.id)
+        .where(Run.offset_x.is_not(None), after_this)
+        .order_by(Run.started_at, Run.id)
+        .limit(1)
+        .subquery("following")
+    )
+    same_unit = select(Run.id).where(Run.serial == bindparam("serial", type_=Run.serial.type))
+    keys, failures = [*BUCKET, *LIMITS], [*BUCKET, "code"]
+    new = [Run.id == run_pk]
+    rows = union_all(*parameter_contributions(BUCKET, new, dict(bounds))).subquery("parameters")
+    return _Submission(
+        changed=union(same_unit, select(following.c.id)),
+        take_out=_upsert(
+            dialect,
+            ReportCounts,
+            keys,
+            COUNT_VALUES,
+            count_contributions(keys, [Run.id.in_(changed)], -1),
+        ),
+        forget=delete(RunFacts).where(RunFacts.run_pk.in_(changed)),
+        facts=insert(RunFacts).from_select(_FACT_COLUMNS, _facts([Run.id.in_(both)])),
+        counts=_upsert(
+            dialect, ReportCounts, keys, COUNT_VALUES, count_contributions(keys, [Run.id.in_(both)])
+        ),
+        failures=_upsert(
+            dialect, ReportFailures, failures, FAILURE_VALUES, failure_contributions(failures, new)
+        ),
+        parameters=_upsert(
+            dialect,
+            ReportParameters,
+            ["parameter", *BUCKET],
+            PARAMETER_VALUES,
+            # WHERE: SQLite reads an ON after a bare FROM as a join's.
+            select(*rows.c).where(true()),
+        ),
+    )
+
+
+def record_run(connection: Connection, run_pk: int) -> None:
+    """Bring the facts and roll-ups up to date with the newly stored run ``run_pk``.
+
+    The runs whose facts it may change, its unit's other runs and the next run of the
+    line with coefficients, are taken out of ``report_counts``, their facts recomputed,
+    and added back with the new run.
+    """
+    bounds = _bounds_for_rollup(connection)
+    do = _submission(connection.dialect.name, tuple(sorted(bounds.items())))
+    serial, started_at = connection.execute(
+        select(Run.serial, Run.started_at).where(Run.id == run_pk)
+    ).one()
+    found = connection.scalars(
+        do.changed, {"run_pk": run_pk, "serial": serial, "started_at": started_at}
+    )
+    changed = sorted(set(found) - {run_pk})
+    if changed:
+        connection.execute(do.take_out, {"changed": changed})
+        connection.execute(do.forget, {"changed": changed})
+    connection.execute(do.facts, {"both": [*changed, run_pk]})
+    connection.execute(do.counts, {"both": [*changed, run_pk]})
+    connection.execute(do.failures, {"run_pk": run_pk})
+    connection.execute(do.parameters, {"run_pk": run_pk})
+
+
+def rebuild(connection: Connection, bounds: Bounds | None = None) -> None:
+    """Recompute every fact and roll-up from the raw tables, in SQL.
+
+    Parameters are binned against ``bounds`` (default: the shipped default limits
+    profile's), which are stored in ``report_bounds``.
+    """
+    bounds = bounds or profile_bounds(load_profile())
+    for table in (ReportParameters, ReportFailures, ReportCounts, RunFacts, ReportBounds):
+        connection.execute(delete(table))
+    _store_bounds(connection, bounds)
+    connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([])))
+    connection.execute(
+        insert(ReportCounts).from_select(
+            [*BUCKET, *LIMITS, *COUNT_VALUES], count_contributions([*BUCKET, *LIMITS], [])
+        )
+    )
+    connection.execute(
+        insert(ReportFailures).from_select(
+            [*BUCKET, "code", *FAILURE_VALUES], failure_contributions([*BUCKET, "code"], [])
+        )
+    )
+    for rows in parameter_contributions(BUCKET, [], bounds):
+        connection.execute(
+            insert(ReportParameters).from_select(["parameter", *BUCKET, *PARAMETER_VALUES], rows)
+        )

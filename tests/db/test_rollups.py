@@ -1,0 +1,257 @@
+"""The report's roll-ups stay exact: random line histories, submitted in random order.
+
+Each history (retests, several stations, operators and lots, runs over three days) is
+submitted in a shuffled order, so runs arrive late and retests land before the runs
+they follow. The report, which adds up roll-ups and partial days, must then equal the
+definitions computed here straight from the runs; rebuilding the roll-ups from the raw
+tables must give the rows the submissions left.
+"""
+
+import math
+import statistics
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from itertools import pairwise
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from db import Database, RunRepository
+from db.models import ReportCounts, ReportFailures, ReportParameters, RunFacts
+from db.reports import eol_report
+from db.rollups import rebuild
+from station.limits import Bounds, load_profile
+from station.report.model import EolReport, ReportFilter
+from tests.db.records import T0, make_record
+
+DAY0 = T0.replace(hour=0)
+MOMENTS = [None, DAY0, DAY0 + timedelta(days=1), T0 + timedelta(hours=20), DAY0 + timedelta(days=3)]
+
+
+@dataclass(frozen=True)
+class Planned:
+    """One run of a generated history."""
+
+    serial: str
+    station: str
+    operator: str
+    lot: str | None
+    started_at: datetime
+    code: str | None
+    charted: bool
+    offset_x: float
+
+    @property
+    def passed(self) -> bool:
+        return self.code is None
+
+
+@st.composite
+def histories(draw: st.DrawFn) -> list[Planned]:
+    """Up to 12 runs of up to 4 units over three days, each start a distinct minute."""
+    minutes = draw(st.lists(st.integers(0, 3 * 24 * 60), min_size=1, max_size=12, unique=True))
+    runs = []
+    for minute in minutes:
+        code = draw(st.sampled_from([None, None, "offset", "sensitivity"]))
+        runs.append(
+            Planned(
+                serial=draw(st.sampled_from(["U1", "U2", "U3", "U4"])),
+                station=draw(st.sampled_from(["st1", "st2"])),
+                operator=draw(st.sampled_from(["op-a", "op-b"])),
+                lot=draw(st.sampled_from([None, "L1", "L2"])),
+                started_at=T0 + timedelta(minutes=minute),
+                code=code,
+                charted=code is None or draw(st.booleans()),
+                offset_x=float(draw(st.integers(1800, 2300))),
+            )
+        )
+    return runs
+
+
+filters = st.builds(
+    ReportFilter,
+    since=st.sampled_from(MOMENTS[:4]),
+    until=st.sampled_from([None, *MOMENTS[2:]]),
+    station_id=st.sampled_from([None, "st1"]),
+    operator_id=st.sampled_from([None, "op-b"]),
+    lot=st.sampled_from([None, "L1"]),
+)
+
+
+def _record(run: Planned) -> Any:
+    failures = [] if run.code is None else [{"code": run.code, "message": "out of limits"}]
+    extra: dict[str, Any] = {} if run.charted else {"coefficients": None, "quality": None}
+    return make_record(
+        serial=run.serial,
+        station_id=run.station,
+        verdict="pass" if run.passed else "fail",
+        started_at=run.started_at,
+        offset=(run.offset_x, 2048.0, 1960.5),
+        operator_id=run.operator,
+        lot=run.lot,
+        failures=failures,
+        **extra,
+    )
+
+
+@contextmanager
+def _rolled_back(database: Database) -> Iterator[Session]:
+    """A session whose work is thrown away at the end of the block."""
+    with database.engine.connect() as connection:
+        outer = connection.begin()
+        with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
+            yield session
+        outer.rollback()
+
+
+def _selected(run: Planned, f: ReportFilter) -> bool:
+    return (
+        (f.since is None or run.started_at >= f.since)
+        and (f.until is None or run.started_at < f.until)
+        and f.station_id in (None, run.station)
+        and f.operator_id in (None, run.operator)
+        and f.lot in (None, run.lot)
+    )
+
+
+def _expected_counts(
+    history: list[Planned], chosen: list[Planned], same: Any
+) -> tuple[int, int, int, int, int]:
+    """(runs, passed, units, first passes, final passes), units counted at their first
+    run among the runs ``same`` groups with it."""
+    first = [r for r in chosen if r == min((o for o in history if same(o, r)), key=_start)]
+    latest = {id(r): max((o for o in history if same(o, r)), key=_start) for r in first}
+    return (
+        len(chosen),
+        sum(r.passed for r in chosen),
+        len(first),
+        sum(r.passed for r in first),
+        sum(latest[id(r)].passed for r in first),
+    )
+
+
+def _start(run: Planned) -> datetime:
+    return run.started_at
+
+
+def _counts_of(summary: Any) -> tuple[int, int, int, int, int]:
+    return (
+        summary.runs,
+        summary.runs_passed,
+        summary.units_tested,
+        summary.first_pass_units,
+        summary.units_passed,
+    )
+
+
+def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
+    chosen = sorted((r for r in history if _selected(r, f)), key=_start)
+
+    def unit(a: Planned, b: Planned) -> bool:
+        return a.serial == b.serial
+
+    def unit_at_station(a: Planned, b: Planned) -> bool:
+        return a.serial == b.serial and a.station == b.station
+
+    assert _counts_of(report.summary) == _expected_counts(history, chosen, unit)
+    assert report.summary.poses == 7 * len(chosen)
+    stations = {s.station_id: s.summary for s in report.stations}
+    assert sorted(stations) == sorted({r.station for r in chosen})
+    for station, summary in stations.items():
+        at = [r for r in chosen if r.station == station]
+        assert _counts_of(summary) == _expected_counts(history, at, unit_at_station)
+    codes = [r.code for r in chosen if r.code is not None]
+    assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
+    latest = {r.serial: r for r in sorted(history, key=_start)}
+    listed = {serial for serial, r in latest.items() if r in chosen}
+    assert report.units_total == len(listed)
+    assert {u.serial for u in report.units} == listed
+
+    xs = [r.offset_x for r in chosen if r.charted]
+    params = {p.name: p for p in report.parameters}
+    x = params["offset_x"]
+    assert (x.count, x.min, x.max) == (len(xs), min(xs, default=None), max(xs, default=None))
+    assert params["pose_noise_x"].count == 7 * len(chosen)
+    if xs:
+        assert x.mean == pytest.approx(statistics.mean(xs), rel=1e-12)
+    if len(xs) > 1:
+        assert x.std == pytest.approx(statistics.stdev(xs), rel=1e-9, abs=1e-9)
+    lower, upper = x.lower, x.upper
+    assert lower is not None
+    assert upper is not None
+    assert x.out_of_limits == sum(not lower <= v <= upper for v in xs)
+    h = x.histogram
+    bins = [min(max(math.floor((v - h.start) / h.width), 0), len(h.counts) - 1) for v in xs]
+    assert h.counts == [bins.count(i) for i in range(len(h.counts))]
+
+    charts = {c.name: c for c in report.control_charts}
+    if not xs:
+        assert charts == {}
+        return
+    chart = charts["offset_x"]
+    assert (chart.count, chart.mean) == (len(xs), pytest.approx(statistics.mean(xs)))
+    if len(xs) > 1:
+        mr_bar = statistics.mean(abs(b - a) for a, b in pairwise(xs))
+        assert chart.mr_bar == pytest.approx(mr_bar, rel=1e-9, abs=1e-9)
+    else:
+        assert chart.mr_bar is None
+
+
+def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
+    """Every roll-up and fact row, floats rounded to 6 digits (sums in another order)."""
+
+    def rounded(row: Any) -> tuple[Any, ...]:
+        return tuple(round(v, 6) if isinstance(v, float) else v for v in row)
+
+    tables = (RunFacts, ReportCounts, ReportFailures, ReportParameters)
+    return {
+        t.__tablename__: {rounded(row) for row in session.execute(select(t.__table__))}
+        for t in tables
+    }
+
+
+@settings(
+    max_examples=30,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+    phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink],
+)
+@given(
+    history=histories(),
+    order=st.randoms(use_true_random=False),
+    report_filter=filters,
+    narrower=st.booleans(),
+)
+def test_late_runs_and_retests_keep_the_report_exact(
+    migrated_database: Database,
+    history: list[Planned],
+    order: Any,
+    report_filter: ReportFilter,
+    narrower: bool,
+) -> None:
+    """``narrower``: capability against offset limits other than the roll-ups' bins."""
+    submitted = list(history)
+    order.shuffle(submitted)
+    with _rolled_back(migrated_database) as session:
+        repository = RunRepository(session)
+        for run in submitted:
+            repository.submit(_record(run))
+        session.flush()
+        profiles = None
+        if narrower:
+            profile = load_profile()
+            offset = Bounds(lower=1900.0, upper=2200.0)
+            profiles = {profile.name: profile.model_copy(update={"offset_counts": offset})}
+        report = eol_report(session, report_filter, profiles=profiles)
+        offset_x = next(p for p in report.parameters if p.name == "offset_x")
+        assert offset_x.lower == (1900.0 if narrower else 1841.0)
+        _check(report, history, report_filter)
+        kept = rollup_rows(session)
+        rebuild(session.connection())
+        assert rollup_rows(session) == kept
