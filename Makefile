@@ -15,8 +15,8 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)  ## the main job on the embedded defaults
 	$(VENV)/bin/calstation demo
 
-test: $(STAMP)  ## the whole test suite
-	$(PY) -m pytest
+test: $(STAMP)  ## the whole test suite, one worker per core (pytest -n 0 for one process)
+	$(PY) -m pytest -n auto
 
 lint: $(STAMP)  ## ruff (lint and format check) and strict mypy
 	$(VENV)/bin/ruff check .
