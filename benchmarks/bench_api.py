@@ -164,6 +164,7 @@ def seed(url: str, runs: int) -> tuple[str, int]:
         )
         connection.execute(text(SEED_POSES_SQL))
         connection.execute(text(SEED_FAILURES_SQL))
+        connection.execute(text("ANALYZE runs; ANALYZE poses; ANALYZE run_failures"))
         rebuild(connection)  # the report's facts and roll-ups, as the migration builds them
     seeded = time.perf_counter()
     with database.session() as session, session.begin():

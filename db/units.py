@@ -95,7 +95,7 @@ class UnitLookups:
     to the database serves many requests, at low load none waits for another.
     """
 
-    def __init__(self, engine: AsyncEngine, readers: int = 2, batch: int = 200) -> None:
+    def __init__(self, engine: AsyncEngine, readers: int = 1, batch: int = 200) -> None:
         self.engine = engine
         self.readers = readers
         self.batch = batch
