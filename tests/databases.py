@@ -10,6 +10,7 @@ Tests are isolated from each other: ``session`` rolls back an outer transaction,
 import os
 import secrets
 from collections.abc import Iterator
+from contextlib import contextmanager
 
 import psycopg
 import pytest
@@ -86,6 +87,17 @@ def database(migrated_database: Database) -> Iterator[Database]:
     with migrated_database.engine.begin() as connection:
         for table in reversed(Base.metadata.sorted_tables):
             connection.execute(table.delete())
+
+
+@contextmanager
+def rolled_back(database: Database) -> Iterator[Session]:
+    """A session whose commits are savepoints of an outer transaction rolled back at the
+    end of the block (for hypothesis examples, which a function fixture cannot reset)."""
+    with database.engine.connect() as connection:
+        outer = connection.begin()
+        with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
+            yield session
+        outer.rollback()
 
 
 @pytest.fixture

@@ -9,8 +9,6 @@ tables must give the rows the submissions left.
 
 import math
 import statistics
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from itertools import pairwise
@@ -28,6 +26,7 @@ from db.reports import eol_report
 from db.rollups import rebuild
 from station.limits import Bounds, load_profile
 from station.report.model import EolReport, ReportFilter
+from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
 DAY0 = T0.replace(hour=0)
@@ -98,16 +97,6 @@ def _record(run: Planned) -> Any:
         failures=failures,
         **extra,
     )
-
-
-@contextmanager
-def _rolled_back(database: Database) -> Iterator[Session]:
-    """A session whose work is thrown away at the end of the block."""
-    with database.engine.connect() as connection:
-        outer = connection.begin()
-        with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
-            yield session
-        outer.rollback()
 
 
 def _selected(run: Planned, f: ReportFilter) -> bool:
@@ -238,7 +227,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
     """``narrower``: capability against offset limits other than the roll-ups' bins."""
     submitted = list(history)
     order.shuffle(submitted)
-    with _rolled_back(migrated_database) as session:
+    with rolled_back(migrated_database) as session:
         repository = RunRepository(session)
         for run in submitted:
             repository.submit(_record(run))

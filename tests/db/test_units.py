@@ -1,8 +1,6 @@
 """Each unit's stored current state equals its latest run, whatever order runs arrive in."""
 
 import uuid
-from collections.abc import Iterator
-from contextlib import contextmanager
 from datetime import timedelta
 
 from hypothesis import HealthCheck, given, settings
@@ -13,6 +11,7 @@ from sqlalchemy.orm import Session
 from db import Database, RunRepository
 from db.models import Run, Unit
 from db.units import calibration_json
+from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
 #: One submission: which of three units, minutes after T0 (ties happen), passed or not.
@@ -21,16 +20,6 @@ submissions = st.lists(
     min_size=1,
     max_size=12,
 )
-
-
-@contextmanager
-def rolled_back(database: Database) -> Iterator[Session]:
-    """A session in a transaction that is rolled back at the end."""
-    with database.engine.connect() as connection:
-        outer = connection.begin()
-        with Session(bind=connection, join_transaction_mode="create_savepoint") as session:
-            yield session
-        outer.rollback()
 
 
 def units_of(session: Session, serials: set[str]) -> dict[str, tuple[int, str]]:
