@@ -56,17 +56,19 @@ def test_concurrent_submitters_store_every_run_exactly_once(database: Database) 
         ]
         for k in range(SUBMITTERS)
     ]
-    store = DatabaseStore(database=database)
+    url = database.engine.url.render_as_string(hide_password=False)
 
     def submitter(k: int) -> list[tuple[uuid.UUID, bool]]:
-        # Its own batch interleaved with its neighbour's backwards (racing the neighbour),
-        # and an immediate retry of every fifth run as if the first answer had been lost.
+        # A station of its own (its own connection), submitting its batch interleaved
+        # with its neighbour's backwards (racing the neighbour), and retrying every fifth
+        # run at once as if the first answer had been lost.
         mine, theirs = batches[k], batches[(k + 1) % SUBMITTERS][::-1]
         results = []
-        for n, record in enumerate(r for pair in zip(mine, theirs, strict=True) for r in pair):
-            results.append((record.run_id, _submit_with_retries(store, record)))
-            if n % 5 == 0:
+        with DatabaseStore(url) as store:
+            for n, record in enumerate(r for pair in zip(mine, theirs, strict=True) for r in pair):
                 results.append((record.run_id, _submit_with_retries(store, record)))
+                if n % 5 == 0:
+                    results.append((record.run_id, _submit_with_retries(store, record)))
         return results
 
     with ThreadPoolExecutor(SUBMITTERS) as pool:
