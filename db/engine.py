@@ -1,7 +1,8 @@
 """Engine and session factory of the results database."""
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from sqlalchemy import URL, Connection, Engine, create_engine, event, make_url
 from sqlalchemy.exc import OperationalError
@@ -33,6 +34,17 @@ def _sqlite_events(engine: Engine, *, autocommit: bool) -> None:
     event.listen(engine, "connect", _sqlite_connect)
     if not autocommit:
         event.listen(engine, "begin", _sqlite_begin)
+
+
+T = TypeVar("T")
+
+
+def for_dialect(session: Session, statements: Mapping[str, T]) -> T:
+    """The entry of ``statements`` for the session's database dialect."""
+    dialect = session.get_bind().dialect.name
+    if dialect not in statements:
+        raise CalstationError(f"database dialect {dialect!r} is not supported")
+    return statements[dialect]
 
 
 #: Async drivers of the supported backends (psycopg 3 speaks both ways).

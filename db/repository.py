@@ -22,7 +22,7 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
-from db.engine import open_database
+from db.engine import for_dialect, open_database
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey
 from db.rollups import lock_submissions, record_run
@@ -166,10 +166,7 @@ class RunRepository:
 
     def _insert_new_run(self) -> ReturningInsert[int]:
         """``INSERT … ON CONFLICT (run_id) DO NOTHING RETURNING id`` in the session's dialect."""
-        dialect = self.session.get_bind().dialect.name
-        if dialect not in _INSERT_NEW_RUN:
-            raise CalstationError(f"database dialect {dialect!r} is not supported")
-        return _INSERT_NEW_RUN[dialect]
+        return for_dialect(self.session, _INSERT_NEW_RUN)
 
     def get(self, run_id: UUID) -> StoredRun | None:
         """One run with its poses and failure reasons."""

@@ -21,8 +21,8 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.ext.asyncio import AsyncEngine
 from sqlalchemy.orm import Session
 
+from db.engine import for_dialect
 from db.models import Run, Unit
-from station.errors import CalstationError
 from station.records import RunSummary, StoredRun, UnitCalibration
 
 
@@ -69,10 +69,7 @@ def record_latest(
     """Make each ``(pk, run)`` its unit's current state, unless a later run is stored."""
     if not runs:
         return
-    dialect = session.get_bind().dialect.name
-    if dialect not in _UPSERT:
-        raise CalstationError(f"database dialect {dialect!r} is not supported")
-    session.execute(_UPSERT[dialect], [_row(pk, run) for pk, run in runs])
+    session.execute(for_dialect(session, _UPSERT), [_row(pk, run) for pk, run in runs])
 
 
 def latest_run_pks(session: Session) -> list[int]:
