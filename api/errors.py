@@ -4,6 +4,7 @@ Answer bodies are ``{"detail": "..."}``; validation errors add ``errors``, one e
 offending field with its location.
 """
 
+import logging
 from collections.abc import Awaitable, Callable
 
 from fastapi import FastAPI, Request, status
@@ -12,8 +13,10 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import OperationalError
 
 from api.verification import CalibrationMismatchError
-from db import RunConflictError, SchemaOutOfDateError
+from db import DatabaseUnavailableError, RunConflictError, SchemaOutOfDateError
 from station.errors import InputError
+
+log = logging.getLogger(__name__)
 
 #: How many field errors the one-line ``detail`` names.
 DETAIL_FIELDS = 3
@@ -48,6 +51,7 @@ def _answer(status_code: int) -> Handler:
 
 
 async def _database_unavailable(_request: Request, exc: Exception) -> JSONResponse:
+    log.error("results database unavailable: %s", (str(exc).splitlines() or [repr(exc)])[0])
     return JSONResponse(
         {"detail": "results database unavailable"},
         status_code=status.HTTP_503_SERVICE_UNAVAILABLE,
@@ -65,3 +69,4 @@ def install_error_handlers(app: FastAPI) -> None:
     )
     app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
     app.add_exception_handler(OperationalError, _database_unavailable)
+    app.add_exception_handler(DatabaseUnavailableError, _database_unavailable)

@@ -6,6 +6,7 @@ from contextlib import asynccontextmanager
 
 from fastapi import APIRouter, Depends, FastAPI
 from sqlalchemy.ext.asyncio import async_sessionmaker
+from sqlalchemy.orm import configure_mappers
 
 from api.deps import require_station
 from api.errors import install_error_handlers
@@ -48,7 +49,10 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
-        app.state.unit_lookups = UnitLookups(reader)
+        lookups = app.state.unit_lookups = UnitLookups(reader)  # keeps one reader connection
+        # The models' mappers are configured on first use: done here, the first
+        # submission does not hold up the requests beside it for tens of milliseconds.
+        configure_mappers()
         # What start-up allocated (modules, routes, models) lives as long as the process:
         # keep it out of the collector's full passes, which otherwise walk it all and
         # stall requests for milliseconds at a time.
@@ -57,6 +61,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         try:
             yield
         finally:
+            await lookups.close()
             await writer.dispose()
             await reader.dispose()
 

@@ -14,7 +14,9 @@ Measures, with ``--clients`` concurrent keep-alive HTTP clients (default 32):
     client sending as fast as it is answered (the throughput), then p50/p99 latency at an
     offered ``--rate`` (default 1,000/s) spread over the same clients, each request timed
     from when it was due;
-(b) ``POST /api/v1/runs`` of new runs (each recomputed by the server): submissions/s;
+(b) ``POST /api/v1/runs`` of new runs (each recomputed by the server): submissions/s
+    as fast as answered; then unit lookups at ``--rate`` again while stations submit
+    ``--submit-rate`` runs/s (default 10/s) beside them;
 (c) list queries (``GET /api/v1/runs`` filtered by station, verdict and time, serial;
     the second page through the cursor) and ``GET /api/v1/runs/{id}``: p50/p99.
 Targets: unit lookup p99 < 20 ms and at least 1,000 lookups/s.
@@ -33,7 +35,7 @@ import time
 import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from urllib.parse import urlencode
@@ -55,6 +57,7 @@ UNITS_PER_RUN = 0.4  # 1,000,000 runs → 400,000 serial numbers, 2.5 runs each
 STATIONS = 8
 T0 = datetime(2026, 1, 1, tzinfo=UTC)
 STEP_S = 15  # one run every 15 s across the plant
+POST_RUNS = 3000  # at most, submitted as fast as answered
 
 SEED_SQL = """
 INSERT INTO runs (run_id, serial, station_id, operator_id, started_at, finished_at,
@@ -110,6 +113,12 @@ class Result:
     errors: int
     server_cpu_s: float = 0.0
     client_cpu_s: float = 0.0
+    cpu_shared: bool = False  # measured over the same time as another load's requests
+
+    @property
+    def requests(self) -> int:
+        """Requests sent, answered or refused."""
+        return len(self.latencies) + self.errors
 
     def row(self, name: str, clients: int) -> str:
         """One Markdown table row."""
@@ -117,12 +126,25 @@ class Result:
         p50 = statistics.median(ms)
         p99 = ms[min(len(ms) - 1, int(0.99 * len(ms)))]
         rate = len(ms) / self.wall_s
-        n = max(1, len(ms) + self.errors)
+        n = max(1, self.requests)
+        cpu = (
+            "(above) | (above)"
+            if self.cpu_shared
+            else f"{1e3 * self.server_cpu_s / n:.2f} | {1e3 * self.client_cpu_s / n:.2f}"
+        )
         return (
             f"| {name} | {clients} | {len(ms)} | {p50:.1f} | {p99:.1f} | {rate:,.0f} | "
-            f"{1e3 * self.server_cpu_s / n:.2f} | {1e3 * self.client_cpu_s / n:.2f} | "
-            f"{self.errors} |"
+            f"{cpu} | {self.errors} |"
         )
+
+    def together(self, other: "Result") -> tuple["Result", "Result"]:
+        """Two loads run side by side: the CPU of both is counted over all their requests."""
+        n = max(1, self.requests)
+        share = n / max(1, n + other.requests)
+        mine = replace(
+            self, server_cpu_s=self.server_cpu_s * share, client_cpu_s=self.client_cpu_s * share
+        )
+        return mine, replace(other, cpu_shared=True)
 
 
 def tree_cpu_s(pid: int) -> float:
@@ -174,6 +196,10 @@ def seed(url: str, runs: int) -> tuple[str, int]:
     filled = time.perf_counter()
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:
         c.execute(text("VACUUM ANALYZE"))
+        # Seeding and VACUUM leave gigabytes of dirty pages. Written out during the
+        # measurement, they would make lookups wait on the disk: a plant's server, which
+        # stores a run every few seconds, never has that backlog.
+        c.execute(text("CHECKPOINT"))
     print(
         f"seeded {runs:,} runs ({7 * runs:,} poses) and their report roll-ups in "
         f"{seeded - started:.0f} s, their {units:,} units' current state in {filled - seeded:.0f} s"
@@ -250,7 +276,7 @@ class Connection:
         self.writer.close()
 
 
-def load(
+async def measure(
     base: str,
     server_pid: int,
     clients: int,
@@ -270,47 +296,43 @@ def load(
     got round to sending it (open loop: latency at a given load, without coordinated
     omission).
     """
+    latencies: list[float] = []
+    errors = 0
+    connections = [await Connection.open(base, headers or {}) for _ in range(clients)]
+    for connection in connections:
+        assert await connection.send(("GET", "/healthz", b"")) == 200
+    issued = 0
+    began, server0, client0 = time.perf_counter(), tree_cpu_s(server_pid), time.process_time()
+    stop = began + seconds
 
-    async def main() -> Result:
-        latencies: list[float] = []
-        errors = 0
-        connections = [await Connection.open(base, headers or {}) for _ in range(clients)]
-        for connection in connections:
-            assert await connection.send(("GET", "/healthz", b"")) == 200
-        issued = 0
-        began, server0, client0 = time.perf_counter(), tree_cpu_s(server_pid), time.process_time()
-        stop = began + seconds
+    async def worker(connection: Connection, seed: int) -> None:
+        nonlocal errors, issued
+        rng = random.Random(seed)
+        interval = clients / rate if rate else 0.0
+        due = began + interval * seed / clients
+        while time.perf_counter() < stop and (total is None or issued < total):
+            issued += 1
+            if rate:
+                await asyncio.sleep(max(0.0, due - time.perf_counter()))
+                started, due = due, due + interval
+            else:
+                started = time.perf_counter()
+            if await connection.send(call(rng)) in expect:
+                latencies.append(time.perf_counter() - started)
+            else:
+                errors += 1
 
-        async def worker(connection: Connection, seed: int) -> None:
-            nonlocal errors, issued
-            rng = random.Random(seed)
-            interval = clients / rate if rate else 0.0
-            due = began + interval * seed / clients
-            while time.perf_counter() < stop and (total is None or issued < total):
-                issued += 1
-                if rate:
-                    await asyncio.sleep(max(0.0, due - time.perf_counter()))
-                    started, due = due, due + interval
-                else:
-                    started = time.perf_counter()
-                if await connection.send(call(rng)) in expect:
-                    latencies.append(time.perf_counter() - started)
-                else:
-                    errors += 1
-
-        await asyncio.gather(*(worker(c, i) for i, c in enumerate(connections)))
-        result = Result(
-            latencies,
-            time.perf_counter() - began,
-            errors,
-            server_cpu_s=tree_cpu_s(server_pid) - server0,
-            client_cpu_s=time.process_time() - client0,
-        )
-        for connection in connections:
-            connection.close()
-        return result
-
-    return uvloop.run(main())
+    await asyncio.gather(*(worker(c, i) for i, c in enumerate(connections)))
+    result = Result(
+        latencies,
+        time.perf_counter() - began,
+        errors,
+        server_cpu_s=tree_cpu_s(server_pid) - server0,
+        client_cpu_s=time.process_time() - client0,
+    )
+    for connection in connections:
+        connection.close()
+    return result
 
 
 def new_record(rng: random.Random, np_rng: np.random.Generator, index: int) -> RunRecord:
@@ -364,6 +386,12 @@ def main() -> None:
     parser.add_argument(
         "--rate", type=float, default=1000.0, help="offered unit lookups/s of the paced run"
     )
+    parser.add_argument(
+        "--submit-rate",
+        type=float,
+        default=10.0,
+        help="submissions/s from the stations while lookups run at --rate",
+    )
     parser.add_argument("--port", type=int, default=8765)
     parser.add_argument(
         "--postgres-url", default=os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
@@ -378,22 +406,57 @@ def main() -> None:
             def lookup(rng: random.Random) -> Call:
                 return ("GET", f"/api/v1/units/PT-{rng.randrange(units):07d}", b"")
 
-            unit = load(base, pid, args.clients, args.seconds, lookup)
-            paced = load(base, pid, args.clients, args.seconds, lookup, rate=args.rate)
+            unit = uvloop.run(measure(base, pid, args.clients, args.seconds, lookup))
+            paced = uvloop.run(
+                measure(base, pid, args.clients, args.seconds, lookup, rate=args.rate)
+            )
             np_rng = np.random.default_rng(7)
             rng = random.Random(7)
-            posts = [new_record(rng, np_rng, i).model_dump_json().encode() for i in range(3000)]
+            beside = int(args.submit_rate * args.seconds * 1.2) + 10
+            posts = [
+                new_record(rng, np_rng, i).model_dump_json().encode()
+                for i in range(POST_RUNS + beside)
+            ]
             queue = iter(posts)
-            post = load(
-                base,
-                pid,
-                args.clients,
-                args.seconds,
-                lambda _: ("POST", "/api/v1/runs", next(queue)),
-                expect=(201,),
-                total=len(posts),
-                headers={"Authorization": f"Bearer {key}", "Content-Type": "application/json"},
+            stations = {"Authorization": f"Bearer {key}", "Content-Type": "application/json"}
+
+            def submit(_: random.Random) -> Call:
+                return ("POST", "/api/v1/runs", next(queue))
+
+            post = uvloop.run(
+                measure(
+                    base,
+                    pid,
+                    args.clients,
+                    args.seconds,
+                    submit,
+                    expect=(201,),
+                    total=POST_RUNS,
+                    headers=stations,
+                )
             )
+            # Each station sends at least once a second: the server's keep-alive
+            # timeout (5 s) would close a connection left idle for longer.
+            submitters = max(1, min(STATIONS, int(args.submit_rate)))
+
+            async def mixed() -> tuple[Result, Result]:
+                return await asyncio.gather(
+                    measure(base, pid, args.clients, args.seconds, lookup, rate=args.rate),
+                    measure(
+                        base,
+                        pid,
+                        submitters,
+                        args.seconds,
+                        submit,
+                        expect=(201,),
+                        headers=stations,
+                        rate=args.submit_rate,
+                    ),
+                )
+
+            paced_mixed, submitted = uvloop.run(mixed())
+            # Both loads were timed over the same seconds: their CPU is one figure.
+            paced_mixed, submitted = paced_mixed.together(submitted)
             runs = "/api/v1/runs"
             page = httpx.get(
                 f"{base}{runs}", params={"station_id": "line2-st3", "limit": 50}
@@ -435,7 +498,8 @@ def main() -> None:
                 "GET /runs/{run_id} (7 poses)": lambda _: ("GET", f"{runs}/{some_run}", b""),
             }
             list_results = {
-                name: load(base, pid, 8, args.seconds / 3, call) for name, call in lists.items()
+                name: uvloop.run(measure(base, pid, 8, args.seconds / 3, call))
+                for name, call in lists.items()
             }
 
     print()
@@ -450,7 +514,15 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|---|")
     print(unit.row("GET /api/v1/units/{serial}, as fast as answered", args.clients))
     print(paced.row(f"GET /api/v1/units/{{serial}} at {args.rate:,.0f}/s", args.clients))
-    print(post.row("POST /api/v1/runs", args.clients))
+    print(
+        paced_mixed.row(
+            f"GET /api/v1/units/{{serial}} at {args.rate:,.0f}/s, "
+            f"stations submitting {args.submit_rate:,.0f}/s",
+            args.clients,
+        )
+    )
+    print(submitted.row(f"POST /api/v1/runs at {args.submit_rate:,.0f}/s, beside it", submitters))
+    print(post.row("POST /api/v1/runs, as fast as answered", args.clients))
     for name, result in list_results.items():
         print(result.row(name, 8))
 

@@ -80,10 +80,11 @@ class DatabaseUnavailableError(CalstationError):
     """The database does not answer (wrong URL, server down, no permission)."""
 
     @classmethod
-    def of(cls, url: str | URL, exc: OperationalError) -> "DatabaseUnavailableError":
+    def of(cls, url: str | URL, exc: Exception) -> "DatabaseUnavailableError":
         """One line naming the database (password hidden) and the driver's first line."""
         shown = make_url(url).render_as_string(hide_password=True)
-        reason = str(exc.orig or exc).strip().splitlines()[0]
+        driver = getattr(exc, "orig", None) or exc  # SQLAlchemy's errors wrap the driver's
+        reason = (str(driver).strip().splitlines() or [type(driver).__name__])[0]
         return cls(f"database {shown} unavailable: {reason}")
 
 

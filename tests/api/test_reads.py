@@ -1,13 +1,16 @@
 """Read endpoints: a unit's state and history, run lists with cursors, single runs, health."""
 
 from datetime import timedelta
+from pathlib import Path
 
 import httpx
 import pytest
+from sqlalchemy import text
 
-from db import Database, RunRepository
+from db import Database, RunRepository, open_database
 from station.records import RunRecord
 from tests.db.records import T0, make_record
+from tests.servers import serving
 
 
 def _store(database: Database, *records: RunRecord) -> None:
@@ -161,3 +164,26 @@ def test_the_openapi_document_lists_every_route(client: httpx.Client) -> None:
         "/api/v1/runs/{run_id}",
     } <= set(paths)
     assert client.get("/docs").status_code == 200
+
+
+def test_a_lookup_the_database_cannot_answer_is_a_503_and_the_server_recovers(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'results.sqlite3'}"
+    database = open_database(url, auto_migrate=True)
+    record = make_record()
+    _store(database, record)
+    path = f"/api/v1/units/{record.serial}"
+    with serving(url) as base, httpx.Client(base_url=base, timeout=10) as client:
+        assert client.get(path).status_code == 200
+        with database.engine.begin() as connection:  # the table goes away under the server
+            connection.execute(text("ALTER TABLE units RENAME TO units_away"))
+        broken = client.get(path)
+        with database.engine.begin() as connection:
+            connection.execute(text("ALTER TABLE units_away RENAME TO units"))
+        again = client.get(path)
+    database.dispose()
+    assert broken.status_code == 503
+    assert broken.json() == {"detail": "results database unavailable"}
+    assert again.status_code == 200
+    assert again.json()["run_id"] == str(record.run_id)
