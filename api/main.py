@@ -50,8 +50,8 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
         lookups = app.state.unit_lookups = UnitLookups(reader)  # keeps one reader connection
-        # The models' mappers are configured on first use: done here, the first
-        # submission does not hold up the requests beside it for tens of milliseconds.
+        # The models' mappers are configured on first use (about 10 ms): done here, the
+        # first request that needs them does not hold up the requests beside it.
         configure_mappers()
         # What start-up allocated (modules, routes, models) lives as long as the process:
         # keep it out of the collector's full passes, which otherwise walk it all and

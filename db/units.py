@@ -161,8 +161,8 @@ class UnitLookups:
         """The stored answers of those ``serials`` that are known."""
         try:
             if self._driver is None:
-                connection = await self.engine.connect()
-                self._connection = await connection.execution_options(isolation_level="AUTOCOMMIT")
+                self._connection = connection = await self.engine.connect()
+                await connection.execution_options(isolation_level="AUTOCOMMIT")
                 self._driver = (await connection.get_raw_connection()).driver_connection
             cursor = await self._driver.execute(self._statement, self._parameters(serials))
             rows = await cursor.fetchall()
