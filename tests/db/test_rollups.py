@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session
 from db import Database, RunRepository
 from db.models import ReportCounts, ReportFailures, ReportParameters, RunFacts
 from db.reports import eol_report
-from db.rollups import rebuild
+from db.rollups import _inline, rebuild
 from station.limits import Bounds, load_profile
 from station.report.model import EolReport, ReportFilter
 from tests.databases import rolled_back
@@ -244,3 +244,24 @@ def test_late_runs_and_retests_keep_the_report_exact(
         kept = rollup_rows(session)
         rebuild(session.connection())
         assert rollup_rows(session) == kept
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    value=st.one_of(
+        st.floats(allow_nan=False, allow_infinity=False),
+        st.integers(-(2**31), 2**31 - 1),
+        st.text(alphabet="abcxyz_.-019", max_size=12),
+    )
+)
+def test_constants_written_into_the_statements_read_back_unchanged(
+    migrated_database: Database, value: float | str
+) -> None:
+    with migrated_database.engine.connect() as connection:
+        assert connection.scalar(select(_inline(value))) == value
+
+
+@pytest.mark.parametrize("text", ["it's", "a;b", "x y", "é"])
+def test_text_that_is_not_a_plain_constant_is_refused(text: str) -> None:
+    with pytest.raises(ValueError, match="not a constant"):
+        _inline(text)
