@@ -210,6 +210,8 @@ def _pairwise(element: smaller | larger, compiler: SQLCompiler, **kw: Any) -> st
 # -- per-run facts ---------------------------------------------------------------------
 
 
+#: Text safe to write between quotes: no quote to escape, no % for the driver to read
+#: as a placeholder.
 _SAFE_TEXT = re.compile(r"[A-Za-z0-9_.-]*")
 
 
