@@ -39,9 +39,9 @@ def _sqlite_events(engine: Engine, *, autocommit: bool) -> None:
 T = TypeVar("T")
 
 
-def for_dialect(session: Session, statements: Mapping[str, T]) -> T:
-    """The entry of ``statements`` for the session's database dialect."""
-    dialect = session.get_bind().dialect.name
+def for_dialect(bind: Session | AsyncEngine, statements: Mapping[str, T]) -> T:
+    """The entry of ``statements`` for the database dialect of a session or an engine."""
+    dialect = (bind.get_bind() if isinstance(bind, Session) else bind).dialect.name
     if dialect not in statements:
         raise CalstationError(f"database dialect {dialect!r} is not supported")
     return statements[dialect]

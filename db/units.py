@@ -25,7 +25,6 @@ from sqlalchemy.orm import Session
 
 from db.engine import DatabaseUnavailableError, for_dialect
 from db.models import Run, Unit
-from station.errors import CalstationError
 from station.records import RunSummary, StoredRun, UnitCalibration
 
 
@@ -112,12 +111,9 @@ class UnitLookups:
     """
 
     def __init__(self, engine: AsyncEngine, batch: int = 200) -> None:
-        dialect = engine.dialect.name
-        if dialect not in _LOOKUP:
-            raise CalstationError(f"database dialect {dialect!r} is not supported")
         self.engine = engine
         self.batch = batch
-        self._statement, self._parameters = _LOOKUP[dialect]
+        self._statement, self._parameters = for_dialect(engine, _LOOKUP)
         self._driver_error: type[Exception] = engine.dialect.loaded_dbapi.Error
         self._waiting: dict[str, list[asyncio.Future[str | None]]] = {}
         self._reader: asyncio.Task[None] | None = None  # the statement out, if any
