@@ -123,6 +123,8 @@ class Outbox:
         try:
             for record in list(self.unwritten):
                 self._send(store, record, tally, partial(self.unwritten.remove, record))
+            if not self.unwritten:
+                self.write_error = None  # whatever the disk refused is stored now
             for path in self.pending():
                 self._send_file(store, path, tally)
         except StoreUnavailableError as exc:
