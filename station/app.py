@@ -28,7 +28,7 @@ from station.errors import CalstationError
 from station.journal import JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
-from station.outbox import Outbox
+from station.outbox import Outbox, waiting
 from station.records import RunRecord
 from station.screens import header, serial_prompt, unit_screen, verdict_screen
 from station.session import ALGORITHM, Phase, UnitRun
@@ -370,7 +370,7 @@ class StationApp:
         except (SQLAlchemyError, OSError, CalstationError) as exc:
             self._drop_store()
             reason = str(exc) if isinstance(exc, CalstationError) else type(exc).__name__
-            self._store_says(f"results store unreachable ({reason}): runs wait in the outbox")
+            self._store_says(f"{waiting(self.backlog)}: results store unreachable ({reason})")
             return
         self.backlog = result.pending
         self.set_aside = self.outbox.set_aside()

@@ -55,7 +55,7 @@ class SyncResult:
         """One plain line for the operator about this sync (None when all went well)."""
         lines = []
         if self.error is not None:
-            lines.append(f"{self.error}; {_runs(self.pending)} wait in the outbox")
+            lines.append(f"{waiting(self.pending)}: {self.error}")
         if self.failing:
             lines.append(
                 f"the store keeps failing on {_runs(self.failing)} ({self.failure}): "
@@ -210,6 +210,11 @@ class _Tally:
 
 def _runs(n: int) -> str:
     return f"{n} run{'s' * (n != 1)}"
+
+
+def waiting(n: int) -> str:
+    """ "1 run waits in the outbox", "3 runs wait in the outbox": a note's first words."""
+    return f"{_runs(n)} wait{'s' * (n == 1)} in the outbox"
 
 
 def _name(record: RunRecord) -> str:

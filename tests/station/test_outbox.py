@@ -275,8 +275,10 @@ def test_a_refused_key_keeps_every_run_queued_until_the_key_works(
     assert (result.stored, result.refused, result.pending) == (0, 0, 3)
     note = result.note()
     assert note is not None
-    assert note.startswith("results server refused this station's API key (401")
-    assert note.endswith("fix api_key; 3 runs wait in the outbox")
+    assert note.startswith(
+        "3 runs wait in the outbox: results server refused this station's API key (401"
+    )
+    assert note.endswith("fix api_key")
     assert outbox.set_aside() == (0, 0)
     with HttpStore(live_url, station_key) as store:
         assert outbox.sync(store).stored == 3
