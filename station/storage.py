@@ -128,7 +128,7 @@ class HttpStore(Closing):
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         try:
-            response = self.client.post(RUNS_PATH, json=record.model_dump(mode="json"))
+            response = self._post(record.model_dump(mode="json"))
         except httpx.HTTPError as exc:
             raise StoreUnavailableError(
                 f"results server {self.client.base_url} unreachable: {exc}"
@@ -139,6 +139,18 @@ class HttpStore(Closing):
                 run=StoredRun.model_validate_json(response.content),
             )
         raise _http_error(self.client.base_url, record, response)
+
+    def _post(self, body: dict[str, object]) -> httpx.Response:
+        """POST the run; once more on a fresh connection if a kept-alive one was dropped.
+
+        The server closes its connection after a 500, so the next record's request may
+        meet a closed socket: that says nothing about the server being reachable, and
+        the submission is idempotent, so it is simply sent again.
+        """
+        try:
+            return self.client.post(RUNS_PATH, json=body)
+        except (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError):
+            return self.client.post(RUNS_PATH, json=body)
 
     def close(self) -> None:
         self.client.close()

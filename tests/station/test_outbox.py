@@ -12,6 +12,7 @@ import httpx
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from rich.console import Console
 from sqlalchemy import func, select
 
 from db import Database
@@ -21,6 +22,7 @@ from station.journal import JournalFile, RunJournal
 from station.outbox import Outbox
 from station.outbox_files import UnreadableRecordError, read_record, reason_of
 from station.records import RunRecord
+from station.screens import header
 from station.storage import DatabaseStore, HttpStore, SubmitOutcome
 from tests.db.records import make_record
 from tests.station.test_storage import poison
@@ -283,3 +285,32 @@ def test_a_refused_key_keeps_every_run_queued_until_the_key_works(
     with HttpStore(live_url, station_key) as store:
         assert outbox.sync(store).stored == 3
     assert stored_runs(database) == 3
+
+
+def test_the_top_line_counts_what_was_set_aside_beside_the_backlog() -> None:
+    console = Console(width=200, record=True)
+    console.print(header("st-1", "op-7", "v0", 2, (1, 3)))
+    top = console.export_text().splitlines()[0]
+    assert top.endswith("outbox 2 · 1 unreadable · 3 refused (calstation outbox list)")
+    console.print(header("st-1", "op-7", "v0", 0))
+    assert console.export_text().splitlines()[0].endswith("outbox empty")
+
+
+def test_a_poison_run_the_server_fails_on_never_holds_up_the_runs_behind_it(
+    tmp_path: Path, live_url: str, database: Database, station_key: str
+) -> None:
+    outbox = Outbox(tmp_path / "outbox")
+    outbox.put(poison(make_record(serial="PT-POISON")))
+    age(outbox.pending()[0], 60)
+    outbox.put(make_record(serial="PT-1"))
+    with HttpStore(live_url, station_key) as store:
+        result = outbox.sync(store)
+    assert result.error is None
+    with database.session() as session:
+        assert session.scalar(select(func.count()).where(Run.serial == "PT-1")) == 1
+    # Whichever comes first: the server fails on it (500 on PostgreSQL: backoff), stores it
+    # (SQLite takes 1e300), refuses it (422), or the station's own model does (unreadable).
+    if result.stored == 2:
+        assert database.is_sqlite
+    else:
+        assert result.failing + result.refused + result.unreadable == 1
