@@ -23,11 +23,12 @@ from sqlalchemy.exc import SQLAlchemyError
 from station import __version__
 from station.config import StationConfig
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
+from station.disk import DiskWatch
 from station.errors import CalstationError
 from station.journal import JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
-from station.outbox import Outbox
+from station.outbox import Outbox, waiting
 from station.records import RunRecord
 from station.screens import header, serial_prompt, unit_screen, verdict_screen
 from station.session import ALGORITHM, Phase, UnitRun
@@ -102,6 +103,11 @@ class StationApp:
         self.store_note: str | None = None
         #: Runs waiting in the outbox (counted at every sync, kept up to date between).
         self.backlog = 0
+        #: Outbox files set aside: (unreadable, refused), counted at every sync.
+        self.set_aside = (0, 0)
+        self.disk = DiskWatch(config.data_dir.expanduser(), self.journal_file, self.outbox)
+        #: What the disk refused, in one line (None when every write went through).
+        self.disk_note: str | None = None
 
     # -- start and loop ------------------------------------------------------------------
 
@@ -158,6 +164,7 @@ class StationApp:
             return
         for key in typed:
             self._key(key)
+        self._check_disk()
         if self.run is not None:
             self.run.step()
             self._echo_messages(self.run)
@@ -171,8 +178,16 @@ class StationApp:
     def screen(self) -> RenderableType:
         """The whole screen as it stands."""
         parts: list[RenderableType] = [
-            header(self.config.station_id, self.config.operator_id, self.versions, self.backlog)
+            header(
+                self.config.station_id,
+                self.config.operator_id,
+                self.versions,
+                self.backlog,
+                self.set_aside,
+            )
         ]
+        if self.disk_note:
+            parts.append(Text(self.disk_note, style="bold red"))
         if self.store_note:
             parts.append(Text(self.store_note, style="yellow"))
         if self.state is State.RESUME and self.pending_resume is not None:
@@ -344,31 +359,36 @@ class StationApp:
     def _sync(self) -> None:
         self._next_sync = time.monotonic() + SYNC_EVERY_S
         self.backlog = self.outbox.count()
+        self.set_aside = self.outbox.set_aside()
         if not self.backlog:
-            self.store_note = None
+            self._store_says(None)
             return
         try:
             if self._store is None:
                 self._store = self._open_store()
             result = self.outbox.sync(self._store)
-            self.backlog = result.pending
         except (SQLAlchemyError, OSError, CalstationError) as exc:
             self._drop_store()
-            self.store_note = (
-                f"results database unreachable ({type(exc).__name__}): runs wait in the outbox"
-            )
-            self._say_line(self.store_note)
+            reason = str(exc) if isinstance(exc, CalstationError) else type(exc).__name__
+            self._store_says(f"{waiting(self.backlog)}: results store unreachable ({reason})")
             return
+        self.backlog = result.pending
+        self.set_aside = self.outbox.set_aside()
         if result.error is not None:
             self._drop_store()
-            self.store_note = f"{result.error}: runs wait in the outbox"
-            self._say_line(self.store_note)
-        else:
-            self.store_note = None
-            if result.refused:
-                self.store_note = (
-                    f"{result.refused} run(s) refused by the store: see {self.outbox.refused_dir}"
-                )
+        self._store_says(result.note())
+
+    def _store_says(self, note: str | None) -> None:
+        """Show ``note`` about the store; a changed note also goes to the log."""
+        if note is not None and note != self.store_note:
+            self._say_line(note)
+        self.store_note = note
+
+    def _check_disk(self) -> None:
+        note = self.disk.check()
+        if note is not None and note != self.disk_note:
+            self._say_line(note)
+        self.disk_note = note
 
     def _check_store(self) -> None:
         """Connect to the store at start, so the first unit does not wait for it."""

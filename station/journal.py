@@ -4,8 +4,11 @@ The station writes the whole state of the unit it is calibrating (serial, run id
 every capture taken and every capture replaced) to one JSON file after each pose,
 atomically. After a crash or a power cut the station finds the file and offers to
 resume the unit at the pose where it stopped; a finished or aborted run removes it.
+When the disk refuses (full, read-only), the unit goes on in memory: the latest state
+(or the removal) is kept and done again by :meth:`JournalFile.retry` once it can be.
 """
 
+import logging
 from datetime import datetime
 from pathlib import Path
 from uuid import UUID
@@ -14,6 +17,8 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from station.files import write_atomic
 from station.records import PoseRecord, ReplacedCapture, Vector3
+
+log = logging.getLogger(__name__)
 
 
 class Capture(BaseModel):
@@ -54,10 +59,30 @@ class JournalFile:
 
     def __init__(self, path: Path) -> None:
         self.path = path
+        #: What the disk refused: the journal to write, or True for the removal.
+        self._owed: RunJournal | bool = False
+        #: Why the latest write failed (None once a write succeeded).
+        self.write_error: OSError | None = None
 
     def save(self, journal: RunJournal) -> None:
-        """Write the state durably (atomic replace)."""
-        write_atomic(self.path, journal.model_dump_json(indent=1))
+        """Write the state durably (atomic replace); if the disk refuses, owe it."""
+        self._owed = journal
+        self.retry()
+
+    def retry(self) -> None:
+        """Do the write (or removal) the disk refused last time, if any."""
+        try:
+            if isinstance(self._owed, RunJournal):
+                write_atomic(self.path, self._owed.model_dump_json(indent=1))
+            elif self._owed:
+                self.path.unlink(missing_ok=True)
+        except OSError as exc:
+            if self.write_error is None:
+                log.error("cannot write the journal %s: %s", self.path, exc)
+            self.write_error = exc
+            return
+        self._owed = False
+        self.write_error = None
 
     def load(self) -> RunJournal | None:
         """The interrupted run, or None. An unreadable journal is kept aside, not lost."""
@@ -73,4 +98,5 @@ class JournalFile:
 
     def clear(self) -> None:
         """The run ended (stored or aborted): nothing to resume."""
-        self.path.unlink(missing_ok=True)
+        self._owed = True
+        self.retry()

@@ -55,14 +55,24 @@ and keep hands off: the capture starts by itself once it lies still in that pose
 At the serial prompt: scan the label (or type it and press Enter); type quit to stop."""
 
 
-def header(station_id: str, operator_id: str, versions: str, backlog: int) -> RenderableType:
-    """The top lines: who, how many runs wait in the outbox, which versions."""
+def header(
+    station_id: str,
+    operator_id: str,
+    versions: str,
+    backlog: int,
+    set_aside: tuple[int, int] = (0, 0),
+) -> RenderableType:
+    """The top lines: who, how many runs wait in the outbox (and were set aside), versions."""
     backlog_text = f"outbox {backlog}" if backlog else "outbox empty"
     style = "bold yellow" if backlog else "green"
+    unreadable, refused = set_aside
+    aside = [f"{unreadable} unreadable"] if unreadable else []
+    aside += [f"{refused} refused"] if refused else []
     who = Text.assemble(
         ("calstation", "bold"),
         f" · station {station_id} · operator {operator_id} · ",
         (backlog_text, style),
+        (f" · {' · '.join(aside)} (calstation outbox list)" if aside else "", "bold red"),
     )
     return Group(who, Text(versions, style="dim"))
 

@@ -6,14 +6,21 @@ Errors tell the outbox what to do::
 
     CalstationError
     └── StoreError
-        ├── StoreUnavailableError   database or server unreachable, 5xx: keep, retry later
-        └── SubmissionRefusedError  the record itself is refused (4xx): retrying will not help
+        ├── StoreUnavailableError       unreachable (connection, timeout, 502/503/504,
+        │   │                           408/429): every record waits, retry later
+        │   └── StoreConfigurationError the station's key or URL is wrong (401/403, 404/405,
+        │                               other 4xx): every record waits until it is fixed
+        ├── RecordFailedError           the store answered but failed on this record (500,
+        │                               a database error other than a lost connection):
+        │                               retry this one with backoff, send the others
+        └── SubmissionRefusedError      the record itself is invalid (400, 409, 413, 422):
+                                        retrying will not help
 """
 
 from typing import Protocol
 
 import httpx
-from sqlalchemy.exc import OperationalError
+from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError, SQLAlchemyError
 
 from db import (
     Database,
@@ -30,7 +37,9 @@ from station.records import RunRecord, StoredRun
 __all__ = [
     "DatabaseStore",
     "HttpStore",
+    "RecordFailedError",
     "RunStore",
+    "StoreConfigurationError",
     "StoreError",
     "StoreUnavailableError",
     "SubmissionRefusedError",
@@ -46,6 +55,14 @@ class StoreError(CalstationError):
 
 class StoreUnavailableError(StoreError):
     """The store did not answer or failed on its side; the record may be sent again later."""
+
+
+class StoreConfigurationError(StoreUnavailableError):
+    """The store refused this station (key, URL): no record goes until the setting is fixed."""
+
+
+class RecordFailedError(StoreError):
+    """The store answered but failed on this record: retry it later, send the others now."""
 
 
 class SubmissionRefusedError(StoreError):
@@ -79,9 +96,13 @@ class DatabaseStore(Closing):
                 return RunRepository(session).submit(record)
         except RunConflictError as exc:
             raise SubmissionRefusedError(str(exc)) from None
-        except OperationalError as exc:
+        except SQLAlchemyError as exc:
             url = self.database.engine.url
-            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
+            if _connection_lost(exc):
+                raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
+            raise RecordFailedError(
+                f"database failed on run {record.run_id}: {_first_line(exc)}"
+            ) from None
 
     def close(self) -> None:
         self.database.dispose()
@@ -107,7 +128,7 @@ class HttpStore(Closing):
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         try:
-            response = self.client.post(RUNS_PATH, json=record.model_dump(mode="json"))
+            response = self._post(record.model_dump(mode="json"))
         except httpx.HTTPError as exc:
             raise StoreUnavailableError(
                 f"results server {self.client.base_url} unreachable: {exc}"
@@ -117,15 +138,76 @@ class HttpStore(Closing):
                 created=response.status_code == 201,
                 run=StoredRun.model_validate_json(response.content),
             )
-        message = _detail(response)
-        if response.is_client_error and response.status_code not in (408, 429):
-            raise SubmissionRefusedError(
-                f"results server refused run {record.run_id} ({response.status_code}): {message}"
-            )
-        raise StoreUnavailableError(f"results server answered {response.status_code}: {message}")
+        raise _http_error(self.client.base_url, record, response)
+
+    def _post(self, body: dict[str, object]) -> httpx.Response:
+        """POST the run; once more on a fresh connection if a kept-alive one was dropped.
+
+        The server closes its connection after a 500, so the next record's request may
+        meet a closed socket: that says nothing about the server being reachable, and
+        the submission is idempotent, so it is simply sent again.
+        """
+        try:
+            return self.client.post(RUNS_PATH, json=body)
+        except (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError):
+            return self.client.post(RUNS_PATH, json=body)
 
     def close(self) -> None:
         self.client.close()
+
+
+def _first_line(exc: SQLAlchemyError) -> str:
+    """The driver's own first line (SQLAlchemy's message adds the whole statement)."""
+    driver = getattr(exc, "orig", None) or exc
+    return (str(driver).strip().splitlines() or [type(driver).__name__])[0]
+
+
+def _connection_lost(exc: SQLAlchemyError) -> bool:
+    """Whether ``exc`` says the database is out of reach, not that this record failed.
+
+    Operational and interface errors are the driver's "no connection, timeout, server
+    shutting down, database locked or full"; any other error (a numeric overflow, a
+    constraint) came back from a working database about this record's statements.
+    """
+    if isinstance(exc, DBAPIError) and exc.connection_invalidated:
+        return True
+    return isinstance(exc, OperationalError | InterfaceError)
+
+
+#: Answers that say the record itself is invalid: it goes to ``refused/``.
+REFUSED = frozenset({400, 409, 413, 422})
+#: Answers that say the server cannot take anything now: every record waits.
+BUSY = frozenset({408, 425, 429, 502, 503, 504})
+#: Answers that say this station's key is not accepted.
+KEY_REFUSED = frozenset({401, 403, 407})
+#: Answers that say there is no run endpoint at this URL.
+WRONG_URL = frozenset({404, 405, 410})
+
+
+def _http_error(base_url: httpx.URL, record: RunRecord, response: httpx.Response) -> StoreError:
+    """The outbox's error for a non-2xx answer to the submission of ``record``."""
+    code, message = response.status_code, _detail(response)
+    if code in REFUSED:
+        return SubmissionRefusedError(
+            f"results server refused run {record.run_id} ({code}): {message}"
+        )
+    if code in BUSY:
+        return StoreUnavailableError(f"results server answered {code}: {message}")
+    if code in KEY_REFUSED:
+        return StoreConfigurationError(
+            f"results server refused this station's API key ({code}: {message}): fix api_key"
+        )
+    if code in WRONG_URL:
+        return StoreConfigurationError(
+            f"results server {base_url} has no run endpoint ({code}): fix server_url"
+        )
+    if response.is_server_error:
+        return RecordFailedError(
+            f"results server failed on run {record.run_id} ({code}): {message}"
+        )
+    return StoreConfigurationError(
+        f"results server answered {code} ({message}): check server_url and api_key"
+    )
 
 
 def _detail(response: httpx.Response) -> str:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from tests.conftest import CliRunner
+from tests.db.records import make_record
 
 
 def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Path) -> None:
@@ -32,3 +33,31 @@ def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Pat
         (run_id.replace("-", ""), verdict, lot) for run_id, verdict, lot in stored
     ]
     assert np.isfinite([u["estimate"]["offset"]["x"] for u in units]).all()
+
+
+def test_unreadable_outbox_files_no_longer_stop_the_demo(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    env_dir = tmp_path / "data"
+    outbox = env_dir / "outbox"
+    outbox.mkdir(parents=True)
+    (outbox / "torn.json").write_text('{"run_id": "0c8f", "serial": "PT0')
+    (outbox / "empty.json").write_bytes(b"")
+    (outbox / "binary.json").write_bytes(bytes(range(256)))
+    waiting = make_record(serial="PT000777")
+    (outbox / f"{waiting.run_id}.json").write_text(waiting.model_dump_json())
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(env_dir)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    result = run_cli("demo", "--units", "1", "--json", "--speed", "20", env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stderr
+    assert "3 unreadable set aside: see calstation outbox list" in result.stderr
+    assert sorted(p.name for p in (outbox / "unreadable").glob("*.json")) == [
+        "binary.json",
+        "empty.json",
+        "torn.json",
+    ]
+    assert not list(outbox.glob("*.json"))  # the waiting run and the demo's run are stored
+    with sqlite3.connect(env_dir / "calstation.sqlite3") as db:
+        serials = {serial for (serial,) in db.execute("select serial from runs")}
+    assert serials == {"PT000777", json.loads(result.stdout)[0]["serial"]}

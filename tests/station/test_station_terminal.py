@@ -291,7 +291,7 @@ def test_database_down_then_back_drains_the_outbox_once(tmp_path: Path) -> None:
         child = station.start()
         station.scan()
         assert station.follow() == "PASS"
-        child.expect("runs wait in the outbox")
+        child.expect("1 run waits in the outbox: results store unreachable")
         child.expect("outbox 1")
         with admin.connect() as connection:
             connection.execute(text(f'CREATE DATABASE "{name}"'))

@@ -4,14 +4,27 @@ import httpx
 import pytest
 
 from db import Database, RunRepository
+from station.records import RunRecord, Vector3
 from station.storage import (
     DatabaseStore,
     HttpStore,
+    RecordFailedError,
+    StoreConfigurationError,
+    StoreError,
     StoreUnavailableError,
     SubmissionRefusedError,
 )
 from tests.db.records import make_record
 from tests.servers import free_port
+
+
+def poison(record: RunRecord) -> RunRecord:
+    """``record`` with a pose spread of 1e300: finite, but beyond any SQL numeric.
+
+    Built without validation, so it stays poison whatever bounds the model has.
+    """
+    first = record.poses[0].model_copy(update={"std": Vector3(x=1e300, y=1.0, z=1.0)})
+    return record.model_copy(update={"poses": (first, *record.poses[1:])})
 
 
 def test_the_database_store_is_idempotent_on_the_run_uuid(database: Database) -> None:
@@ -50,7 +63,12 @@ def test_the_http_store_tells_a_refusal_from_an_outage(
 ) -> None:
     with (
         HttpStore(live_url, "csk_wrong") as store,
-        pytest.raises(SubmissionRefusedError, match="401"),
+        pytest.raises(StoreConfigurationError, match=r"API key \(401.*fix api_key"),
+    ):
+        store.submit(make_record())
+    with (
+        HttpStore(f"{live_url}/not-here", station_key) as store,
+        pytest.raises(StoreConfigurationError, match=r"\(404\): fix server_url"),
     ):
         store.submit(make_record())
     bad = make_record(offset=(2000.0, 2000.0, 2000.0))
@@ -66,3 +84,51 @@ def test_the_http_store_tells_a_refusal_from_an_outage(
         pytest.raises(StoreUnavailableError, match="unreachable"),
     ):
         store.submit(make_record())
+
+
+def test_a_database_error_on_one_record_blames_the_record_not_the_store(
+    database: Database,
+) -> None:
+    if database.is_sqlite:
+        pytest.skip("SQLite stores 1e300 as it is: no error to tell apart")
+    store = DatabaseStore(database=database)
+    with pytest.raises(RecordFailedError, match="out of range"):
+        store.submit(poison(make_record(serial="PT-POISON")))
+    store.submit(make_record(serial="PT-GOOD"))  # the same store goes on
+
+
+def test_a_database_that_does_not_answer_is_unavailable() -> None:
+    url = f"postgresql+psycopg://postgres@127.0.0.1:{free_port()}/test?connect_timeout=2"
+    with pytest.raises(StoreUnavailableError) as raised:
+        DatabaseStore(url)
+    assert not isinstance(raised.value, StoreConfigurationError)
+
+
+# The real server never answers these (it answers 401, 404, 409, 422 above), so a mock
+# transport plays a proxy, a broken server, or a future server refusing a key's scope.
+@pytest.mark.parametrize(
+    ("status", "error"),
+    [
+        (400, SubmissionRefusedError),
+        (413, SubmissionRefusedError),
+        (403, StoreConfigurationError),
+        (405, StoreConfigurationError),
+        (418, StoreConfigurationError),
+        (302, StoreConfigurationError),
+        (429, StoreUnavailableError),
+        (502, StoreUnavailableError),
+        (503, StoreUnavailableError),
+        (504, StoreUnavailableError),
+        (500, RecordFailedError),
+        (507, RecordFailedError),
+    ],
+)
+def test_every_answer_tells_the_outbox_what_to_do(status: int, error: type[StoreError]) -> None:
+    transport = httpx.MockTransport(lambda _: httpx.Response(status, json={"detail": "no"}))
+    with (
+        HttpStore("http://results", "key", transport=transport) as store,
+        pytest.raises(StoreError) as raised,
+    ):
+        store.submit(make_record())
+    assert type(raised.value) is error
+    assert str(status) in str(raised.value)

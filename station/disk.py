@@ -1,0 +1,73 @@
+"""The data directory refusing writes mid-unit: one plain line, the unit kept in memory.
+
+The journal (:class:`station.journal.JournalFile`) and the outbox
+(:class:`station.outbox.Outbox`) keep what the disk refused and write it again when
+asked; :class:`DiskWatch` asks once a second and says, in the operator's words, what
+is wrong and what to do, until every write went through.
+"""
+
+import errno
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from station.journal import JournalFile
+from station.outbox import Outbox
+
+#: Seconds between two attempts to write what the disk refused.
+RETRY_EVERY_S = 1.0
+
+#: errno → (what is wrong, what the operator does about it).
+_PROBLEMS = {
+    errno.ENOSPC: ("disk full", "free space"),
+    errno.EDQUOT: ("disk quota exceeded", "free space"),
+    errno.EFBIG: ("file too large for the disk", "free space"),
+    errno.EROFS: ("read-only file system", "make it writable"),
+    errno.EACCES: ("permission denied", "make it writable"),
+    errno.EPERM: ("permission denied", "make it writable"),
+}
+
+
+def cannot_write_line(data_dir: Path, exc: OSError, kept: str) -> str:
+    """The operator's line: what the disk refused, what is kept, what to do.
+
+    ``cannot write to DATA_DIR: disk full — the unit is kept in memory; free space to
+    continue``.
+    """
+    what, fix = _PROBLEMS.get(exc.errno or 0, (exc.strerror or str(exc), "fix it"))
+    return f"cannot write to {data_dir}: {what} — {kept} kept in memory; {fix} to continue"
+
+
+class DiskWatch:
+    """Retries the writes the disk refused and words the trouble for the screen."""
+
+    def __init__(
+        self,
+        data_dir: Path,
+        journal_file: JournalFile,
+        outbox: Outbox,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.data_dir = data_dir
+        self.journal_file = journal_file
+        self.outbox = outbox
+        self.clock = clock
+        self._next_try = 0.0
+
+    def check(self) -> str | None:
+        """Retry (at most once a second) and return the line to show, None when all is written."""
+        if self.journal_file.write_error is None and self.outbox.write_error is None:
+            return None
+        now = self.clock()
+        if now >= self._next_try:
+            self._next_try = now + RETRY_EVERY_S
+            self.journal_file.retry()
+            self.outbox.flush()
+        error = self.journal_file.write_error or self.outbox.write_error
+        if error is None:
+            return None
+        runs = len(self.outbox.unwritten)
+        things = ["the unit"] if self.journal_file.write_error is not None else []
+        things += [f"{runs} finished run{'s' * (runs > 1)}"] if runs else []
+        verb = "is" if len(things) == 1 and runs <= 1 else "are"
+        return cannot_write_line(self.data_dir, error, f"{' and '.join(things)} {verb}")
