@@ -24,7 +24,8 @@ from station import __version__
 from station.config import StationConfig
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
 from station.errors import CalstationError
-from station.journal import JournalFile, RunJournal
+from station.files import disk_problem
+from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
 from station.outbox import Outbox
@@ -118,7 +119,10 @@ class StationApp:
         self._sync()
         self._check_port()
         interrupted = self.journal_file.load()
-        if interrupted is not None:
+        if isinstance(interrupted, DiscardedJournal):
+            self.note = interrupted.sentence
+            self._say_line(self.note)
+        elif interrupted is not None:
             self.pending_resume = interrupted
             self.state = State.RESUME
             self._say_line(
@@ -300,7 +304,16 @@ class StationApp:
                 started_at=datetime.now(UTC),
                 poses=(*run_settings.poses, run_settings.verification_pose),
             )
-            self.journal_file.save(journal)
+            try:
+                self.journal_file.save(journal)
+            except OSError as exc:
+                driver.close()
+                self.note = (
+                    f"cannot start unit {serial}: {disk_problem(exc)} in "
+                    f"{self.journal_file.path.parent}: make room, then scan it again"
+                )
+                self._say_line(self.note)
+                return
         self.note = None
         self._said = 0
         self.run = UnitRun(

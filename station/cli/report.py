@@ -58,7 +58,7 @@ def report(
         lot=lot,
     )
     profiles = load_profiles(limits)
-    url = database_url or DatabaseSettings().url()
+    url = database_url or DatabaseSettings.from_environment().url()
     database = open_database(url)
     try:
         with database.session() as session:
