@@ -8,7 +8,7 @@ from sqlalchemy import func, select
 
 from db import Database
 from db.models import Run
-from station.journal import JournalFile, RunJournal
+from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.outbox import Outbox
 from station.storage import DatabaseStore, HttpStore
 from tests.db.records import make_record
@@ -83,5 +83,7 @@ def test_journal_round_trip_and_an_unreadable_journal_is_kept_aside(tmp_path: Pa
     assert loaded.run_id == journal.run_id
     assert loaded.next_pose == 0
     path.write_text("{ torn")
+    discarded = journal_file.load()
+    assert isinstance(discarded, DiscardedJournal)
+    assert discarded.kept_as.read_text() == "{ torn"
     assert journal_file.load() is None
-    assert path.with_suffix(".unreadable").read_text() == "{ torn"
