@@ -10,8 +10,8 @@ from sqlalchemy.ext.asyncio import AsyncEngine, create_async_engine
 from sqlalchemy.orm import Session, sessionmaker
 
 from db import migrate
-from db.settings import DatabaseSettings
-from station.errors import CalstationError
+from db.settings import DatabaseSettings, check_database_url
+from station.errors import CalstationError, InputError
 
 
 def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:
@@ -65,7 +65,14 @@ def make_async_engine(url: str | URL, **kwargs: Any) -> AsyncEngine:
 
 
 def make_engine(url: str, **kwargs: Any) -> Engine:
-    """An engine for ``url``; SQLite files get foreign keys, WAL and a busy timeout."""
+    """An engine for ``url``; SQLite files get foreign keys, WAL and a busy timeout.
+
+    A URL whose database or driver cannot be loaded is an :class:`InputError`.
+    """
+    try:
+        check_database_url(url)
+    except ValueError as exc:
+        raise InputError(f"database URL: {exc}") from None
     parsed = make_url(url)
     if parsed.get_backend_name() == "sqlite":
         if parsed.database and parsed.database != ":memory:":
@@ -117,7 +124,7 @@ def open_database(url: str | None = None, *, auto_migrate: bool | None = None) -
     (``calstation db upgrade``); opening one whose schema is behind raises
     :class:`db.migrate.SchemaOutOfDateError`.
     """
-    engine = make_engine(url or DatabaseSettings().url())
+    engine = make_engine(url or DatabaseSettings.from_environment().url())
     database = Database(engine)
     try:
         if auto_migrate if auto_migrate is not None else database.is_sqlite:

@@ -25,7 +25,7 @@ from station.config import StationConfig
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
 from station.disk import DiskWatch
 from station.errors import CalstationError
-from station.journal import JournalFile, RunJournal
+from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
 from station.outbox import Outbox, waiting
@@ -124,7 +124,10 @@ class StationApp:
         self._sync()
         self._check_port()
         interrupted = self.journal_file.load()
-        if interrupted is not None:
+        if isinstance(interrupted, DiscardedJournal):
+            self.note = interrupted.sentence
+            self._say_line(self.note)
+        elif interrupted is not None:
             self.pending_resume = interrupted
             self.state = State.RESUME
             self._say_line(
@@ -315,6 +318,8 @@ class StationApp:
                 started_at=datetime.now(UTC),
                 poses=(*run_settings.poses, run_settings.verification_pose),
             )
+            # A disk that refuses does not stop the unit: the journal owes the write and
+            # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             self.journal_file.save(journal)
         self.note = None
         self._said = 0

@@ -7,13 +7,14 @@ Values come, last one winning, from the defaults here, a TOML file (``--config``
 import re
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
+from urllib.parse import urlsplit
 
-from pydantic import Field, ValidationError, field_validator
-from pydantic_settings import BaseSettings, SettingsConfigDict
+from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
-from db.settings import default_data_dir
-from station.errors import InputError
+from db.settings import DatabaseUrl, DataDir, default_data_dir
+from station.errors import InputError, validation_problem
 from station.session import RunSettings
 
 #: Serial numbers on the putters' labels: PT and six digits.
@@ -33,8 +34,8 @@ class StationConfig(BaseSettings):
     limits_file: Path | None = None
     limits_profile: str | None = None
     serial_pattern: str = SERIAL_PATTERN
-    data_dir: Path = default_data_dir()
-    database_url: str | None = None
+    data_dir: DataDir = default_data_dir()
+    database_url: DatabaseUrl | None = None
     server_url: str | None = None
     api_key: str | None = None
     run: RunSettings = RunSettings()
@@ -47,6 +48,23 @@ class StationConfig(BaseSettings):
         except re.error as exc:
             raise ValueError(f"not a regular expression: {exc}") from None
         return value
+
+    @field_validator("server_url")
+    @classmethod
+    def _http(cls, value: str | None) -> str | None:
+        if value is not None and not (
+            urlsplit(value).scheme in ("http", "https") and urlsplit(value).netloc
+        ):
+            raise ValueError(f"{value!r} is not an http:// or https:// URL")
+        return value
+
+    @model_validator(mode="after")
+    def _key_for_the_server(self) -> Self:
+        if self.server_url and not self.api_key:
+            raise ValueError(
+                "server_url needs the station's api_key (--api-key, CALSTATION_API_KEY)"
+            )
+        return self
 
     @property
     def journal_path(self) -> Path:
@@ -75,7 +93,15 @@ def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
     try:
         return StationConfig(**values)
     except ValidationError as exc:
-        first = exc.errors()[0]
         where = f"{path}: " if path is not None else ""
-        field = ".".join(str(p) for p in first["loc"])
-        raise InputError(f"{where}station configuration: {field}: {first['msg']}") from None
+        raise InputError(f"{where}station configuration: {validation_problem(exc)}") from None
+    except SettingsError as exc:  # an environment variable that is not valid JSON
+        raise InputError(f"station configuration: {_env_problem(exc)}") from None
+
+
+def _env_problem(exc: SettingsError) -> str:
+    """``CALSTATION_RUN: not valid JSON (…)`` from pydantic-settings' error."""
+    field = re.search(r'field "([^"]+)"', str(exc))
+    name = f"CALSTATION_{field.group(1).upper()}" if field else "a CALSTATION_ variable"
+    cause = exc.__cause__
+    return f"{name}: not valid JSON ({cause})" if cause is not None else f"{name}: {exc}"

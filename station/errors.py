@@ -9,6 +9,8 @@ its message as one line and exits with status 2, never a traceback::
     └── calibration.CalibrationError   the poses cannot give a trustworthy calibration
 """
 
+from pydantic import ValidationError
+
 
 class CalstationError(Exception):
     """Base of every error whose message is shown to the operator as it is."""
@@ -16,3 +18,20 @@ class CalstationError(Exception):
 
 class InputError(CalstationError):
     """A file, a field or a value given by the user is unusable."""
+
+
+def validation_problem(exc: ValidationError, *, env_prefix: str | None = None) -> str:
+    """The first problem pydantic found, as ``field.sub: message`` (a person reads it).
+
+    A validator's own sentence is given as it is, without pydantic's "Value error, ".
+    With ``env_prefix`` the field is named as its environment variable
+    (``CALSTATION_DATABASE_URL``), for settings read from the environment.
+    """
+    first = exc.errors(include_url=False)[0]
+    parts = [str(part) for part in first["loc"]]
+    if env_prefix is not None and parts:
+        parts[0] = env_prefix + parts[0].upper()
+    field = ".".join(parts)
+    error = first.get("ctx", {}).get("error")
+    message = str(error) if first["type"] == "value_error" and error is not None else first["msg"]
+    return f"{field}: {message}" if field else message

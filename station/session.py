@@ -23,7 +23,7 @@ from enum import StrEnum
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from station import __version__
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
@@ -36,6 +36,7 @@ from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
 from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, gravity_direction, sense
+from station.pose_plan import check_plan
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, Pose, pose
 from station.records import (
     Coefficients,
@@ -85,6 +86,11 @@ class RunSettings(BaseModel):
         if unknown:
             raise ValueError(f"unknown pose {unknown[0]!r}; known: {', '.join(POSES)}")
         return value
+
+    @model_validator(mode="after")
+    def _can_finish(self) -> "RunSettings":
+        check_plan(self.poses, self.verification_pose, self.min_pose_separation_deg, self.model)
+        return self
 
 
 class Phase(StrEnum):

@@ -23,7 +23,7 @@ class PoseResult:
     Means, standard deviations and the sample count are over the accepted window:
     accelerometer in ADC counts, gyros in deg/s, temperature in °C. ``duration_s`` is
     the window's span and ``wait_s`` the time from the start of the acquisition to
-    acceptance, both in device time (sequence numbers over the sample rate);
+    the window's last sample, both in device time (sequence numbers over the sample rate);
     ``link`` counts what happened on the link during the acquisition.
     """
 
@@ -168,11 +168,13 @@ class PoseAcquisition:
         if verdict is None:
             self._check(self.detector.last)
             return None
+        # Waited until the window's last sample, not the last one drained: how many
+        # samples one poll takes in depends on how busy the machine is.
         self.result = PoseResult.from_window(
             verdict.window,
             pose=self.pose,
             rate_hz=self._rate,
-            wait_s=self.elapsed_s,
+            wait_s=(verdict.window[-1, 0] - self._first_seq + 1) / self._rate,
             link=self.driver.stats - self._stats0,
             loss_fraction=verdict.loss_fraction,
         )

@@ -52,7 +52,7 @@ def db_rebuild_report(
     shipped default profile): run it when reports measure against other limits.
     """
     chosen = load_profile(limits, profile)
-    url = database_url or DatabaseSettings().url()
+    url = database_url or DatabaseSettings.from_environment().url()
     database = open_database(url)
     try:
         with database.engine.begin() as connection:
@@ -70,7 +70,7 @@ def db_rebuild_report(
 @db_app.command("upgrade")
 def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     """Migrate the database to the current schema (creating it if it is empty)."""
-    url = database_url or DatabaseSettings().url()
+    url = database_url or DatabaseSettings.from_environment().url()
     revision = upgrade_database(url)
     out.print(f"database {_shown(url)} at schema revision {revision}")
 

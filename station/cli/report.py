@@ -13,7 +13,7 @@ from station.cli.output import err, out
 from station.errors import CalstationError
 from station.limits import load_profiles
 from station.report.model import ReportFilter
-from station.report.period import parse_moment
+from station.report.period import parse_period
 from station.report.render import FORMATS, render
 
 
@@ -49,15 +49,16 @@ def report(
     """End-of-line report: yields, failure Pareto, capability, control charts, ship/hold."""
     if format not in FORMATS:
         raise CalstationError(f"--format {format!r} is not one of {', '.join(FORMATS)}")
+    start, end = parse_period(since, until)
     report_filter = ReportFilter(
-        since=parse_moment(since, name="--from") if since else None,
-        until=parse_moment(until, name="--to") if until else None,
+        since=start,
+        until=end,
         station_id=station,
         operator_id=operator,
         lot=lot,
     )
     profiles = load_profiles(limits)
-    url = database_url or DatabaseSettings().url()
+    url = database_url or DatabaseSettings.from_environment().url()
     database = open_database(url)
     try:
         with database.session() as session:

@@ -36,7 +36,7 @@ def serve(
         os.environ["CALSTATION_DATABASE_URL"] = database_url
     # Migrate the embedded database (or check a server's schema) once, before the
     # workers start, so they never race on it and a bad URL fails here in one line.
-    open_database(ApiSettings().url()).dispose()
+    open_database(ApiSettings.from_environment().url()).dispose()
     uvicorn.run(
         "api.main:create_app",
         factory=True,

@@ -11,6 +11,7 @@ from station.config import StationConfig, load_config
 from station.demo import ScriptedOperator
 from station.keys import TerminalKeys
 from station.limits import load_profile
+from station.startup import check_port, prepare_data_dir
 from station.storage import DatabaseStore, HttpStore, RunStore
 
 ConfigOption = Annotated[
@@ -70,6 +71,8 @@ def run_command(
         },
     )
     limits_profile = load_profile(config.limits_file, config.limits_profile)
+    prepare_data_dir(config.data_dir)
+    check_port(config.port)
     with TerminalKeys() as keys:
         app = StationApp(
             config=config,
@@ -105,6 +108,7 @@ def demo_command(
             "lot": lot or "demo-lot",
         },
     )
+    prepare_data_dir(config.data_dir)
     port = config.data_dir.expanduser() / "demo" / "putter"
     config = config.model_copy(update={"port": str(port)})
     operator_script = ScriptedOperator(units=units, port=port, seed=seed, speed=speed)

@@ -1,14 +1,26 @@
-"""Reading the report's time bounds: ISO dates or moments, UTC unless a zone is given."""
+"""Reading the report's time bounds: ISO dates or moments, UTC unless a zone is given.
+
+One place for the CLI (``--from``/``--to``) and the API (``from``/``to``): a bound must
+read as a date or time, stay a valid moment once shifted to UTC, and leave room for the
+report to round it to its whole day (:data:`EARLIEST` … :data:`LATEST`); ``from`` must
+come before ``to``.
+"""
 
 from datetime import UTC, date, datetime, time
 
 from station.errors import InputError
 
+#: The range a bound may take: a day inside what a date can hold at either end, for the
+#: report splits its period at midnights (the day after ``from``, the day of ``to``).
+EARLIEST = datetime(1, 1, 2, tzinfo=UTC)
+LATEST = datetime(9999, 12, 31, tzinfo=UTC)
+
 
 def parse_moment(text: str, *, name: str) -> datetime:
-    """``2026-11-02`` (midnight UTC), ``2026-11-02T14:00`` (UTC) or with a zone.
+    """``2026-11-02`` (midnight UTC), ``2026-11-02T14:00`` (UTC) or with a zone, in UTC.
 
-    Raises :class:`InputError` naming the option ``name`` for anything else.
+    Raises :class:`InputError` naming the option ``name`` for anything else, or for a
+    moment outside :data:`EARLIEST` … :data:`LATEST` (UTC).
     """
     try:
         moment = datetime.fromisoformat(text)
@@ -19,7 +31,29 @@ def parse_moment(text: str, *, name: str) -> datetime:
             raise InputError(
                 f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or 2026-11-02T14:00Z)"
             ) from None
-    return moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+    try:
+        utc = moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+    except OverflowError:  # the zone shifts it past year 1 or 9999
+        utc = None
+    if utc is None or not EARLIEST <= utc <= LATEST:
+        raise InputError(
+            f"{name} {text!r} is out of range: give a moment from "
+            f"{EARLIEST.date().isoformat()} to {LATEST.date().isoformat()} (UTC)"
+        )
+    return utc
+
+
+def parse_period(
+    since: str | None, until: str | None, *, names: tuple[str, str] = ("--from", "--to")
+) -> tuple[datetime | None, datetime | None]:
+    """Both bounds (either may be absent); :class:`InputError` unless ``since < until``."""
+    start = parse_moment(since, name=names[0]) if since else None
+    end = parse_moment(until, name=names[1]) if until else None
+    if start is not None and end is not None and not start < end:
+        raise InputError(
+            f"{names[0]} {since!r} is not before {names[1]} {until!r}: the period holds nothing"
+        )
+    return start, end
 
 
 def start_of_day(now: datetime) -> datetime:

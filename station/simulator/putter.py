@@ -87,9 +87,18 @@ class VirtualPutter(Closing):
         thermal: Thermal | None = None,
     ) -> None:
         encode_text(serial, 16)
-        truth_rng, motion_rng, self._noise_rng, self._fault_rng = np.random.default_rng(seed).spawn(
-            4
-        )
+        # One generator per stream of draws, each drawn in sample order: a sample's noise
+        # and faults then depend on its number only, not on how many samples one pass of
+        # the loop makes (which follows how busy the machine is).
+        (
+            truth_rng,
+            motion_rng,
+            self._accel_rng,
+            self._drop_rng,
+            self._gyro_rng,
+            self._corrupt_rng,
+            self._bit_rng,
+        ) = np.random.default_rng(seed).spawn(7)
         self._truth = SensorTruth.draw(truth_rng)
         self._label = serial
         self.clock = VirtualClock(speed)
@@ -344,10 +353,10 @@ class VirtualPutter(Closing):
         self._motion.never_settles = self.faults.never_settle
         kin = self._motion.evaluate(t)
         temperature = self.thermal.at(t)
-        acc = accelerometer_counts(self._truth, kin.force_g, temperature, self._noise_rng)
+        acc = accelerometer_counts(self._truth, kin.force_g, temperature, self._accel_rng)
         if self.faults.saturate_axis is not None:
             acc[:, AXES.index(self.faults.saturate_axis)] = ADC_MAX
-        gyro = gyro_rates(self._truth, kin.rate_dps, kin.force_g, self._noise_rng)
+        gyro = gyro_rates(self._truth, kin.rate_dps, kin.force_g, self._gyro_rng)
         return acc, _int16(gyro, GYRO_DPS_PER_LSB), _int16(temperature, TEMP_C_PER_LSB)
 
     def trace(self, start_s: float, count: int) -> np.ndarray:
@@ -375,9 +384,8 @@ class VirtualPutter(Closing):
         self._seq += count
         self._stream_samples += count
         kind = FrameType.CAL_SAMPLE if calibrated else FrameType.SAMPLE
-        rng = self._fault_rng
-        keep = rng.random(count) >= self.faults.drop_rate
-        corrupt = rng.random(count) < self.faults.corrupt_rate
+        keep = self._drop_rng.random(count) >= self.faults.drop_rate
+        corrupt = self._corrupt_rng.random(count) < self.faults.corrupt_rate
         size = rec.dtype.itemsize
         payload = rec.tobytes()
         out = bytearray()
@@ -385,7 +393,7 @@ class VirtualPutter(Closing):
             frame = encode_frame(kind, payload[i * size : (i + 1) * size])
             if corrupt[i]:
                 flipped = bytearray(frame)
-                bit = int(rng.integers(len(frame) * 8))
+                bit = int(self._bit_rng.integers(len(frame) * 8))
                 flipped[bit // 8] ^= 1 << (bit % 8)
                 frame = bytes(flipped)
             out += frame

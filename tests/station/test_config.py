@@ -34,7 +34,7 @@ def test_flags_override_the_file_and_the_environment(
             '"head_up"]\n',
             "head_up",
         ),
-        ('serial_pattern = "(["\n', "serial_pattern: Value error, not a regular expression"),
+        ('serial_pattern = "(["\n', "serial_pattern: not a regular expression"),
         ('station_id = "has space"\n', "station_id"),
         ('lot = "L 7"\n', "lot"),
         ("bogus = 1\n", "bogus"),

@@ -18,7 +18,7 @@ from sqlalchemy import func, select
 from db import Database
 from db.models import Run
 from station.backoff import FIRST_S, RecordBackoff
-from station.journal import JournalFile, RunJournal
+from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.outbox import Outbox
 from station.outbox_files import UnreadableRecordError, read_record, reason_of
 from station.records import RunRecord
@@ -97,8 +97,10 @@ def test_journal_round_trip_and_an_unreadable_journal_is_kept_aside(tmp_path: Pa
     assert loaded.run_id == journal.run_id
     assert loaded.next_pose == 0
     path.write_text("{ torn")
+    discarded = journal_file.load()
+    assert isinstance(discarded, DiscardedJournal)
+    assert discarded.kept_as.read_text() == "{ torn"
     assert journal_file.load() is None
-    assert path.with_suffix(".unreadable").read_text() == "{ torn"
 
 
 GOOD = make_record(serial="PT-GOOD").model_dump_json().encode()

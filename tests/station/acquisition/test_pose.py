@@ -1,5 +1,6 @@
 """Taking poses from the virtual putter over a real pty, faults included."""
 
+import math
 import time
 from collections.abc import Iterator
 
@@ -15,8 +16,11 @@ from station.acquisition import (
     acquire_pose,
 )
 from station.device import DeviceDisconnectedError, DeviceTimeoutError, PutterDriver
+from station.device.protocol import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.simulator import VirtualPutter
+from station.simulator.motion import Handling
+from station.simulator.sensor import REFERENCE_TEMPERATURE_C
 
 SPEED = 25.0
 
@@ -36,10 +40,14 @@ def driver(unit: VirtualPutter) -> Iterator[PutterDriver]:
         yield drv
 
 
-def reading(unit: VirtualPutter, name: str) -> np.ndarray:
+def reading(unit: VirtualPutter, name: str, temperature_c: float) -> np.ndarray:
+    """The noise-free counts of pose ``name`` at ``temperature_c`` (the sensor model's)."""
     truth = unit.truth
     force = pose(name).gravity_body
-    return truth.offset_counts + truth.sensitivity_counts_per_g * (truth.cross_axis @ force)
+    dt = temperature_c - REFERENCE_TEMPERATURE_C
+    offset = truth.offset_counts + truth.offset_tempco_counts_per_c * dt
+    sensitivity = truth.sensitivity_counts_per_g * (1 + truth.sensitivity_tempco_per_c * dt)
+    return offset + sensitivity * (truth.cross_axis @ force)
 
 
 def poll_until_done(acquisition: PoseAcquisition) -> None:
@@ -47,21 +55,72 @@ def poll_until_done(acquisition: PoseAcquisition) -> None:
         time.sleep(0.005)
 
 
+def first_still_window_ends_s(unit: VirtualPutter, move_s: float) -> tuple[float, float]:
+    """Earliest and latest device time, from a move's start, of its first still window's end.
+
+    The window (W seconds) may start only once the put-down tremor's rate no longer
+    spreads a gyro beyond ``gyro_std_max_dps``: the binding check (the accelerometer's
+    spread, drift and |g| pass the moment the unit is put down, by a factor of two or
+    more). The rocking tremor's rate is ``A e^(−u/τ) sin(ωu + φ)`` about a random axis,
+    ``A = θ₀ √(ω² + 1/τ²)``; from ``u₀`` on it holds ``E(u₀) = A²τ/4 (1 ± 1/√(1 + ω²τ²))
+    e^(−2u₀/τ)`` (deg/s)²·s. A window starting ``u₀`` after the put-down therefore
+    passes for sure once ``g_max² E(u₀)/W`` plus the noise's variance (its 1024-sample
+    estimate 5 σ high) is under the limit², and cannot pass while a third of
+    ``g_min² E(u₀)/W`` (the axis the rock projects most on), less the window mean's
+    square (at most ``(2θ₀/W)²``), is over it. ``g`` spans the gyro's gain over
+    directions (scale error and misalignment). The window ends on the detector's hop
+    grid, counted from the move's first sample (the move starts within a sample before).
+    """
+    h = Handling()
+    limits = StillnessThresholds()
+    truth = unit.truth
+    rate = 500.0
+    window = limits.window_samples / rate
+    tau = h.settle_time_constant_s
+    omega = 2 * math.pi * h.tremor_rock_hz
+    amplitude = h.tremor_rock_deg * math.hypot(omega, 1 / tau)
+    ripple = 1 / math.sqrt(1 + (omega * tau) ** 2)
+    gains = np.linalg.svd(
+        np.eye(3) + truth.gyro_misalignment + np.diag(truth.gyro_scale_error),
+        compute_uv=False,
+    )
+    limit = limits.gyro_std_max_dps**2
+    noise = truth.gyro_noise_dps**2 * (1 + 5 * math.sqrt(2 / limits.window_samples))
+    noise += GYRO_DPS_PER_LSB**2 / 12
+    most = gains.max() ** 2 * amplitude**2 * tau / 4 * (1 + ripple) / window
+    least = gains.min() ** 2 * amplitude**2 * tau / 4 * (1 - ripple) / window / 3
+    mean_sq = (2 * h.tremor_rock_deg / window) ** 2
+    latest_u = tau / 2 * math.log(most / (limit - noise))
+    earliest_u = tau / 2 * math.log(least / (limit + mean_sq))
+    hop = limits.hop_samples / rate
+    return move_s + earliest_u + window - 1 / rate, move_s + latest_u + window + hop
+
+
 def test_a_whole_unit_of_seven_poses_matches_the_truth(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
+    earliest, latest = first_still_window_ends_s(unit, move_s=1.5)
     for name in (*CALIBRATION_POSES, VERIFICATION_POSE):
-        moved_at = unit.move_to(name)
+        moved_at = unit.move_to(name, 1.5)
         assert moved_at is not None
         result = acquire_pose(driver, pose=name, timeout_s=20.0, from_seq=moved_at)
         assert result.first_seq > moved_at
         assert result.pose == name
         assert result.sample_count == 1024
-        # The window starts after the move and its tremor: never before 1.5 s of handling.
-        assert 1.5 < result.wait_s < 6.0
+        # The window starts once the put-down tremor has died down (device time).
+        assert earliest <= result.wait_s <= latest
         assert result.duration_s == pytest.approx(1024 / 500)
-        # Temperature drift (up to 0.5 count/°C) and noise: within a count of the truth.
-        np.testing.assert_allclose(result.accel_mean, reading(unit, name), atol=1.0)
+        # The model at the window's temperature, within 5 σ of the mean of 1024 samples
+        # of noise and rounding, plus the drift over half a step of the temperature.
+        expected = reading(unit, name, result.temperature_c)
+        tempco = np.abs(
+            reading(unit, name, REFERENCE_TEMPERATURE_C + 1)
+            - reading(unit, name, REFERENCE_TEMPERATURE_C)
+        )
+        sigma = math.sqrt(unit.truth.noise_counts**2 + 1 / 12) / math.sqrt(1024)
+        np.testing.assert_array_less(
+            np.abs(result.accel_mean - expected), 5 * sigma + tempco * TEMP_C_PER_LSB / 2
+        )
         assert np.all(result.accel_std < StillnessThresholds().accel_std_max_counts)
         np.testing.assert_allclose(result.gyro_mean, unit.truth.gyro_bias_dps, atol=0.03)
         assert 24.0 < result.temperature_c < 27.0

@@ -8,7 +8,7 @@ import pytest
 
 from db import Database
 from tests.conftest import CliRunner
-from tests.db.eol_data import insert_line_history
+from tests.db.eol_data import RUNS, insert_line_history
 
 RANGE = ("--from", "2026-11-02T08:00Z", "--to", "2026-11-02T10:00Z")
 
@@ -77,12 +77,27 @@ def test_lot_filter_leaves_out_the_runs_without_a_lot(
     assert all_row.split()[1:5] == ["0", "0", "0", "0"]
 
 
+@pytest.mark.usefixtures("line")
+def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) -> None:
+    result = run_cli(
+        "report", "--from", "0001-01-02", "--to", "9999-12-31", "--database-url", database_url
+    )
+    assert result.returncode == 0, result.stderr
+    all_row = next(line for line in result.stdout.splitlines() if line.startswith("all "))
+    # Every run of the history: the one after the usual range too.
+    units, runs = all_row.split()[1], all_row.split()[4]
+    assert (int(units), int(runs)) == (len({run[1] for run in RUNS}), len(RUNS))
+
+
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [
         (("--from", "yesterday"), "--from 'yesterday' is not an ISO date"),
         (("--format", "xml"), "--format 'xml' is not one of text, csv, json, html"),
         (("--limits", "/nonexistent/limits.toml"), "cannot read the limits file"),
+        (("--from", "9999-12-31T23:00:00-05:00"), "--from '9999-12-31T23:00:00-05:00' is out of"),
+        (("--to", "0001-01-01T00:00:00+01:00"), "--to '0001-01-01T00:00:00+01:00' is out of"),
+        (("--from", "2026-02-01", "--to", "2026-01-01"), "--from '2026-02-01' is not before --to"),
     ],
 )
 def test_bad_options_are_one_line_and_exit_2(

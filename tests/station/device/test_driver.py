@@ -131,7 +131,8 @@ def test_a_mute_unit_gives_no_reply_after_the_retries(
     started = time.monotonic()
     with pytest.raises(NoReplyError, match=r"did not answer IDENTIFY within 0.3 s \(2 tries\)"):
         driver.identify()
-    assert 0.55 < time.monotonic() - started < 2.0
+    # Two tries of 0.3 s each: at least that long (longer on a busy machine).
+    assert time.monotonic() - started >= 0.6
 
 
 def test_a_unit_with_the_wrong_serial_is_refused(unit: VirtualPutter, driver: PutterDriver) -> None:
@@ -301,7 +302,7 @@ def test_an_undrained_buffer_keeps_the_newest_samples_and_counts_the_overrun() -
     port = serial.serial_for_url("loop://", timeout=0.01)
     with PutterDriver(port, buffer_rows=50) as drv:
         port.write(b"".join(encode_sample(s, (1, 2, 3), (0, 0, 0), 0) for s in range(120)))
-        deadline = time.monotonic() + 2.0
+        deadline = time.monotonic() + 30.0  # a safety net only
         while drv.stats.samples < 120 and time.monotonic() < deadline:
             time.sleep(0.01)
         assert drv.pending() == 50
