@@ -13,7 +13,8 @@ Errors tell the outbox what to do::
 from typing import Protocol
 
 import httpx
-from sqlalchemy.exc import OperationalError
+from pydantic import BaseModel
+from sqlalchemy.exc import OperationalError, SQLAlchemyError
 
 from db import (
     Database,
@@ -25,7 +26,7 @@ from db import (
 )
 from station.closing import Closing
 from station.errors import CalstationError
-from station.records import RunRecord, StoredRun
+from station.records import RunRecord, RunSummary, StoredRun
 
 __all__ = [
     "DatabaseStore",
@@ -38,6 +39,7 @@ __all__ = [
 ]
 
 RUNS_PATH = "/api/v1/runs"
+UNITS_PATH = "/api/v1/units"
 
 
 class StoreError(CalstationError):
@@ -57,6 +59,10 @@ class RunStore(Protocol):
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         """Store ``record`` (or find it stored already) and return the stored run."""
+        ...
+
+    def history(self, serial: str) -> list[RunSummary]:
+        """Every stored run of the unit, oldest first; :class:`StoreUnavailableError`."""
         ...
 
     def close(self) -> None:
@@ -80,6 +86,14 @@ class DatabaseStore(Closing):
         except RunConflictError as exc:
             raise SubmissionRefusedError(str(exc)) from None
         except OperationalError as exc:
+            url = self.database.engine.url
+            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
+
+    def history(self, serial: str) -> list[RunSummary]:
+        try:
+            with self.database.session() as session:
+                return RunRepository(session).history(serial)
+        except SQLAlchemyError as exc:
             url = self.database.engine.url
             raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
 
@@ -124,8 +138,27 @@ class HttpStore(Closing):
             )
         raise StoreUnavailableError(f"results server answered {response.status_code}: {message}")
 
+    def history(self, serial: str) -> list[RunSummary]:
+        """``GET /api/v1/units/{serial}/runs``; a unit the server does not know has none."""
+        try:
+            response = self.client.get(f"{UNITS_PATH}/{serial}/runs")
+            if response.status_code == 404:
+                return []
+            response.raise_for_status()
+            return RunHistory.model_validate_json(response.content).data
+        except (httpx.HTTPError, ValueError) as exc:
+            raise StoreUnavailableError(
+                f"results server {self.client.base_url}: no history of {serial}: {exc}"
+            ) from None
+
     def close(self) -> None:
         self.client.close()
+
+
+class RunHistory(BaseModel):
+    """The body of ``GET /api/v1/units/{serial}/runs``."""
+
+    data: list[RunSummary]
 
 
 def _detail(response: httpx.Response) -> str:
