@@ -59,7 +59,7 @@ from station.records import (
     RunRecord,
     Vector3,
 )
-from station.sensor import AXES
+from station.run_checks import run_checks
 
 Array = NDArray[np.float64]
 ALGORITHM = "autocal-eq10"
@@ -568,39 +568,13 @@ class UnitRun:
     # -- the verdict -------------------------------------------------------------------
 
     def _checks(self) -> list[FailureReason]:
-        reasons: list[FailureReason] = []
-        captures = self.journal.captures
-        for i, capture in sorted(captures.items()):
-            rec = capture.record
-            for axis, std in zip(AXES, rec.std.as_tuple(), strict=True):
-                if (r := check(self.profile, "pose_noise", std, axis=axis, pose=i)) is not None:
-                    reasons.append(r)
-            if (r := check(self.profile, "link_loss", capture.loss_fraction, pose=i)) is not None:
-                reasons.append(r)
-        if self.solution is not None:
-            cal = self.solution.calibration
-            for i, axis in enumerate(AXES):
-                if (
-                    r := check(self.profile, "offset", float(cal.offset[i]), axis=axis)
-                ) is not None:
-                    reasons.append(r)
-            for i, axis in enumerate(AXES):
-                value = float(cal.sensitivity[i])
-                if (r := check(self.profile, "sensitivity", value, axis=axis)) is not None:
-                    reasons.append(r)
-            verify = self.fit_count
-            if verify in captures:
-                raw = np.array(captures[verify].record.mean.as_tuple())
-                error = abs(float(np.linalg.norm(apply(cal, raw))) - 1.0) * 1000.0
-                self.verification_error_mg = error
-                if (r := check(self.profile, "verification_error", error, pose=verify)) is not None:
-                    reasons.append(r)
-        gyro = self._gyro_summary()
-        if gyro is not None:
-            for axis, bias in zip(AXES, gyro.bias.as_tuple(), strict=True):
-                if (r := check(self.profile, "gyro_bias", bias, axis=axis)) is not None:
-                    reasons.append(r)
-        return reasons
+        calibration = self.solution.calibration if self.solution is not None else None
+        result = run_checks(
+            self.profile, self.journal.captures, calibration, self.fit_count, self._gyro_summary()
+        )
+        if result.verification_error_mg is not None:
+            self.verification_error_mg = result.verification_error_mg
+        return result.reasons
 
     def _gyro_summary(self) -> GyroSummary | None:
         """Bias and noise of each gyro over the fit poses, and their bias-vs-gravity slope."""
