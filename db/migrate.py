@@ -37,9 +37,17 @@ def current_revision(engine: Engine) -> str | None:
 
 
 def upgrade(engine: Engine, revision: str = "head") -> None:
-    """Migrate the database up to ``revision``, in one transaction."""
+    """Migrate the database up to ``revision``, in one transaction.
+
+    At the head, derived data of an older definition is rewritten too
+    (:func:`db.derived.rewrite_if_stale`).
+    """
+    from db.derived import rewrite_if_stale  # it needs the models, which import this
+
     with engine.begin() as connection:
         command.upgrade(alembic_config(connection), revision)
+        if revision == "head":
+            rewrite_if_stale(connection)
 
 
 def require_current(engine: Engine) -> None:

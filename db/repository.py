@@ -26,7 +26,7 @@ from db.engine import for_dialect, open_database
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey
 from db.rollups import lock_submissions, record_run
-from db.units import latest_run_pks, record_latest
+from db.units import record_units, refresh_answers
 from station.errors import CalstationError, InputError
 from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
@@ -85,11 +85,11 @@ class RunPage:
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
-    A record without a lot is hashed without the field, as before the field existed, so
-    a retry from an older station matches the run it stored.
+    A record without a lot or a disposition is hashed without the field, as before the
+    field existed, so a retry from an older station matches the run it stored.
     """
-    unset = {"lot"} if record.lot is None else None
-    return hashlib.sha256(record.model_dump_json(exclude=unset).encode()).hexdigest()
+    unset = {name for name in ("lot", "disposition") if getattr(record, name) is None}
+    return hashlib.sha256(record.model_dump_json(exclude=unset or None).encode()).hexdigest()
 
 
 def key_sha256(key: str) -> str:
@@ -161,7 +161,7 @@ class RunRepository:
         record_run(self.session.connection(), pk)
         # Already validated: build the answer without validating it again.
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
-        record_latest(self.session, [(pk, stored)])
+        record_units(self.session, [record.serial], stored)
         return SubmitOutcome(created=True, run=stored)
 
     def _insert_new_run(self) -> ReturningInsert[int]:
@@ -220,21 +220,14 @@ class RunRepository:
         cursor = encode_cursor(page[-1].started_at, page[-1].id) if more else None
         return RunPage(runs=self._summaries(page), next_cursor=cursor)
 
-    def refresh_units(self, batch: int = 2000) -> int:
-        """Write every unit's current state from ``runs``; return the number of units.
+    def refresh_units(self) -> int:
+        """Write every unit's answer from ``runs``; return the number of units.
 
         The migration that adds ``units`` fills it with this, and so does a bulk load of
-        runs; a new shape of the stored answer (:class:`station.records.UnitCalibration`)
-        needs a migration that calls it again. Works ``batch`` runs per statement.
+        runs; answers of an older shape (:class:`station.unit_state.UnitCalibration`)
+        are rewritten with it when the database is upgraded (:func:`db.migrate.upgrade`).
         """
-        pks = latest_run_pks(self.session)
-        for start in range(0, len(pks), batch):
-            chunk = self.session.scalars(select(Run).where(Run.id.in_(pks[start : start + batch])))
-            runs = list(chunk)
-            pairs = zip((run.id for run in runs), self._summaries(runs), strict=True)
-            record_latest(self.session, list(pairs))
-            self.session.expunge_all()
-        return len(pks)
+        return refresh_answers(self.session)
 
     def _failures(self, pks: Sequence[int]) -> dict[int, list[RunFailure]]:
         by_run: dict[int, list[RunFailure]] = defaultdict(list)

@@ -8,7 +8,8 @@ transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
 - ``run_facts``: per run, its first failure code, pose count, gyro bias, whether it is
   its unit's first or latest run (on the line, at its station), whether the unit's latest
   run passed (on its first run), the unit's run count and the previous run of the line
-  with coefficients.
+  with coefficients. A unit's latest run is its latest that is not an operator's abort
+  (an abort wrote nothing into the unit), or its latest if all are aborts.
 - ``report_counts``, ``report_failures``, ``report_parameters``: per day (UTC) × station ×
   operator × lot, the sums, minima and maxima of what each run contributes (counts,
   first and final passes, moving ranges; failing runs by first reason; n, Σ(x − c),
@@ -78,6 +79,7 @@ from db.models import (
 from station.limits import load_profile
 from station.report.bounds import COEFFICIENTS, PARAMETERS, Bounds, ParameterSpec, profile_bounds
 from station.report.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
+from station.unit_state import ABORTED
 
 #: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
 #: adds the limits profile.
@@ -236,20 +238,29 @@ def _inline(value: float | str | None) -> ColumnElement[Any]:
 
 
 _PASS, _FAIL, _ZERO, _ONE = _inline("pass"), _inline("fail"), _inline(0), _inline(1)
+_ABORTED = _inline(ABORTED)
 
 
 def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
     """The ``run_facts`` rows of the runs ``where`` selects (see :class:`RunFacts`)."""
     other = aliased(Run, name="other")
     earlier = tuple_(other.started_at, other.id) < tuple_(Run.started_at, Run.id)
-    later = tuple_(other.started_at, other.id) > tuple_(Run.started_at, Run.id)
     unit = other.serial == Run.serial
     at_station = and_(unit, other.station_id == Run.station_id)
     newest = (other.started_at.desc(), other.id.desc())
+    # A unit's latest run is its latest that counts: an operator's abort wrote nothing
+    # and says nothing about the unit (station.unit_state), unless all its runs are aborts.
+    aborted = exists().where(RunFailure.run_pk == other.id, RunFailure.code == _ABORTED)
+    counted_newest = (case((aborted, _ONE), else_=_ZERO), *newest)
+
+    def latest(column: Any, *among: ColumnElement[bool]) -> Any:
+        """``column`` of the unit's latest run that counts, among the runs ``among``."""
+        stmt = select(column).where(*among).order_by(*counted_newest).limit(1)
+        return stmt.scalar_subquery()
 
     def latest_passed(*among: ColumnElement[bool]) -> ColumnElement[bool]:
-        verdict = select(other.verdict).where(*among).order_by(*newest).limit(1)
-        return verdict.scalar_subquery() == _PASS
+        passed: ColumnElement[bool] = latest(other.verdict, *among) == _PASS
+        return passed
 
     line_first = ~exists().where(unit, earlier)
     station_first = ~exists().where(at_station, earlier)
@@ -264,7 +275,7 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
         bias["y"],
         bias["z"],
         line_first,
-        ~exists().where(unit, later),
+        Run.id == latest(other.id, unit),
         and_(line_first, latest_passed(unit)),
         select(func.count()).select_from(other).where(unit).scalar_subquery(),
         station_first,

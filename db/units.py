@@ -1,84 +1,140 @@
 """Each unit's current calibration, kept ready to serve in the ``units`` table.
 
 ``GET /api/v1/units/{serial}`` is the plant's most frequent question. Its answer, the
-JSON of :class:`station.records.UnitCalibration` for the unit's latest run, is written
-when a run is stored (:func:`record_latest`, in the submission's transaction) and read
-back as text by primary key (:class:`UnitLookups`): no ORM, no validation and no
-serialisation on the read path, and one statement for all the lookups that arrive
-while the previous one is out.
+JSON of :class:`station.unit_state.UnitCalibration` (what the unit holds, its latest
+attempt, its verdict), is written when a run is stored (:func:`record_units`, in the
+submission's transaction, from every run of the unit) and read back as text by primary
+key (:class:`UnitLookups`): no ORM, no validation and no serialisation on the read path,
+and one statement for all the lookups that arrive while the previous one is out.
 
-"Latest" is the order of ``ix_runs_serial_started_at``: ``(started_at, id)``. A run
-delivered late by a station's outbox, older than the unit's latest, leaves the row as it
-is; concurrent submissions for one unit are ordered by the row lock of the upsert.
+Runs are ordered as ``ix_runs_serial_started_at`` orders them: ``(started_at, id)``, so
+a run delivered late by a station's outbox takes its place in the unit's history.
+Submissions are serialised (:func:`db.rollups.lock_submissions`), so each one reads
+every run stored before it. Answers of an older shape are rewritten when the database
+is upgraded (:func:`answers_are_stale`, :func:`refresh_answers`).
 """
 
 import asyncio
 import json
+from collections import defaultdict
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from sqlalchemy import func, select, tuple_
+from pydantic import ValidationError
+from sqlalchemy import select
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.ext.asyncio import AsyncConnection, AsyncEngine
 from sqlalchemy.orm import Session
 
 from db.engine import DatabaseUnavailableError, for_dialect
-from db.models import Run, Unit
-from station.records import RunSummary, StoredRun, UnitCalibration
+from db.mapping import summary_of
+from db.models import Run, RunFailure, Unit
+from station.records import RunSummary, StoredRun
+from station.unit_state import UnitCalibration
 
 
-def _latest_wins(dialect: Any) -> Any:
-    """``INSERT … ON CONFLICT (serial) DO UPDATE`` unless the stored run is later.
-
-    The same run is written again: that is how :meth:`db.RunRepository.refresh_units`
-    rewrites the stored answers.
-    """
+def _upsert(dialect: Any) -> Any:
+    """``INSERT … ON CONFLICT (serial) DO UPDATE``: the answer is computed from every run."""
     stmt = dialect.insert(Unit)
     new = stmt.excluded
     return stmt.on_conflict_do_update(
         index_elements=[Unit.serial],
         set_={"run_pk": new.run_pk, "started_at": new.started_at, "calibration": new.calibration},
-        where=tuple_(Unit.started_at, Unit.run_pk) <= tuple_(new.started_at, new.run_pk),
     )
 
 
 # Built once, values bound at execution: the compiled statement is cached.
-_UPSERT = {"postgresql": _latest_wins(postgresql), "sqlite": _latest_wins(sqlite)}
+_UPSERT = {"postgresql": _upsert(postgresql), "sqlite": _upsert(sqlite)}
 
 
-def calibration_json(latest: RunSummary | StoredRun) -> str:
-    """The answer about a unit whose latest run is ``latest``."""
-    return UnitCalibration.of(latest).model_dump_json()
+def answer_json(runs: Sequence[RunSummary | StoredRun], previous: str | None = None) -> str:
+    """The answer about a unit whose runs are ``runs`` (oldest first).
+
+    The runs table does not keep a run's disposition: the latest attempt's comes from
+    the run as submitted or, when the answer is rewritten, from the ``previous`` answer.
+    """
+    answer = UnitCalibration.of_history(runs)
+    if answer.latest.disposition is None and previous is not None:
+        try:
+            before = UnitCalibration.model_validate_json(previous)
+        except ValidationError:  # an answer of an older shape: it had none
+            before = None
+        if before is not None and before.latest.run_id == answer.latest.run_id:
+            latest = answer.latest.model_copy(update={"disposition": before.latest.disposition})
+            answer = answer.model_copy(update={"latest": latest})
+    return answer.model_dump_json()
 
 
-def _row(run_pk: int, latest: RunSummary | StoredRun) -> dict[str, Any]:
-    return {
-        "serial": latest.serial,
-        "run_pk": run_pk,
-        "started_at": latest.started_at,
-        "calibration": calibration_json(latest),
-    }
+def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[int, RunSummary]]]:
+    """Every run of each of ``serials`` with its key, oldest first (by ``(started_at, id)``)."""
+    runs = session.scalars(
+        select(Run).where(Run.serial.in_(serials)).order_by(Run.serial, Run.started_at, Run.id)
+    ).all()
+    failures: dict[int, list[RunFailure]] = defaultdict(list)
+    failed = [run.id for run in runs if run.verdict == "fail"]
+    if failed:
+        for failure in session.scalars(
+            select(RunFailure)
+            .where(RunFailure.run_pk.in_(failed))
+            .order_by(RunFailure.run_pk, RunFailure.position)
+        ):
+            failures[failure.run_pk].append(failure)
+    by_serial: dict[str, list[tuple[int, RunSummary]]] = defaultdict(list)
+    for run in runs:
+        by_serial[run.serial].append((run.id, summary_of(run, failures[run.id])))
+    return by_serial
 
 
-def record_latest(
-    session: Session, runs: Sequence[tuple[int, RunSummary]] | Sequence[tuple[int, StoredRun]]
+def record_units(
+    session: Session, serials: Sequence[str], submitted: StoredRun | None = None
 ) -> None:
-    """Make each ``(pk, run)`` its unit's current state, unless a later run is stored."""
-    if not runs:
+    """Write the answers about ``serials`` from their stored runs.
+
+    ``submitted`` is a run just stored: its disposition, which ``runs`` does not hold,
+    goes into the answer.
+    """
+    if not serials:
         return
-    session.execute(for_dialect(session, _UPSERT), [_row(pk, run) for pk, run in runs])
+    stored = select(Unit.serial, Unit.calibration).where(Unit.serial.in_(serials))
+    previous: dict[str, str] = {serial: answer for serial, answer in session.execute(stored)}
+    rows = []
+    for serial, runs in _runs_of(session, serials).items():
+        summaries = [
+            submitted if submitted is not None and run.run_id == submitted.run_id else run
+            for _, run in runs
+        ]
+        pk, latest = runs[-1]
+        rows.append(
+            {
+                "serial": serial,
+                "run_pk": pk,
+                "started_at": latest.started_at,
+                "calibration": answer_json(summaries, previous.get(serial)),
+            }
+        )
+    session.execute(for_dialect(session, _UPSERT), rows)
 
 
-def latest_run_pks(session: Session) -> list[int]:
-    """The latest run of every unit, from ``runs`` alone (one windowed scan)."""
-    ranked = select(
-        Run.id,
-        func.row_number()
-        .over(partition_by=Run.serial, order_by=(Run.started_at.desc(), Run.id.desc()))
-        .label("nth"),
-    ).subquery()
-    return list(session.scalars(select(ranked.c.id).where(ranked.c.nth == 1)))
+def refresh_answers(session: Session, batch: int = 500) -> int:
+    """Rewrite every unit's answer from ``runs``; return the number of units."""
+    serials = list(session.scalars(select(Run.serial).distinct().order_by(Run.serial)))
+    for start in range(0, len(serials), batch):
+        record_units(session, serials[start : start + batch])
+        session.expunge_all()
+    return len(serials)
+
+
+def answers_are_stale(session: Session) -> bool:
+    """Whether the stored answers are of an older shape than :class:`UnitCalibration`."""
+    sample = session.scalars(select(Unit.calibration).limit(1)).one_or_none()
+    if sample is None:
+        return False
+    try:
+        UnitCalibration.model_validate_json(sample)
+    except ValidationError:
+        return True
+    return False
 
 
 #: The lookup statement of each backend and its parameters, for the driver's own

@@ -28,11 +28,13 @@ from station.errors import CalstationError
 from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
+from station.operator_text import port_problem
 from station.outbox import Outbox, waiting
 from station.records import RunRecord
 from station.screens import header, serial_prompt, unit_screen, verdict_screen
 from station.session import ALGORITHM, Phase, UnitRun
 from station.storage import RunStore
+from station.unit_history import ScanAction, UnitHistory
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +63,7 @@ class State(StrEnum):
 
     RESUME = "resume"
     SERIAL = "serial"
+    CONFIRM = "confirm"
     UNIT = "unit"
 
 
@@ -91,6 +94,8 @@ class StationApp:
         self.state = State.SERIAL
         self.run: UnitRun | None = None
         self.pending_resume: RunJournal | None = None
+        #: The scanned unit's history (asked about in CONFIRM; its verdict's disposition).
+        self.history: UnitHistory | None = None
         self.typed = ""
         self.note: str | None = None
         self.last_record: RunRecord | None = None
@@ -202,6 +207,8 @@ class StationApp:
                     style="bold yellow",
                 )
             )
+        elif self.state is State.CONFIRM and self.note:
+            parts.append(Text(self.note, style="bold yellow"))
         elif self.state is State.UNIT and self.run is not None:
             parts.append(unit_screen(self.run, self.show_help))
             if self.confirm_abort:
@@ -236,6 +243,8 @@ class StationApp:
             self._resume_key(key)
         elif self.state is State.SERIAL:
             self._serial_key(key)
+        elif self.state is State.CONFIRM:
+            self._confirm_key(key)
         elif self.run is not None:
             self._unit_key(self.run, key)
 
@@ -246,6 +255,7 @@ class StationApp:
         if journal is None:
             return
         if key.lower() == "y":
+            self.history = self._history(journal.serial)
             self._start_unit(journal.serial, journal)
         else:
             self.journal_file.clear()
@@ -287,7 +297,30 @@ class StationApp:
             self.note = f"{serial!r} is not a serial number (expected {self.config.serial_pattern})"
             self._say_line(self.note)
             return
-        self._start_unit(serial, None)
+        self.history = history = self._history(serial)
+        decision = history.at_scan(self.profile.attempts_allowed)
+        if decision.note:
+            self._say_line(decision.note)
+        self.note = decision.text or decision.note
+        if decision.text:
+            self._say_line(decision.text)
+        if decision.action is ScanAction.CONFIRM:
+            self.state = State.CONFIRM
+        elif decision.action is ScanAction.START:
+            self._start_unit(serial, None, keep_note=True)
+
+    def _confirm_key(self, key: str) -> None:
+        """The answer to "passed already: calibrate again? y/n"."""
+        self.state = State.SERIAL
+        if self.history is not None and key.lower() == "y":
+            self._start_unit(self.history.serial, None)
+        else:
+            self.note = "not calibrated again: scan the next unit"
+
+    def _history(self, serial: str) -> UnitHistory:
+        if self._store is None:
+            self._check_store()
+        return UnitHistory.gather(serial, self._store, self.outbox.pending())
 
     def _open_unit(self, serial: str) -> PutterDriver:
         port = self.config.port
@@ -295,7 +328,7 @@ class StationApp:
             raise DeviceError("no putter port configured (--port)")
         return open_unit(port, serial)
 
-    def _start_unit(self, serial: str, journal: RunJournal | None) -> None:
+    def _start_unit(self, serial: str, journal: RunJournal | None, keep_note: bool = False) -> None:
         self.last_record = None
         try:
             driver = self._open_unit(serial)
@@ -304,7 +337,7 @@ class StationApp:
             self._say_line(self.note)
             return
         except DeviceError as exc:
-            self.note = f"cannot reach unit {serial}: {exc}"
+            self.note = f"cannot reach unit {serial} on {self.config.port}: {port_problem(exc)}"
             self._say_line(self.note)
             return
         if journal is None:
@@ -321,7 +354,7 @@ class StationApp:
             # A disk that refuses does not stop the unit: the journal owes the write and
             # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             self.journal_file.save(journal)
-        self.note = None
+        self.note = self.note if keep_note else None
         self._said = 0
         self.run = UnitRun(
             driver=driver,
@@ -337,6 +370,9 @@ class StationApp:
     def _finish_unit(self, run: UnitRun) -> None:
         run.driver.close()
         record = run.record
+        if record is not None and self.history is not None:
+            where = self.history.disposition(record, self.profile.attempts_allowed)
+            record = record.model_copy(update={"disposition": where})
         if record is not None:
             self.outbox.put(record)
             self.backlog += 1
@@ -352,8 +388,11 @@ class StationApp:
             self.records.append(record)
             self.last_record = record
             failed = ", ".join(f.code for f in record.failures)
+            then = f": {record.disposition}" if record.disposition else ""
             self._say_line(
-                f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "")
+                f"{record.serial}: {record.verdict.upper()}"
+                + (f" ({failed})" if failed else "")
+                + then
             )
             self._sync()
         if self.units is not None and len(self.records) >= self.units:
@@ -419,4 +458,6 @@ class StationApp:
         try:
             PutterDriver.open(self.config.port).close()
         except DeviceError as exc:
-            self._say_line(f"putter port: {exc} (waiting for a unit)")
+            self._say_line(
+                f"putter port {self.config.port}: {port_problem(exc)} (waiting for a unit)"
+            )

@@ -22,6 +22,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from station.errors import InputError
 from station.records import Axis, FailureReason, LimitsRef
+from station.unit_state import DEFAULT_RETEST_LIMIT
 
 DEFAULT_PROFILE = "kxm52-production"
 
@@ -75,11 +76,25 @@ class LimitsProfile(BaseModel):
     gyro_bias_dps: Bounds
     link_loss: Bounds
     writeback_relative_error: Bounds
+    retest_limit: Annotated[
+        int | None,
+        Field(ge=1, le=100, description="attempts per unit (aborts not counted) before rework"),
+    ] = None
+
+    @property
+    def attempts_allowed(self) -> int:
+        """The retest limit, or the default one (:mod:`station.unit_state`)."""
+        return self.retest_limit if self.retest_limit is not None else DEFAULT_RETEST_LIMIT
 
     @property
     def sha256(self) -> str:
-        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace)."""
-        canonical = json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace).
+
+        A profile without a retest limit hashes as before the field existed.
+        """
+        unset = {"retest_limit"} if self.retest_limit is None else None
+        document = self.model_dump(mode="json", exclude=unset)
+        canonical = json.dumps(document, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(canonical.encode()).hexdigest()
 
     @property

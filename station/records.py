@@ -34,6 +34,7 @@ __all__ = [
     "SERIAL_PATTERN",
     "Coefficients",
     "Counts3",
+    "Disposition",
     "FailureReason",
     "GyroFitRecord",
     "GyroSummary",
@@ -48,13 +49,14 @@ __all__ = [
     "RunRecord",
     "RunSummary",
     "StoredRun",
-    "UnitCalibration",
     "UtcDatetime",
     "Vector3",
     "Verdict",
 ]
 
 Verdict = Literal["pass", "fail"]
+#: Where a unit goes after a run: out of the door, back on a station, or to the repair bench.
+Disposition = Literal["ship", "retest", "rework"]
 Model = Literal["six", "nine"]
 Axis = Literal["x", "y", "z"]
 #: ``fit`` poses feed the calibration solve; ``verify`` poses only check its result.
@@ -237,6 +239,8 @@ class _RunHeader(_Record):
     model: Model
     limits: LimitsRef
     verdict: Verdict
+    #: Where the unit goes next (:mod:`station.unit_state`); None on records from before.
+    disposition: Disposition | None = None
     failures: tuple[FailureReason, ...] = ()
     coefficients: Coefficients | None = None
     quality: QualityMetrics | None = None
@@ -282,57 +286,6 @@ class StoredRun(RunRecord):
     """A run as the plant's record holds it: the submitted record and when it arrived."""
 
     received_at: UtcDatetime
-
-
-class UnitCalibration(_Record):
-    """A unit's current state: its latest run's verdict and calibration.
-
-    What ``GET /api/v1/units/{serial}`` answers; the results database keeps it ready,
-    serialised, per serial number (:mod:`db.units`).
-    """
-
-    serial: str
-    verdict: Verdict
-    run_id: UUID
-    calibrated_at: Annotated[datetime, Field(description="when the latest run finished (UTC)")]
-    station_id: str
-    operator_id: str
-    lot: Annotated[str | None, Field(description="the unit's production lot, if known")]
-    software_version: str
-    model: Model
-    limits: LimitsRef
-    offset: Annotated[Vector3 | None, Field(description="counts")]
-    sensitivity: Annotated[Vector3 | None, Field(description="counts/g")]
-    matrix: Annotated[Matrix3 | None, Field(description="counts → g, g = M·(raw − offset)")]
-    quality: QualityMetrics | None
-    failures: tuple[FailureReason, ...]
-    gyro: Annotated[
-        GyroSummary | None,
-        Field(description="the gyros over the latest run's still poses: bias, noise, slope vs g"),
-    ]
-
-    @classmethod
-    def of(cls, run: "RunSummary | StoredRun") -> "UnitCalibration":
-        """The unit's state given its latest run."""
-        cal = run.coefficients
-        return cls(
-            serial=run.serial,
-            verdict=run.verdict,
-            run_id=run.run_id,
-            calibrated_at=run.finished_at,
-            station_id=run.station_id,
-            operator_id=run.operator_id,
-            lot=run.lot,
-            software_version=run.software_version,
-            model=run.model,
-            limits=run.limits,
-            offset=cal.offset if cal else None,
-            sensitivity=cal.sensitivity if cal else None,
-            matrix=cal.matrix if cal else None,
-            quality=run.quality,
-            failures=run.failures,
-            gyro=run.gyro,
-        )
 
 
 class GyroFitRecord(_Record):

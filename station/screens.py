@@ -10,6 +10,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from station.operator_text import pose_words, wrong_unit
 from station.poses import Pose
 from station.records import RunRecord
 from station.session import Phase, UnitRun
@@ -42,13 +43,20 @@ BANNER = {
     ),
 }
 
-KEYS_HELP = "keys: r redo last pose · 1-9 redo that pose · a abort unit · h help"
+#: What each disposition tells the operator, under the verdict.
+NEXT_STEP: dict[str, tuple[str, str]] = {
+    "ship": ("SHIP: the unit holds verified coefficients; put it with the good units", "green"),
+    "retest": ("RETEST: calibrate this unit again", "yellow"),
+    "rework": ("REWORK: take the unit to the repair bench; do not calibrate it again", "red"),
+}
+
+KEYS_HELP = "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help"
 HELP = """\
 The station asks for one pose at a time. Put the putter in the pose shown, let go,
 and keep hands off: the capture starts by itself once it lies still in that pose.
 
   r      redo the last pose taken
-  1…9    redo pose number N (its old capture is kept for audit)
+  1…9    redo pose number N, once taken (its old capture is kept for audit)
   a      abort this unit (press a, then y to confirm)
   h, ?   show or hide this help
 
@@ -91,7 +99,10 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
     target: Pose | None = run.requested
     parts: list[RenderableType] = []
     title = f"unit {run.journal.serial}"
-    if run.phase is Phase.RECONNECT:
+    if run.phase is Phase.RECONNECT and run.wrong_unit is not None:
+        expected = run.journal.serial
+        parts.append(Text(wrong_unit(run.wrong_unit, expected).upper(), style="bold red"))
+    elif run.phase is Phase.RECONNECT:
         parts.append(
             Text("CABLE PULLED — plug the unit back in; the poses taken are kept", style="bold red")
         )
@@ -101,7 +112,7 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
         )
     elif target is not None:
         step = Text.assemble(
-            (f"pose {run.index + 1} of {total}: {target.name.replace('_', ' ')}", "bold cyan"),
+            (f"pose {run.index + 1} of {total}: {pose_words(target.name)}", "bold cyan"),
             f" — {target.instruction}",
         )
         parts.append(step)
@@ -112,7 +123,7 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
             parts.append(
                 Text.assemble(
                     "station sees: ",
-                    (live.sensed.nearest.name.replace("_", " "), "bold"),
+                    (pose_words(live.sensed.nearest.name), "bold"),
                     f" ({live.sensed.nearest_deg:.0f}° off)  ",
                     (ok, "green" if live.matches else "red"),
                 )
@@ -126,19 +137,22 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
         )
         state = "moving" if live.moving else "still"
         filled = round(live.progress * 30)
+        refused = live.refused is not None and live.progress >= 1.0
         parts.append(
             Text.assemble(
                 f"capture ({state}) ",
-                ("█" * filled, "green"),
+                ("█" * filled, "red" if refused else "green"),
                 ("░" * (30 - filled), "dim"),
-                f" {live.progress:4.0%}",
+                " refused" if refused else f" {live.progress:4.0%}",
             )
         )
+        if live.refused is not None:
+            parts.append(Text(live.refused, style="bold yellow"))
     poses = Text()
     for i, p in enumerate(run.sequence):
         mark = "✓" if i in run.journal.captures else ("▶" if i == run.index else "·")
         style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
-        poses.append(f" {mark}{i + 1} {p.name}", style=style)
+        poses.append(f" {mark}{i + 1} {pose_words(p.name)}", style=style)
     parts.append(poses)
     for message in run.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
@@ -168,6 +182,9 @@ def verdict_screen(record: RunRecord) -> RenderableType:
         lines.append(Align.center(table))
     for failure in record.failures:
         lines.append(Text(f"✗ {failure.code}: {failure.message}", style="red"))
+    if record.disposition is not None:
+        step, colour = NEXT_STEP[record.disposition]
+        lines.append(Text(f"next: {step}", style=f"bold {colour}", justify="center"))
     lines.append(Text(f"run {record.run_id}", style="dim", justify="center"))
     return Panel(Group(*lines), border_style="green" if record.verdict == "pass" else "red")
 

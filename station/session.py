@@ -17,7 +17,7 @@ The journal is saved after every pose, so a crash loses nothing.
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from enum import StrEnum
 
@@ -31,10 +31,21 @@ from station.acquisition.pose import PoseAcquisition, PoseResult
 from station.acquisition.stillness import StillnessThresholds, WindowVerdict, judge_window
 from station.calibration import CalibrationError, Model, Solution, apply, solve
 from station.device import DeviceCalibration, DeviceError, PutterDriver
-from station.device.errors import DeviceDisconnectedError, DeviceTimeoutError
+from station.device.errors import (
+    DeviceDisconnectedError,
+    DeviceTimeoutError,
+    SerialNumberMismatchError,
+)
 from station.gyro import summarize_still_poses
 from station.journal import Capture, JournalFile, RunJournal
 from station.limits import LimitsProfile, check
+from station.operator_text import (
+    MOVED_EARLY,
+    capture_refused,
+    port_problem,
+    pose_words,
+    wrong_unit,
+)
 from station.orientation import POSE_TOLERANCE_DEG, Sensed, angle_deg, gravity_direction, sense
 from station.pose_plan import check_plan
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, Pose, pose
@@ -49,7 +60,7 @@ from station.records import (
     RunRecord,
     Vector3,
 )
-from station.sensor import AXES
+from station.run_checks import run_checks
 
 Array = NDArray[np.float64]
 ALGORITHM = "autocal-eq10"
@@ -112,14 +123,21 @@ class LiveView:
     gyro_rate: Array = field(default_factory=lambda: np.zeros(3))
     moving: bool = True
     progress: float = 0.0
+    #: Why the capture does not go on, in the operator's words (None: it does).
+    refused: str | None = None
 
 
 @dataclass(frozen=True)
 class Message:
-    """A sentence for the operator; ``level`` is info, warn or error."""
+    """A sentence for the operator; ``level`` is info, warn or error.
+
+    ``topic`` names a condition the message is about (``link``): it is taken off the
+    screen when the condition ends.
+    """
 
     level: str
     text: str
+    topic: str | None = None
 
 
 def _vec(values: Array | tuple[float, float, float]) -> Vector3:
@@ -173,6 +191,10 @@ class UnitRun:
         self._moved = False
         self.verification_error_mg: float | None = None
         self.unit_output_error_mg: float | None = None
+        #: Whether the coefficients are in the unit (written and read back).
+        self.written = False
+        #: The serial of another unit plugged in while this one was awaited.
+        self.wrong_unit: str | None = None
 
     # -- what the interface shows --------------------------------------------------
 
@@ -186,16 +208,26 @@ class UnitRun:
         """The pose asked for now (None once all are taken)."""
         return self.sequence[self.index] if self.index < len(self.sequence) else None
 
-    def say(self, level: str, text: str) -> None:
+    def say(self, level: str, text: str, topic: str | None = None) -> None:
         """Tell the operator something (newest last)."""
-        self.messages.append(Message(level, text))
+        self.messages.append(Message(level, text, topic))
         self.said += 1
+
+    def unsay(self, topic: str) -> None:
+        """Take the messages about ``topic`` off the screen: it is no longer true."""
+        kept = [m for m in self.messages if m.topic != topic]
+        self.messages.clear()
+        self.messages.extend(kept)
 
     # -- operator commands -----------------------------------------------------------
 
     def redo(self, index: int) -> None:
         """Take pose ``index`` again; its current capture is kept for audit."""
         if not 0 <= index < len(self.sequence):
+            return
+        if index not in self.journal.captures:
+            name = pose_words(self.sequence[index].name)
+            self.say("warn", f"pose {index + 1} ({name}) is not taken yet: nothing to redo")
             return
         if self.phase not in (Phase.POSE, Phase.RECONNECT):
             self.say("warn", "too late to redo a pose: the coefficients are being written")
@@ -216,7 +248,8 @@ class UnitRun:
         self.solution = None
         self.index = self.journal.next_pose
         self._restart_acquisition()
-        self.say("info", f"pose {index + 1} ({self.sequence[index].name}) will be taken again")
+        name = pose_words(self.sequence[index].name)
+        self.say("info", f"pose {index + 1} ({name}) will be taken again")
 
     def redo_last(self) -> None:
         """Take the most recently captured pose again."""
@@ -229,6 +262,14 @@ class UnitRun:
         if self.phase is Phase.DONE:
             return self.record
         self._failures = [FailureReason(code="aborted", message="aborted by the operator")]
+        if self.written:  # the unit holds them: not an abort that left it as it was
+            self._failures = [
+                FailureReason(
+                    code="unit_output",
+                    message="aborted by the operator after the coefficients were written: "
+                    "the unit's own output was not checked",
+                )
+            ]
         self._finish(store=bool(self.journal.captures))
         return self.record
 
@@ -268,6 +309,9 @@ class UnitRun:
         self._update_live(acquisition.recent, target)
         if self.phase is Phase.DONE:
             return
+        if result is None and self.live.matches and self.live.progress >= 1.0:
+            refused = capture_refused(acquisition.last_verdict, self.settings.stillness)
+            self.live = replace(self.live, refused=refused)
         if result is None:
             if not self.live.matches:
                 self._restart_acquisition()
@@ -288,11 +332,15 @@ class UnitRun:
         was_capturing = self.live.progress >= 0.25
         if verdict.motion:
             self._moved = True
+        refused = self.live.refused if self._still_samples else None
         if matches and not verdict.motion:
             self._still_samples += len(rows)
         else:
             if was_capturing and matches:
-                self.say("warn", f"moved during capture of {target.name}: hold the putter still")
+                name = pose_words(target.name)
+                self.say("warn", f"moved during capture of {name}: hold the putter still")
+            elif self.live.progress >= 0.05 and self.live.matches:  # not the settling
+                refused = MOVED_EARLY
             self._still_samples = 0
         if self._moved and not matches and not verdict.motion:
             self._say_wrong_pose(sensed, target)
@@ -303,6 +351,7 @@ class UnitRun:
             gyro_rate=window[:, 4:7].mean(axis=0),
             moving=verdict.motion,
             progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
+            refused=refused,
         )
 
     def _fail_saturated(self, target: Pose, verdict: WindowVerdict) -> None:
@@ -342,14 +391,14 @@ class UnitRun:
             if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
                 self.say(
                     "warn",
-                    f"too close to pose {j + 1} ({self.sequence[j].name}), already taken: "
-                    f"pose {self.index + 1} is {target.name}",
+                    f"too close to pose {j + 1} ({pose_words(self.sequence[j].name)}), "
+                    f"already taken: pose {self.index + 1} is {pose_words(target.name)}",
                 )
                 return
         self.say(
             "warn",
-            f"wrong pose: the putter lies {sensed.nearest.name}, "
-            f"pose {self.index + 1} is {target.name}",
+            f"wrong pose: the putter lies {pose_words(sensed.nearest.name)}, "
+            f"pose {self.index + 1} is {pose_words(target.name)}",
         )
 
     def _captured_directions(self) -> list[tuple[int, Array]]:
@@ -406,7 +455,7 @@ class UnitRun:
             loss_fraction=result.loss_fraction,
         )
         self.journal_file.save(self.journal)
-        self.say("info", f"pose {index + 1} ({target.name}) captured")
+        self.say("info", f"pose {index + 1} ({pose_words(target.name)}) captured")
         self._wrong_pose_said = None
         self._moved = False
         self._still_samples = 0
@@ -448,6 +497,7 @@ class UnitRun:
             self.driver.stop_stream()
             self.driver.write_calibration(written)
             back = self.driver.read_calibration()
+            self.written = True
         except DeviceError as exc:
             self._failures.append(
                 FailureReason(code="writeback", message=f"write-back failed: {exc}")
@@ -488,7 +538,11 @@ class UnitRun:
         self._finish(store=True)
 
     def _lost_link(self, exc: DeviceError) -> None:
-        self.say("error", f"lost the unit ({exc}): plug it back in, the poses taken are kept")
+        self.say(
+            "error",
+            f"lost the unit ({port_problem(exc)}): plug it back in, the poses taken are kept",
+            topic="link",
+        )
         self.driver.close()
         self.phase = Phase.RECONNECT
         self._next_reconnect = time.monotonic() + RECONNECT_EVERY_S
@@ -499,11 +553,18 @@ class UnitRun:
         self._next_reconnect = time.monotonic() + RECONNECT_EVERY_S
         try:
             driver = self._reopen()
+        except SerialNumberMismatchError as exc:
+            if self.wrong_unit != exc.reported:
+                self.wrong_unit = exc.reported
+                self.say("error", wrong_unit(exc.reported, exc.expected), topic="link")
+            return
         except DeviceError:
             return
         self.driver = driver
+        self.wrong_unit = None
         self.phase = Phase.POSE
         self._recent = np.empty((0, 8))
+        self.unsay("link")
         self.say("info", "the unit is back: carry on")
         if self.index >= len(self.sequence):  # it went while its coefficients were written
             self._write_back()
@@ -513,39 +574,13 @@ class UnitRun:
     # -- the verdict -------------------------------------------------------------------
 
     def _checks(self) -> list[FailureReason]:
-        reasons: list[FailureReason] = []
-        captures = self.journal.captures
-        for i, capture in sorted(captures.items()):
-            rec = capture.record
-            for axis, std in zip(AXES, rec.std.as_tuple(), strict=True):
-                if (r := check(self.profile, "pose_noise", std, axis=axis, pose=i)) is not None:
-                    reasons.append(r)
-            if (r := check(self.profile, "link_loss", capture.loss_fraction, pose=i)) is not None:
-                reasons.append(r)
-        if self.solution is not None:
-            cal = self.solution.calibration
-            for i, axis in enumerate(AXES):
-                if (
-                    r := check(self.profile, "offset", float(cal.offset[i]), axis=axis)
-                ) is not None:
-                    reasons.append(r)
-            for i, axis in enumerate(AXES):
-                value = float(cal.sensitivity[i])
-                if (r := check(self.profile, "sensitivity", value, axis=axis)) is not None:
-                    reasons.append(r)
-            verify = self.fit_count
-            if verify in captures:
-                raw = np.array(captures[verify].record.mean.as_tuple())
-                error = abs(float(np.linalg.norm(apply(cal, raw))) - 1.0) * 1000.0
-                self.verification_error_mg = error
-                if (r := check(self.profile, "verification_error", error, pose=verify)) is not None:
-                    reasons.append(r)
-        gyro = self._gyro_summary()
-        if gyro is not None:
-            for axis, bias in zip(AXES, gyro.bias.as_tuple(), strict=True):
-                if (r := check(self.profile, "gyro_bias", bias, axis=axis)) is not None:
-                    reasons.append(r)
-        return reasons
+        calibration = self.solution.calibration if self.solution is not None else None
+        result = run_checks(
+            self.profile, self.journal.captures, calibration, self.fit_count, self._gyro_summary()
+        )
+        if result.verification_error_mg is not None:
+            self.verification_error_mg = result.verification_error_mg
+        return result.reasons
 
     def _gyro_summary(self) -> GyroSummary | None:
         """Bias and noise of each gyro over the fit poses, and their bias-vs-gravity slope."""

@@ -20,6 +20,7 @@ Errors tell the outbox what to do::
 from typing import Protocol
 
 import httpx
+from pydantic import BaseModel
 from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError, SQLAlchemyError
 
 from db import (
@@ -32,7 +33,7 @@ from db import (
 )
 from station.closing import Closing
 from station.errors import CalstationError
-from station.records import RunRecord, StoredRun
+from station.records import RunRecord, RunSummary, StoredRun
 
 __all__ = [
     "DatabaseStore",
@@ -47,6 +48,7 @@ __all__ = [
 ]
 
 RUNS_PATH = "/api/v1/runs"
+UNITS_PATH = "/api/v1/units"
 
 
 class StoreError(CalstationError):
@@ -76,6 +78,10 @@ class RunStore(Protocol):
         """Store ``record`` (or find it stored already) and return the stored run."""
         ...
 
+    def history(self, serial: str) -> list[RunSummary]:
+        """Every stored run of the unit, oldest first; :class:`StoreUnavailableError`."""
+        ...
+
     def close(self) -> None:
         """Release connections."""
         ...
@@ -103,6 +109,14 @@ class DatabaseStore(Closing):
             raise RecordFailedError(
                 f"database failed on run {record.run_id}: {_first_line(exc)}"
             ) from None
+
+    def history(self, serial: str) -> list[RunSummary]:
+        try:
+            with self.database.session() as session:
+                return RunRepository(session).history(serial)
+        except SQLAlchemyError as exc:
+            url = self.database.engine.url
+            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
 
     def close(self) -> None:
         self.database.dispose()
@@ -151,6 +165,19 @@ class HttpStore(Closing):
             return self.client.post(RUNS_PATH, json=body)
         except (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError):
             return self.client.post(RUNS_PATH, json=body)
+
+    def history(self, serial: str) -> list[RunSummary]:
+        """``GET /api/v1/units/{serial}/runs``; a unit the server does not know has none."""
+        try:
+            response = self.client.get(f"{UNITS_PATH}/{serial}/runs")
+            if response.status_code == 404:
+                return []
+            response.raise_for_status()
+            return RunHistory.model_validate_json(response.content).data
+        except (httpx.HTTPError, ValueError) as exc:
+            raise StoreUnavailableError(
+                f"results server {self.client.base_url}: no history of {serial}: {exc}"
+            ) from None
 
     def close(self) -> None:
         self.client.close()
@@ -208,6 +235,12 @@ def _http_error(base_url: httpx.URL, record: RunRecord, response: httpx.Response
     return StoreConfigurationError(
         f"results server answered {code} ({message}): check server_url and api_key"
     )
+
+
+class RunHistory(BaseModel):
+    """The body of ``GET /api/v1/units/{serial}/runs``."""
+
+    data: list[RunSummary]
 
 
 def _detail(response: httpx.Response) -> str:

@@ -21,6 +21,7 @@ from station.report.html import certificate_page, dashboard_page
 from station.report.model import ReportFilter
 from station.report.period import parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
+from station.unit_state import counts
 
 #: Units on the dashboard's list, and points on each of its control charts.
 DASHBOARD_UNITS = 20
@@ -66,8 +67,10 @@ async def get_eol_report(
 
 
 def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
-    latest = repository.latest_for_serial(serial)
-    return repository.get(latest.run_id) if latest is not None else None
+    """The unit's latest run that counts (an operator's abort does not), as the report's."""
+    runs = repository.history(serial)
+    counted = [run for run in runs if counts(run)] or runs
+    return repository.get(counted[-1].run_id) if counted else None
 
 
 @router.get(
@@ -79,7 +82,8 @@ async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
     repository: ReaderDep,
 ) -> HTMLResponse:
-    """The unit's calibration certificate: its latest run, coefficients, poses, limits."""
+    """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
+    limits."""
     run = await repository.run(lambda r: _latest_run(r, serial))
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")

@@ -7,7 +7,8 @@ from fastapi import APIRouter, HTTPException, Path, Response, status
 from api.deps import ReaderDep, UnitLookupsDep
 from api.responses import json_response
 from api.schemas import Problem, RunList
-from station.records import SERIAL_PATTERN, UnitCalibration
+from station.records import SERIAL_PATTERN
+from station.unit_state import UnitCalibration
 
 router = APIRouter(
     prefix="/units",

@@ -357,7 +357,10 @@ class PutterDriver(Closing):
     def _fail(self, failure: DeviceError) -> None:
         if self._failure is None:
             self._failure = failure
-            log.warning("%s", failure)
+            # Not a warning: the error reaches the station, which tells the operator in
+            # plain words; Python's last-resort handler would print this raw text over
+            # the screen and leave it there.
+            log.info("%s", failure)
         self._raw.wake()
         self._calibrated.wake()
 

@@ -34,14 +34,16 @@ def test_a_unit_shows_its_latest_run(client: httpx.Client, database: Database) -
     _store(database, retest, first)
     unit = client.get(f"/api/v1/units/{first.serial}").json()
     assert unit["serial"] == first.serial
-    assert (unit["verdict"], unit["run_id"]) == ("pass", str(retest.run_id))
-    assert unit["offset"] == {"x": 2050.0, "y": 2040.0, "z": 2030.0}
-    assert unit["sensitivity"] == {"x": 813.95, "y": 815.66, "z": 820.17}
-    assert unit["matrix"][0][0] == pytest.approx(1 / 813.95)
-    assert unit["calibrated_at"] == "2026-11-02T09:01:35Z"
-    assert unit["station_id"] == retest.station_id
-    assert unit["lot"] == "L2611-07"
-    assert unit["failures"] == []
+    latest, holds = unit["latest"], unit["holds"]
+    assert (unit["verdict"], unit["attempts"]) == ("pass", 2)
+    assert (latest["run_id"], holds["run_id"]) == (str(retest.run_id), str(retest.run_id))
+    assert holds["offset"] == {"x": 2050.0, "y": 2040.0, "z": 2030.0}
+    assert holds["sensitivity"] == {"x": 813.95, "y": 815.66, "z": 820.17}
+    assert holds["matrix"][0][0] == pytest.approx(1 / 813.95)
+    assert holds["written_at"] == latest["finished_at"] == "2026-11-02T09:01:35Z"
+    assert latest["station_id"] == holds["station_id"] == retest.station_id
+    assert latest["lot"] == "L2611-07"
+    assert (latest["failures"], latest["wrote_unit"]) == ([], True)
     history = client.get(f"/api/v1/units/{first.serial}/runs").json()
     assert [r["run_id"] for r in history["data"]] == [str(first.run_id), str(retest.run_id)]
     assert history["data"][0]["failures"][0]["code"] == "sensitivity_out_of_range"
@@ -52,7 +54,7 @@ def test_a_failing_unit_shows_its_failure_reasons(client: httpx.Client, database
     _store(database, record)
     unit = client.get(f"/api/v1/units/{record.serial}").json()
     assert unit["verdict"] == "fail"
-    assert unit["failures"] == [
+    assert unit["latest"]["failures"] == [
         {
             "code": "sensitivity_out_of_range",
             "message": "sensitivity z 820.17 counts/g above 819.0",
@@ -186,4 +188,4 @@ def test_a_lookup_the_database_cannot_answer_is_a_503_and_the_server_recovers(
     assert broken.status_code == 503
     assert broken.json() == {"detail": "results database unavailable"}
     assert again.status_code == 200
-    assert again.json()["run_id"] == str(record.run_id)
+    assert again.json()["latest"]["run_id"] == str(record.run_id)

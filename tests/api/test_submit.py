@@ -52,7 +52,7 @@ def test_a_failed_run_without_coefficients_is_stored(
     answer = client.post(RUNS, json=record.model_dump(mode="json"), headers=_auth(station_key))
     assert answer.status_code == 201, answer.text
     unit = client.get(f"/api/v1/units/{record.serial}").json()
-    assert (unit["verdict"], unit["offset"]) == ("fail", None)
+    assert (unit["verdict"], unit["holds"], unit["latest"]["wrote_unit"]) == ("fail", None, False)
 
 
 @pytest.mark.parametrize(

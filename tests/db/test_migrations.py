@@ -25,7 +25,7 @@ from db.base import Base
 from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
 from db.models import ReportCounts, Run, RunFailure, Unit
-from db.units import calibration_json
+from db.units import answer_json
 from tests.db.records import T0, make_record
 from tests.db.test_rollups import rollup_rows
 
@@ -104,10 +104,9 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
     with database.session() as session:
         repo = RunRepository(session)
         stored = {s: c for s, c in session.execute(select(Unit.serial, Unit.calibration))}
-        latest = {serial: repo.latest_for_serial(serial) for serial in ("PT-000001", "PT-000002")}
-    assert stored == {
-        serial: calibration_json(run) for serial, run in latest.items() if run is not None
-    }
+        expected = {serial: answer_json(repo.history(serial)) for serial in stored}
+    assert stored == expected
+    assert set(stored) == {"PT-000001", "PT-000002"}
     assert f'"run_id":"{retest.run_id}"' in stored["PT-000001"]
     engine.dispose()
 

@@ -144,10 +144,11 @@ def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:
     assert StoredRun.model_validate_json(outcome.run.model_dump_json()) == outcome.run
 
 
-def test_a_record_without_a_lot_hashes_as_before_the_lot_existed() -> None:
+def test_a_record_without_a_lot_or_disposition_hashes_as_before_those_existed() -> None:
     record = make_record()
     document = json.loads(record.model_dump_json())
-    del document["lot"]
+    del document["lot"], document["disposition"]
     before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
     assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
     assert record_sha256(make_record(lot="L1")) != record_sha256(record)
+    assert record_sha256(make_record(disposition="ship")) != record_sha256(record)

@@ -2,7 +2,8 @@
 
 Each history (retests, several stations, operators and lots, runs over three days) is
 submitted in a shuffled order, so runs arrive late and retests land before the runs
-they follow. The report, which adds up roll-ups and partial days, must then equal the
+they follow; some runs are operator aborts, which are a unit's latest run only when all its
+runs are. The report, which adds up roll-ups and partial days, must then equal the
 definitions computed here straight from the runs; rebuilding the roll-ups from the raw
 tables must give the rows the submissions left.
 """
@@ -57,7 +58,7 @@ def histories(draw: st.DrawFn) -> list[Planned]:
     minutes = draw(st.lists(st.integers(0, 3 * 24 * 60), min_size=1, max_size=12, unique=True))
     runs = []
     for minute in minutes:
-        code = draw(st.sampled_from([None, None, "offset", "sensitivity"]))
+        code = draw(st.sampled_from([None, None, "offset", "sensitivity", "aborted"]))
         runs.append(
             Planned(
                 serial=draw(st.sampled_from(["U1", "U2", "U3", "U4"])),
@@ -115,7 +116,7 @@ def _expected_counts(
     """(runs, passed, units, first passes, final passes), units counted at their first
     run among the runs ``same`` groups with it."""
     first = [r for r in chosen if r == min((o for o in history if same(o, r)), key=_start)]
-    latest = {id(r): max((o for o in history if same(o, r)), key=_start) for r in first}
+    latest = {id(r): max((o for o in history if same(o, r)), key=_latest) for r in first}
     return (
         len(chosen),
         sum(r.passed for r in chosen),
@@ -127,6 +128,11 @@ def _expected_counts(
 
 def _start(run: Planned) -> datetime:
     return run.started_at
+
+
+def _latest(run: Planned) -> tuple[bool, datetime]:
+    """Order of a unit's latest run: an operator's abort only when all its runs are."""
+    return (run.code != "aborted", run.started_at)
 
 
 def _counts_of(summary: Any) -> tuple[int, int, int, int, int]:
@@ -157,7 +163,7 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         assert _counts_of(summary) == _expected_counts(history, at, unit_at_station)
     codes = [r.code for r in chosen if r.code is not None]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
-    latest = {r.serial: r for r in sorted(history, key=_start)}
+    latest = {r.serial: r for r in sorted(history, key=_latest)}
     listed = {serial for serial, r in latest.items() if r in chosen}
     assert report.units_total == len(listed)
     assert {u.serial for u in report.units} == listed

@@ -18,7 +18,7 @@ from db import (
     open_database,
 )
 from db.models import Run
-from db.units import UnitLookups, calibration_json
+from db.units import UnitLookups, answer_json
 from tests.db.records import T0, make_record
 
 SERIALS = [f"PT-{i:06d}" for i in range(12)]
@@ -35,9 +35,7 @@ def stored(database: Database) -> dict[str, str]:
                 repo.submit(make_record(serial=serial, started_at=T0 + timedelta(hours=i)))
         expected = {}
         for serial in SERIALS:
-            latest = repo.latest_for_serial(serial)
-            assert latest is not None
-            expected[serial] = calibration_json(latest)
+            expected[serial] = answer_json(repo.history(serial))
     return expected
 
 
@@ -161,7 +159,7 @@ def test_every_waiting_lookup_gets_the_database_error_and_the_next_reconnects(
     assert all(isinstance(outcome, DatabaseUnavailableError) for outcome in failed)
     assert "no such table: units" in str(failed[0])
     assert answer is not None
-    assert json.loads(answer)["run_id"] == str(record.run_id)
+    assert json.loads(answer)["latest"]["run_id"] == str(record.run_id)
 
 
 @pytest.mark.postgres

@@ -1,4 +1,4 @@
-"""Each unit's stored current state equals its latest run, whatever order runs arrive in."""
+"""Each unit's stored answer equals the one its history gives, whatever order runs arrive in."""
 
 import uuid
 from datetime import timedelta
@@ -10,7 +10,7 @@ from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
 from db.models import Run, Unit
-from db.units import calibration_json
+from db.units import answer_json
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
@@ -53,12 +53,12 @@ def test_the_stored_state_is_the_latest_run_in_any_arrival_order(
             )
         serials = {f"{prefix}{unit}" for unit, _, _ in arrivals}
         stored = units_of(session, serials)
-        # The definition: the unit's latest run by (started_at, id), read from runs.
+        # The definition: the answer of the unit's runs by (started_at, id), read from runs.
         for serial in serials:
             latest = repo.latest_for_serial(serial)
             assert latest is not None
             latest_pk = session.scalars(select(Run.id).where(Run.run_id == latest.run_id)).one()
-            assert stored[serial] == (latest_pk, calibration_json(latest))
+            assert stored[serial] == (latest_pk, answer_json(repo.history(serial)))
         # Rebuilt from runs alone (the migration's and a bulk load's path): the same rows.
         session.execute(delete(Unit).where(Unit.serial.in_(serials)))
         repo.refresh_units()

@@ -157,3 +157,61 @@ def test_abort_after_a_redo_records_the_poses_still_held(bench: Bench) -> None:
     assert [p.name for p in record.poses] == ["face_up", "toe_up"]
     assert [p.index for p in record.poses] == [0, 1]
     assert [f.code for f in record.failures] == ["aborted"]
+
+
+def test_another_unit_plugged_back_in_is_named_until_the_right_one_returns(
+    bench: Bench, tmp_path: Path
+) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 2)
+    bench.putter.unplug()
+    bench.drive(lambda run: run.phase is Phase.RECONNECT)
+    other = VirtualPutter(seed=3, serial="PT000002", speed=20.0)
+    other.serve_pty(bench.port)  # the operator plugs the wrong unit in
+    try:
+        bench.drive(lambda run: run.wrong_unit is not None, timeout=20)
+        said = [m.text for m in bench.run.messages]
+        assert said[-1] == (
+            f"PT000002 plugged in, {SERIAL} expected: plug {SERIAL} back in, or abort"
+        )
+    finally:
+        other.close()
+    bench.putter.replug()
+    bench.drive(lambda run: run.phase is Phase.POSE, timeout=20)
+    assert bench.run.wrong_unit is None
+    texts = [m.text for m in bench.run.messages]
+    assert texts[-1] == "the unit is back: carry on"
+    assert not any("PT000002" in t or "lost the unit" in t for t in texts)  # no longer true
+    bench.drive(done)
+    assert bench.run.record is not None
+    assert bench.run.record.verdict == "pass"
+
+
+def test_a_key_for_a_pose_not_taken_says_so_and_changes_nothing(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 1)
+    bench.run.redo(4)  # key 5 at pose 2
+    assert bench.run.messages[-1].text == "pose 5 (shaft up) is not taken yet: nothing to redo"
+    assert sorted(bench.run.journal.captures) == [0]
+    assert 4 not in bench.run.journal.replaced
+
+
+def test_an_abort_after_the_write_back_is_not_recorded_as_leaving_the_unit_alone(
+    bench: Bench,
+) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    record = bench.run.abort()
+    assert record is not None
+    assert [f.code for f in record.failures] == ["unit_output"]
+    assert record.coefficients is not None  # and wrote_unit(record) holds: the unit has them
+
+
+def test_a_capture_refused_for_link_loss_says_why_at_once(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(drop_rate=0.05))
+    try:
+        bench.drive(lambda run: "cable" in (run.live.refused or ""), timeout=20)
+        refused = bench.run.live.refused
+        assert refused is not None
+        assert refused.startswith("capture refused: the cable loses")
+        assert not bench.run.journal.captures
+        assert bench.run.phase is Phase.POSE  # long before the 30 s pose timeout
+    finally:
+        bench.close()

@@ -174,11 +174,11 @@ def test_wrong_pose_is_said_and_not_captured(station: Station) -> None:
     station.scan()
     assert station.wait_asked() == (1, "face_up")
     station.putter.move_to("face_up", 1.0)
-    child.expect("pose 1 \\(face_up\\) captured")
+    child.expect("pose 1 \\(face up\\) captured")
     station.putter.move_to("toe_up", 1.0)  # pose 2 is face_down
-    child.expect("wrong pose: the putter lies toe_up, pose 2 is face_down")
+    child.expect("wrong pose: the putter lies toe up, pose 2 is face down")
     station.putter.move_to("face_up", 1.0)  # back to pose 1: already taken
-    child.expect("too close to pose 1 \\(face_up\\), already taken")
+    child.expect("too close to pose 1 \\(face up\\), already taken")
     assert station.follow() == "PASS"
     names = station.rows('select name from poses order by "index"')
     assert [n for (n,) in names][:2] == ["face_up", "face_down"]
@@ -191,11 +191,11 @@ def test_motion_during_capture_is_said_at_once(tmp_path: Path) -> None:
         station.scan()
         station.wait_asked()
         station.putter.move_to("face_up", 1.0)
-        child.expect("pose 1 \\(face_up\\) captured")
+        child.expect("pose 1 \\(face up\\) captured")
         station.putter.move_to("face_down", 0.5)
         child.expect(r"capture \(still\) [^\n]*? [3-9]\d%")
         station.putter.move_to("face_down", 2.0)  # picked up again mid-capture
-        child.expect("moved during capture of face_down: hold the putter still")
+        child.expect("moved during capture of face down: hold the putter still")
         station.asked = "face_down"
         assert station.follow() == "PASS"
     finally:
@@ -207,10 +207,10 @@ def test_redo_keeps_the_replaced_capture(station: Station) -> None:
     station.scan()
     station.follow(until_pose=4)  # poses 1-3 taken, pose 4 asked for
     child.send("r")
-    child.expect("pose 3 \\(toe_up\\) will be taken again")
+    child.expect("pose 3 \\(toe up\\) will be taken again")
     station.asked = None
     child.send("1")
-    child.expect("pose 1 \\(face_up\\) will be taken again")
+    child.expect("pose 1 \\(face up\\) will be taken again")
     assert station.follow() == "PASS"
     replaced = station.rows(
         'select "index", replaced from poses where replaced != \'[]\' order by "index"'

@@ -55,7 +55,7 @@ def test_the_http_store_submits_and_retries_against_a_live_server(
     assert first.run.model_dump(exclude={"received_at"}) == record.model_dump()
     assert again.run == first.run
     unit = httpx.get(f"{live_url}/api/v1/units/{record.serial}").json()
-    assert unit["run_id"] == str(record.run_id)
+    assert unit["latest"]["run_id"] == unit["holds"]["run_id"] == str(record.run_id)
 
 
 def test_the_http_store_tells_a_refusal_from_an_outage(
