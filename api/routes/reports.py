@@ -5,12 +5,12 @@
 """
 
 from datetime import UTC, datetime
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Path, Query, status
 from fastapi.responses import HTMLResponse, Response
 
-from api.deps import ReaderDep, RepositoryDep
+from api.deps import ReaderDep, ReportPoolDep
 from api.schemas import Problem
 from db import RunRepository
 from db.reports import eol_report
@@ -26,7 +26,16 @@ from station.report.render import MEDIA_TYPES, render
 DASHBOARD_UNITS = 20
 DASHBOARD_CHART_POINTS = 60
 
-router = APIRouter(tags=["reports"])
+#: 503: the database is down, a read ran out of time, or the report pool stayed busy.
+UNAVAILABLE: dict[int | str, dict[str, Any]] = {
+    503: {
+        "model": Problem,
+        "description": "the database does not answer, a read took longer than the read "
+        "timeout, or every report connection stayed busy (`Retry-After`): retry later; "
+        "for a report, a shorter range is quicker",
+    }
+}
+router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 
 
@@ -41,7 +50,7 @@ dashboard = APIRouter(tags=["reports"])
     },
 )
 async def get_eol_report(
-    repository: RepositoryDep,
+    repository: ReportPoolDep,
     since: Annotated[
         str | None, Query(alias="from", description="start, ISO date or time (UTC if no zone)")
     ] = None,
@@ -60,9 +69,10 @@ async def get_eol_report(
         operator_id=operator,
         lot=lot,
     )
-    # A transactional session: the report sets its PostgreSQL planner options locally.
-    report = await repository.run(lambda r: eol_report(r.session, report_filter, unit_limit=units))
-    return Response(render(report, format), media_type=MEDIA_TYPES[format])
+    body = await repository.run(
+        lambda r: render(eol_report(r.session, report_filter, unit_limit=units), format)
+    )
+    return Response(body, media_type=MEDIA_TYPES[format])
 
 
 def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
@@ -89,16 +99,18 @@ async def get_certificate(
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
-async def get_dashboard(repository: RepositoryDep) -> HTMLResponse:
+async def get_dashboard(repository: ReportPoolDep) -> HTMLResponse:
     """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
     now = datetime.now(UTC)
-    report = await repository.run(
-        lambda r: eol_report(
-            r.session,
-            ReportFilter(since=start_of_day(now)),
-            unit_limit=DASHBOARD_UNITS,
-            chart_points=DASHBOARD_CHART_POINTS,
-            now=now,
+    page = await repository.run(
+        lambda r: dashboard_page(
+            eol_report(
+                r.session,
+                ReportFilter(since=start_of_day(now)),
+                unit_limit=DASHBOARD_UNITS,
+                chart_points=DASHBOARD_CHART_POINTS,
+                now=now,
+            )
         )
     )
-    return HTMLResponse(dashboard_page(report))
+    return HTMLResponse(page)
