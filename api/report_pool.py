@@ -12,6 +12,8 @@ engine's statement timeout (:mod:`db.timeouts`).
 """
 
 import asyncio
+import os
+import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
@@ -23,6 +25,15 @@ from db import RunRepository
 from station.errors import CalstationError
 
 T = TypeVar("T")
+
+
+#: Niceness of the report threads (Linux schedules threads apart): under load the
+#: processor goes to the event loops, and the stations they serve, first.
+REPORT_NICENESS = 10
+
+
+def _yield_to_the_stations() -> None:
+    os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), REPORT_NICENESS)
 
 
 class ReportsBusyError(CalstationError):
@@ -37,7 +48,9 @@ class ReportPool:
         self.threads = threads
         self.wait_s = wait_s
         self._free = asyncio.Semaphore(threads)
-        self._executor = ThreadPoolExecutor(threads, thread_name_prefix="report")
+        self._executor = ThreadPoolExecutor(
+            threads, thread_name_prefix="report", initializer=_yield_to_the_stations
+        )
 
     async def run(self, work: Callable[[RunRepository], T]) -> T:
         """``work(repository)`` in a report thread, in a transaction of its own.
