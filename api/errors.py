@@ -12,7 +12,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from sqlalchemy.exc import OperationalError
 
-from api.report_pool import ReportsBusyError
+from api.report_pool import ReadTimeoutError, ReportsBusyError
 from api.verification import CalibrationMismatchError
 from db import DatabaseUnavailableError, RunConflictError, SchemaOutOfDateError
 from db.timeouts import is_statement_timeout
@@ -69,14 +69,18 @@ async def _reports_busy(_request: Request, exc: Exception) -> JSONResponse:
     return _retry_later(str(exc))
 
 
+async def _read_timeout(request: Request, _exc: Exception) -> JSONResponse:
+    log.warning("%s %s: read timeout", request.method, request.url.path)
+    return _retry_later(
+        "the read took longer than the server's read timeout (CALSTATION_READ_TIMEOUT_S): "
+        "retry later; for a report, a shorter range is quicker"
+    )
+
+
 async def _database_error(request: Request, exc: Exception) -> JSONResponse:
     """A read that ran out of time (the read timeout) apart from a database that is down."""
     if isinstance(exc, OperationalError) and is_statement_timeout(exc):
-        log.warning("%s %s: read timeout", request.method, request.url.path)
-        return _retry_later(
-            "the read took longer than the server's read timeout (CALSTATION_READ_TIMEOUT_S): "
-            "retry later; for a report, a shorter range is quicker"
-        )
+        return await _read_timeout(request, exc)
     return await _database_unavailable(request, exc)
 
 
@@ -100,4 +104,5 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
     app.add_exception_handler(OperationalError, _database_error)
     app.add_exception_handler(ReportsBusyError, _reports_busy)
+    app.add_exception_handler(ReadTimeoutError, _read_timeout)
     app.add_exception_handler(DatabaseUnavailableError, _database_unavailable)

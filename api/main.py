@@ -14,7 +14,7 @@ from api.limits import BodySizeLimit
 from api.report_pool import ReportPool
 from api.routes import gyro, health, reports, runs, units
 from api.settings import ApiSettings
-from db import make_async_engine, make_engine, open_database
+from db import make_async_engine, open_database
 from db.units import UnitLookups
 from station import __version__
 
@@ -49,15 +49,12 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             isolation_level="AUTOCOMMIT",
             pool_reset_on_return=None,
         )
-        # The report and the dashboard: connections and threads of their own.
-        report_engine = make_engine(
-            url,
-            statement_timeout_s=settings.read_timeout_s,
-            pool_size=settings.report_pool_size,
-            max_overflow=0,
-        )
+        # The report and the dashboard: processes and connections of their own.
         app.state.report_pool = report_pool = ReportPool(
-            report_engine, threads=settings.report_pool_size, wait_s=settings.report_wait_s
+            url,
+            processes=settings.report_pool_size,
+            wait_s=settings.report_wait_s,
+            timeout_s=settings.read_timeout_s,
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)

@@ -69,10 +69,15 @@ async def get_eol_report(
         operator_id=operator,
         lot=lot,
     )
-    body = await repository.run(
-        lambda r: render(eol_report(r.session, report_filter, unit_limit=units), format)
-    )
+    body = await repository.run(eol_body, report_filter, units, format)
     return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def eol_body(
+    repository: RunRepository, filter: ReportFilter, units: int | None, format: str
+) -> str:
+    """The report rendered (in a report process: :mod:`api.report_pool`)."""
+    return render(eol_report(repository.session, filter, unit_limit=units), format)
 
 
 def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
@@ -101,16 +106,16 @@ async def get_certificate(
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
 async def get_dashboard(repository: ReportPoolDep) -> HTMLResponse:
     """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
-    now = datetime.now(UTC)
-    page = await repository.run(
-        lambda r: dashboard_page(
-            eol_report(
-                r.session,
-                ReportFilter(since=start_of_day(now)),
-                unit_limit=DASHBOARD_UNITS,
-                chart_points=DASHBOARD_CHART_POINTS,
-                now=now,
-            )
-        )
+    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC)))
+
+
+def dashboard_body(repository: RunRepository, now: datetime) -> str:
+    """The dashboard page at ``now`` (in a report process: :mod:`api.report_pool`)."""
+    report = eol_report(
+        repository.session,
+        ReportFilter(since=start_of_day(now)),
+        unit_limit=DASHBOARD_UNITS,
+        chart_points=DASHBOARD_CHART_POINTS,
+        now=now,
     )
-    return HTMLResponse(page)
+    return dashboard_page(report)
