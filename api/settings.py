@@ -10,7 +10,7 @@ from db.settings import DatabaseSettings
 class ApiSettings(DatabaseSettings):
     """Database location plus the server's own switches.
 
-    ``read_requires_key``: read endpoints need a station API key too (default: open on
+    ``read_requires_key``: read endpoints need an API key too (default: open on
     the plant network). ``max_body_bytes``: larger request bodies are refused with 413.
     ``read_pool_size`` and ``write_pool_size``: database connections of each server
     process for reads and for submissions. ``report_pool_size``: connections (and
