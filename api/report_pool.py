@@ -15,6 +15,8 @@ the read timeout (:mod:`db.timeouts`, :class:`ReadTimeoutError`).
 import asyncio
 import multiprocessing
 import os
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from functools import partial
@@ -47,10 +49,22 @@ class ReadTimeoutError(CalstationError):
 _engine: Engine | None = None
 
 
+#: How often a report process looks whether its server process is still there.
+PARENT_CHECK_S = 1.0
+
+
 def _start(url: str, timeout_s: float) -> None:
     global _engine
     os.nice(REPORT_NICENESS)
     _engine = make_engine(url, statement_timeout_s=timeout_s, pool_size=1, max_overflow=0)
+    threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
+
+
+def _end_with(parent: int) -> None:
+    """End this report process once its server process is gone, however that ended."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_CHECK_S)
+    os._exit(0)
 
 
 def _in_transaction(
