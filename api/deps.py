@@ -12,7 +12,9 @@ from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
+from api.report_pool import ReportPool
 from db import RunRepository
+from db.repository import KeyHolder
 from db.units import UnitLookups
 
 T = TypeVar("T")
@@ -67,32 +69,80 @@ async def get_reader(readers: ReadersDep) -> AsyncIterator[Repository]:
 RepositoryDep = Annotated[Repository, Depends(get_repository)]
 ReaderDep = Annotated[Repository, Depends(get_reader)]
 
+
+async def get_report_pool(request: Request) -> ReportPool:
+    """The report pool: the end-of-line report and the dashboard, apart from the rest."""
+    pool: ReportPool = request.app.state.report_pool
+    return pool
+
+
+#: Heavy key-less reads; ``await reports.run(work)`` as on a :class:`Repository`.
+ReportPoolDep = Annotated[ReportPool, Depends(get_report_pool)]
+
 _bearer = HTTPBearer(
     auto_error=False,
-    description="A station API key (`calstation keys create --station ID`).",
+    description=(
+        "An API key: a station's (`calstation keys create --station ID`) stores that "
+        "station's runs, a lab's (`calstation keys create --lab ID`) stores gyro fits."
+    ),
 )
 CredentialsDep = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
 
 
-async def require_station(credentials: CredentialsDep, readers: ReadersDep) -> str:
-    """The station whose API key authorises the request; 401 without a valid key."""
+async def _key_holder(
+    credentials: HTTPAuthorizationCredentials | None, sessions: async_sessionmaker[AsyncSession]
+) -> KeyHolder:
+    """The holder of the request's API key (looked up on ``sessions``); 401 without one."""
     if credentials is None:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
-            "a station API key is required: 'Authorization: Bearer <key>'",
+            "an API key is required: 'Authorization: Bearer <key>'",
             headers={"WWW-Authenticate": "Bearer"},
         )
-    async with readers() as session:
-        station = await Repository(session).run(
-            lambda repository: repository.station_for_key(credentials.credentials)
+    async with sessions() as session:
+        holder = await Repository(session).run(
+            lambda repository: repository.key_holder(credentials.credentials)
         )
-    if station is None:
+    if holder is None:
         raise HTTPException(
             status.HTTP_401_UNAUTHORIZED,
             "unknown or revoked API key",
             headers={"WWW-Authenticate": "Bearer"},
         )
-    return station
+    return holder
+
+
+async def require_key(credentials: CredentialsDep, readers: ReadersDep) -> KeyHolder:
+    """Any valid API key (reads, when the server wants a key for them)."""
+    return await _key_holder(credentials, readers)
+
+
+async def require_station(credentials: CredentialsDep, sessions: SessionsDep) -> str:
+    """The station whose key authorises a submission of runs; 403 for a lab key.
+
+    Looked up on the submissions' own pool: report readers never hold up a station.
+    """
+    holder = await _key_holder(credentials, sessions)
+    if holder.scope != "station":
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            f"this API key belongs to lab {holder.holder}: runs need their station's key "
+            "(calstation keys create --station ID)",
+        )
+    return holder.holder
+
+
+async def require_lab(credentials: CredentialsDep, sessions: SessionsDep) -> str:
+    """The lab whose key authorises storing a gyro fit; 403 for a station key."""
+    holder = await _key_holder(credentials, sessions)
+    if holder.scope != "lab":
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            f"this API key belongs to station {holder.holder}: gyro fits need a lab key "
+            "(calstation keys create --lab ID)",
+        )
+    return holder.holder
 
 
 StationDep = Annotated[str, Depends(require_station)]
+LabDep = Annotated[str, Depends(require_lab)]

@@ -12,8 +12,10 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from sqlalchemy.exc import OperationalError
 
+from api.report_pool import ReadTimeoutError, ReportsBusyError
 from api.verification import CalibrationMismatchError
 from db import DatabaseUnavailableError, RunConflictError, SchemaOutOfDateError
+from db.timeouts import is_statement_timeout
 from station.errors import InputError
 
 log = logging.getLogger(__name__)
@@ -50,6 +52,38 @@ def _answer(status_code: int) -> Handler:
     return handler
 
 
+#: Seconds a client is asked to wait before it asks again, when reads are overloaded.
+RETRY_AFTER_S = 10
+
+
+def _retry_later(detail: str) -> JSONResponse:
+    return JSONResponse(
+        {"detail": detail},
+        status_code=status.HTTP_503_SERVICE_UNAVAILABLE,
+        headers={"Retry-After": str(RETRY_AFTER_S)},
+    )
+
+
+async def _reports_busy(_request: Request, exc: Exception) -> JSONResponse:
+    log.warning("report refused: %s", exc)
+    return _retry_later(str(exc))
+
+
+async def _read_timeout(request: Request, _exc: Exception) -> JSONResponse:
+    log.warning("%s %s: read timeout", request.method, request.url.path)
+    return _retry_later(
+        "the read took longer than the server's read timeout (CALSTATION_READ_TIMEOUT_S): "
+        "retry later; for a report, a shorter range is quicker"
+    )
+
+
+async def _database_error(request: Request, exc: Exception) -> JSONResponse:
+    """A read that ran out of time (the read timeout) apart from a database that is down."""
+    if isinstance(exc, OperationalError) and is_statement_timeout(exc):
+        return await _read_timeout(request, exc)
+    return await _database_unavailable(request, exc)
+
+
 async def _database_unavailable(_request: Request, exc: Exception) -> JSONResponse:
     log.error("results database unavailable: %s", (str(exc).splitlines() or [repr(exc)])[0])
     return JSONResponse(
@@ -68,5 +102,7 @@ def install_error_handlers(app: FastAPI) -> None:
         _answer(status.HTTP_422_UNPROCESSABLE_CONTENT),
     )
     app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
-    app.add_exception_handler(OperationalError, _database_unavailable)
+    app.add_exception_handler(OperationalError, _database_error)
+    app.add_exception_handler(ReportsBusyError, _reports_busy)
+    app.add_exception_handler(ReadTimeoutError, _read_timeout)
     app.add_exception_handler(DatabaseUnavailableError, _database_unavailable)

@@ -8,9 +8,10 @@ from fastapi import APIRouter, Depends, FastAPI
 from sqlalchemy.ext.asyncio import async_sessionmaker
 from sqlalchemy.orm import configure_mappers
 
-from api.deps import require_station
+from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
+from api.report_pool import ReportPool
 from api.routes import gyro, health, reports, runs, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
@@ -42,10 +43,18 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # Nothing to reset when a connection goes back either: it never opens a transaction.
         reader = make_async_engine(
             url,
+            statement_timeout_s=settings.read_timeout_s,
             pool_size=settings.read_pool_size,
             max_overflow=0,
             isolation_level="AUTOCOMMIT",
             pool_reset_on_return=None,
+        )
+        # The report and the dashboard: processes and connections of their own.
+        app.state.report_pool = report_pool = ReportPool(
+            url,
+            processes=settings.report_pool_size,
+            wait_s=settings.report_wait_s,
+            timeout_s=settings.read_timeout_s,
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
@@ -64,6 +73,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             await lookups.close()
             await writer.dispose()
             await reader.dispose()
+            report_pool.close()
 
     app = FastAPI(
         title="calstation results",
@@ -73,7 +83,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     )
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
-    reads = [Depends(require_station)] if settings.read_requires_key else []
+    reads = [Depends(require_key)] if settings.read_requires_key else []
     v1 = APIRouter(prefix=API_PREFIX)
     v1.include_router(units.router, dependencies=reads)
     v1.include_router(runs.router, dependencies=reads)

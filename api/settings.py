@@ -10,13 +10,21 @@ from db.settings import DatabaseSettings
 class ApiSettings(DatabaseSettings):
     """Database location plus the server's own switches.
 
-    ``read_requires_key``: read endpoints need a station API key too (default: open on
+    ``read_requires_key``: read endpoints need an API key too (default: open on
     the plant network). ``max_body_bytes``: larger request bodies are refused with 413.
     ``read_pool_size`` and ``write_pool_size``: database connections of each server
-    process for reads and for submissions.
+    process for reads and for submissions. ``report_pool_size``: connections (and
+    threads) of each server process for the end-of-line report and the dashboard, apart
+    from the others so that readers never take the stations' connections.
+    ``read_timeout_s``: longest statement of a read (PostgreSQL ``statement_timeout``;
+    on SQLite the report's statements only); ``report_wait_s``: longest wait for a free
+    report connection. Either exceeded answers 503.
     """
 
     read_requires_key: bool = False
     max_body_bytes: Annotated[int, Field(ge=1024)] = 1024 * 1024
     read_pool_size: Annotated[int, Field(ge=1)] = 8
     write_pool_size: Annotated[int, Field(ge=1)] = 6
+    report_pool_size: Annotated[int, Field(ge=1)] = 1
+    read_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 30.0
+    report_wait_s: Annotated[float, Field(gt=0, le=3600)] = 10.0

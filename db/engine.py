@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from db import migrate
 from db.settings import DatabaseSettings, check_database_url
+from db.timeouts import sqlite_statement_timeout, with_statement_timeout
 from station.errors import CalstationError, InputError
 
 
@@ -51,22 +52,33 @@ def for_dialect(bind: Session | AsyncEngine, statements: Mapping[str, T]) -> T:
 _ASYNC_DRIVERS = {"sqlite": "sqlite+aiosqlite", "postgresql": "postgresql+psycopg"}
 
 
-def make_async_engine(url: str | URL, **kwargs: Any) -> AsyncEngine:
-    """An asyncio engine on the same database as :func:`make_engine` would open."""
+def make_async_engine(
+    url: str | URL, *, statement_timeout_s: float | None = None, **kwargs: Any
+) -> AsyncEngine:
+    """An asyncio engine on the same database as :func:`make_engine` would open.
+
+    ``statement_timeout_s`` bounds each statement on PostgreSQL; SQLite's asyncio driver
+    runs statements in a thread of its own, out of reach of :mod:`db.timeouts`.
+    """
     parsed = make_url(url)
     backend = parsed.get_backend_name()
     if backend not in _ASYNC_DRIVERS:
         raise CalstationError(f"database dialect {backend!r} is not supported")
     parsed = parsed.set(drivername=_ASYNC_DRIVERS[backend])
+    if statement_timeout_s is not None and backend == "postgresql":
+        parsed = with_statement_timeout(parsed, statement_timeout_s)
     engine = create_async_engine(parsed, **kwargs)
     if backend == "sqlite":
         _sqlite_events(engine.sync_engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
     return engine
 
 
-def make_engine(url: str, **kwargs: Any) -> Engine:
+def make_engine(
+    url: str | URL, *, statement_timeout_s: float | None = None, **kwargs: Any
+) -> Engine:
     """An engine for ``url``; SQLite files get foreign keys, WAL and a busy timeout.
 
+    ``statement_timeout_s`` ends any statement that runs longer (:mod:`db.timeouts`).
     A URL whose database or driver cannot be loaded is an :class:`InputError`.
     """
     try:
@@ -79,7 +91,11 @@ def make_engine(url: str, **kwargs: Any) -> Engine:
             Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(parsed, **kwargs)
         _sqlite_events(engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
+        if statement_timeout_s is not None:
+            sqlite_statement_timeout(engine, statement_timeout_s)
         return engine
+    if statement_timeout_s is not None and parsed.get_backend_name() == "postgresql":
+        parsed = with_statement_timeout(parsed, statement_timeout_s)
     return create_engine(parsed, **kwargs)
 
 

@@ -189,12 +189,18 @@ class GyroFit(Base):
 
 
 class StationKey(Base):
-    """A station's API key, stored as its SHA-256 (the key itself is shown once)."""
+    """An API key, stored as its SHA-256 (the key itself is shown once).
+
+    ``scope`` says what it may store: ``station``, the runs of station ``station_id``;
+    ``lab``, units' gyro fits (``station_id`` then names the lab).
+    """
 
     __tablename__ = "station_keys"
+    __table_args__ = (CheckConstraint("scope IN ('station', 'lab')", name="scope"),)
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
     station_id: Mapped[str] = mapped_column(String(NAME), index=True)
+    scope: Mapped[str] = mapped_column(String(8), server_default="station")
     key_sha256: Mapped[str] = mapped_column(String(64), unique=True)
     created_at: Mapped[datetime] = mapped_column(UtcDateTime())
     revoked_at: Mapped[datetime | None] = mapped_column(UtcDateTime())

@@ -14,6 +14,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from typing import Literal, cast
 from uuid import UUID
 
 from sqlalchemy import insert, select, text, tuple_, update
@@ -50,6 +51,18 @@ MAX_PAGE = 500
 
 class RunConflictError(CalstationError):
     """A run with this UUID is already stored with different content."""
+
+
+#: What an API key may store: its station's runs, or units' gyro fits (a lab's).
+KeyScope = Literal["station", "lab"]
+
+
+@dataclass(frozen=True)
+class KeyHolder:
+    """The station or lab a key belongs to (``holder``) and what it may store."""
+
+    holder: str
+    scope: KeyScope
 
 
 @dataclass(frozen=True)
@@ -117,7 +130,7 @@ def decode_cursor(cursor: str) -> tuple[datetime, int]:
 
 
 class RunRepository:
-    """Runs and station keys, in the caller's session (the caller commits)."""
+    """Runs, API keys and gyro fits, in the caller's session (the caller commits)."""
 
     def __init__(self, session: Session) -> None:
         self.session = session
@@ -245,35 +258,44 @@ class RunRepository:
         failures = self._failures(failed)
         return [summary_of(run, failures[run.id]) for run in runs]
 
-    # -- station keys ------------------------------------------------------------------
+    # -- API keys ----------------------------------------------------------------------
 
-    def create_key(self, station_id: str) -> str:
-        """A new API key for ``station_id``; only its hash is stored, so show it now."""
+    def create_key(self, holder: str, scope: KeyScope = "station") -> str:
+        """A new API key of station (or lab) ``holder``; only its hash is stored, so show it now."""
         key = "csk_" + secrets.token_urlsafe(32)
         self.session.add(
             StationKey(
-                station_id=station_id, key_sha256=key_sha256(key), created_at=datetime.now(UTC)
+                station_id=holder,
+                scope=scope,
+                key_sha256=key_sha256(key),
+                created_at=datetime.now(UTC),
             )
         )
         return key
 
-    def revoke_keys(self, station_id: str) -> int:
-        """Revoke every valid key of ``station_id``; return how many there were."""
+    def revoke_keys(self, holder: str, scope: KeyScope = "station") -> int:
+        """Revoke every valid key of station (or lab) ``holder``; return how many there were."""
         revoked = self.session.scalars(
             update(StationKey)
-            .where(StationKey.station_id == station_id, StationKey.revoked_at.is_(None))
+            .where(
+                StationKey.station_id == holder,
+                StationKey.scope == scope,
+                StationKey.revoked_at.is_(None),
+            )
             .values(revoked_at=datetime.now(UTC))
             .returning(StationKey.id)
         ).all()
         return len(revoked)
 
-    def station_for_key(self, key: str) -> str | None:
-        """The station a valid (not revoked) key belongs to."""
-        return self.session.scalars(
-            select(StationKey.station_id).where(
+    def key_holder(self, key: str) -> KeyHolder | None:
+        """Who a valid (not revoked) key belongs to, and what it may store."""
+        row = self.session.execute(
+            select(StationKey.station_id, StationKey.scope).where(
                 StationKey.key_sha256 == key_sha256(key), StationKey.revoked_at.is_(None)
             )
         ).one_or_none()
+        # The table's check constraint holds the scope to the two names.
+        return None if row is None else KeyHolder(row.station_id, cast(KeyScope, row.scope))
 
     # -- gyro error-model fits ----------------------------------------------------------
 

@@ -7,15 +7,17 @@ station uses an embedded SQLite file, ``calstation.sqlite3`` under
 ``~/.local/share/calstation``). Both are checked when read: a URL whose scheme or
 driver cannot be loaded, or a data directory that is a file, is refused at once rather
 than when the first run is stored.
+``CALSTATION_DATABASE_PASSWORD`` gives the password apart from the URL: any characters
+(``p@ss:w/rd``), no escaping by hand.
 """
 
 import os
 from pathlib import Path
 from typing import Annotated, Self
 
-from pydantic import AfterValidator, ValidationError
+from pydantic import AfterValidator, SecretStr, ValidationError
 from pydantic_settings import BaseSettings, SettingsConfigDict
-from sqlalchemy import make_url
+from sqlalchemy import URL, make_url
 from sqlalchemy.exc import ArgumentError, NoSuchModuleError
 
 from station.errors import InputError, validation_problem
@@ -31,7 +33,7 @@ def default_data_dir() -> Path:
     return Path(base) / "calstation"
 
 
-def check_database_url(url: str) -> str:
+def check_database_url(url: str | URL) -> str | URL:
     """``url`` if it names a supported database whose driver is installed.
 
     Raises ``ValueError`` naming the problem (an unknown scheme, an unsupported
@@ -79,6 +81,7 @@ class DatabaseSettings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="CALSTATION_", extra="ignore")
 
     database_url: DatabaseUrl | None = None
+    database_password: SecretStr | None = None
     data_dir: DataDir = default_data_dir()
 
     @classmethod
@@ -91,7 +94,15 @@ class DatabaseSettings(BaseSettings):
             raise InputError(validation_problem(exc, env_prefix=prefix)) from None
 
     def url(self) -> str:
-        """The URL to connect to: the configured one or the embedded SQLite file."""
+        """The URL to connect to: the configured one or the embedded SQLite file.
+
+        ``database_password`` replaces the URL's password, escaped as a URL needs it.
+        """
         if self.database_url:
-            return self.database_url
+            if self.database_password is None:
+                return self.database_url
+            url = make_url(self.database_url).set(
+                password=self.database_password.get_secret_value()
+            )
+            return url.render_as_string(hide_password=False)
         return f"sqlite:///{self.data_dir.expanduser() / SQLITE_FILE_NAME}"

@@ -25,6 +25,13 @@ def station_key(database: Database) -> str:
         return RunRepository(session).create_key(STATION)
 
 
+@pytest.fixture
+def lab_key(database: Database) -> str:
+    """A valid API key of lab ``gyro-lab`` (stores gyro fits)."""
+    with database.session() as session, session.begin():
+        return RunRepository(session).create_key("gyro-lab", "lab")
+
+
 def free_port() -> int:
     """A TCP port nobody listens on right now."""
     with socket.socket() as probe:

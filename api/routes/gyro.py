@@ -1,17 +1,25 @@
 """``/api/v1/units/{serial}/gyro``: a unit's gyro error-model fit and still-pose figures."""
 
+import logging
 from datetime import UTC, datetime
 
 from fastapi import APIRouter, HTTPException, Response, status
 
-from api.deps import ReaderDep, RepositoryDep, StationDep
+from api.deps import LabDep, ReaderDep, RepositoryDep
 from api.responses import json_response
 from api.routes.units import SerialPath
 from api.schemas import GyroFitSubmission, Problem, UnitGyro
 from station.records import GyroFitRecord
 
+log = logging.getLogger(__name__)
+
 router = APIRouter(prefix="/units", tags=["gyro"])
-submissions = APIRouter(prefix="/units", tags=["gyro"])
+#: Storing a fit: a lab key only (a station's key answers 403).
+submissions = APIRouter(
+    prefix="/units",
+    tags=["gyro"],
+    responses={403: {"model": Problem, "description": "a station's key, not a lab's"}},
+)
 
 
 @router.get(
@@ -37,11 +45,10 @@ async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
 async def submit_unit_gyro(
     serial: SerialPath,
     submission: GyroFitSubmission,
-    station: StationDep,
+    lab: LabDep,
     repository: RepositoryDep,
 ) -> Response:
     """Store a gyro fit of the unit (``calstation gyro fit LOG --json`` as ``report``)."""
-    del station  # any station's key may store a lab fit
     fit = GyroFitRecord(
         serial=serial,
         fitted_at=datetime.now(UTC),
@@ -51,4 +58,5 @@ async def submit_unit_gyro(
     )
     async with repository.session.begin():
         await repository.run(lambda r: r.add_gyro_fit(fit))
+    log.info("gyro fit of %s from %s stored by lab %s", serial, fit.source, lab)
     return json_response(fit, status.HTTP_201_CREATED)

@@ -5,12 +5,12 @@
 """
 
 from datetime import UTC, datetime
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Path, Query, status
 from fastapi.responses import HTMLResponse, Response
 
-from api.deps import ReaderDep, RepositoryDep
+from api.deps import ReaderDep, ReportPoolDep
 from api.schemas import Problem
 from db import RunRepository
 from db.reports import eol_report
@@ -27,7 +27,16 @@ from station.unit_state import counts
 DASHBOARD_UNITS = 20
 DASHBOARD_CHART_POINTS = 60
 
-router = APIRouter(tags=["reports"])
+#: 503: the database is down, a read ran out of time, or the report pool stayed busy.
+UNAVAILABLE: dict[int | str, dict[str, Any]] = {
+    503: {
+        "model": Problem,
+        "description": "the database does not answer, a read took longer than the read "
+        "timeout, or every report connection stayed busy (`Retry-After`): retry later; "
+        "for a report, a shorter range is quicker",
+    }
+}
+router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 
 
@@ -42,7 +51,7 @@ dashboard = APIRouter(tags=["reports"])
     },
 )
 async def get_eol_report(
-    repository: RepositoryDep,
+    repository: ReportPoolDep,
     since: Annotated[
         str | None, Query(alias="from", description="start, ISO date or time (UTC if no zone)")
     ] = None,
@@ -61,9 +70,15 @@ async def get_eol_report(
         operator_id=operator,
         lot=lot,
     )
-    # A transactional session: the report sets its PostgreSQL planner options locally.
-    report = await repository.run(lambda r: eol_report(r.session, report_filter, unit_limit=units))
-    return Response(render(report, format), media_type=MEDIA_TYPES[format])
+    body = await repository.run(eol_body, report_filter, units, format)
+    return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def eol_body(
+    repository: RunRepository, filter: ReportFilter, units: int | None, format: str
+) -> str:
+    """The report rendered (in a report process: :mod:`api.report_pool`)."""
+    return render(eol_report(repository.session, filter, unit_limit=units), format)
 
 
 def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
@@ -93,16 +108,18 @@ async def get_certificate(
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
-async def get_dashboard(repository: RepositoryDep) -> HTMLResponse:
+async def get_dashboard(repository: ReportPoolDep) -> HTMLResponse:
     """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
-    now = datetime.now(UTC)
-    report = await repository.run(
-        lambda r: eol_report(
-            r.session,
-            ReportFilter(since=start_of_day(now)),
-            unit_limit=DASHBOARD_UNITS,
-            chart_points=DASHBOARD_CHART_POINTS,
-            now=now,
-        )
+    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC)))
+
+
+def dashboard_body(repository: RunRepository, now: datetime) -> str:
+    """The dashboard page at ``now`` (in a report process: :mod:`api.report_pool`)."""
+    report = eol_report(
+        repository.session,
+        ReportFilter(since=start_of_day(now)),
+        unit_limit=DASHBOARD_UNITS,
+        chart_points=DASHBOARD_CHART_POINTS,
+        now=now,
     )
-    return HTMLResponse(dashboard_page(report))
+    return dashboard_page(report)

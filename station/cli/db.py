@@ -1,8 +1,8 @@
 """``calstation db upgrade``, ``calstation db rebuild-report`` and ``calstation keys
-create``: the results database by hand."""
+create|revoke --station ID|--lab ID``: the results database by hand."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, cast
 
 import typer
 from pydantic import TypeAdapter, ValidationError
@@ -10,6 +10,7 @@ from sqlalchemy import func, make_url, select
 
 from db import DatabaseSettings, open_database, repository_transaction, upgrade_database
 from db.models import Run
+from db.repository import KeyScope
 from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
 from station.limits import load_profile
@@ -19,7 +20,10 @@ from station.report.bounds import profile_bounds
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True
 )
-keys_app = typer.Typer(help="API keys of the stations that submit over HTTP.", no_args_is_help=True)
+keys_app = typer.Typer(
+    help="API keys of the stations (runs) and labs (gyro fits) that submit over HTTP.",
+    no_args_is_help=True,
+)
 
 DatabaseUrlOption = Annotated[
     str | None,
@@ -84,31 +88,52 @@ def _station_id(value: str) -> str:
         ) from None
 
 
+def _optional_id(value: str | None) -> str | None:
+    return None if value is None else _station_id(value)
+
+
+StationOption = Annotated[
+    str | None,
+    typer.Option(
+        "--station", help="A station's key: stores that station's runs.", callback=_optional_id
+    ),
+]
+LabOption = Annotated[
+    str | None,
+    typer.Option("--lab", help="A lab's key: stores units' gyro fits.", callback=_optional_id),
+]
+
+
+def _holder(station: str | None, lab: str | None) -> tuple[str, KeyScope]:
+    """The key's holder and scope from ``--station`` or ``--lab`` (exactly one)."""
+    if (station is None) == (lab is None):
+        raise typer.BadParameter(
+            "give either --station ID or --lab ID", param_hint="--station/--lab"
+        )
+    return (station, "station") if station is not None else (cast(str, lab), "lab")
+
+
 @keys_app.command("create")
 def keys_create(
-    station: Annotated[
-        str, typer.Option("--station", help="The station the key is for.", callback=_station_id)
-    ],
-    database_url: DatabaseUrlOption = None,
+    station: StationOption = None, lab: LabOption = None, database_url: DatabaseUrlOption = None
 ) -> None:
-    """Create an API key for a station and print it (only its hash is stored)."""
+    """Create an API key for a station (its runs) or a lab (gyro fits) and print it.
+
+    Only the key's hash is stored: it is shown this once.
+    """
+    holder, scope = _holder(station, lab)
     with repository_transaction(database_url) as repository:
-        key = repository.create_key(station)
-    err.print(f"API key for station {station} (shown once, store it on the station):")
+        key = repository.create_key(holder, scope)
+    err.print(f"API key for {scope} {holder} (shown once, store it where it is used):")
     out.print(key)
 
 
 @keys_app.command("revoke")
 def keys_revoke(
-    station: Annotated[
-        str,
-        typer.Option(
-            "--station", help="The station whose keys stop working.", callback=_station_id
-        ),
-    ],
-    database_url: DatabaseUrlOption = None,
+    station: StationOption = None, lab: LabOption = None, database_url: DatabaseUrlOption = None
 ) -> None:
-    """Revoke every API key of a station (a lost or replaced station)."""
+    """Revoke every API key of a station or a lab (lost, replaced or retired)."""
+    holder, scope = _holder(station, lab)
     with repository_transaction(database_url) as repository:
-        revoked = repository.revoke_keys(station)
-    out.print(f"revoked {revoked} API key(s) of station {station}")
+        revoked = repository.revoke_keys(holder, scope)
+    out.print(f"revoked {revoked} API key(s) of {scope} {holder}")

@@ -51,7 +51,7 @@ def test_the_latest_fit_is_the_units_and_survives_a_round_trip(
 
 
 def test_api_serves_the_fit_and_the_latest_runs_gyros(
-    client: httpx.Client, database: Database, station_key: str, centrifuge_log: Path
+    client: httpx.Client, database: Database, lab_key: str, centrifuge_log: Path
 ) -> None:
     record = make_record(serial="PT000009")
     with database.session() as session, session.begin():
@@ -65,7 +65,7 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     report = fit_log(log).to_dict()
     refused = client.post("/api/v1/units/PT000009/gyro", json={"source": "c.csv", "report": report})
     assert refused.status_code == 401
-    headers = {"Authorization": f"Bearer {station_key}"}
+    headers = {"Authorization": f"Bearer {lab_key}"}
     bad = client.post(
         "/api/v1/units/PT000009/gyro",
         json={"source": "c.csv", "report": {"dwells": 1}},
@@ -91,6 +91,26 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     plot = page[page.index('<figure class="chart gyro-plot"') :]
     assert plot.index("<svg") < plot.index("</figure>")
     assert "+581 ppm/g" in plot  # the fitted line's legend, x gyro
+
+
+def test_only_a_lab_key_stores_a_gyro_fit(
+    client: httpx.Client, station_key: str, centrifuge_log: Path
+) -> None:
+    log = read_log(centrifuge_log)
+    body = {
+        "source": "c.csv",
+        "report": fit_log(log).to_dict(),
+        "dwells": GyroDwells.of(log).model_dump(),
+    }
+    answer = client.post(
+        "/api/v1/units/PT000010/gyro", json=body, headers={"Authorization": f"Bearer {station_key}"}
+    )
+    assert answer.status_code == 403
+    assert answer.json()["detail"] == (
+        "this API key belongs to station line1-st1: gyro fits need a lab key "
+        "(calstation keys create --lab ID)"
+    )
+    assert client.get("/api/v1/units/PT000010/gyro").status_code == 404  # nothing stored
 
 
 def test_gyro_fit_store_puts_the_fit_where_the_api_reads_it(

@@ -76,7 +76,17 @@ def test_a_station_submits_only_its_own_runs(client: httpx.Client, database: Dat
         other_key = RunRepository(session).create_key("line2-st9")
     answer = client.post(RUNS, json=make_record().model_dump(mode="json"), headers=_auth(other_key))
     assert answer.status_code == 403
-    assert "line2-st9" in answer.json()["detail"]
+    assert answer.json()["detail"] == (
+        "this API key belongs to station line2-st9, the run to line1-st1"
+    )
+
+
+def test_a_lab_key_stores_no_runs(client: httpx.Client, lab_key: str) -> None:
+    record = make_record()
+    answer = client.post(RUNS, json=record.model_dump(mode="json"), headers=_auth(lab_key))
+    assert answer.status_code == 403
+    assert "belongs to lab gyro-lab: runs need their station's key" in answer.json()["detail"]
+    assert client.get(f"{RUNS}/{record.run_id}").status_code == 404
 
 
 @pytest.mark.parametrize(

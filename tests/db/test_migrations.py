@@ -11,6 +11,7 @@ from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from sqlalchemy import func, insert, inspect, make_url, select, text
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from db import (
@@ -25,6 +26,7 @@ from db.base import Base
 from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
 from db.models import ReportCounts, Run, RunFailure, Unit
+from db.repository import KeyHolder, key_sha256
 from db.units import answer_json
 from tests.db.records import T0, make_record
 from tests.db.test_rollups import rollup_rows
@@ -133,3 +135,22 @@ def test_the_report_migration_builds_the_roll_ups_of_the_runs_already_stored(
             assert session.scalar(select(func.sum(ReportCounts.poses))) == 3 * 7
     finally:
         engine.dispose()
+
+
+def test_the_key_scope_migration_makes_every_existing_key_a_station_key(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    upgrade(engine, "0004")
+    with engine.begin() as connection:  # a key created before keys had a scope
+        connection.execute(
+            text(
+                "INSERT INTO station_keys (station_id, key_sha256, created_at) "
+                "VALUES ('line1-st1', :digest, :now)"
+            ),
+            {"digest": key_sha256("csk_old"), "now": T0},
+        )
+    upgrade(engine)
+    with Database(engine).session() as session:
+        assert RunRepository(session).key_holder("csk_old") == KeyHolder("line1-st1", "station")
+    with engine.begin() as connection, pytest.raises(IntegrityError):
+        connection.execute(text("UPDATE station_keys SET scope = 'admin'"))
+    engine.dispose()

@@ -11,7 +11,7 @@ from sqlalchemy.orm import Session
 
 from db import RunConflictError, RunQuery, RunRepository
 from db.models import Pose, StationKey
-from db.repository import encode_cursor, record_sha256
+from db.repository import KeyHolder, encode_cursor, record_sha256
 from station.errors import InputError
 from station.records import StoredRun
 from tests.db.records import T0, make_record
@@ -129,14 +129,26 @@ def test_a_page_size_out_of_range_is_refused(session: Session) -> None:
         RunRepository(session).list_runs(RunQuery(limit=0))
 
 
-def test_station_keys_are_stored_hashed_and_resolve_to_their_station(session: Session) -> None:
+def test_keys_are_stored_hashed_and_resolve_to_their_holder_and_scope(session: Session) -> None:
     repo = RunRepository(session)
     key = repo.create_key("line1-st1")
+    lab = repo.create_key("line1-st1", "lab")
     session.flush()
-    stored = session.scalars(select(StationKey.key_sha256)).one()
-    assert key not in stored
-    assert repo.station_for_key(key) == "line1-st1"
-    assert repo.station_for_key(key + "x") is None
+    stored = session.scalars(select(StationKey.key_sha256)).all()
+    assert not any(key in digest or lab in digest for digest in stored)
+    assert repo.key_holder(key) == KeyHolder("line1-st1", "station")
+    assert repo.key_holder(lab) == KeyHolder("line1-st1", "lab")
+    assert repo.key_holder(key + "x") is None
+
+
+def test_revoking_a_stations_keys_leaves_a_lab_of_the_same_name_alone(session: Session) -> None:
+    repo = RunRepository(session)
+    station, lab = repo.create_key("bench-1"), repo.create_key("bench-1", "lab")
+    assert repo.revoke_keys("bench-1") == 1
+    assert repo.key_holder(station) is None
+    assert repo.key_holder(lab) == KeyHolder("bench-1", "lab")
+    assert repo.revoke_keys("bench-1", "lab") == 1
+    assert repo.key_holder(lab) is None
 
 
 def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:

@@ -4,11 +4,13 @@ import os
 from datetime import timedelta
 from pathlib import Path
 
+import pytest
 from sqlalchemy import delete, func, select
 
 from db import Database, RunRepository
 from db.migrate import head_revision
 from db.models import ReportCounts, StationKey
+from db.repository import KeyHolder
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 
@@ -59,7 +61,7 @@ def test_keys_create_prints_a_key_stored_only_as_its_hash(
     assert key.startswith("csk_")
     assert "line3-st2" in result.stderr
     with database.session() as session:
-        assert RunRepository(session).station_for_key(key) == "line3-st2"
+        assert RunRepository(session).key_holder(key) == KeyHolder("line3-st2", "station")
         assert key not in session.scalars(select(StationKey.key_sha256)).one()
 
 
@@ -69,6 +71,37 @@ def test_keys_create_refuses_a_bad_station_id(run_cli: CliRunner, tmp_path: Path
     )
     assert result.returncode == 2
     assert "--station" in result.stderr
+
+
+def test_keys_create_lab_makes_a_key_for_gyro_fits(
+    run_cli: CliRunner, database: Database, database_url: str
+) -> None:
+    result = run_cli(
+        "keys", "create", "--lab", "gyro-lab", "--database-url", database_url, env=_env()
+    )
+    assert result.returncode == 0, result.stderr
+    assert "lab gyro-lab" in result.stderr
+    with database.session() as session:
+        assert RunRepository(session).key_holder(result.stdout.strip()) == KeyHolder(
+            "gyro-lab", "lab"
+        )
+    revoked = run_cli(
+        "keys", "revoke", "--lab", "gyro-lab", "--database-url", database_url, env=_env()
+    )
+    assert "revoked 1 API key(s) of lab gyro-lab" in revoked.stdout
+
+
+@pytest.mark.parametrize(
+    "given", [[], ["--station", "line3-st2", "--lab", "gyro-lab"]], ids=["neither", "both"]
+)
+def test_keys_create_needs_exactly_one_holder(
+    run_cli: CliRunner, tmp_path: Path, given: list[str]
+) -> None:
+    result = run_cli("keys", "create", *given, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
+    assert result.returncode == 2
+    assert "give either --station ID or --lab ID" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "calstation.sqlite3").exists()
 
 
 def test_keys_revoke_stops_every_key_of_the_station(
@@ -85,8 +118,8 @@ def test_keys_revoke_stops_every_key_of_the_station(
     assert "revoked 2 API key(s)" in result.stdout
     with database.session() as session:
         repository = RunRepository(session)
-        assert [repository.station_for_key(key) for key in keys] == [None, None]
-        assert repository.station_for_key(other) == "line3-st3"
+        assert [repository.key_holder(key) for key in keys] == [None, None]
+        assert repository.key_holder(other) == KeyHolder("line3-st3", "station")
 
 
 def test_db_rebuild_report_restores_the_roll_ups_from_the_runs(
