@@ -13,9 +13,9 @@ inside by construction (tests/station/test_record_bounds.py checks it).
 """
 
 import re
-from typing import Annotated, Final
+from typing import Annotated, Final, TypeVar
 
-from pydantic import AfterValidator, Field, StringConstraints
+from pydantic import AfterValidator, BaseModel, Field, StringConstraints
 
 from station.device.protocol import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.sensor import ADC_MAX, ADC_MIN
@@ -109,3 +109,27 @@ def printable(text: str) -> str:
 
 Text = Annotated[str, StringConstraints(max_length=500), AfterValidator(printable)]
 """Free text for people (messages, reasons): one line, no control characters."""
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def _plain(value: object, where: str) -> None:
+    if isinstance(value, str) and not _PRINTABLE.match(value):
+        raise ValueError(f"{where or 'text'} must not contain control characters")
+    if isinstance(value, float) and not -MEASURE_MAX <= value <= MEASURE_MAX:
+        raise ValueError(f"{where or 'number'} {value:.6g} is not a number within ±{MEASURE_MAX:g}")
+    if isinstance(value, dict | list | tuple):
+        items = value.items() if isinstance(value, dict) else enumerate(value)
+        for key, item in items:
+            _plain(item, f"{where}.{key}" if where else str(key))
+
+
+def plain_document(document: M) -> M:
+    """``document`` unchanged; ValueError naming the first text holding a control
+    character or number outside ±:data:`MEASURE_MAX` (NaN included) anywhere in it.
+
+    For the models stored whole as one JSON document (a gyro fit and its dwells), whose
+    many fields are free-form lists: PostgreSQL's JSON refuses NUL and NaN.
+    """
+    _plain(document.model_dump(), "")
+    return document

@@ -42,6 +42,7 @@ from station.record_bounds import (
     Measure,
     Temperature,
     Text,
+    plain_document,
     printable,
 )
 from station.sensor import ADC_MAX, ADC_MIN
@@ -376,14 +377,18 @@ class UnitCalibration(_Record):
         )
 
 
+LogSource = Annotated[
+    str, StringConstraints(min_length=1, max_length=255), AfterValidator(printable)
+]
+"""The rate-table / centrifuge log a gyro fit was made from."""
+
+
 class GyroFitRecord(_Record):
     """A unit's gyro error-model fit from a rate-table / centrifuge log, as stored."""
 
     serial: Serial
     fitted_at: UtcDatetime
-    source: Annotated[
-        str, StringConstraints(min_length=1, max_length=255), AfterValidator(printable)
-    ]
-    report: GyroFitReport
+    source: LogSource
+    report: Annotated[GyroFitReport, AfterValidator(plain_document)]
     #: The log's dwells, kept to draw the fit's scale-factor plot (certificate).
-    dwells: GyroDwells | None = None
+    dwells: Annotated[GyroDwells, AfterValidator(plain_document)] | None = None

@@ -5,9 +5,9 @@ from datetime import UTC, datetime
 from fastapi import APIRouter, HTTPException, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
-from api.responses import json_response
+from api.responses import json_response, problems
 from api.routes.units import SerialPath
-from api.schemas import GyroFitSubmission, Problem, UnitGyro
+from api.schemas import GyroFitSubmission, UnitGyro
 from station.records import GyroFitRecord
 
 router = APIRouter(prefix="/units", tags=["gyro"])
@@ -17,7 +17,7 @@ submissions = APIRouter(prefix="/units", tags=["gyro"])
 @router.get(
     "/{serial}/gyro",
     response_model=UnitGyro,
-    responses={404: {"model": Problem, "description": "no gyro fit and no run of this serial"}},
+    responses=problems(404, _404="no gyro fit and no run of this serial"),
 )
 async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
     """The unit's latest gyro fit (for compensation) and its latest run's still-pose gyros."""
@@ -32,7 +32,7 @@ async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
     "/{serial}/gyro",
     status_code=status.HTTP_201_CREATED,
     response_model=GyroFitRecord,
-    responses={401: {"model": Problem}, 413: {"model": Problem}, 422: {"model": Problem}},
+    responses=problems(401, 403),
 )
 async def submit_unit_gyro(
     serial: SerialPath,
