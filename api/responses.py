@@ -14,7 +14,7 @@ from api.schemas import Problem, ValidationProblem
 
 #: Why the server gives each error answer, as the OpenAPI document says it.
 PROBLEMS: dict[int, str] = {
-    400: "a query parameter is well-formed but unusable (a cursor this server never gave)",
+    400: "the body cannot be read (not UTF-8), or a cursor this server never gave",
     401: "no API key, or an unknown or revoked one",
     403: "the API key may not do this",
     404: "nothing stored under this name",

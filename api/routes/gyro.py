@@ -32,7 +32,7 @@ async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
     "/{serial}/gyro",
     status_code=status.HTTP_201_CREATED,
     response_model=GyroFitRecord,
-    responses=problems(401, 403),
+    responses=problems(400, 401, 403),
 )
 async def submit_unit_gyro(
     serial: SerialPath,

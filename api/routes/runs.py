@@ -29,7 +29,9 @@ router = APIRouter(prefix="/runs", tags=["runs"])
 submissions = APIRouter(prefix="/runs", tags=["runs"])
 
 
-@router.get("", response_model=RunList, responses=problems(400))
+@router.get(
+    "", response_model=RunList, responses=problems(400, _400="a cursor this server never gave")
+)
 async def list_runs(
     repository: ReaderDep,
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
@@ -76,6 +78,7 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
     responses={
         200: {"model": StoredRun, "description": "already stored: the stored run"},
         **problems(
+            400,
             401,
             403,
             409,
