@@ -34,7 +34,7 @@ def parse_moment(text: str, *, name: str) -> datetime:
                 f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or 2026-11-02T14:00Z)"
             ) from None
     outside = InputError(
-        f"{name} {text!r} is outside {MOMENT_MIN:%Y-%m-%d} … {MOMENT_MAX:%Y-%m-%d} 00:00 (UTC)"
+        f"{name} {text!r} is outside {MOMENT_MIN.date()} … {MOMENT_MAX.date()} 00:00 (UTC)"
     )
     try:
         moment = moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
@@ -50,9 +50,8 @@ def check_range(since: datetime | None, until: datetime | None, *, names: str) -
     (``names`` says both options, e.g. ``--from/--to``)."""
     if since is not None and until is not None and since > until:
         start, end = names.split("/")
-        raise InputError(
-            f"{start} {since:%Y-%m-%d %H:%M} UTC is after {end} {until:%Y-%m-%d %H:%M}"
-        )
+        first, last = (moment.isoformat(" ", "minutes")[:16] for moment in (since, until))
+        raise InputError(f"{start} {first} UTC is after {end} {last}")
 
 
 def start_of_day(now: datetime) -> datetime:
