@@ -1,11 +1,14 @@
 """Every refused request ends as a 4xx with one clear ``detail`` line (never a 5xx).
 
-Answer bodies are ``{"detail": "..."}``; validation errors add ``errors``, one entry per
-offending field with its location.
+Answer bodies are ``{"detail": "..."}`` (:class:`api.schemas.Problem`); every 422 adds
+``errors``, one entry per offending field with its location
+(:class:`api.schemas.ValidationProblem`), whether pydantic, a route's own check
+(:func:`invalid`) or the server's solve refused it. :mod:`api.responses` documents them.
 """
 
 import logging
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
+from typing import Any
 
 from fastapi import FastAPI, Request, status
 from fastapi.exceptions import RequestValidationError
@@ -28,18 +31,32 @@ def _location(loc: tuple[int | str, ...]) -> str:
     return ".".join(str(part) for part in loc)
 
 
-async def _validation_error(_request: Request, exc: Exception) -> JSONResponse:
-    assert isinstance(exc, RequestValidationError)
-    errors = [
+def invalid(loc: tuple[str, ...], message: str) -> RequestValidationError:
+    """A 422 naming the field at ``loc`` (e.g. ``("query", "from")``), as pydantic's are."""
+    return RequestValidationError([{"loc": loc, "msg": message, "type": "value_error"}])
+
+
+def _validation_answer(errors: Sequence[dict[str, Any]]) -> JSONResponse:
+    entries = [
         {"loc": _location(tuple(e["loc"])), "msg": str(e["msg"]), "type": str(e["type"])}
-        for e in exc.errors()
+        for e in errors
     ]
-    shown = "; ".join(f"{e['loc']}: {e['msg']}" for e in errors[:DETAIL_FIELDS])
-    more = f" (and {len(errors) - DETAIL_FIELDS} more)" if len(errors) > DETAIL_FIELDS else ""
+    shown = "; ".join(f"{e['loc']}: {e['msg']}" for e in entries[:DETAIL_FIELDS])
+    more = f" (and {len(entries) - DETAIL_FIELDS} more)" if len(entries) > DETAIL_FIELDS else ""
     return JSONResponse(
-        {"detail": f"invalid request: {shown}{more}", "errors": errors},
+        {"detail": f"invalid request: {shown}{more}", "errors": entries},
         status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
     )
+
+
+async def _validation_error(_request: Request, exc: Exception) -> JSONResponse:
+    assert isinstance(exc, RequestValidationError)
+    return _validation_answer(exc.errors())
+
+
+async def _calibration_mismatch(_request: Request, exc: Exception) -> JSONResponse:
+    loc = ("body", "coefficients")
+    return _validation_answer([{"loc": loc, "msg": str(exc), "type": "calibration_mismatch"}])
 
 
 Handler = Callable[[Request, Exception], Awaitable[JSONResponse]]
@@ -97,10 +114,7 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(InputError, _answer(status.HTTP_400_BAD_REQUEST))
     app.add_exception_handler(RunConflictError, _answer(status.HTTP_409_CONFLICT))
-    app.add_exception_handler(
-        CalibrationMismatchError,
-        _answer(status.HTTP_422_UNPROCESSABLE_CONTENT),
-    )
+    app.add_exception_handler(CalibrationMismatchError, _calibration_mismatch)
     app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
     app.add_exception_handler(OperationalError, _database_error)
     app.add_exception_handler(ReportsBusyError, _reports_busy)

@@ -12,6 +12,7 @@ from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.report_pool import ReportPool
+from api.responses import problems
 from api.routes import gyro, health, reports, runs, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
@@ -80,17 +81,19 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         summary="Calibration runs of the smart putter, per serial number.",
         version=__version__,
         lifespan=lifespan,
+        responses=problems(413, 503),
     )
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
     reads = [Depends(require_key)] if settings.read_requires_key else []
-    v1 = APIRouter(prefix=API_PREFIX)
-    v1.include_router(units.router, dependencies=reads)
-    v1.include_router(runs.router, dependencies=reads)
+    keyed = problems(401) if settings.read_requires_key else None
+    v1 = APIRouter(prefix=API_PREFIX, responses=problems(422))
+    v1.include_router(units.router, dependencies=reads, responses=keyed)
+    v1.include_router(runs.router, dependencies=reads, responses=keyed)
     v1.include_router(runs.submissions)
-    v1.include_router(gyro.router, dependencies=reads)
+    v1.include_router(gyro.router, dependencies=reads, responses=keyed)
     v1.include_router(gyro.submissions)
-    v1.include_router(reports.router, dependencies=reads)
+    v1.include_router(reports.router, dependencies=reads, responses=keyed)
     app.include_router(health.router)
     app.include_router(v1)
     app.include_router(reports.dashboard, dependencies=reads)

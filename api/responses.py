@@ -1,7 +1,44 @@
-"""JSON answers serialised once, by pydantic, without FastAPI validating them again."""
+"""What the API answers: JSON bodies, and the one definition of every error answer.
+
+:func:`problems` gives the ``responses=`` entries of the error answers a route (or a
+router, or the whole app) can give, so the OpenAPI document lists each answer the
+server actually gives, with the body it actually has (:mod:`api.errors`).
+"""
+
+from typing import Any
 
 from fastapi import Response, status
 from pydantic import BaseModel
+
+from api.schemas import Problem, ValidationProblem
+
+#: Why the server gives each error answer, as the OpenAPI document says it.
+PROBLEMS: dict[int, str] = {
+    400: "the body cannot be read (not UTF-8), or a cursor this server never gave",
+    401: "no API key, or an unknown or revoked one",
+    403: "the API key may not do this",
+    404: "nothing stored under this name",
+    409: "a run with this UUID is stored with different content",
+    413: "the request body is larger than the server accepts",
+    422: "a field, parameter or body is invalid (each offending one is named in errors)",
+    503: "the results database does not answer, or is not at the current schema",
+}
+
+
+def problems(*codes: int, **descriptions: str) -> dict[int | str, dict[str, Any]]:
+    """``responses=`` entries for the error answers ``codes``, JSON bodies.
+
+    ``descriptions`` overrides a description per code (``_404="no run of this serial"``).
+    """
+    return {
+        code: {
+            "model": ValidationProblem
+            if code == status.HTTP_422_UNPROCESSABLE_CONTENT
+            else Problem,
+            "description": descriptions.get(f"_{code}", PROBLEMS[code]),
+        }
+        for code in codes
+    }
 
 
 def json_response(model: BaseModel, status_code: int = status.HTTP_200_OK) -> Response:

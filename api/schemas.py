@@ -2,17 +2,33 @@
 
 from typing import Annotated
 
-from pydantic import BaseModel, Field
+from pydantic import AfterValidator, BaseModel, Field
 
 from station.gyro.fit import GyroFitReport
 from station.gyro.log import GyroDwells
-from station.records import GyroFitRecord, GyroSummary, RunSummary
+from station.record_bounds import plain_document
+from station.records import GyroFitRecord, GyroSummary, LogSource, RunSummary
 
 
 class Problem(BaseModel):
-    """Body of every 4xx/5xx answer."""
+    """Body of every 4xx/5xx answer but 422: one line saying what is wrong."""
 
     detail: str
+
+
+class FieldError(BaseModel):
+    """One offending field of a refused request."""
+
+    loc: Annotated[str, Field(description="where: body.poses.0.std, query.from, …")]
+    msg: str
+    type: str
+
+
+class ValidationProblem(BaseModel):
+    """Body of every 422 answer: one line naming the first fields, then each of them."""
+
+    detail: str
+    errors: list[FieldError]
 
 
 class Health(BaseModel):
@@ -33,11 +49,12 @@ class RunList(BaseModel):
 class GyroFitSubmission(BaseModel):
     """``POST /api/v1/units/{serial}/gyro``: a fit made in the lab, and the log it came from."""
 
-    source: Annotated[
-        str, Field(min_length=1, max_length=255, description="the log it was fitted to")
-    ]
-    report: GyroFitReport
-    dwells: Annotated[GyroDwells | None, Field(description="the log's dwells, for the plot")] = None
+    source: Annotated[LogSource, Field(description="the log it was fitted to")]
+    report: Annotated[GyroFitReport, AfterValidator(plain_document)]
+    dwells: Annotated[
+        Annotated[GyroDwells, AfterValidator(plain_document)] | None,
+        Field(description="the log's dwells, for the plot"),
+    ] = None
 
 
 class UnitGyro(BaseModel):

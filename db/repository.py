@@ -124,8 +124,8 @@ def decode_cursor(cursor: str) -> tuple[datetime, int]:
         started_at, run_pk = datetime.fromisoformat(moment), int(pk)
         if started_at.tzinfo is None or not 0 < run_pk < 2**63:
             raise ValueError("not a cursor")
-        return started_at, run_pk
-    except (ValueError, binascii.Error, UnicodeDecodeError):
+        return started_at.astimezone(UTC), run_pk
+    except (ValueError, OverflowError, binascii.Error, UnicodeDecodeError):
         raise InputError(f"cursor {cursor[:40]!r} is not one this server handed out") from None
 
 

@@ -10,8 +10,8 @@ temperatures in °C, residuals and errors in mg (1 mg = 0.001 g), times in UTC.
 """
 
 import math
-import re
-from datetime import UTC, datetime
+from collections.abc import Callable
+from datetime import UTC, datetime, timedelta
 from typing import Annotated, Literal, Self
 from uuid import UUID
 
@@ -28,6 +28,23 @@ from pydantic import (
 from station.gyro.fit import GyroFitReport
 from station.gyro.log import GyroDwells
 from station.gyro.still import GyroStillSummary
+from station.record_bounds import (
+    ADC_SPAN,
+    GYRO_RANGE_DPS,
+    GYRO_SPAN_DPS,
+    MATRIX_MAX_G_PER_COUNT,
+    OFFSET_MAX_COUNTS,
+    OFFSET_MIN_COUNTS,
+    RUN_MAX_DAYS,
+    SENSITIVITY_MAX_COUNTS_PER_G,
+    ConditionNumber,
+    ErrorMg,
+    Measure,
+    Temperature,
+    Text,
+    plain_document,
+    printable,
+)
 from station.sensor import ADC_MAX, ADC_MIN
 
 __all__ = [
@@ -65,25 +82,16 @@ PoseRole = Literal["fit", "verify"]
 #: Largest count a database INTEGER column holds.
 _INT32_MAX = 2**31 - 1
 
+#: A station, operator or lot name (query filters use it too).
+IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
+
 #: A unit's serial number: letters, digits, ``.``, ``_``, ``-``; at most 64 characters.
 SERIAL_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._\-]{0,63}$"
 
 Serial = Annotated[str, StringConstraints(pattern=SERIAL_PATTERN)]
 
-Identifier = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")]
+Identifier = Annotated[str, StringConstraints(pattern=IDENTIFIER_PATTERN)]
 """A station, operator, algorithm or limits-profile name."""
-
-_PRINTABLE = re.compile(r"^[^\x00-\x1f\x7f]*$")
-
-
-def _printable(text: str) -> str:
-    if not _PRINTABLE.match(text):
-        raise ValueError("must not contain control characters")
-    return text
-
-
-Text = Annotated[str, StringConstraints(max_length=500), AfterValidator(_printable)]
-"""Free text for people (messages, reasons): one line, no control characters."""
 
 Count = Annotated[int, Field(ge=0, le=_INT32_MAX)]
 
@@ -117,14 +125,42 @@ class Vector3(_Record):
         return (self.x, self.y, self.z)
 
 
-def _within_adc(counts: Vector3) -> Vector3:
-    if not all(ADC_MIN <= value <= ADC_MAX for value in counts.as_tuple()):
-        raise ValueError(f"counts must lie within the ADC range {ADC_MIN}…{ADC_MAX}")
-    return counts
+def _within(
+    lower: float, upper: float, what: str, *, above: bool = False
+) -> Callable[[Vector3], Vector3]:
+    """A check that every component lies within ``lower…upper`` (above ``lower`` if
+    ``above``), naming the first axis outside (bounds: :mod:`station.record_bounds`)."""
+
+    def check(vector: Vector3) -> Vector3:
+        for axis, value in zip("xyz", vector.as_tuple(), strict=True):
+            if not (lower < value if above else lower <= value) or not value <= upper:
+                raise ValueError(f"{axis} {value:.6g} outside {what} {lower:g}…{upper:g}")
+        return vector
+
+    return check
 
 
-Counts3 = Annotated[Vector3, AfterValidator(_within_adc)]
+Counts3 = Annotated[Vector3, AfterValidator(_within(ADC_MIN, ADC_MAX, "the ADC range"))]
 """One ADC reading per axis, within the converter's range (counts)."""
+
+Spread3 = Annotated[Vector3, AfterValidator(_within(0, ADC_SPAN, "the ADC span"))]
+"""A spread of ADC readings per axis (counts)."""
+
+GyroRate3 = Annotated[
+    Vector3, AfterValidator(_within(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range"))
+]
+"""One gyro reading or mean per axis (deg/s)."""
+
+GyroSpread3 = Annotated[Vector3, AfterValidator(_within(0, GYRO_SPAN_DPS, "the gyro span"))]
+"""A spread of gyro readings per axis (deg/s)."""
+
+Offset3 = Annotated[
+    Vector3, AfterValidator(_within(OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS, "a zero-g output"))
+]
+Sensitivity3 = Annotated[
+    Vector3,
+    AfterValidator(_within(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity", above=True)),
+]
 
 
 class LinkStats(_Record):
@@ -142,7 +178,7 @@ class ReplacedCapture(_Record):
     captured_at: UtcDatetime
     reason: Text
     mean: Counts3
-    std: Vector3
+    std: Spread3
     sample_count: Count
 
 
@@ -153,10 +189,10 @@ class PoseRecord(_Record):
     name: Identifier
     role: PoseRole = "fit"
     mean: Counts3
-    std: Vector3
+    std: Spread3
     sample_count: Annotated[int, Field(ge=1, le=_INT32_MAX)]
-    gyro_mean: Vector3 | None = None
-    temperature_c: float | None = None
+    gyro_mean: GyroRate3 | None = None
+    temperature_c: Temperature | None = None
     link: LinkStats = LinkStats()
     replaced: tuple[ReplacedCapture, ...] = ()
 
@@ -166,9 +202,9 @@ class FailureReason(_Record):
 
     code: Identifier
     message: Text
-    measured: float | None = None
-    lower: float | None = None
-    upper: float | None = None
+    measured: Measure | None = None
+    lower: Measure | None = None
+    upper: Measure | None = None
     axis: Axis | None = None
     pose: Count | None = None
 
@@ -178,6 +214,10 @@ def _matrix_3x3(rows: tuple[tuple[float, ...], ...]) -> tuple[tuple[float, ...],
         raise ValueError("must be 3 rows of 3 numbers")
     if not all(math.isfinite(value) for row in rows for value in row):
         raise ValueError("must hold finite numbers")
+    bound = MATRIX_MAX_G_PER_COUNT
+    for i, j in ((i, j) for i in range(3) for j in range(3)):
+        if not -bound <= rows[i][j] <= bound:
+            raise ValueError(f"[{i}][{j}] {rows[i][j]:.6g} outside {-bound:g}…{bound:g} g/count")
     return rows
 
 
@@ -187,18 +227,18 @@ Matrix3 = Annotated[tuple[tuple[float, ...], ...], AfterValidator(_matrix_3x3)]
 class Coefficients(_Record):
     """The calibration written into the unit (``g = matrix @ (raw − offset)``)."""
 
-    offset: Vector3
-    sensitivity: Vector3
+    offset: Offset3
+    sensitivity: Sensitivity3
     matrix: Matrix3
 
 
 class QualityMetrics(_Record):
     """How well the calibration explains the poses."""
 
-    residual_rms_mg: Annotated[float, Field(ge=0)]
-    residual_max_mg: Annotated[float, Field(ge=0)]
-    condition_number: Annotated[float, Field(ge=1)]
-    verification_error_mg: Annotated[float, Field(ge=0)] | None = None
+    residual_rms_mg: ErrorMg
+    residual_max_mg: ErrorMg
+    condition_number: ConditionNumber
+    verification_error_mg: ErrorMg | None = None
 
 
 class GyroSummary(_Record):
@@ -210,8 +250,8 @@ class GyroSummary(_Record):
     g-sensitivity study says it should be for a still unit.
     """
 
-    bias: Vector3
-    noise: Vector3
+    bias: GyroRate3
+    noise: GyroSpread3
     still: GyroStillSummary | None = None
 
 
@@ -250,6 +290,8 @@ class _RunHeader(_Record):
     def _consistent_outcome(self) -> Self:
         if self.finished_at < self.started_at:
             raise ValueError("finished_at is before started_at")
+        if self.finished_at - self.started_at > timedelta(days=RUN_MAX_DAYS):
+            raise ValueError(f"finished_at is more than {RUN_MAX_DAYS} days after started_at")
         if self.verdict == "pass" and self.failures:
             raise ValueError("a passing run has no failure reasons")
         if self.verdict == "fail" and not self.failures:
@@ -288,14 +330,18 @@ class StoredRun(RunRecord):
     received_at: UtcDatetime
 
 
+LogSource = Annotated[
+    str, StringConstraints(min_length=1, max_length=255), AfterValidator(printable)
+]
+"""The rate-table / centrifuge log a gyro fit was made from."""
+
+
 class GyroFitRecord(_Record):
     """A unit's gyro error-model fit from a rate-table / centrifuge log, as stored."""
 
     serial: Serial
     fitted_at: UtcDatetime
-    source: Annotated[
-        str, StringConstraints(min_length=1, max_length=255), AfterValidator(_printable)
-    ]
-    report: GyroFitReport
+    source: LogSource
+    report: Annotated[GyroFitReport, AfterValidator(plain_document)]
     #: The log's dwells, kept to draw the fit's scale-factor plot (certificate).
-    dwells: GyroDwells | None = None
+    dwells: Annotated[GyroDwells, AfterValidator(plain_document)] | None = None

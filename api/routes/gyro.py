@@ -6,26 +6,22 @@ from datetime import UTC, datetime
 from fastapi import APIRouter, HTTPException, Response, status
 
 from api.deps import LabDep, ReaderDep, RepositoryDep
-from api.responses import json_response
+from api.responses import json_response, problems
 from api.routes.units import SerialPath
-from api.schemas import GyroFitSubmission, Problem, UnitGyro
+from api.schemas import GyroFitSubmission, UnitGyro
 from station.records import GyroFitRecord
 
 log = logging.getLogger(__name__)
 
 router = APIRouter(prefix="/units", tags=["gyro"])
 #: Storing a fit: a lab key only (a station's key answers 403).
-submissions = APIRouter(
-    prefix="/units",
-    tags=["gyro"],
-    responses={403: {"model": Problem, "description": "a station's key, not a lab's"}},
-)
+submissions = APIRouter(prefix="/units", tags=["gyro"])
 
 
 @router.get(
     "/{serial}/gyro",
     response_model=UnitGyro,
-    responses={404: {"model": Problem, "description": "no gyro fit and no run of this serial"}},
+    responses=problems(404, _404="no gyro fit and no run of this serial"),
 )
 async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
     """The unit's latest gyro fit (for compensation) and its latest run's still-pose gyros."""
@@ -40,7 +36,7 @@ async def get_unit_gyro(serial: SerialPath, repository: ReaderDep) -> Response:
     "/{serial}/gyro",
     status_code=status.HTTP_201_CREATED,
     response_model=GyroFitRecord,
-    responses={401: {"model": Problem}, 413: {"model": Problem}, 422: {"model": Problem}},
+    responses=problems(400, 401, 403, _403="a station's key: gyro fits need a lab key"),
 )
 async def submit_unit_gyro(
     serial: SerialPath,

@@ -9,17 +9,21 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, HTTPException, Path, Query, status
 from fastapi.responses import HTMLResponse, Response
+from pydantic import BeforeValidator, WithJsonSchema
 
 from api.deps import ReaderDep, ReportPoolDep
+from api.errors import invalid
+from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
 from db.reports import eol_report
+from station.errors import InputError
 from station.limits import load_profiles
-from station.records import SERIAL_PATTERN, StoredRun
+from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
 from station.report.bounds import choose_profile
 from station.report.html import certificate_page, dashboard_page
-from station.report.model import ReportFilter
-from station.report.period import parse_moment, start_of_day
+from station.report.model import EolReport, ReportFilter
+from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 from station.unit_state import counts
 
@@ -40,32 +44,60 @@ router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 
 
+def _moment(name: str) -> BeforeValidator:
+    def parse(text: object) -> object:
+        try:
+            return parse_moment(text, name=name) if isinstance(text, str) else text
+        except InputError as exc:
+            raise ValueError(str(exc)) from None
+
+    return BeforeValidator(parse)
+
+
+_MOMENT_SCHEMA = WithJsonSchema({"type": "string", "examples": ["2026-11-02", "2026-11-02T14:00Z"]})
+Since = Annotated[datetime, _moment("from"), _MOMENT_SCHEMA]
+Until = Annotated[datetime, _moment("to"), _MOMENT_SCHEMA]
+Name = Annotated[str, Query(pattern=IDENTIFIER_PATTERN)]
+
+
 @router.get(
     "/reports/eol",
+    response_class=Response,
     responses={
         200: {
-            "content": {MEDIA_TYPES["csv"]: {}, MEDIA_TYPES["html"]: {}},
+            "model": EolReport,
+            "content": {
+                MEDIA_TYPES["csv"]: {"schema": {"type": "string"}},
+                MEDIA_TYPES["html"]: {"schema": {"type": "string"}},
+            },
             "description": "the report in the requested format",
         },
-        400: {"model": Problem, "description": "a bound is not a date or time"},
     },
 )
 async def get_eol_report(
     repository: ReportPoolDep,
     since: Annotated[
-        str | None, Query(alias="from", description="start, ISO date or time (UTC if no zone)")
+        Since | None,
+        Query(alias="from", description="start, ISO date or time (UTC if no zone)"),
     ] = None,
-    until: Annotated[str | None, Query(alias="to", description="end (exclusive)")] = None,
-    station: Annotated[str | None, Query(description="only this station")] = None,
-    operator: Annotated[str | None, Query(description="only this operator")] = None,
-    lot: Annotated[str | None, Query(description="only this production lot")] = None,
+    until: Annotated[Until | None, Query(alias="to", description="end (exclusive)")] = None,
+    station: Annotated[Name | None, Query(description="only this station")] = None,
+    operator: Annotated[Name | None, Query(description="only this operator")] = None,
+    lot: Annotated[Name | None, Query(description="only this production lot")] = None,
     format: Literal["json", "csv", "html"] = "json",
-    units: Annotated[int | None, Query(ge=1, description="list only the latest N units")] = None,
+    units: Annotated[
+        int | None,
+        Query(ge=1, le=MAX_LISTED_UNITS, description="list only the latest N units"),
+    ] = None,
 ) -> Response:
     """Yields, failure Pareto, capability, control charts and ship/hold list of a range."""
+    try:
+        check_order(since, until, names=("from", "to"))
+    except InputError as exc:
+        raise invalid(("query", "from"), str(exc)) from None
     report_filter = ReportFilter(
-        since=parse_moment(since, name="from") if since else None,
-        until=parse_moment(until, name="to") if until else None,
+        since=since,
+        until=until,
         station_id=station,
         operator_id=operator,
         lot=lot,
@@ -90,8 +122,11 @@ def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
 
 @router.get(
     "/units/{serial}/certificate",
-    response_class=HTMLResponse,
-    responses={404: {"model": Problem, "description": "no run of this serial number"}},
+    response_class=Response,  # 200 is HTML, the errors JSON: each says its own media type
+    responses={
+        200: {"content": {"text/html": {"schema": {"type": "string"}}}, "description": "the page"},
+        **problems(404, _404="no run of this serial number"),
+    },
 )
 async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],

@@ -7,12 +7,19 @@ from uuid import UUID
 from fastapi import APIRouter, HTTPException, Query, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
-from api.responses import json_response
-from api.schemas import Problem, RunList
+from api.responses import json_response, problems
+from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
-from station.records import SERIAL_PATTERN, RunRecord, StoredRun, UtcDatetime, Verdict
+from station.records import (
+    IDENTIFIER_PATTERN,
+    SERIAL_PATTERN,
+    RunRecord,
+    StoredRun,
+    UtcDatetime,
+    Verdict,
+)
 
 log = logging.getLogger(__name__)
 
@@ -22,19 +29,21 @@ router = APIRouter(prefix="/runs", tags=["runs"])
 submissions = APIRouter(prefix="/runs", tags=["runs"])
 
 
-@router.get("", response_model=RunList)
+@router.get(
+    "", response_model=RunList, responses=problems(400, _400="a cursor this server never gave")
+)
 async def list_runs(
     repository: ReaderDep,
     serial: Annotated[str | None, Query(pattern=SERIAL_PATTERN)] = None,
-    station_id: Annotated[str | None, Query(max_length=64)] = None,
+    station_id: Annotated[str | None, Query(pattern=IDENTIFIER_PATTERN)] = None,
     lot: Annotated[
-        str | None, Query(max_length=64, description="the unit's production lot")
+        str | None, Query(pattern=IDENTIFIER_PATTERN, description="the unit's production lot")
     ] = None,
     verdict: Verdict | None = None,
     since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
     until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
     limit: Annotated[int, Query(ge=1, le=MAX_PAGE)] = 100,
-    cursor: Annotated[str | None, Query(max_length=200)] = None,
+    cursor: Annotated[str | None, Query(max_length=200, pattern=r"^[A-Za-z0-9_=-]*$")] = None,
 ) -> Response:
     """Runs matching every given filter, newest first, one page at a time."""
     query = RunQuery(
@@ -53,7 +62,7 @@ async def list_runs(
     )
 
 
-@router.get("/{run_id}", response_model=StoredRun, responses={404: {"model": Problem}})
+@router.get("/{run_id}", response_model=StoredRun, responses=problems(404, _404="no such run"))
 async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
     """One run with every pose."""
     run = await repository.run(lambda r: r.get(run_id))
@@ -68,11 +77,15 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
     response_model=StoredRun,
     responses={
         200: {"model": StoredRun, "description": "already stored: the stored run"},
-        401: {"model": Problem},
-        403: {"model": Problem},
-        409: {"model": Problem, "description": "same run UUID, different content"},
-        413: {"model": Problem},
-        422: {"model": Problem, "description": "invalid, or the poses give other coefficients"},
+        **problems(
+            400,
+            401,
+            403,
+            409,
+            422,
+            _403="the API key belongs to another station",
+            _422="invalid (each offending field named), or the poses give other coefficients",
+        ),
     },
 )
 async def submit_run(record: RunRecord, station: StationDep, repository: RepositoryDep) -> Response:

@@ -5,15 +5,15 @@ from typing import Annotated
 from fastapi import APIRouter, HTTPException, Path, Response, status
 
 from api.deps import ReaderDep, UnitLookupsDep
-from api.responses import json_response
-from api.schemas import Problem, RunList
+from api.responses import json_response, problems
+from api.schemas import RunList
 from station.records import SERIAL_PATTERN
 from station.unit_state import UnitCalibration
 
 router = APIRouter(
     prefix="/units",
     tags=["units"],
-    responses={404: {"model": Problem, "description": "no run of this serial number"}},
+    responses=problems(404, _404="no run of this serial number"),
 )
 
 SerialPath = Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")]

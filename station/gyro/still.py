@@ -13,42 +13,51 @@ at level α. Bias is the mean over the poses, checked against a limit when one i
 given; noise the RMS of the per-pose noise.
 """
 
-from typing import Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel
+from pydantic import BaseModel, ConfigDict, Field
 from scipy import special
 
 from station.errors import InputError
 from station.gyro.lsq import solve
 from station.gyro.model import FloatArray
+from station.record_bounds import MEASURE_MAX, GyroRate, GyroSpread, Measure, Probability, Text
 from station.sensor import AXES
 
 MIN_POSES_FOR_SLOPE = 4
 MIN_POSES_FOR_TEST = 5
 
 
-class GyroAxisStill(BaseModel):
-    """One gyro's figures over the still poses."""
+#: One value per gravity axis (x, y, z).
+Slope3 = Annotated[list[Measure], Field(min_length=3, max_length=3)]
 
-    axis: str
-    bias_dps: float
-    noise_dps: float
-    slope_dps_per_g: list[float] | None
-    slope_stderr_dps_per_g: list[float] | None
-    slope_p_value: float | None
+
+class GyroAxisStill(BaseModel):
+    """One gyro's figures over the still poses (bounds: :mod:`station.record_bounds`)."""
+
+    model_config = ConfigDict(allow_inf_nan=False)
+
+    axis: Literal["x", "y", "z"]
+    bias_dps: GyroRate
+    noise_dps: GyroSpread
+    slope_dps_per_g: Slope3 | None
+    slope_stderr_dps_per_g: Slope3 | None
+    slope_p_value: Probability | None
     slope_consistent_with_zero: bool | None
     bias_within_limit: bool | None
-    reason: str | None = None
+    reason: Text | None = None
 
 
 class GyroStillSummary(BaseModel):
     """The three gyros over the still poses of one run."""
 
-    poses: int
-    alpha: float
-    bias_limit_dps: float | None
-    axes: list[GyroAxisStill]
+    model_config = ConfigDict(allow_inf_nan=False)
+
+    poses: Annotated[int, Field(ge=0, le=64)]
+    alpha: Annotated[float, Field(gt=0, lt=1)]
+    bias_limit_dps: Annotated[float, Field(gt=0, le=MEASURE_MAX)] | None
+    axes: Annotated[list[GyroAxisStill], Field(max_length=3)]
 
     @property
     def bias_pass(self) -> bool | None:

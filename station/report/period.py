@@ -15,6 +15,9 @@ from station.errors import InputError
 EARLIEST = datetime(1, 1, 2, tzinfo=UTC)
 LATEST = datetime(9999, 12, 31, tzinfo=UTC)
 
+#: The most units a report lists (``--units``, ``units=``): years of a line's output.
+MAX_LISTED_UNITS = 1_000_000
+
 
 def parse_moment(text: str, *, name: str) -> datetime:
     """``2026-11-02`` (midnight UTC), ``2026-11-02T14:00`` (UTC) or with a zone, in UTC.
@@ -43,16 +46,24 @@ def parse_moment(text: str, *, name: str) -> datetime:
     return utc
 
 
+def check_order(
+    start: datetime | None, end: datetime | None, *, names: tuple[str, str] = ("--from", "--to")
+) -> None:
+    """:class:`InputError` unless ``start < end`` (either may be absent)."""
+    if start is not None and end is not None and not start < end:
+        first, last = (moment.isoformat(" ", "minutes") for moment in (start, end))
+        raise InputError(
+            f"{names[0]} {first} is not before {names[1]} {last}: the period holds nothing"
+        )
+
+
 def parse_period(
     since: str | None, until: str | None, *, names: tuple[str, str] = ("--from", "--to")
 ) -> tuple[datetime | None, datetime | None]:
     """Both bounds (either may be absent); :class:`InputError` unless ``since < until``."""
     start = parse_moment(since, name=names[0]) if since else None
     end = parse_moment(until, name=names[1]) if until else None
-    if start is not None and end is not None and not start < end:
-        raise InputError(
-            f"{names[0]} {since!r} is not before {names[1]} {until!r}: the period holds nothing"
-        )
+    check_order(start, end, names=names)
     return start, end
 
 

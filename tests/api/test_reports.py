@@ -70,8 +70,10 @@ def test_station_filter_and_a_bad_bound(client: httpx.Client) -> None:
     st2 = client.get("/api/v1/reports/eol", params={**RANGE, "station": "st2"}).json()
     assert (st2["summary"]["runs"], st2["summary"]["units_tested"]) == (3, 2)
     bad = client.get("/api/v1/reports/eol", params={"from": "last tuesday"})
-    assert bad.status_code == 400
-    assert "from 'last tuesday' is not an ISO date" in bad.json()["detail"]
+    assert bad.status_code == 422
+    [error] = bad.json()["errors"]
+    assert error["loc"] == "query.from"
+    assert "from 'last tuesday' is not an ISO date" in error["msg"]
     assert client.get("/api/v1/reports/eol", params={"format": "pdf"}).status_code == 422
 
 

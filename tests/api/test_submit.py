@@ -103,7 +103,9 @@ def test_coefficients_the_poses_do_not_give_are_refused(
     body["coefficients"][field] = change
     answer = client.post(RUNS, json=body, headers=_auth(station_key))
     assert answer.status_code == 422
-    assert answer.json()["detail"].startswith(where)
+    [error] = answer.json()["errors"]
+    assert error["loc"] == "body.coefficients"
+    assert error["msg"].startswith(where)
 
 
 def test_coefficients_from_degenerate_poses_are_refused(

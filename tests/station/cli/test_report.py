@@ -97,7 +97,10 @@ def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) ->
         (("--limits", "/nonexistent/limits.toml"), "cannot read the limits file"),
         (("--from", "9999-12-31T23:00:00-05:00"), "--from '9999-12-31T23:00:00-05:00' is out of"),
         (("--to", "0001-01-01T00:00:00+01:00"), "--to '0001-01-01T00:00:00+01:00' is out of"),
-        (("--from", "2026-02-01", "--to", "2026-01-01"), "--from '2026-02-01' is not before --to"),
+        (
+            ("--from", "2026-02-01", "--to", "2026-01-01"),
+            "--from 2026-02-01 00:00+00:00 is not before --to",
+        ),
     ],
 )
 def test_bad_options_are_one_line_and_exit_2(

@@ -8,7 +8,14 @@ from hypothesis import strategies as st
 
 from db.reports import split_days
 from station.errors import InputError
-from station.report.period import EARLIEST, LATEST, parse_moment, parse_period, start_of_day
+from station.report.period import (
+    EARLIEST,
+    LATEST,
+    check_order,
+    parse_moment,
+    parse_period,
+    start_of_day,
+)
 
 
 @pytest.mark.parametrize(
@@ -93,5 +100,13 @@ def test_a_period_must_run_forwards() -> None:
     )
     assert parse_period(None, "2026-01-02")[0] is None
     for since, until in (("2026-02-01", "2026-01-01"), ("2026-01-01T05:00+05:00", "2026-01-01")):
-        with pytest.raises(InputError, match=r"^from '.*' is not before to '.*': the period holds"):
+        with pytest.raises(InputError, match=r"^from .* is not before to .*: the period holds"):
             parse_period(since, until, names=("from", "to"))
+
+
+def test_the_api_checks_parsed_bounds_the_same_way() -> None:
+    check_order(EARLIEST, LATEST)
+    with pytest.raises(InputError, match=r"^from 9999-12-31 00:00\+00:00 is not before to 0001"):
+        check_order(LATEST, EARLIEST, names=("from", "to"))
+    with pytest.raises(InputError, match="the period holds nothing"):
+        check_order(EARLIEST, EARLIEST)

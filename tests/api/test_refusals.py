@@ -1,0 +1,103 @@
+"""Nonsense is refused before it reaches SQL: 422 naming the field or parameter, never
+500, on SQLite and PostgreSQL (a real server process on each)."""
+
+import httpx
+import pytest
+
+from tests.db.records import make_record
+
+RUNS = "/api/v1/runs"
+EOL = "/api/v1/reports/eol"
+
+
+def _auth(key: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {key}"}
+
+
+@pytest.mark.parametrize(
+    ("change", "loc", "words"),
+    [
+        (lambda body: body["poses"][0]["std"].update(x=1e300), "body.poses.0.std", "x 1e+300"),
+        (
+            lambda body: body.update(
+                gyro={"bias": {"x": 1e300, "y": 0, "z": 0}, "noise": {"x": 1, "y": 1, "z": 1}}
+            ),
+            "body.gyro.bias",
+            "gyro range",
+        ),
+        (
+            lambda body: body["poses"][1].update(temperature_c=-1e300),
+            "body.poses.1.temperature_c",
+            "greater than or equal",
+        ),
+    ],
+    ids=["pose-std", "gyro-bias", "temperature"],
+)
+def test_a_poison_run_is_refused_naming_the_field_and_the_report_still_answers(
+    client: httpx.Client, station_key: str, change: object, loc: str, words: str
+) -> None:
+    good = make_record()
+    assert client.post(
+        RUNS, json=good.model_dump(mode="json"), headers=_auth(station_key)
+    ).is_success
+    body = make_record(serial="PT-000002").model_dump(mode="json")
+    change(body)  # type: ignore[operator]
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    errors = answer.json()["errors"]
+    assert errors[0]["loc"] == loc
+    assert words in errors[0]["msg"]
+    assert loc in answer.json()["detail"]
+    report = client.get(EOL)
+    assert report.status_code == 200, report.text
+    assert report.json()["summary"]["runs"] == 1
+
+
+@pytest.mark.parametrize(
+    ("query", "loc"),
+    [
+        (f"{RUNS}?station_id=%00", "query.station_id"),
+        (f"{RUNS}?lot=%00", "query.lot"),
+        (f"{RUNS}?lot={'x' * 65}", "query.lot"),
+        (f"{RUNS}?cursor=%00", "query.cursor"),
+        (f"{EOL}?station=%00", "query.station"),
+        (f"{EOL}?operator=%00", "query.operator"),
+        (f"{EOL}?lot=%00", "query.lot"),
+        (f"{EOL}?from=9999-12-31T23:00:00-05:00", "query.from"),
+        (f"{EOL}?from=9999-12-31T00:00:01Z", "query.from"),
+        (f"{EOL}?to=0001-01-01T00:00:00%2B01:00", "query.to"),
+        (f"{EOL}?units=999999999999999999999", "query.units"),
+        (f"{EOL}?units=1000001", "query.units"),
+        (f"{EOL}?from=2026-11-03&to=2026-11-02", "query.from"),
+    ],
+)
+def test_every_unusable_query_parameter_gets_422_naming_it(
+    client: httpx.Client, query: str, loc: str
+) -> None:
+    answer = client.get(query)
+    assert answer.status_code == 422, answer.text
+    assert answer.json()["errors"][0]["loc"] == loc
+    assert answer.json()["detail"].startswith(f"invalid request: {loc}: ")
+
+
+@pytest.mark.parametrize(
+    "query",
+    [
+        f"{EOL}?from=9999-12-31",
+        f"{EOL}?to=0001-01-01",
+        f"{EOL}?from=0001-01-01T00:00:00Z&to=9999-12-31T00:00:00Z",
+        f"{EOL}?units=1000000&format=csv",
+        f"{RUNS}?since=0001-01-01T00:00:00Z&until=9999-12-31T23:59:59Z",
+    ],
+)
+def test_the_edges_of_the_ranges_are_answered(client: httpx.Client, query: str) -> None:
+    assert client.get(query).status_code == 200
+
+
+def test_a_forged_cursor_that_overflows_is_400_not_500(client: httpx.Client) -> None:
+    import base64
+
+    forged = base64.urlsafe_b64encode(b"0001-01-01T00:00:00+14:00|5").decode().rstrip("=")
+    answer = client.get(RUNS, params={"cursor": forged})
+    assert answer.status_code == 400, answer.text
+    assert "cursor" in answer.json()["detail"]
