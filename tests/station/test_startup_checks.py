@@ -138,6 +138,7 @@ def _cut(text: str) -> bytes:
         (b"\x00\x01\x02", None, "is cut short or not JSON"),
         (b"", None, "is cut short or not JSON"),
     ],
+    ids=["torn", "latin-1", "unknown pose", "binary", "empty"],
 )
 def test_an_unreadable_journal_is_kept_aside_and_named(
     tmp_path: Path, content: bytes, serial: str | None, reason: str
