@@ -191,7 +191,7 @@ def seed(url: str, runs: int) -> tuple[str, int]:
     seeded = time.perf_counter()
     with database.session() as session, session.begin():
         repository = RunRepository(session)
-        repository.refresh_units()  # each unit's current state, as its migration fills it
+        repository.refresh_units()  # each unit's current state, as an upgrade writes it
         key = repository.create_key("line1-st1")
     filled = time.perf_counter()
     with database.engine.connect().execution_options(isolation_level="AUTOCOMMIT") as c:

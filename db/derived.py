@@ -1,27 +1,37 @@
-"""Derived data whose definition changed without a change of schema, rewritten at upgrade.
+"""Derived data, written at upgrade when it is missing or of an older definition.
 
 The unit answers (:mod:`db.units`) and the report's facts and roll-ups
-(:mod:`db.rollups`) are functions of ``runs``. When this software defines them
-differently from the software that wrote them (answers of an older shape; a unit's
-latest run no longer an operator's abort), :func:`rewrite_if_stale` rewrites both from
-``runs`` in the upgrade's transaction: ``calstation db upgrade``, or any opening of the
-embedded SQLite database.
+(:mod:`db.rollups`) are functions of ``runs``. The migrations create their tables
+only; when they are empty beside stored runs (a migration just added them), or this
+software defines them differently from the software that wrote them (answers of an
+older shape; a unit's latest run no longer an operator's abort), :func:`rewrite_if_stale`
+writes both from ``runs`` in the upgrade's transaction: ``calstation db upgrade``, or
+any opening of the embedded SQLite database.
 """
 
-from sqlalchemy import Connection
+from sqlalchemy import Connection, select
 from sqlalchemy.orm import Session
 
+from db.models import Run, RunFacts, Unit
 from db.rollups import lock_submissions, rebuild, stored_bounds
 from db.units import answers_are_stale, refresh_answers
 
 
 def rewrite_if_stale(connection: Connection) -> bool:
-    """Rewrite the answers and the report's roll-ups if the answers are stale."""
+    """Write the answers and the report's roll-ups if they are missing or stale."""
     session = Session(bind=connection)
-    if not answers_are_stale(session):
+    if not (_missing(session) or answers_are_stale(session)):
         return False
     lock_submissions(connection)
     refresh_answers(session)
     session.flush()
     rebuild(connection, stored_bounds(connection) or None)
     return True
+
+
+def _missing(session: Session) -> bool:
+    """Whether runs are stored but the answers or the roll-ups were never written."""
+    if session.scalars(select(Run.id).limit(1)).first() is None:
+        return False
+    no_units = session.scalars(select(Unit.serial).limit(1)).first() is None
+    return no_units or session.scalars(select(RunFacts.run_pk).limit(1)).first() is None

@@ -26,6 +26,7 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "limits_version": record.limits.version,
         "limits_sha256": record.limits.sha256,
         "verdict": record.verdict,
+        "disposition": record.disposition,
         "offset_x": cal.offset.x if cal else None,
         "offset_y": cal.offset.y if cal else None,
         "offset_z": cal.offset.z if cal else None,
@@ -98,6 +99,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
             "sha256": run.limits_sha256,
         },
         "verdict": run.verdict,
+        "disposition": run.disposition,
         "gyro": run.gyro,
         "failures": [
             {

@@ -45,6 +45,7 @@ class Run(Base):
     __table_args__ = (
         CheckConstraint("verdict IN ('pass', 'fail')", name="verdict"),
         CheckConstraint("model IN ('six', 'nine')", name="model"),
+        CheckConstraint("disposition IN ('ship', 'retest', 'rework')", name="disposition"),
         Index("ix_runs_serial_started_at", "serial", "started_at", "id"),
         Index("ix_runs_station_id_started_at", "station_id", "started_at", "id"),
         Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
@@ -69,6 +70,8 @@ class Run(Base):
     limits_version: Mapped[str] = mapped_column(String(NAME))
     limits_sha256: Mapped[str] = mapped_column(String(64))
     verdict: Mapped[str] = mapped_column(String(4))
+    #: Where the station sent the unit (ship, retest, rework); older runs have none.
+    disposition: Mapped[str | None] = mapped_column(String(8))
     offset_x: Mapped[float | None] = mapped_column(Double())
     offset_y: Mapped[float | None] = mapped_column(Double())
     offset_z: Mapped[float | None] = mapped_column(Double())
@@ -156,9 +159,8 @@ class Unit(Base):
     ``calibration`` is the JSON of :class:`station.records.UnitCalibration` for the run
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
-    the run (:mod:`db.units`), so a unit lookup reads one row by primary key. A new
-    shape of the answer comes with a migration that rewrites the rows
-    (:meth:`db.RunRepository.refresh_units`).
+    the run (:mod:`db.units`), so a unit lookup reads one row by primary key. Answers
+    missing or of an older shape are written at upgrade (:mod:`db.derived`).
     """
 
     __tablename__ = "units"

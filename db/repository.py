@@ -174,7 +174,7 @@ class RunRepository:
         record_run(self.session.connection(), pk)
         # Already validated: build the answer without validating it again.
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
-        record_units(self.session, [record.serial], stored)
+        record_units(self.session, [record.serial])
         return SubmitOutcome(created=True, run=stored)
 
     def _insert_new_run(self) -> ReturningInsert[int]:
@@ -236,9 +236,9 @@ class RunRepository:
     def refresh_units(self) -> int:
         """Write every unit's answer from ``runs``; return the number of units.
 
-        The migration that adds ``units`` fills it with this, and so does a bulk load of
-        runs; answers of an older shape (:class:`station.unit_state.UnitCalibration`)
-        are rewritten with it when the database is upgraded (:func:`db.migrate.upgrade`).
+        A bulk load of runs uses it; answers missing or of an older shape
+        (:class:`station.unit_state.UnitCalibration`) are written with it when the
+        database is upgraded (:mod:`db.derived`).
         """
         return refresh_answers(self.session)
 

@@ -48,22 +48,9 @@ def _upsert(dialect: Any) -> Any:
 _UPSERT = {"postgresql": _upsert(postgresql), "sqlite": _upsert(sqlite)}
 
 
-def answer_json(runs: Sequence[RunSummary | StoredRun], previous: str | None = None) -> str:
-    """The answer about a unit whose runs are ``runs`` (oldest first).
-
-    The runs table does not keep a run's disposition: the latest attempt's comes from
-    the run as submitted or, when the answer is rewritten, from the ``previous`` answer.
-    """
-    answer = UnitCalibration.of_history(runs)
-    if answer.latest.disposition is None and previous is not None:
-        try:
-            before = UnitCalibration.model_validate_json(previous)
-        except ValidationError:  # an answer of an older shape: it had none
-            before = None
-        if before is not None and before.latest.run_id == answer.latest.run_id:
-            latest = answer.latest.model_copy(update={"disposition": before.latest.disposition})
-            answer = answer.model_copy(update={"latest": latest})
-    return answer.model_dump_json()
+def answer_json(runs: Sequence[RunSummary | StoredRun]) -> str:
+    """The answer about a unit whose runs are ``runs`` (oldest first)."""
+    return UnitCalibration.of_history(runs).model_dump_json()
 
 
 def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[int, RunSummary]]]:
@@ -86,31 +73,19 @@ def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[i
     return by_serial
 
 
-def record_units(
-    session: Session, serials: Sequence[str], submitted: StoredRun | None = None
-) -> None:
-    """Write the answers about ``serials`` from their stored runs.
-
-    ``submitted`` is a run just stored: its disposition, which ``runs`` does not hold,
-    goes into the answer.
-    """
+def record_units(session: Session, serials: Sequence[str]) -> None:
+    """Write the answers about ``serials`` from their stored runs."""
     if not serials:
         return
-    stored = select(Unit.serial, Unit.calibration).where(Unit.serial.in_(serials))
-    previous: dict[str, str] = {serial: answer for serial, answer in session.execute(stored)}
     rows = []
     for serial, runs in _runs_of(session, serials).items():
-        summaries = [
-            submitted if submitted is not None and run.run_id == submitted.run_id else run
-            for _, run in runs
-        ]
         pk, latest = runs[-1]
         rows.append(
             {
                 "serial": serial,
                 "run_pk": pk,
                 "started_at": latest.started_at,
-                "calibration": answer_json(summaries, previous.get(serial)),
+                "calibration": answer_json([run for _, run in runs]),
             }
         )
     session.execute(for_dialect(session, _UPSERT), rows)

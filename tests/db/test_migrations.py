@@ -98,6 +98,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
     with engine.begin() as connection:  # runs stored before the units table existed
         for record in (retest, first, other):
             row = run_row(record, received_at=T0, record_sha256="0" * 64)
+            del row["disposition"]  # a column of revision 0006
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), failure_rows(pk, record))
@@ -154,3 +155,23 @@ def test_the_key_scope_migration_makes_every_existing_key_a_station_key(empty_ur
     with engine.begin() as connection, pytest.raises(IntegrityError):
         connection.execute(text("UPDATE station_keys SET scope = 'admin'"))
     engine.dispose()
+
+
+def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine, "0005")
+        record = make_record(verdict="fail")
+        with engine.begin() as connection:  # a run stored before runs had a disposition
+            row = run_row(record, received_at=T0, record_sha256="0" * 64)
+            del row["disposition"]
+            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
+            connection.execute(insert(RunFailure), failure_rows(pk, record))
+        upgrade(engine)
+        with Session(engine) as session:
+            (stored,) = RunRepository(session).history(record.serial)
+            assert stored.disposition is None
+            assert stored.failures == record.failures
+            assert session.scalar(select(func.count()).select_from(RunFailure)) == 1
+    finally:
+        engine.dispose()

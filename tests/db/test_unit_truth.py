@@ -101,3 +101,19 @@ def test_answers_of_the_older_shape_are_rewritten_at_upgrade(session: Session) -
     assert not answers_are_stale(session)
     assert _answer(session, passed.serial).verdict == "pass"
     assert not rewrite_if_stale(session.connection())
+
+
+def test_every_run_keeps_where_the_unit_went(session: Session) -> None:
+    repo = RunRepository(session)
+    first = make_record(disposition="retest", **ABORT)
+    second = make_record(started_at=T0 + timedelta(hours=1), disposition="ship")
+    legacy = make_record(started_at=T0 + timedelta(hours=2))  # a station before dispositions
+    for record in (first, second, legacy):
+        repo.submit(record)
+    session.flush()
+    assert [run.disposition for run in repo.history(first.serial)] == ["retest", "ship", None]
+    stored = repo.get(second.run_id)
+    assert stored is not None
+    assert stored.disposition == "ship"
+    # The answer's latest attempt is the one without a disposition: it says none.
+    assert _answer(session, first.serial).latest.disposition is None

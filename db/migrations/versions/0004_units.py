@@ -1,4 +1,7 @@
-"""Each unit's current calibration, ready to serve (``units``), filled from ``runs``.
+"""Each unit's current calibration, ready to serve (``units``).
+
+The schema only: the answers about the units already stored are derived data, written
+once the database reaches the head (:func:`db.derived.rewrite_if_stale`).
 
 Revision ID: 0004
 Revises: 0003
@@ -8,10 +11,8 @@ from collections.abc import Sequence
 
 import sqlalchemy as sa
 from alembic import op
-from sqlalchemy.orm import Session
 
 from db.base import UtcDateTime
-from db.repository import RunRepository
 
 revision: str = "0004"
 down_revision: str | None = "0003"
@@ -35,10 +36,6 @@ def upgrade() -> None:
         ),
         sa.PrimaryKeyConstraint("serial", name=op.f("pk_units")),
     )
-    # The answers are built by the same code as at every submission.
-    session = Session(bind=op.get_bind())
-    RunRepository(session).refresh_units()
-    session.flush()
 
 
 def downgrade() -> None:
