@@ -31,11 +31,12 @@ _PROBLEMS = {
 def cannot_write_line(data_dir: Path, exc: OSError, kept: str) -> str:
     """The operator's line: what the disk refused, what is kept, what to do.
 
-    ``cannot write to DATA_DIR: disk full — the unit is kept in memory; free space to
-    continue``.
+    ``disk full — the unit is kept in memory; free space in DATA_DIR to continue``: what
+    is wrong comes first, so that a long data directory at a narrow screen's edge never
+    hides it.
     """
     what, fix = _PROBLEMS.get(exc.errno or 0, (exc.strerror or str(exc), "fix it"))
-    return f"cannot write to {data_dir}: {what} — {kept} kept in memory; {fix} to continue"
+    return f"{what} — {kept} kept in memory; {fix} in {data_dir} to continue"
 
 
 class DiskWatch:

@@ -94,8 +94,7 @@ def test_a_full_disk_keeps_the_unit_in_memory_and_writes_it_when_space_returns(
     journal_file.save(state)  # the pose's save: refused, owed
     assert not journal_file.path.exists()
     assert watch.check() == (
-        f"cannot write to {small_disk.path}: disk full — the unit is kept in memory; "
-        "free space to continue"
+        f"disk full — the unit is kept in memory; free space in {small_disk.path} to continue"
     )
     record = make_record(serial="PT000001")
     outbox.put(record)  # the verdict: refused, kept in memory
@@ -140,9 +139,9 @@ def test_a_read_only_data_dir_is_said_and_the_end_of_the_unit_is_done_later(
     assert journal_file.path.exists()
     note = watch.check()
     assert note is not None
-    assert note.endswith(
+    assert note == (
         "read-only file system — the unit and 1 finished run are kept in memory; "
-        "make it writable to continue"
+        f"make it writable in {small_disk.path} to continue"
     )
     small_disk.read_only(False)
     now[0] += 1
