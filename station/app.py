@@ -31,8 +31,10 @@ from station.limits import LimitsProfile
 from station.operator_text import port_problem
 from station.outbox import Outbox, waiting
 from station.records import RunRecord
+from station.run.phases import Phase
+from station.run.record import ALGORITHM
 from station.screens import header, serial_prompt, unit_screen, verdict_screen
-from station.session import ALGORITHM, Phase, UnitRun
+from station.session import UnitRun
 from station.storage import RunStore
 from station.unit_history import ScanAction, UnitHistory
 
@@ -210,7 +212,7 @@ class StationApp:
         elif self.state is State.CONFIRM and self.note:
             parts.append(Text(self.note, style="bold yellow"))
         elif self.state is State.UNIT and self.run is not None:
-            parts.append(unit_screen(self.run, self.show_help))
+            parts.append(unit_screen(self.run.view(), self.show_help))
             if self.confirm_abort:
                 parts.append(
                     Text(
@@ -230,11 +232,9 @@ class StationApp:
             self.console.print(text, markup=False, highlight=False)
 
     def _echo_messages(self, run: UnitRun) -> None:
-        new = run.said - self._said
-        if new > 0:
-            for message in list(run.messages)[-min(new, len(run.messages)) :]:
-                self._say_line(f"{run.journal.serial}: {message.text}")
-        self._said = run.said
+        for message in run.messages.since(self._said):
+            self._say_line(f"{run.journal.serial}: {message.text}")
+        self._said = run.messages.said
 
     # -- keys ----------------------------------------------------------------------------
 
