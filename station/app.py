@@ -1,10 +1,11 @@
 """The operator station: serial prompt, one unit after another, verdict banners.
 
 :class:`StationApp` owns the loop: it reads the operator's keys (a terminal, or the
-demo's scripted operator), steps the unit in progress (:class:`station.session.UnitRun`),
-draws the screens (:mod:`station.screens`), and hands every finished run to the
-outbox, which stores it (:mod:`station.outbox`). A journal left by a crash is offered
-for resumption at start.
+demo's scripted operator) and acts on what they answer (:mod:`station.prompt`), steps
+the unit in progress (:class:`station.session.UnitRun`), draws the screens
+(:mod:`station.screens`), and hands every finished run to the outbox, which stores it
+(:mod:`station.results_link`). A journal left by a crash is offered for resumption at
+start.
 """
 
 import logging
@@ -13,37 +14,31 @@ import time
 import uuid
 from collections.abc import Callable
 from datetime import UTC, datetime
-from enum import StrEnum
 
 from rich.console import Console, Group, RenderableType
 from rich.live import Live
-from rich.text import Text
-from sqlalchemy.exc import SQLAlchemyError
 
 from station import __version__
 from station.config import StationConfig
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
-from station.disk import DiskWatch
-from station.errors import CalstationError
 from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
 from station.operator_text import port_problem
-from station.outbox import Outbox, waiting
+from station.prompt import Prompt, Recalibrate, Resume, Serial, State
 from station.records import RunRecord
-from station.screens import header, serial_prompt, unit_screen, verdict_screen
-from station.session import ALGORITHM, Phase, UnitRun
+from station.results_link import ResultsLink
+from station.run.phases import Phase
+from station.run.record import ALGORITHM
+from station.screens import header
+from station.session import UnitRun
 from station.storage import RunStore
 from station.unit_history import ScanAction, UnitHistory
 
 log = logging.getLogger(__name__)
 
-#: Seconds between attempts to empty a non-empty outbox while idle.
-SYNC_EVERY_S = 5.0
 #: Seconds between screen refreshes.
 DRAW_EVERY_S = 0.1
-ENTER = ("\r", "\n")
-BACKSPACE = ("\x7f", "\b")
 
 
 def open_unit(port: str, serial: str) -> PutterDriver:
@@ -58,13 +53,17 @@ def open_unit(port: str, serial: str) -> PutterDriver:
     return driver
 
 
-class State(StrEnum):
-    """What the station waits for."""
-
-    RESUME = "resume"
-    SERIAL = "serial"
-    CONFIRM = "confirm"
-    UNIT = "unit"
+def new_journal(config: StationConfig, serial: str) -> RunJournal:
+    """The journal of a new run of ``serial`` on the station ``config`` describes."""
+    return RunJournal(
+        run_id=uuid.uuid4(),
+        serial=serial,
+        station_id=config.station_id,
+        operator_id=config.operator_id,
+        lot=config.lot,
+        started_at=datetime.now(UTC),
+        poses=(*config.run.poses, config.run.verification_pose),
+    )
 
 
 class StationApp:
@@ -83,36 +82,26 @@ class StationApp:
     ) -> None:
         self.config = config
         self.profile = profile
-        self._open_store = open_store
-        self._store: RunStore | None = None
         self.keys = keys
         self.console = console
         self.units = units
         self.tick_s = tick_s
-        self.outbox = Outbox(config.outbox_dir)
         self.journal_file = JournalFile(config.journal_path)
-        self.state = State.SERIAL
+        self.results = ResultsLink(
+            outbox_dir=config.outbox_dir,
+            data_dir=config.data_dir.expanduser(),
+            journal_file=self.journal_file,
+            open_store=open_store,
+            say_line=self._say_line,
+        )
+        self.prompt = Prompt()
         self.run: UnitRun | None = None
-        self.pending_resume: RunJournal | None = None
         #: The scanned unit's history (asked about in CONFIRM; its verdict's disposition).
         self.history: UnitHistory | None = None
-        self.typed = ""
-        self.note: str | None = None
         self.last_record: RunRecord | None = None
         self.records: list[RunRecord] = []
-        self.show_help = False
-        self.confirm_abort = False
         self.done = False
         self._said = 0
-        self._next_sync = 0.0
-        self.store_note: str | None = None
-        #: Runs waiting in the outbox (counted at every sync, kept up to date between).
-        self.backlog = 0
-        #: Outbox files set aside: (unreadable, refused), counted at every sync.
-        self.set_aside = (0, 0)
-        self.disk = DiskWatch(config.data_dir.expanduser(), self.journal_file, self.outbox)
-        #: What the disk refused, in one line (None when every write went through).
-        self.disk_note: str | None = None
 
     # -- start and loop ------------------------------------------------------------------
 
@@ -125,16 +114,14 @@ class StationApp:
     def serve(self) -> list[RunRecord]:
         """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
         self._say_line(f"calstation {self.versions}")
-        self._check_store()
-        self._sync()
+        self.results.check_store()
+        self.results.sync()
         self._check_port()
         interrupted = self.journal_file.load()
         if isinstance(interrupted, DiscardedJournal):
-            self.note = interrupted.sentence
-            self._say_line(self.note)
+            self._tell(interrupted.sentence)
         elif interrupted is not None:
-            self.pending_resume = interrupted
-            self.state = State.RESUME
+            self.prompt.ask_resume(interrupted)
             self._say_line(
                 f"unit {interrupted.serial} was interrupted at pose {interrupted.next_pose + 1} of "
                 f"{len(interrupted.poses)}: resume it? (y/n)"
@@ -148,8 +135,7 @@ class StationApp:
         finally:
             if self.run is not None:
                 self.run.driver.close()
-            if self._store is not None:
-                self._store.close()
+            self.results.close()
         return self.records
 
     def _loop(self, draw: Callable[[], None]) -> None:
@@ -172,57 +158,29 @@ class StationApp:
             return
         for key in typed:
             self._key(key)
-        self._check_disk()
+        self.results.check_disk()
         if self.run is not None:
             self.run.step()
             self._echo_messages(self.run)
             if self.run.phase is Phase.DONE:
                 self._finish_unit(self.run)
-        if self.state is not State.UNIT and time.monotonic() >= self._next_sync and self.backlog:
-            self._sync()
+        if self.prompt.state is not State.UNIT:
+            self.results.sync_if_due()
 
     # -- screens -------------------------------------------------------------------------
 
     def screen(self) -> RenderableType:
         """The whole screen as it stands."""
-        parts: list[RenderableType] = [
-            header(
-                self.config.station_id,
-                self.config.operator_id,
-                self.versions,
-                self.backlog,
-                self.set_aside,
-            )
-        ]
-        if self.disk_note:
-            parts.append(Text(self.disk_note, style="bold red"))
-        if self.store_note:
-            parts.append(Text(self.store_note, style="yellow"))
-        if self.state is State.RESUME and self.pending_resume is not None:
-            j = self.pending_resume
-            parts.append(
-                Text(
-                    f"Unit {j.serial} was interrupted at pose {j.next_pose + 1} of {len(j.poses)}. "
-                    "Resume it? press y (resume) or n (discard)",
-                    style="bold yellow",
-                )
-            )
-        elif self.state is State.CONFIRM and self.note:
-            parts.append(Text(self.note, style="bold yellow"))
-        elif self.state is State.UNIT and self.run is not None:
-            parts.append(unit_screen(self.run, self.show_help))
-            if self.confirm_abort:
-                parts.append(
-                    Text(
-                        "abort this unit? press y to confirm, any other key to go on",
-                        style="bold red",
-                    )
-                )
-        else:
-            if self.last_record is not None:
-                parts.append(verdict_screen(self.last_record))
-            parts.append(serial_prompt(self.typed, self.note))
-        return Group(*parts)
+        results = self.results
+        top = header(
+            self.config.station_id,
+            self.config.operator_id,
+            self.versions,
+            results.backlog,
+            results.set_aside,
+        )
+        run = self.run.view() if self.run is not None else None
+        return Group(top, *results.status_lines(), self.prompt.screen(run, self.last_record))
 
     def _say_line(self, text: str) -> None:
         """A line for a console that is not a terminal (logs, the demo's stderr)."""
@@ -230,62 +188,31 @@ class StationApp:
             self.console.print(text, markup=False, highlight=False)
 
     def _echo_messages(self, run: UnitRun) -> None:
-        new = run.said - self._said
-        if new > 0:
-            for message in list(run.messages)[-min(new, len(run.messages)) :]:
-                self._say_line(f"{run.journal.serial}: {message.text}")
-        self._said = run.said
+        for message in run.messages.since(self._said):
+            self._say_line(f"{run.journal.serial}: {message.text}")
+        self._said = run.messages.said
 
     # -- keys ----------------------------------------------------------------------------
 
     def _key(self, key: str) -> None:
-        if self.state is State.RESUME:
-            self._resume_key(key)
-        elif self.state is State.SERIAL:
-            self._serial_key(key)
-        elif self.state is State.CONFIRM:
-            self._confirm_key(key)
-        elif self.run is not None:
-            self._unit_key(self.run, key)
-
-    def _resume_key(self, key: str) -> None:
-        journal = self.pending_resume
-        self.pending_resume = None
-        self.state = State.SERIAL
-        if journal is None:
-            return
-        if key.lower() == "y":
-            self.history = self._history(journal.serial)
-            self._start_unit(journal.serial, journal)
-        else:
+        answer = self.prompt.key(key, self.run)
+        if isinstance(answer, Serial):
+            self._submit_serial(answer.text)
+        elif isinstance(answer, Resume) and answer.yes:
+            self.history = self.results.history(answer.journal.serial)
+            self._start_unit(answer.journal.serial, answer.journal)
+        elif isinstance(answer, Resume):
             self.journal_file.clear()
-            self.note = f"interrupted run of {journal.serial} discarded"
-            self._say_line(self.note)
+            self._tell(f"interrupted run of {answer.journal.serial} discarded")
+        elif isinstance(answer, Recalibrate) and answer.yes and self.history is not None:
+            self._start_unit(self.history.serial, None)
+        elif isinstance(answer, Recalibrate):
+            self.prompt.note = "not calibrated again: scan the next unit"
 
-    def _serial_key(self, key: str) -> None:
-        if key in ENTER:
-            text, self.typed = self.typed.strip(), ""
-            if text:
-                self._submit_serial(text)
-        elif key in BACKSPACE:
-            self.typed = self.typed[:-1]
-        elif key.isprintable():
-            self.typed += key
-
-    def _unit_key(self, run: UnitRun, key: str) -> None:
-        if self.confirm_abort:
-            self.confirm_abort = False
-            if key.lower() == "y":
-                run.abort()
-            return
-        if key in ("h", "?"):
-            self.show_help = not self.show_help
-        elif key == "r":
-            run.redo_last()
-        elif key.isdigit() and key != "0":
-            run.redo(int(key) - 1)
-        elif key == "a":
-            self.confirm_abort = True
+    def _tell(self, note: str) -> None:
+        """Show ``note`` under the prompt, and log it."""
+        self.prompt.note = note
+        self._say_line(note)
 
     # -- units ---------------------------------------------------------------------------
 
@@ -294,33 +221,19 @@ class StationApp:
             self.done = True
             return
         if not re.fullmatch(self.config.serial_pattern, serial):
-            self.note = f"{serial!r} is not a serial number (expected {self.config.serial_pattern})"
-            self._say_line(self.note)
+            self._tell(f"{serial!r} is not a serial number (expected {self.config.serial_pattern})")
             return
-        self.history = history = self._history(serial)
+        self.history = history = self.results.history(serial)
         decision = history.at_scan(self.profile.attempts_allowed)
         if decision.note:
             self._say_line(decision.note)
-        self.note = decision.text or decision.note
+        self.prompt.note = decision.text or decision.note
         if decision.text:
             self._say_line(decision.text)
         if decision.action is ScanAction.CONFIRM:
-            self.state = State.CONFIRM
+            self.prompt.state = State.CONFIRM
         elif decision.action is ScanAction.START:
             self._start_unit(serial, None, keep_note=True)
-
-    def _confirm_key(self, key: str) -> None:
-        """The answer to "passed already: calibrate again? y/n"."""
-        self.state = State.SERIAL
-        if self.history is not None and key.lower() == "y":
-            self._start_unit(self.history.serial, None)
-        else:
-            self.note = "not calibrated again: scan the next unit"
-
-    def _history(self, serial: str) -> UnitHistory:
-        if self._store is None:
-            self._check_store()
-        return UnitHistory.gather(serial, self._store, self.outbox.pending())
 
     def _open_unit(self, serial: str) -> PutterDriver:
         port = self.config.port
@@ -333,28 +246,17 @@ class StationApp:
         try:
             driver = self._open_unit(serial)
         except SerialNumberMismatchError as exc:
-            self.note = f"{exc}: set the unit aside; nothing was recorded"
-            self._say_line(self.note)
+            self._tell(f"{exc}: set the unit aside; nothing was recorded")
             return
         except DeviceError as exc:
-            self.note = f"cannot reach unit {serial} on {self.config.port}: {port_problem(exc)}"
-            self._say_line(self.note)
+            self._tell(f"cannot reach unit {serial} on {self.config.port}: {port_problem(exc)}")
             return
         if journal is None:
-            run_settings = self.config.run
-            journal = RunJournal(
-                run_id=uuid.uuid4(),
-                serial=serial,
-                station_id=self.config.station_id,
-                operator_id=self.config.operator_id,
-                lot=self.config.lot,
-                started_at=datetime.now(UTC),
-                poses=(*run_settings.poses, run_settings.verification_pose),
-            )
+            journal = new_journal(self.config, serial)
             # A disk that refuses does not stop the unit: the journal owes the write and
             # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             self.journal_file.save(journal)
-        self.note = self.note if keep_note else None
+        self.prompt.note = self.prompt.note if keep_note else None
         self._said = 0
         self.run = UnitRun(
             driver=driver,
@@ -364,7 +266,7 @@ class StationApp:
             settings=self.config.run,
             reopen=lambda: self._open_unit(serial),
         )
-        self.state = State.UNIT
+        self.prompt.state = State.UNIT
         self._say_line(f"{serial}: calibration started (run {journal.run_id})")
 
     def _finish_unit(self, run: UnitRun) -> None:
@@ -374,16 +276,12 @@ class StationApp:
             where = self.history.disposition(record, self.profile.attempts_allowed)
             record = record.model_copy(update={"disposition": where})
         if record is not None:
-            self.outbox.put(record)
-            self.backlog += 1
+            self.results.put(record)
         self.journal_file.clear()
         self.run = None
-        self.state = State.SERIAL
-        self.confirm_abort = False
-        self.show_help = False
+        self.prompt.unit_done()
         if record is None:
-            self.note = f"unit {run.journal.serial} aborted before any pose: nothing recorded"
-            self._say_line(self.note)
+            self._tell(f"unit {run.journal.serial} aborted before any pose: nothing recorded")
         else:
             self.records.append(record)
             self.last_record = record
@@ -394,62 +292,11 @@ class StationApp:
                 + (f" ({failed})" if failed else "")
                 + then
             )
-            self._sync()
+            self.results.sync()
         if self.units is not None and len(self.records) >= self.units:
             self.done = True
 
-    # -- storage -------------------------------------------------------------------------
-
-    def _sync(self) -> None:
-        self._next_sync = time.monotonic() + SYNC_EVERY_S
-        self.backlog = self.outbox.count()
-        self.set_aside = self.outbox.set_aside()
-        if not self.backlog:
-            self._store_says(None)
-            return
-        try:
-            if self._store is None:
-                self._store = self._open_store()
-            result = self.outbox.sync(self._store)
-        except (SQLAlchemyError, OSError, CalstationError) as exc:
-            self._drop_store()
-            reason = str(exc) if isinstance(exc, CalstationError) else type(exc).__name__
-            self._store_says(f"{waiting(self.backlog)}: results store unreachable ({reason})")
-            return
-        self.backlog = result.pending
-        self.set_aside = self.outbox.set_aside()
-        if result.error is not None:
-            self._drop_store()
-        self._store_says(result.note())
-
-    def _store_says(self, note: str | None) -> None:
-        """Show ``note`` about the store; a changed note also goes to the log."""
-        if note is not None and note != self.store_note:
-            self._say_line(note)
-        self.store_note = note
-
-    def _check_disk(self) -> None:
-        note = self.disk.check()
-        if note is not None and note != self.disk_note:
-            self._say_line(note)
-        self.disk_note = note
-
-    def _check_store(self) -> None:
-        """Connect to the store at start, so the first unit does not wait for it."""
-        try:
-            self._store = self._open_store()
-        except (SQLAlchemyError, OSError, CalstationError) as exc:
-            self.store_note = (
-                f"results database unreachable ({type(exc).__name__}): runs will wait in the outbox"
-            )
-            self._say_line(self.store_note)
-        else:
-            self._say_line("results database: connected")
-
-    def _drop_store(self) -> None:
-        if self._store is not None:
-            self._store.close()
-            self._store = None
+    # -- the port -----------------------------------------------------------------------
 
     def _check_port(self) -> None:
         if self.config.port is None:

@@ -15,7 +15,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.errors import InputError, validation_problem
-from station.session import RunSettings
+from station.run.settings import RunSettings
 
 #: Serial numbers on the putters' labels: PT and six digits.
 SERIAL_PATTERN = r"^PT\d{6}$"

@@ -53,7 +53,7 @@ class ScriptedOperator:
     def read(self) -> str:
         """The keys the operator types now; also moves the unit in the operator's hands."""
         app = self.station
-        if app.state == "serial":
+        if app.prompt.state == "serial":
             if self._current is not None:
                 self._current.putter.close()
                 self.done.append(self._current)

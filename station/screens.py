@@ -13,7 +13,8 @@ from rich.text import Text
 from station.operator_text import pose_words, wrong_unit
 from station.poses import Pose
 from station.records import RunRecord
-from station.session import Phase, UnitRun
+from station.run.phases import Phase
+from station.run.view import RunView
 
 #: Small drawings of the putter in each named pose (head ▣, shaft ║ or ═, grip ▓).
 DRAWINGS: dict[str, str] = {
@@ -93,31 +94,30 @@ def _meter(value: float, limit: float, label: str, unit: str) -> Text:
     return Text.assemble(f"{label:<6}", (bar, style), f" {value:5.2f} / {limit:g} {unit}")
 
 
-def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
-    """The screen while a unit is calibrated."""
-    total = len(run.sequence)
-    target: Pose | None = run.requested
+def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
+    """The screen while a unit is calibrated, drawn from the run's view model."""
+    total = len(view.poses)
+    target: Pose | None = view.requested
     parts: list[RenderableType] = []
-    title = f"unit {run.journal.serial}"
-    if run.phase is Phase.RECONNECT and run.wrong_unit is not None:
-        expected = run.journal.serial
-        parts.append(Text(wrong_unit(run.wrong_unit, expected).upper(), style="bold red"))
-    elif run.phase is Phase.RECONNECT:
+    title = f"unit {view.serial}"
+    if view.phase is Phase.RECONNECT and view.wrong_unit is not None:
+        parts.append(Text(wrong_unit(view.wrong_unit, view.serial).upper(), style="bold red"))
+    elif view.phase is Phase.RECONNECT:
         parts.append(
             Text("CABLE PULLED — plug the unit back in; the poses taken are kept", style="bold red")
         )
-    elif run.phase is Phase.UNIT_OUTPUT:
+    elif view.phase is Phase.UNIT_OUTPUT:
         parts.append(
             Text("checking the unit's own calibrated output — keep it still", style="bold")
         )
     elif target is not None:
         step = Text.assemble(
-            (f"pose {run.index + 1} of {total}: {pose_words(target.name)}", "bold cyan"),
+            (f"pose {view.index + 1} of {total}: {pose_words(target.name)}", "bold cyan"),
             f" — {target.instruction}",
         )
         parts.append(step)
         parts.append(Text(DRAWINGS.get(target.name, ""), style="cyan"))
-        live = run.live
+        live = view.live
         if live.sensed is not None:
             ok = "✓ matches" if live.matches else "✗ not the pose asked for"
             parts.append(
@@ -128,7 +128,7 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
                     (ok, "green" if live.matches else "red"),
                 )
             )
-        limits = run.settings.stillness
+        limits = view.stillness
         parts.append(
             _meter(float(live.accel_std.max()), limits.accel_std_max_counts, "accel", "counts")
         )
@@ -149,12 +149,12 @@ def unit_screen(run: UnitRun, show_help: bool = False) -> RenderableType:
         if live.refused is not None:
             parts.append(Text(live.refused, style="bold yellow"))
     poses = Text()
-    for i, p in enumerate(run.sequence):
-        mark = "✓" if i in run.journal.captures else ("▶" if i == run.index else "·")
+    for i, p in enumerate(view.poses):
+        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
         style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
         poses.append(f" {mark}{i + 1} {pose_words(p.name)}", style=style)
     parts.append(poses)
-    for message in run.messages:
+    for message in view.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
         parts.append(Text(message.text, style=style))
     parts.append(Text(HELP if show_help else KEYS_HELP, style="dim"))

@@ -147,6 +147,6 @@ def demo_command(
     if as_json:
         print_json(summary)
     else:
-        backlog = app.outbox.count()
+        backlog = app.results.outbox.count()
         where = config.database_url or config.data_dir
         out.print(f"{len(records)} units calibrated; outbox {backlog}; database {where}")

@@ -13,7 +13,9 @@ from station.app import open_unit
 from station.device import PutterDriver
 from station.journal import JournalFile, RunJournal
 from station.limits import load_profile
-from station.session import Phase, RunSettings, UnitRun
+from station.run.phases import Phase
+from station.run.settings import RunSettings
+from station.session import UnitRun
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 

@@ -3,7 +3,8 @@
 Every pose's noise and link loss, the solved offsets and sensitivities, the verification
 pose's calibrated |g| and the gyro biases, each against the limits profile
 (:func:`station.limits.check`). Kept apart from :class:`station.session.UnitRun`, which
-drives the run, so the checks read as one list.
+drives the run, so the checks read as one list; :mod:`station.run.verdict` adds them to
+the failures found on the way.
 """
 
 from collections.abc import Mapping

@@ -1,0 +1,196 @@
+"""The pose being taken: its acquisition, the live view, and when it is accepted.
+
+:class:`PoseCapture` holds what the station knows while it asks for one pose: the
+samples of the last quarter second (the live view the operator watches), how many of
+them lay still in the pose asked for (the capture's share), whether the unit moved since
+the last capture, and which wrong place was named already. It polls
+:class:`station.acquisition.pose.PoseAcquisition` and hands over a captured window only
+when the unit lies in the pose asked for, away from every pose taken before; what is
+done with it is :class:`station.session.UnitRun`'s business.
+"""
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
+from station.acquisition.pose import PoseAcquisition, PoseResult
+from station.acquisition.stillness import WindowVerdict, judge_window
+from station.device import PutterDriver
+from station.journal import RunJournal
+from station.operator_text import MOVED_EARLY, capture_refused, pose_words
+from station.orientation import Sensed, angle_deg, gravity_direction, sense
+from station.poses import Pose
+from station.run.messages import MessageLog
+from station.run.settings import RunSettings
+
+Array = NDArray[np.float64]
+#: Samples of the live view: about a quarter second at the default rate.
+LIVE_SAMPLES = 128
+
+
+@dataclass(frozen=True)
+class LiveView:
+    """What the operator sees while a pose is taken."""
+
+    sensed: Sensed | None = None
+    matches: bool = False
+    accel_std: Array = field(default_factory=lambda: np.zeros(3))
+    gyro_rate: Array = field(default_factory=lambda: np.zeros(3))
+    moving: bool = True
+    progress: float = 0.0
+    #: Why the capture does not go on, in the operator's words (None: it does).
+    refused: str | None = None
+
+
+@dataclass(frozen=True)
+class Saturated:
+    """An axis sits at an ADC rail while the unit is still; ``verdict`` is that window."""
+
+    verdict: WindowVerdict
+
+
+class PoseCapture:
+    """The acquisition of the pose asked for, and the live view of the unit meanwhile."""
+
+    def __init__(self, settings: RunSettings, journal: RunJournal, messages: MessageLog) -> None:
+        self.settings = settings
+        self._journal = journal
+        self._messages = messages
+        self._names = journal.poses
+        self.live = LiveView()
+        self._acquisition: PoseAcquisition | None = None
+        self._recent: Array = np.empty((0, 8))
+        self._still_samples = 0
+        self._wrong_pose_said: str | None = None
+        #: Whether the unit moved since the last capture (before it has, it still lies
+        #: in the pose just taken, which is no mistake).
+        self._moved = False
+
+    def restart(self, driver: PutterDriver, target: Pose | None) -> None:
+        """Start taking ``target`` afresh (after a capture, a refusal, a redo, a return)."""
+        self._acquisition = PoseAcquisition(
+            driver,
+            pose=target.name if target else None,
+            limits=self.settings.stillness,
+            timeout_s=self.settings.pose_timeout_s,
+        )
+
+    def forget_window(self) -> None:
+        """Drop the live window: the unit was away, its samples are no longer the unit's."""
+        self._recent = np.empty((0, 8))
+
+    def clear_view(self) -> None:
+        """Show nothing live any more (the run ended)."""
+        self.live = LiveView()
+
+    def poll(self, driver: PutterDriver, index: int, target: Pose) -> PoseResult | Saturated | None:
+        """Act on the samples received: the accepted pose, a saturated axis, or nothing yet."""
+        if self._acquisition is None:
+            self.restart(driver, target)
+        acquisition = self._acquisition
+        assert acquisition is not None
+        try:
+            result = acquisition.poll()
+        except SaturatedAxisError:
+            verdict = acquisition.last_verdict
+            assert verdict is not None  # the error comes from a judged window
+            return Saturated(verdict)
+        except (NotStillError, LinkQualityError) as exc:
+            self._messages.say("warn", str(exc))
+            self.restart(driver, target)
+            return None
+        saturated = self._update_live(acquisition.recent, index, target)
+        if saturated is not None:
+            return saturated
+        if result is None and self.live.matches and self.live.progress >= 1.0:
+            refused = capture_refused(acquisition.last_verdict, self.settings.stillness)
+            self.live = replace(self.live, refused=refused)
+        if result is None:
+            if not self.live.matches:
+                self.restart(driver, target)
+            return None
+        if not self._acceptable(result, index, target):
+            self.restart(driver, target)
+            return None
+        self._wrong_pose_said = None
+        self._moved = False
+        self._still_samples = 0
+        self.live = LiveView()
+        return result
+
+    def _update_live(self, rows: Array, index: int, target: Pose) -> Saturated | None:
+        if len(rows) == 0:
+            return None
+        self._recent = np.concatenate((self._recent, rows))[-LIVE_SAMPLES:]
+        window = self._recent
+        sensed = sense(window[:, 1:4].mean(axis=0))
+        verdict: WindowVerdict = judge_window(window, self.settings.stillness)
+        if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
+            return Saturated(verdict)
+        matches = sensed.matches(target, self.settings.pose_tolerance_deg)
+        was_capturing = self.live.progress >= 0.25
+        if verdict.motion:
+            self._moved = True
+        refused = self.live.refused if self._still_samples else None
+        if matches and not verdict.motion:
+            self._still_samples += len(rows)
+        else:
+            if was_capturing and matches:
+                name = pose_words(target.name)
+                self._messages.say("warn", f"moved during capture of {name}: hold the putter still")
+            elif self.live.progress >= 0.05 and self.live.matches:  # not the settling
+                refused = MOVED_EARLY
+            self._still_samples = 0
+        if self._moved and not matches and not verdict.motion:
+            self._say_wrong_pose(sensed, index, target)
+        self.live = LiveView(
+            sensed=sensed,
+            matches=matches,
+            accel_std=window[:, 1:4].std(axis=0),
+            gyro_rate=window[:, 4:7].mean(axis=0),
+            moving=verdict.motion,
+            progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
+            refused=refused,
+        )
+        return None
+
+    def _acceptable(self, result: PoseResult, index: int, target: Pose) -> bool:
+        """Whether the still window lies in ``target``, away from every pose taken."""
+        sensed = sense(result.accel_mean)
+        close_to_earlier = any(
+            angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
+            for _, direction in self._captured_directions()
+        )
+        if close_to_earlier or not sensed.matches(target, self.settings.pose_tolerance_deg):
+            if self._moved:
+                self._say_wrong_pose(sensed, index, target)
+            return False
+        return True
+
+    def _say_wrong_pose(self, sensed: Sensed, index: int, target: Pose) -> None:
+        """Say once per place why the unit lying still there is not captured."""
+        if self._wrong_pose_said == sensed.nearest.name:
+            return
+        self._wrong_pose_said = sensed.nearest.name
+        for j, direction in self._captured_directions():
+            if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
+                self._messages.say(
+                    "warn",
+                    f"too close to pose {j + 1} ({pose_words(self._names[j])}), "
+                    f"already taken: pose {index + 1} is {pose_words(target.name)}",
+                )
+                return
+        self._messages.say(
+            "warn",
+            f"wrong pose: the putter lies {pose_words(sensed.nearest.name)}, "
+            f"pose {index + 1} is {pose_words(target.name)}",
+        )
+
+    def _captured_directions(self) -> list[tuple[int, Array]]:
+        """Sensed gravity direction of every pose taken, by pose index."""
+        return [
+            (i, gravity_direction(np.array(c.record.mean.as_tuple())))
+            for i, c in sorted(self._journal.captures.items())
+        ]

@@ -1,0 +1,193 @@
+"""The records a run builds from what it took: each pose, the gyros, the whole run.
+
+Pure functions of the run's journal, solution and verdict, so that
+:class:`station.session.UnitRun` only decides *when* a record is made.
+"""
+
+from collections.abc import Mapping
+from datetime import UTC, datetime
+
+import numpy as np
+from numpy.typing import NDArray
+
+from station import __version__
+from station.acquisition.pose import PoseResult
+from station.calibration import Solution, apply
+from station.gyro import summarize_still_poses
+from station.journal import Capture, RunJournal
+from station.limits import LimitsProfile
+from station.records import (
+    Coefficients,
+    FailureReason,
+    GyroSummary,
+    LinkStats,
+    PoseRecord,
+    PoseRole,
+    QualityMetrics,
+    ReplacedCapture,
+    RunRecord,
+    Vector3,
+)
+from station.run.settings import RunSettings
+
+Array = NDArray[np.float64]
+ALGORITHM = "autocal-eq10"
+
+
+def _vec(values: Array | tuple[float, float, float]) -> Vector3:
+    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+
+
+def now() -> datetime:
+    """The time stamps of captures and records (UTC)."""
+    return datetime.now(UTC)
+
+
+def window_record(window: Array, index: int, name: str, role: PoseRole) -> PoseRecord:
+    """The record of a live window kept as evidence (it failed the unit uncaptured)."""
+    return PoseRecord(
+        index=index,
+        name=name,
+        role=role,
+        mean=_vec(window[:, 1:4].mean(axis=0)),
+        std=_vec(window[:, 1:4].std(axis=0, ddof=1)),
+        sample_count=len(window),
+        gyro_mean=_vec(window[:, 4:7].mean(axis=0)),
+        temperature_c=float(window[:, 7].mean()),
+    )
+
+
+def capture_of(
+    result: PoseResult,
+    index: int,
+    name: str,
+    role: PoseRole,
+    replaced: tuple[ReplacedCapture, ...],
+) -> Capture:
+    """The journal's capture of an accepted pose, with the captures it replaced."""
+    record = PoseRecord(
+        index=index,
+        name=name,
+        role=role,
+        mean=_vec(result.accel_mean),
+        std=_vec(result.accel_std),
+        sample_count=result.sample_count,
+        gyro_mean=_vec(result.gyro_mean),
+        temperature_c=result.temperature_c,
+        link=LinkStats(
+            crc_errors=result.link.crc_failures,
+            gaps=result.link.seq_gaps,
+            resyncs=result.link.resyncs,
+            lost_samples=result.link.samples_lost,
+        ),
+        replaced=replaced,
+    )
+    return Capture(
+        record=record,
+        gyro_std=_vec(result.gyro_std),
+        captured_at=now(),
+        duration_s=result.duration_s,
+        loss_fraction=result.loss_fraction,
+    )
+
+
+def replaced_capture(capture: Capture, reason: str) -> ReplacedCapture:
+    """What is kept for audit of a capture taken again."""
+    rec = capture.record
+    return ReplacedCapture(
+        captured_at=capture.captured_at,
+        reason=reason,
+        mean=rec.mean,
+        std=rec.std,
+        sample_count=rec.sample_count,
+    )
+
+
+def fit_means(captures: Mapping[int, Capture], fit_count: int) -> Array:
+    """The accelerometer means of the fit poses, in order (all must be taken)."""
+    return np.array([captures[i].record.mean.as_tuple() for i in range(fit_count)])
+
+
+def gyro_summary(
+    captures: Mapping[int, Capture], fit_count: int, solution: Solution | None
+) -> GyroSummary | None:
+    """Bias and noise of each gyro over the fit poses, and their bias-vs-gravity slope."""
+    fit = [captures[i] for i in range(fit_count) if i in captures]
+    gyro_means = [c.record.gyro_mean for c in fit]
+    if not fit or any(m is None for m in gyro_means):
+        return None
+    means = np.array([m.as_tuple() for m in gyro_means if m is not None])
+    stds = np.array([c.gyro_std.as_tuple() for c in fit])
+    still = None
+    if solution is not None and len(fit) == fit_count:
+        gravity = apply(solution.calibration, fit_means(captures, fit_count))
+        still = summarize_still_poses(means, stds, gravity)
+    return GyroSummary(
+        bias=_vec(means.mean(axis=0)),
+        noise=_vec(np.sqrt((stds**2).mean(axis=0))),
+        still=still,
+    )
+
+
+def pose_records(
+    captures: Mapping[int, Capture], evidence: PoseRecord | None
+) -> tuple[PoseRecord, ...]:
+    """Every pose taken (plus the window that failed the unit, if not taken), in order.
+
+    A run that ends with a pose missing (aborted after a redo) is numbered without
+    the gap; the names still say which pose each one is.
+    """
+    taken = [captures[i].record for i in sorted(captures)]
+    if evidence is not None and evidence.index not in captures:
+        taken = sorted((*taken, evidence), key=lambda p: p.index)
+    return tuple(
+        p if p.index == i else p.model_copy(update={"index": i}) for i, p in enumerate(taken)
+    )
+
+
+def run_record(
+    journal: RunJournal,
+    settings: RunSettings,
+    profile: LimitsProfile,
+    solution: Solution | None,
+    *,
+    failures: list[FailureReason],
+    verification_error_mg: float | None,
+    gyro: GyroSummary | None,
+    poses: tuple[PoseRecord, ...],
+) -> RunRecord:
+    """The record of the finished run, as it goes to the outbox."""
+    coefficients = quality = None
+    if solution is not None:
+        cal = solution.calibration.to_dict()
+        coefficients = Coefficients(
+            offset=Vector3.model_validate(cal["offset"]),
+            sensitivity=Vector3.model_validate(cal["sensitivity"]),
+            matrix=tuple(tuple(row) for row in solution.calibration.matrix.tolist()),
+        )
+        q = solution.quality
+        quality = QualityMetrics(
+            residual_rms_mg=q.residual_rms_mg,
+            residual_max_mg=q.residual_max_mg,
+            condition_number=max(1.0, q.condition_number),
+            verification_error_mg=verification_error_mg,
+        )
+    return RunRecord(
+        run_id=journal.run_id,
+        serial=journal.serial,
+        station_id=journal.station_id,
+        operator_id=journal.operator_id,
+        lot=journal.lot,
+        started_at=journal.started_at,
+        finished_at=now(),
+        software_version=__version__,
+        algorithm=ALGORITHM if settings.model == "six" else "autocal-ls9",
+        model=settings.model,
+        limits=profile.ref,
+        verdict="fail" if failures else "pass",
+        failures=tuple(failures),
+        coefficients=coefficients,
+        quality=quality,
+        gyro=gyro,
+        poses=poses,
+    )

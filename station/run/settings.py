@@ -1,0 +1,43 @@
+"""How a station runs its units: the poses, their tolerances, stillness and the model.
+
+Part of the station's configuration (:class:`station.config.StationConfig`); read by
+every step of a unit's run (:class:`station.session.UnitRun`).
+"""
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from station.acquisition.stillness import StillnessThresholds
+from station.calibration import Model
+from station.orientation import POSE_TOLERANCE_DEG
+from station.pose_plan import check_plan
+from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
+
+
+class RunSettings(BaseModel):
+    """How a station runs its units (from the station's configuration)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    poses: tuple[str, ...] = Field(CALIBRATION_POSES, min_length=6)
+    verification_pose: str = VERIFICATION_POSE
+    pose_tolerance_deg: float = Field(POSE_TOLERANCE_DEG, gt=0, lt=90)
+    min_pose_separation_deg: float = Field(
+        30.0, gt=0, description="a capture this close to an earlier pose is refused"
+    )
+    stillness: StillnessThresholds = StillnessThresholds()
+    pose_timeout_s: float = Field(30.0, gt=0, description="device time before 'not still'")
+    model: Model = "six"
+
+    @field_validator("poses", "verification_pose")
+    @classmethod
+    def _known_poses(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
+        names = (value,) if isinstance(value, str) else value
+        unknown = [n for n in names if n not in POSES]
+        if unknown:
+            raise ValueError(f"unknown pose {unknown[0]!r}; known: {', '.join(POSES)}")
+        return value
+
+    @model_validator(mode="after")
+    def _can_finish(self) -> "RunSettings":
+        check_plan(self.poses, self.verification_pose, self.min_pose_separation_deg, self.model)
+        return self
