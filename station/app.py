@@ -79,6 +79,7 @@ class StationApp:
         console: Console,
         units: int | None = None,
         tick_s: float = 0.01,
+        probe_port: bool = True,
     ) -> None:
         self.config = config
         self.profile = profile
@@ -86,6 +87,8 @@ class StationApp:
         self.console = console
         self.units = units
         self.tick_s = tick_s
+        #: Try the putter port at start (the demo's port exists only while a unit is in).
+        self.probe_port = probe_port
         self.journal_file = JournalFile(config.journal_path)
         self.results = ResultsLink(
             outbox_dir=config.outbox_dir,
@@ -116,7 +119,8 @@ class StationApp:
         self._say_line(f"calstation {self.versions}")
         self.results.check_store()
         self.results.sync()
-        self._check_port()
+        if self.probe_port:
+            self._check_port()
         interrupted = self.journal_file.load()
         if isinstance(interrupted, DiscardedJournal):
             self._tell(interrupted.sentence)

@@ -120,8 +120,15 @@ def demo_command(
         keys=operator_script,
         console=console,
         units=units,
+        probe_port=False,
     )
     operator_script.station = app
+    console.print(
+        f"demo: {units} virtual putter{'s' * (units > 1)}, each plugged into {port} in turn and "
+        f"moved through the poses by a scripted operator, at {speed:g}× real time",
+        markup=False,
+        highlight=False,
+    )
     try:
         records = app.serve()
     finally:

@@ -27,6 +27,9 @@ def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Pat
             ratio = estimate["sensitivity"][axis] / truth["sensitivity"][axis]
             assert abs(ratio - 1) < 1e-3
     assert "PASS" in result.stderr  # the screens went to stderr
+    # A newcomer's first screen says what the demo does, and no port trouble.
+    assert "demo: 2 virtual putters, each plugged into" in result.stderr
+    assert "no such port" not in result.stderr
     with sqlite3.connect(env_dir / "calstation.sqlite3") as db:
         stored = db.execute("select run_id, verdict, lot from runs order by started_at").fetchall()
     assert [(u["run_id"].replace("-", ""), u["verdict"], "demo-lot") for u in units] == [
