@@ -17,8 +17,7 @@ from typing import Annotated, Final, TypeVar
 
 from pydantic import AfterValidator, BaseModel, Field, StringConstraints
 
-from station.device.protocol import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
-from station.sensor import ADC_MAX, ADC_MIN
+from station.sensor import ADC_MAX, ADC_MIN, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 
 #: The ADC's span, counts: no spread of readings within 0…4095 exceeds it.
 ADC_SPAN: Final = float(ADC_MAX - ADC_MIN)

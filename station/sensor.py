@@ -21,6 +21,11 @@ NOMINAL_SENSITIVITY_COUNTS_PER_G: Final = 819.2
 SENSITIVITY_TOLERANCE: Final = 0.05
 #: Typical cross-axis sensitivity of the KXM52.
 CROSS_AXIS_TYPICAL: Final = 0.02
+#: Gyro rate resolution of the putter's reports: one count of the int16 field is 0.02 deg/s
+#: (±655 deg/s span).
+GYRO_DPS_PER_LSB: Final = 0.02
+#: Temperature resolution of the putter's reports: one count of the int16 field is 0.01 °C.
+TEMP_C_PER_LSB: Final = 0.01
 #: Samples averaged per still pose in the paper.
 SAMPLES_PER_POSE: Final = 1024
 
