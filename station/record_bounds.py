@@ -2,8 +2,8 @@
 
 A record that validates holds only values the putter and the station can produce, so
 nothing downstream (the database's roll-ups, sums of squares, the JSON report) meets a
-number it cannot handle. Each bound follows from the hardware (brief section 2 and the
-serial protocol), never from a limits profile: a failing unit's record must still be
+number it cannot handle. Each bound follows from the hardware ([Song2006]_ Table 1 and
+the serial protocol), never from a limits profile: a failing unit's record must still be
 storable, however bad the unit. A value outside them is a corrupted or forged record,
 and the results server answers 422 naming the field.
 
