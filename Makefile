@@ -18,10 +18,11 @@ demo: $(STAMP)  ## the main job on the embedded defaults
 test: $(STAMP)  ## the whole test suite, one worker per core (pytest -n 0 for one process)
 	$(PY) -m pytest -n auto
 
-lint: $(STAMP)  ## ruff (lint and format check) and strict mypy
+lint: $(STAMP)  ## ruff (lint and format check), strict mypy and the import contracts (layers)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
 	$(VENV)/bin/mypy
+	$(VENV)/bin/lint-imports
 
 format: $(STAMP)
 	$(VENV)/bin/ruff format .
@@ -31,4 +32,4 @@ bench: $(STAMP)  ## every benchmark in benchmarks/ (minutes; results go to docs/
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .import_linter_cache

@@ -32,8 +32,8 @@ from db import make_engine, open_database
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
 from station.limits import load_profile, load_profiles
-from station.report.bounds import profile_bounds
-from station.report.model import ReportFilter
+from station.quality.figures import ReportFilter
+from station.quality.parameters import profile_bounds
 
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 CODES = "ARRAY['offset','sensitivity','verification_error','pose_noise','gyro_bias','link_loss']"

@@ -30,7 +30,7 @@ from sqlalchemy import (
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from db.base import Base, JsonDocument, UtcDateTime
-from station.report.capability import HISTOGRAM_BINS
+from station.quality.capability import HISTOGRAM_BINS
 
 #: Primary keys: BIGINT on PostgreSQL; SQLite's rowid alias must be spelled INTEGER.
 BigId = BigInteger().with_variant(Integer(), "sqlite")

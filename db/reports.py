@@ -7,7 +7,7 @@ ends, in one statement per section (``UNION ALL``, then grouped). The control-ch
 limits add up the stored moving ranges; the control-chart points and the unit list
 walk ``ix_runs_started_at`` backwards. Python only merges the grouped rows (stations,
 profiles: a few dozen) and applies the capability formulas of
-:mod:`station.report.capability`.
+:mod:`station.quality.capability`.
 """
 
 from collections import defaultdict
@@ -43,16 +43,7 @@ from db.rollups import (
     stored_bounds,
 )
 from station.limits import LimitsProfile, load_profiles
-from station.records import LimitsRef
-from station.report.bounds import (
-    COEFFICIENTS,
-    PARAMETERS,
-    Bounds,
-    ParameterSpec,
-    choose_profile,
-    profile_bounds,
-)
-from station.report.capability import (
+from station.quality.capability import (
     cp,
     cpk,
     histogram_bins,
@@ -60,7 +51,7 @@ from station.report.capability import (
     shifted_moments,
     tolerance,
 )
-from station.report.model import (
+from station.quality.figures import (
     ChartPoint,
     ControlChart,
     EolReport,
@@ -72,6 +63,15 @@ from station.report.model import (
     Summary,
     UnitVerdict,
 )
+from station.quality.parameters import (
+    COEFFICIENTS,
+    PARAMETERS,
+    Bounds,
+    ParameterSpec,
+    choose_profile,
+    profile_bounds,
+)
+from station.records import LimitsRef
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
@@ -542,7 +542,7 @@ def eol_report(
     """The end-of-line report over the runs ``filter`` selects.
 
     Capability is measured against the profile of ``profiles`` (default: the shipped
-    limits file) that :func:`station.report.bounds.choose_profile` picks for the runs in
+    limits file) that :func:`station.quality.parameters.choose_profile` picks for the runs in
     range; ``unit_limit`` cuts the unit list to the latest units.
     """
     queries = ReportQueries(session, filter)

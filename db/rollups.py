@@ -77,8 +77,14 @@ from db.models import (
     RunFailure,
 )
 from station.limits import load_profile
-from station.report.bounds import COEFFICIENTS, PARAMETERS, Bounds, ParameterSpec, profile_bounds
-from station.report.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
+from station.quality.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
+from station.quality.parameters import (
+    COEFFICIENTS,
+    PARAMETERS,
+    Bounds,
+    ParameterSpec,
+    profile_bounds,
+)
 from station.unit_state import ABORTED
 
 #: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
@@ -88,6 +94,18 @@ LIMITS = ("limits_name", "limits_version", "limits_sha256")
 
 #: Histogram bin columns of ``report_parameters``.
 HISTOGRAM = tuple(f"h{i:02d}" for i in range(HISTOGRAM_BINS))
+
+#: Where each report parameter (:data:`station.quality.parameters.PARAMETERS`) is stored:
+#: one value per run (a column of ``runs`` or ``run_facts``) or one per pose (``poses``).
+PER_RUN: dict[str, InstrumentedAttribute[float | None]] = {
+    **{f"offset_{a}": getattr(Run, f"offset_{a}") for a in "xyz"},
+    **{f"sensitivity_{a}": getattr(Run, f"sensitivity_{a}") for a in "xyz"},
+    "verification_error": Run.verification_error_mg,
+    **{f"gyro_bias_{a}": getattr(RunFacts, f"gyro_bias_{a}") for a in "xyz"},
+}
+PER_POSE: dict[str, InstrumentedAttribute[float | None]] = {
+    f"pose_noise_{a}": getattr(Pose, f"std_{a}") for a in "xyz"
+}
 
 #: How each value column merges across rows: ``sum``, ``min`` or ``max``.
 COUNT_VALUES: dict[str, str] = {
@@ -385,15 +403,6 @@ def failure_contributions(keys: Sequence[str], where: Sequence[ColumnElement[boo
     )
 
 
-def _value(spec: ParameterSpec) -> Any:
-    """Where a parameter's values are: a column of ``runs``, ``run_facts`` or ``poses``."""
-    if spec.source == "poses":
-        return getattr(Pose, spec.column)
-    if spec.family == "gyro_bias":
-        return getattr(RunFacts, f"gyro_bias_{spec.column}")
-    return getattr(Run, spec.column)
-
-
 def _limits_of(specs: Sequence[ParameterSpec], bounds: Bounds) -> FromClause:
     """One row per parameter: its limits, marginal zones, histogram range and centre."""
     limits: list[Select[Any]] = []
@@ -428,18 +437,20 @@ def parameter_contributions(
     ``report_parameters`` over the runs ``where`` selects, against ``bounds``.
 
     ``c`` is the centre of the tolerance, bins those of
-    :func:`station.report.capability.histogram_bins`, marginal and out-of-limits as
-    :func:`station.report.capability.marginal_zones` says. One scan of the runs (with
+    :func:`station.quality.capability.histogram_bins`, marginal and out-of-limits as
+    :func:`station.quality.capability.marginal_zones` says. One scan of the runs (with
     their facts) for the per-run parameters, one of their poses for pose noise, each
     paired with the parameters' limits.
     """
     selects = []
     runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
     poses = Pose.__table__.join(Run.__table__, Pose.run_pk == Run.id)
-    for source, rows in (("runs", runs), ("poses", poses)):
-        specs = [spec for spec in PARAMETERS if spec.source == source]
+    for rows, stored in ((runs, PER_RUN), (poses, PER_POSE)):
+        specs = [spec for spec in PARAMETERS if spec.name in stored]
         limits = _limits_of(specs, bounds)
-        value = case(*((limits.c.parameter == _inline(spec.name), _value(spec)) for spec in specs))
+        value = case(
+            *((limits.c.parameter == _inline(spec.name), stored[spec.name]) for spec in specs)
+        )
         bins = len(HISTOGRAM)
         # OFFSET 0: PostgreSQL keeps value and bin columns instead of inlining their
         # expressions into every aggregate.

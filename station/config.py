@@ -13,9 +13,9 @@ from urllib.parse import urlsplit
 from pydantic import Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
-from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.errors import InputError, validation_problem
 from station.run.settings import RunSettings
+from station.storage import DatabaseUrl, DataDir, default_data_dir
 
 #: Serial numbers on the putters' labels: PT and six digits.
 SERIAL_PATTERN = r"^PT\d{6}$"

@@ -1,7 +1,7 @@
 """Which way the putter lies, from its raw accelerometer counts.
 
 Before calibration only nominal scaling is known (offset 2048 counts, 819.2
-counts/g, brief section 2), good to about 15° — ample to tell the named poses apart,
+counts/g, [Song2006]_ Table 1), good to about 15° — ample to tell the named poses apart,
 which are 90° from each other. The operator is told which pose the station sees and
 how far it is from the one asked for.
 """

@@ -10,7 +10,7 @@ A pose is the rotation ``R`` that takes body-frame vectors to the world frame
 (x, y horizontal, z up). At rest the accelerometer senses the reaction to gravity,
 +1 g along world up, i.e. ``R⁻¹ · (0, 0, 1)`` in its own axes: that is
 :attr:`Pose.gravity_body`. Any turn about the vertical leaves it unchanged, which is
-why the six calibration poses need no precise jig (brief section 3).
+why the six calibration poses need no precise jig ([Song2006]_).
 """
 
 from dataclasses import dataclass

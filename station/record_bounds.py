@@ -2,8 +2,8 @@
 
 A record that validates holds only values the putter and the station can produce, so
 nothing downstream (the database's roll-ups, sums of squares, the JSON report) meets a
-number it cannot handle. Each bound follows from the hardware (brief section 2 and the
-serial protocol), never from a limits profile: a failing unit's record must still be
+number it cannot handle. Each bound follows from the hardware ([Song2006]_ Table 1 and
+the serial protocol), never from a limits profile: a failing unit's record must still be
 storable, however bad the unit. A value outside them is a corrupted or forged record,
 and the results server answers 422 naming the field.
 
@@ -17,8 +17,7 @@ from typing import Annotated, Final, TypeVar
 
 from pydantic import AfterValidator, BaseModel, Field, StringConstraints
 
-from station.device.protocol import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
-from station.sensor import ADC_MAX, ADC_MIN
+from station.sensor import ADC_MAX, ADC_MIN, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 
 #: The ADC's span, counts: no spread of readings within 0…4095 exceeds it.
 ADC_SPAN: Final = float(ADC_MAX - ADC_MIN)

@@ -1,4 +1,4 @@
-"""Sensor and front-end constants of the putter (brief section 2, paper 1 Table 1).
+"""Sensor and front-end constants of the putter ([Song2006]_ Table 1).
 
 Kionix KXM52-1050 accelerometer (±2 g, ratiometric, 3.3 V) behind a TI ADS7829
 12-bit ADC: 0…4095 counts over 0…3.3 V.
@@ -21,7 +21,12 @@ NOMINAL_SENSITIVITY_COUNTS_PER_G: Final = 819.2
 SENSITIVITY_TOLERANCE: Final = 0.05
 #: Typical cross-axis sensitivity of the KXM52.
 CROSS_AXIS_TYPICAL: Final = 0.02
-#: Samples averaged per still pose in the paper.
+#: Gyro rate resolution of the putter's reports: one count of the int16 field is 0.02 deg/s
+#: (±655 deg/s span).
+GYRO_DPS_PER_LSB: Final = 0.02
+#: Temperature resolution of the putter's reports: one count of the int16 field is 0.01 °C.
+TEMP_C_PER_LSB: Final = 0.01
+#: Samples averaged per still pose in [Song2006]_.
 SAMPLES_PER_POSE: Final = 1024
 
 #: An accelerometer or gyro axis of the unit's body frame.

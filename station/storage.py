@@ -2,6 +2,9 @@
 
 Both stores are idempotent on the run UUID, so an outbox may resend a record as often as
 it likes: the first delivery stores it, every later one gets the stored run back.
+This module is the station loop's one door to storage: nothing else in the loop imports
+:mod:`db` (an import-linter contract keeps it so), and the settings that say where the
+database is (:data:`DatabaseUrl`, :data:`DataDir`) come through here too.
 Errors tell the outbox what to do::
 
     CalstationError
@@ -31,12 +34,15 @@ from db import (
     SubmitOutcome,
     open_database,
 )
+from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.closing import Closing
 from station.errors import CalstationError
 from station.records import RunRecord, RunSummary, StoredRun
 
 __all__ = [
+    "DataDir",
     "DatabaseStore",
+    "DatabaseUrl",
     "HttpStore",
     "RecordFailedError",
     "RunStore",
@@ -45,6 +51,7 @@ __all__ = [
     "StoreUnavailableError",
     "SubmissionRefusedError",
     "SubmitOutcome",
+    "default_data_dir",
 ]
 
 RUNS_PATH = "/api/v1/runs"

@@ -19,10 +19,10 @@ from db import RunRepository
 from db.reports import eol_report
 from station.errors import InputError
 from station.limits import load_profiles
+from station.quality.figures import EolReport, ReportFilter
+from station.quality.parameters import choose_profile
 from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
-from station.report.bounds import choose_profile
 from station.report.html import certificate_page, dashboard_page
-from station.report.model import EolReport, ReportFilter
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 from station.unit_state import counts

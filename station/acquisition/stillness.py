@@ -1,7 +1,7 @@
 """Streaming detection of still windows.
 
 The accelerometer cannot tell motion from gravity, so a pose is recorded only from a
-window in which the unit demonstrably did not move (brief section 3). A window of
+window in which the unit demonstrably did not move ([Song2006]_: at rest). A window of
 ``window_samples`` consecutive samples is accepted when all of these hold:
 
 - spread: every accelerometer axis' standard deviation is small (handling, tremor);

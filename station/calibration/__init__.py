@@ -1,4 +1,4 @@
-"""Accelerometer calibration from still poses (brief section 3, paper 1).
+"""Accelerometer calibration from still poses, after [Song2006]_.
 
 Public surface::
 
@@ -8,6 +8,9 @@ Public surface::
     solve_least_squares(...)   6- or 9-parameter maximum-likelihood fit, N ≥ 6 / 9
     solve_classic(plus, minus) the ±1 g baseline, eqs. 2 and 3
     apply(calibration, raw)    counts → g
+
+.. [Song2006] C.-M. Song, "Autocalibration Method of Three-axis Micromachined
+   Accelerometers", 2006.
 """
 
 from station.calibration.classic import solve_classic

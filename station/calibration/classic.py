@@ -1,4 +1,4 @@
-"""The classic ±1 g method (paper eqs. 2, 3): the baseline that needs a precise jig.
+"""The classic ±1 g method ([Song2006]_ eqs. 2, 3): the baseline that needs a precise jig.
 
 Each axis is held exactly along +1 g and −1 g; its offset and sensitivity are
 

@@ -9,8 +9,8 @@ between poses, so they do not depend on the unknown offsets:
   θ = 2·asin(|a_i − a_j| / 2s) with the nominal sensitivity s;
 * **coverage** — √(λ_min/λ_max) of the covariance of the pose means: 1 when the
   poses span all directions equally (e.g. ±1 g on each axis), 0 when they lie in one
-  plane, where an ellipsoid through them is not unique (brief section 3: the system
-  degenerates when the poses do not span the sphere).
+  plane, where an ellipsoid through them is not unique (the system of [Song2006]_
+  eq. 10 degenerates when the poses do not span the sphere).
 """
 
 from dataclasses import dataclass

@@ -4,10 +4,10 @@ Model: every still pose i sees exactly 1 g, so with g_i = C·(a_i − o),
 
     r_i(θ) = |C·(a_i − o)| − 1 = 0,
 
-the paper's eq. 7/8 written as a geometric residual in g. The 6-parameter model has
-C = diag(1/s) (θ = o, s; paper eq. 5); the 9-parameter model has C upper-triangular
+[Song2006]_ eqs. 7, 8 written as a geometric residual in g. The 6-parameter model has
+C = diag(1/s) (θ = o, s; [Song2006]_ eq. 5); the 9-parameter model has C upper-triangular
 (θ = o and C's six entries), which adds the three non-orthogonality terms that carry
-cross-axis sensitivity and mounting misalignment (brief section 3). An upper-triangular
+cross-axis sensitivity and mounting misalignment (outside [Song2006]_'s model). An upper-triangular
 C is unique: |g| cannot see a rotation, so a full 3×3 C is not identifiable.
 
 Fit in two steps, in normalised counts (:mod:`station.calibration.residual`):

@@ -1,6 +1,6 @@
-"""The paper's six-position autocalibration, eq. 10, vectorised over units.
+"""The six-position autocalibration of [Song2006]_, eq. 10, vectorised over units.
 
-Model (brief section 3, paper eqs. 5, 7, 8): at rest, for every pose i, in counts,
+Model ([Song2006]_ eqs. 5, 7, 8): at rest, for every pose i, in counts,
 
     (a_xi − a_x0)²/s_x² + (a_yi − a_y0)²/s_y² + (a_zi − a_z0)²/s_z² = 1.
 

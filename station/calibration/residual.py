@@ -1,10 +1,10 @@
 """The geometric residual of a still pose and its Jacobian, in normalised counts.
 
 Every solve works in normalised counts v = (a − 2048)/819.2 (nominal offset and
-sensitivity, brief section 2), where the unknowns are all of order 1: offsets o near
+sensitivity, [Song2006]_ Table 1), where the unknowns are all of order 1: offsets o near
 0, sensitivities s near 1, C near the identity. The residual of pose i is
 
-    r_i = |C·(v_i − o)| − 1                               (paper eqs. 7, 8)
+    r_i = |C·(v_i − o)| − 1                               ([Song2006]_ eqs. 7, 8)
 
 and its Jacobian J (N × p) both drives the Levenberg–Marquardt fit and measures the
 geometry: cond(J) is the **condition number** reported and bounded for every method

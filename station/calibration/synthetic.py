@@ -46,7 +46,7 @@ def random_unit(
     offset_spread: float = OFFSET_SPREAD_COUNTS,
     sensitivity_tolerance: float = SENSITIVITY_TOLERANCE,
 ) -> TrueUnit:
-    """A unit drawn uniformly within the datasheet spreads (brief section 2).
+    """A unit drawn uniformly within the datasheet spreads ([Song2006]_ Table 1).
 
     ``cross_axis``: each off-diagonal coupling is uniform in ±cross_axis (the KXM52's
     typical value is :data:`station.sensor.CROSS_AXIS_TYPICAL`).

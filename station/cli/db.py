@@ -14,8 +14,8 @@ from db.repository import KeyScope
 from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
 from station.limits import load_profile
+from station.quality.parameters import profile_bounds
 from station.records import Identifier
-from station.report.bounds import profile_bounds
 
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True

@@ -149,7 +149,7 @@ def fit(
     except InputError as exc:
         raise InputError(f"{log_file}: {exc}") from None
     if plot is not None:
-        from station.gyro.plot import plot_g_sensitivity, sense_axes_of
+        from station.report.gyro_plot import plot_g_sensitivity, sense_axes_of
 
         model = report.error_model()
         sense = sense_axes_of(report, model)

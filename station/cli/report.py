@@ -12,7 +12,7 @@ from station.cli.db import DatabaseUrlOption
 from station.cli.output import err, out
 from station.errors import CalstationError
 from station.limits import load_profiles
-from station.report.model import ReportFilter
+from station.quality.figures import ReportFilter
 from station.report.period import parse_period
 from station.report.render import FORMATS, render
 

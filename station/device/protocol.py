@@ -22,6 +22,8 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from station.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+
 PROTOCOL_VERSION: Final = 1
 SYNC: Final = b"\xa5\x5a"
 HEADER_BYTES: Final = 4  # sync, type, length
@@ -29,10 +31,6 @@ CRC_BYTES: Final = 2
 FRAME_OVERHEAD: Final = HEADER_BYTES + CRC_BYTES
 CRC_INIT: Final = 0xFFFF
 
-#: Gyro rate resolution: one count of the int16 field is 0.02 deg/s (±655 deg/s span).
-GYRO_DPS_PER_LSB: Final = 0.02
-#: Temperature resolution: one count of the int16 field is 0.01 °C.
-TEMP_C_PER_LSB: Final = 0.01
 #: Largest sample rate the firmware accepts, samples/s.
 MAX_RATE_HZ: Final = 1000
 DEFAULT_RATE_HZ: Final = 500

@@ -13,7 +13,7 @@ Public surface::
     compensate                                  compensation.py inverse of the model
     summarize_still_poses, GyroStillSummary     still.py        the station's still poses
 
-The Fig. 10-style plot lives in :mod:`station.gyro.plot` (it imports matplotlib).
+The Fig. 10-style plot lives in :mod:`station.report.gyro_plot` (it imports matplotlib).
 """
 
 from station.gyro.comparison import AxisComparison

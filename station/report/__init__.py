@@ -1,8 +1,9 @@
-"""The end-of-line report: yields, failure Pareto, process capability, control charts.
+"""The end-of-line report, rendered: yields, failure Pareto, process capability, control charts.
 
 The numbers are computed by SQL in :mod:`db.reports` into a
-:class:`station.report.model.EolReport`; this package holds the report's shape
-(``model``), its parameters and limits (``bounds``), the capability math
-(``capability``) and the renderers (``render``: text, CSV, JSON, HTML; ``svg``: the
-charts), so every format shows the same numbers.
+:class:`station.quality.figures.EolReport` (the report's figures, parameters and
+capability math are domain: :mod:`station.quality`); this package renders them
+(``render``: text, CSV, JSON, HTML; ``svg``: the charts; ``gyro_plot``: the gyro
+g-sensitivity figure), so every format shows the same numbers, and reads the period a
+report covers (``period``).
 """

@@ -10,12 +10,12 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
-from station.gyro.plot import sense_axes_of, svg_g_sensitivity
 from station.limits import LimitsProfile
+from station.quality.figures import EolReport
+from station.quality.parameters import profile_bounds
 from station.records import GyroFitRecord, StoredRun
 from station.report import formatting, svg
-from station.report.bounds import profile_bounds
-from station.report.model import EolReport
+from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import PARAMETER_HEADER, SUMMARY_HEADER, parameter_cells, summary_cells
 
 #: Seconds between the dashboard's reloads.

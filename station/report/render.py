@@ -11,9 +11,9 @@ import json
 from collections.abc import Iterator
 from typing import Any, Literal, get_args
 
+from station.quality.figures import EolReport
 from station.report import html
 from station.report.formatting import moment, number, percent
-from station.report.model import EolReport
 from station.report.tables import (
     PARAMETER_HEADER,
     SUMMARY_HEADER,

@@ -5,8 +5,8 @@ Pareto, individuals and moving-range (I-MR) control charts. No script, no extern
 from collections.abc import Sequence
 from xml.sax.saxutils import escape
 
+from station.quality.figures import ControlChart, ParameterStats, ParetoEntry
 from station.report.formatting import number, percent
-from station.report.model import ControlChart, ParameterStats, ParetoEntry
 
 WIDTH, HEIGHT, PAD = 360, 150, 28
 LIMIT_COLOUR, CENTRE_COLOUR, BAR_COLOUR, ALARM_COLOUR = "#c0392b", "#2c7a2c", "#3b6ea5", "#c0392b"

@@ -1,7 +1,7 @@
 """The summary and parameter tables' cells, shared by the text and HTML renderings."""
 
+from station.quality.figures import EolReport, Summary
 from station.report.formatting import number, percent, seconds
-from station.report.model import EolReport, Summary
 
 SUMMARY_HEADER = [
     "",

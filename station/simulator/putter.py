@@ -22,13 +22,11 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
     DEFAULT_RATE_HZ,
-    GYRO_DPS_PER_LSB,
     MAX_CALIBRATED_RATE_HZ,
     MAX_RATE_HZ,
     PAYLOAD_LENGTHS,
     RATE_STRUCT,
     SAMPLE_DTYPE,
-    TEMP_C_PER_LSB,
     ErrorCode,
     Frame,
     FrameParser,
@@ -38,7 +36,7 @@ from station.device.protocol import (
     encode_text,
 )
 from station.poses import Pose, pose
-from station.sensor import ADC_MAX, AXES
+from station.sensor import ADC_MAX, AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.simulator.clock import VirtualClock
 from station.simulator.faults import Faults
 from station.simulator.motion import Handling, MotionModel

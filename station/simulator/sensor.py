@@ -1,6 +1,6 @@
 """Sensor model of the virtual putter: accelerometer behind the ADC, and the gyros.
 
-Accelerometer (brief section 2, paper 1 eq. 5 extended by cross-axis coupling and
+Accelerometer ([Song2006]_ Table 1 and eq. 5, extended by cross-axis coupling and
 temperature), per sample, in ADC counts::
 
     a = o(T) + diag(s(T)) · C · f + n,      then rounded and clipped to 0…4095
@@ -10,7 +10,7 @@ temperature), per sample, in ADC counts::
 diagonal, off-diagonal terms up to 2 %), ``n`` white noise. The unit's true
 counts-to-g map is therefore ``M = (diag(s) · C)⁻¹``, ``g = M · (a − o)``.
 
-Gyros (paper 2 eq. 4), per axis i, in deg/s::
+Gyros ([Park2014]_ eq. 4), per axis i, in deg/s::
 
     ω̃_i = ω_i + β_i + Σ_{j≠i} β_ij ω_j + β_ii ω_i + G_ii · f_sense(i) · ω_i + n
 
@@ -46,7 +46,7 @@ ACCEL_NOISE_COUNTS: Final = 1.0
 GYRO_NOISE_DPS: Final = 0.08
 #: Largest gyro bias drawn, deg/s (below the stillness detector's rate threshold).
 GYRO_BIAS_MAX_DPS: Final = 0.3
-#: Scale-factor g-sensitivity of paper 2 (X 581, Y 612, Z −613 ppm/g), nominal magnitude.
+#: Scale-factor g-sensitivity of [Park2014]_ (X 581, Y 612, Z −613 ppm/g), nominal magnitude.
 GYRO_G_SENSITIVITY_PER_G: Final = 600e-6
 
 
@@ -142,7 +142,7 @@ def accelerometer_counts(
 def gyro_rates(
     truth: SensorTruth, rate_dps: Array, force_g: Array, rng: np.random.Generator
 ) -> Array:
-    """Measured rates (N-by-3, deg/s) for true body rates ``rate_dps`` (paper 2 eq. 4)."""
+    """Measured rates (N-by-3, deg/s) for true body rates ``rate_dps`` ([Park2014]_ eq. 4)."""
     sense_force = force_g[:, list(GYRO_SENSE_AXIS)]
     return np.asarray(
         rate_dps

@@ -1,5 +1,6 @@
 """Migrations: an empty database reaches head matching the models; SQLite needs no set-up."""
 
+import ast
 import os
 import secrets
 from collections.abc import Iterator
@@ -14,6 +15,7 @@ from sqlalchemy import func, insert, inspect, make_url, select, text
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+import db.migrations
 from db import (
     Database,
     DatabaseSettings,
@@ -175,3 +177,27 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             assert session.scalar(select(func.count()).select_from(RunFailure)) == 1
     finally:
         engine.dispose()
+
+
+#: Top-level packages of this project: a revision that imports one of them would create
+#: something else whenever that code is edited.
+PROJECT_PACKAGES = {"station", "api", "db", "tests", "benchmarks"}
+
+
+def _imported_packages(source: str) -> set[str]:
+    """The top-level packages a module's source imports, wherever in its code."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            names.add(node.module or "")
+    return {name.split(".")[0] for name in names}
+
+
+def test_no_revision_imports_project_code() -> None:
+    versions = sorted((Path(db.migrations.__file__).parent / "versions").glob("*.py"))
+    assert versions
+    for path in versions:
+        imported = _imported_packages(path.read_text(encoding="utf-8"))
+        assert imported & PROJECT_PACKAGES == set(), path.name

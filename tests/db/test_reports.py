@@ -10,8 +10,8 @@ from sqlalchemy.orm import Session
 
 from db import RunQuery, RunRepository
 from db.reports import eol_report
-from station.report.bounds import default_bounds
-from station.report.model import EolReport, ReportFilter
+from station.quality.figures import EolReport, ReportFilter
+from station.quality.parameters import default_bounds
 from tests.db.eol_data import IN_RANGE, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 

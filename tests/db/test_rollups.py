@@ -24,9 +24,10 @@ from sqlalchemy.orm import Session
 from db import Database, RunRepository
 from db.models import ReportCounts, ReportFailures, ReportParameters, RunFacts
 from db.reports import eol_report
-from db.rollups import _inline, rebuild
+from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.limits import Bounds, load_profile
-from station.report.model import EolReport, ReportFilter
+from station.quality.figures import EolReport, ReportFilter
+from station.quality.parameters import PARAMETERS
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
@@ -271,3 +272,9 @@ def test_constants_written_into_the_statements_read_back_unchanged(
 def test_text_that_is_not_a_plain_constant_is_refused(text: str) -> None:
     with pytest.raises(ValueError, match="not a constant"):
         _inline(text)
+
+
+def test_every_report_parameter_is_stored_in_exactly_one_column() -> None:
+    stored = [*PER_RUN, *PER_POSE]
+    assert sorted(stored) == sorted(spec.name for spec in PARAMETERS)
+    assert len(set(stored)) == len(stored)

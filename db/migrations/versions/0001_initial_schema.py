@@ -11,12 +11,14 @@ import sqlalchemy as sa
 from alembic import op
 from sqlalchemy.dialects import postgresql
 
-from db.base import UtcDateTime
-
 revision: str = "0001"
 down_revision: str | None = None
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
+
+#: The DDL type of :class:`db.base.UtcDateTime`, written out: a migration imports no project
+#: code, so editing db/ never changes what this revision creates.
+UtcDateTime = sa.DateTime(timezone=True)
 
 
 def upgrade() -> None:
@@ -32,9 +34,9 @@ def upgrade() -> None:
         sa.Column("serial", sa.String(length=64), nullable=False),
         sa.Column("station_id", sa.String(length=64), nullable=False),
         sa.Column("operator_id", sa.String(length=64), nullable=False),
-        sa.Column("started_at", UtcDateTime(), nullable=False),
-        sa.Column("finished_at", UtcDateTime(), nullable=False),
-        sa.Column("received_at", UtcDateTime(), nullable=False),
+        sa.Column("started_at", UtcDateTime, nullable=False),
+        sa.Column("finished_at", UtcDateTime, nullable=False),
+        sa.Column("received_at", UtcDateTime, nullable=False),
         sa.Column("software_version", sa.String(length=64), nullable=False),
         sa.Column("algorithm", sa.String(length=64), nullable=False),
         sa.Column("model", sa.String(length=4), nullable=False),
@@ -90,8 +92,8 @@ def upgrade() -> None:
         ),
         sa.Column("station_id", sa.String(length=64), nullable=False),
         sa.Column("key_sha256", sa.String(length=64), nullable=False),
-        sa.Column("created_at", UtcDateTime(), nullable=False),
-        sa.Column("revoked_at", UtcDateTime(), nullable=True),
+        sa.Column("created_at", UtcDateTime, nullable=False),
+        sa.Column("revoked_at", UtcDateTime, nullable=True),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_station_keys")),
         sa.UniqueConstraint("key_sha256", name=op.f("uq_station_keys_key_sha256")),
     )

@@ -8,13 +8,17 @@ from collections.abc import Sequence
 
 import sqlalchemy as sa
 from alembic import op
-
-from db.base import JsonDocument, UtcDateTime
+from sqlalchemy.dialects import postgresql
 
 revision: str = "0002"
 down_revision: str | None = "0001"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
+
+#: The DDL types of :mod:`db.base`, written out: a migration imports no project code, so
+#: editing db/ never changes what this revision creates.
+UtcDateTime = sa.DateTime(timezone=True)
+JsonDocument = sa.JSON().with_variant(postgresql.JSONB(), "postgresql")
 
 
 def upgrade() -> None:
@@ -27,7 +31,7 @@ def upgrade() -> None:
             nullable=False,
         ),
         sa.Column("serial", sa.String(length=64), nullable=False),
-        sa.Column("fitted_at", UtcDateTime(), nullable=False),
+        sa.Column("fitted_at", UtcDateTime, nullable=False),
         sa.Column("source", sa.String(length=255), nullable=False),
         sa.Column("document", JsonDocument, nullable=False),
         sa.PrimaryKeyConstraint("id", name=op.f("pk_gyro_fits")),

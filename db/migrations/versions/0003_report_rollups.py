@@ -15,9 +15,6 @@ from typing import Any
 import sqlalchemy as sa
 from alembic import op
 
-from db.base import UtcDateTime
-from db.rollups import COUNT_VALUES, HISTOGRAM
-
 revision: str = "0003"
 down_revision: str | None = "0002"
 branch_labels: str | Sequence[str] | None = None
@@ -35,13 +32,27 @@ def _bucket() -> list[sa.Column[object]]:
     ]
 
 
-def _count_type(name: str) -> sa.types.TypeEngine[Any]:
-    """The type of a ``report_counts`` value column."""
-    if name in ("first_start", "last_finish"):
-        return UtcDateTime()
-    if name == "duration_ms":
-        return sa.BigInteger()
-    return sa.Double() if name.startswith("mr_") else sa.Integer()
+#: The value columns of ``report_counts`` at this revision and their types, written out
+#: (not taken from :mod:`db.rollups`): editing db/ never changes what this revision creates.
+COUNT_COLUMNS: tuple[tuple[str, sa.types.TypeEngine[Any]], ...] = (
+    ("runs", sa.Integer()),
+    ("runs_passed", sa.Integer()),
+    ("duration_ms", sa.BigInteger()),
+    ("poses", sa.Integer()),
+    ("first_start", sa.DateTime(timezone=True)),
+    ("last_finish", sa.DateTime(timezone=True)),
+    ("line_units", sa.Integer()),
+    ("line_first_pass", sa.Integer()),
+    ("line_final_pass", sa.Integer()),
+    ("listed", sa.Integer()),
+    ("units", sa.Integer()),
+    ("first_pass", sa.Integer()),
+    ("final_pass", sa.Integer()),
+    ("charted", sa.Integer()),
+    *((f"mr_{kind}_{axis}", sa.Double()) for kind in ("offset", "sensitivity") for axis in "xyz"),
+)
+#: The histogram bin columns of ``report_parameters`` at this revision: h00 … h29.
+HISTOGRAM_COLUMNS = tuple(f"h{i:02d}" for i in range(30))
 
 
 def upgrade() -> None:
@@ -76,14 +87,7 @@ def upgrade() -> None:
         sa.Column("limits_name", sa.String(length=64), nullable=False),
         sa.Column("limits_version", sa.String(length=64), nullable=False),
         sa.Column("limits_sha256", sa.String(length=64), nullable=False),
-        *(
-            sa.Column(
-                name,
-                _count_type(name),
-                nullable=False,
-            )
-            for name in COUNT_VALUES
-        ),
+        *(sa.Column(name, type_, nullable=False) for name, type_ in COUNT_COLUMNS),
         sa.PrimaryKeyConstraint(
             *limits, "day", "station_id", "operator_id", "lot", name=op.f("pk_report_counts")
         ),
@@ -108,7 +112,7 @@ def upgrade() -> None:
         sa.Column("outside", sa.Integer(), nullable=False),
         sa.Column("marginal", sa.Integer(), nullable=False),
         *_bucket(),
-        *(sa.Column(name, sa.Integer(), nullable=False) for name in HISTOGRAM),
+        *(sa.Column(name, sa.Integer(), nullable=False) for name in HISTOGRAM_COLUMNS),
         sa.PrimaryKeyConstraint(
             "parameter",
             "day",

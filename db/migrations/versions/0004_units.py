@@ -12,12 +12,14 @@ from collections.abc import Sequence
 import sqlalchemy as sa
 from alembic import op
 
-from db.base import UtcDateTime
-
 revision: str = "0004"
 down_revision: str | None = "0003"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
+
+#: The DDL type of :class:`db.base.UtcDateTime`, written out: a migration imports no project
+#: code, so editing db/ never changes what this revision creates.
+UtcDateTime = sa.DateTime(timezone=True)
 
 
 def upgrade() -> None:
@@ -29,7 +31,7 @@ def upgrade() -> None:
             sa.BigInteger().with_variant(sa.Integer(), "sqlite"),
             nullable=False,
         ),
-        sa.Column("started_at", UtcDateTime(), nullable=False),
+        sa.Column("started_at", UtcDateTime, nullable=False),
         sa.Column("calibration", sa.Text(), nullable=False),
         sa.ForeignKeyConstraint(
             ["run_pk"], ["runs.id"], name=op.f("fk_units_run_pk_runs"), ondelete="CASCADE"

@@ -16,8 +16,8 @@ from station.acquisition import (
     acquire_pose,
 )
 from station.device import DeviceDisconnectedError, DeviceTimeoutError, PutterDriver
-from station.device.protocol import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.simulator import VirtualPutter
 from station.simulator.motion import Handling
 from station.simulator.sensor import REFERENCE_TEMPERATURE_C

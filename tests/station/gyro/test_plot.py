@@ -7,7 +7,7 @@ import pytest
 from station.errors import InputError
 from station.gyro.fit import fit_log
 from station.gyro.log import GyroLog
-from station.gyro.plot import plot_g_sensitivity
+from station.report.gyro_plot import plot_g_sensitivity
 
 
 @pytest.mark.parametrize(("name", "magic"), [("fig.png", b"\x89PNG"), ("fig.svg", b"<?xml")])

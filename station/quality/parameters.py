@@ -1,14 +1,15 @@
 """The report's parameters and the limits their capability is measured against.
 
-Each parameter belongs to a limits family (``offset``, ``sensitivity``,
-``verification_error``, ``pose_noise``, ``gyro_bias``: the check codes of a limits
-profile, :data:`station.limits.CHECKS`). :func:`profile_bounds` is the one place bounds
-enter the report: from a limits profile (:mod:`station.limits`).
+What a parameter is (its name, limits family and unit), not where it is stored: the
+columns that hold each one are :mod:`db.rollups`' business. Each parameter belongs to a
+limits family (``offset``, ``sensitivity``, ``verification_error``, ``pose_noise``,
+``gyro_bias``: the check codes of a limits profile, :data:`station.limits.CHECKS`).
+:func:`profile_bounds` is the one place bounds enter the report: from a limits profile
+(:mod:`station.limits`).
 """
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 from station.limits import CHECKS, DEFAULT_PROFILE, LimitsProfile, load_profile
 from station.records import LimitsRef
@@ -59,31 +60,19 @@ def choose_profile(
 
 @dataclass(frozen=True)
 class ParameterSpec:
-    """One reported parameter: its name, limits family, unit and where it is stored.
-
-    ``source`` is ``runs`` (one value per run) or ``poses`` (one value per pose);
-    ``column`` is the column, or for ``gyro_bias`` the axis inside the run's gyro
-    document.
-    """
+    """One reported parameter: its name, limits family and unit."""
 
     name: str
     family: str
     unit: str
-    source: Literal["runs", "poses"]
-    column: str
 
 
 PARAMETERS: tuple[ParameterSpec, ...] = (
-    *(ParameterSpec(f"offset_{a}", "offset", "counts", "runs", f"offset_{a}") for a in "xyz"),
-    *(
-        ParameterSpec(f"sensitivity_{a}", "sensitivity", "counts/g", "runs", f"sensitivity_{a}")
-        for a in "xyz"
-    ),
-    ParameterSpec(
-        "verification_error", "verification_error", "mg", "runs", "verification_error_mg"
-    ),
-    *(ParameterSpec(f"pose_noise_{a}", "pose_noise", "counts", "poses", f"std_{a}") for a in "xyz"),
-    *(ParameterSpec(f"gyro_bias_{a}", "gyro_bias", "deg/s", "runs", a) for a in "xyz"),
+    *(ParameterSpec(f"offset_{a}", "offset", "counts") for a in "xyz"),
+    *(ParameterSpec(f"sensitivity_{a}", "sensitivity", "counts/g") for a in "xyz"),
+    ParameterSpec("verification_error", "verification_error", "mg"),
+    *(ParameterSpec(f"pose_noise_{a}", "pose_noise", "counts") for a in "xyz"),
+    *(ParameterSpec(f"gyro_bias_{a}", "gyro_bias", "deg/s") for a in "xyz"),
 )
 
 #: The calibration coefficients, each with an individuals (I-MR) control chart.

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from station.report.capability import (
+from station.quality.capability import (
     D4,
     HISTOGRAM_BINS,
     cp,
