@@ -22,18 +22,20 @@ from datetime import UTC, datetime
 from enum import StrEnum
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from station import __version__
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
 from station.acquisition.pose import PoseAcquisition, PoseResult
 from station.acquisition.stillness import StillnessThresholds, WindowVerdict, judge_window
+from station.arrays import FloatArray as Array
 from station.calibration import CalibrationError, Model, Solution, apply, solve
-from station.device import DeviceCalibration, DeviceError, PutterDriver
-from station.device.errors import (
+from station.device import (
+    DeviceCalibration,
     DeviceDisconnectedError,
+    DeviceError,
     DeviceTimeoutError,
+    PutterDriver,
     SerialNumberMismatchError,
 )
 from station.gyro import summarize_still_poses
@@ -62,7 +64,6 @@ from station.records import (
 )
 from station.run_checks import run_checks
 
-Array = NDArray[np.float64]
 ALGORITHM = "autocal-eq10"
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128

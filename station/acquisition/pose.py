@@ -5,15 +5,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
 from station.acquisition.stillness import StillnessDetector, StillnessThresholds, WindowVerdict
-from station.device.driver import PutterDriver
-from station.device.errors import DeviceTimeoutError
-from station.device.stats import LinkStats
-
-Array = NDArray[np.float64]
+from station.arrays import FloatArray
+from station.device import DeviceTimeoutError, LinkStats, PutterDriver
 
 
 @dataclass(frozen=True)
@@ -28,10 +24,10 @@ class PoseResult:
     """
 
     pose: str | None
-    accel_mean: Array
-    accel_std: Array
-    gyro_mean: Array
-    gyro_std: Array
+    accel_mean: FloatArray
+    accel_std: FloatArray
+    gyro_mean: FloatArray
+    gyro_std: FloatArray
     temperature_c: float
     temperature_std_c: float
     sample_count: int
@@ -45,7 +41,7 @@ class PoseResult:
     @classmethod
     def from_window(
         cls,
-        window: Array,
+        window: FloatArray,
         *,
         pose: str | None,
         rate_hz: float,
@@ -124,7 +120,7 @@ class PoseAcquisition:
         self._last_arrival = time.monotonic()
         self.result: PoseResult | None = None
         #: The rows the latest :meth:`poll` took in, for a live view of the unit.
-        self.recent: Array = np.empty((0, 8))
+        self.recent: FloatArray = np.empty((0, 8))
 
     @property
     def elapsed_s(self) -> float:

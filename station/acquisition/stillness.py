@@ -20,9 +20,9 @@ that is still from the start is accepted after at most ``window + hop`` samples.
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.arrays import FloatArray
 from station.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -31,8 +31,6 @@ from station.sensor import (
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
     SAMPLES_PER_POSE,
 )
-
-Array = NDArray[np.float64]
 
 
 class StillnessThresholds(BaseModel):
@@ -101,7 +99,7 @@ class WindowVerdict:
     saturated_axes: tuple[str, ...]
     loss_fraction: float
     motion: bool
-    window: Array
+    window: FloatArray
 
     @property
     def still(self) -> bool:
@@ -109,7 +107,7 @@ class WindowVerdict:
         return not self.reasons
 
 
-def judge_window(window: Array, limits: StillnessThresholds) -> WindowVerdict:
+def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdict:
     """Judge one window of samples (rows as :data:`station.device.SAMPLE_COLUMNS`)."""
     acc = window[:, 1:4]
     gyro = window[:, 4:7]
@@ -167,10 +165,10 @@ class StillnessDetector:
         self.limits = limits or StillnessThresholds()
         self.last: WindowVerdict | None = None
         self.samples_seen = 0
-        self._rows: Array = np.empty((0, 8))
+        self._rows: FloatArray = np.empty((0, 8))
         self._next_eval = self.limits.window_samples
 
-    def feed(self, rows: Array) -> WindowVerdict | None:
+    def feed(self, rows: FloatArray) -> WindowVerdict | None:
         """Add rows; return the verdict of the first still window they complete, if any."""
         width = self.limits.window_samples
         hop = self.limits.hop_samples
