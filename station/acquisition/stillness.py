@@ -23,6 +23,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from station.arrays import FloatArray
+from station.samples import SampleBlock
 from station.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -108,13 +109,17 @@ class WindowVerdict:
 
 
 def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdict:
-    """Judge one window of samples (rows as :data:`station.device.SAMPLE_COLUMNS`)."""
-    acc = window[:, 1:4]
-    gyro = window[:, 4:7]
+    """Judge one window of samples (rows as :data:`station.samples.SAMPLE_COLUMNS`).
+
+    Spreads are the window's sample standard deviations (:meth:`SampleBlock.summary`).
+    """
+    block = SampleBlock(window)
+    acc = block.accel
+    summary = block.summary()
     reasons: list[str] = []
     motion = False
-    span = window[-1, 0] - window[0, 0] + 1
-    loss = 1.0 - len(window) / span if span > 0 else 0.0
+    span = block.span
+    loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
     saturated = tuple(
@@ -124,10 +129,9 @@ def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdi
     )
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
-    std = acc.std(axis=0)
-    quarter = max(1, len(window) // 4)
+    quarter = max(1, len(block) // 4)
     drift = np.abs(acc[-quarter:].mean(axis=0) - acc[:quarter].mean(axis=0))
-    for axis, s, d in zip(AXES, std, drift, strict=True):
+    for axis, s, d in zip(AXES, summary.accel_std, drift, strict=True):
         if axis in saturated:
             continue
         if s > limits.accel_std_max_counts:
@@ -138,12 +142,12 @@ def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdi
                 f"accel {axis} drifted {d:.1f} counts > {limits.accel_drift_max_counts:g}"
             )
             motion = True
-    nominal_g = (acc.mean(axis=0) - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    nominal_g = (summary.accel_mean - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
     magnitude = float(np.linalg.norm(nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
-    for axis, rate, s in zip(AXES, gyro.mean(axis=0), gyro.std(axis=0), strict=True):
+    for axis, rate, s in zip(AXES, summary.gyro_mean, summary.gyro_std, strict=True):
         if abs(rate) > limits.gyro_rate_max_dps:
             reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
             motion = True
@@ -165,7 +169,7 @@ class StillnessDetector:
         self.limits = limits or StillnessThresholds()
         self.last: WindowVerdict | None = None
         self.samples_seen = 0
-        self._rows: FloatArray = np.empty((0, 8))
+        self._rows: FloatArray = SampleBlock.empty().rows
         self._next_eval = self.limits.window_samples
 
     def feed(self, rows: FloatArray) -> WindowVerdict | None:
