@@ -10,7 +10,7 @@ place, so every screen says the same thing the same way.
 import errno
 
 from station.acquisition.stillness import StillnessThresholds, WindowVerdict
-from station.device.errors import DeviceTimeoutError, NoReplyError
+from station.device import DeviceTimeoutError, NoReplyError
 
 #: Longest explanation taken over from an error the station does not know.
 MAX_UNKNOWN = 80

@@ -9,18 +9,16 @@ how far it is from the one asked for.
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from station.arrays import FloatArray
 from station.poses import POSES, Pose
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
-
-Array = NDArray[np.float64]
 
 #: How far (degrees) the sensed gravity may be from a pose's and still count as it.
 POSE_TOLERANCE_DEG = 25.0
 
 
-def gravity_direction(accel_counts: Array) -> Array:
+def gravity_direction(accel_counts: FloatArray) -> FloatArray:
     """Unit vector of the sensed gravity reaction (body axes) from mean raw counts (3,)."""
     g = (
         np.asarray(accel_counts, dtype=np.float64) - NOMINAL_OFFSET_COUNTS
@@ -29,7 +27,7 @@ def gravity_direction(accel_counts: Array) -> Array:
     return g / norm if norm > 0 else np.array([0.0, 0.0, 0.0])
 
 
-def angle_deg(a: Array, b: Array) -> float:
+def angle_deg(a: FloatArray, b: FloatArray) -> float:
     """Angle between two unit vectors, degrees."""
     return float(np.degrees(np.arccos(np.clip(float(a @ b), -1.0, 1.0))))
 
@@ -38,7 +36,7 @@ def angle_deg(a: Array, b: Array) -> float:
 class Sensed:
     """The pose nearest to the sensed gravity, and the angle to it."""
 
-    direction: Array
+    direction: FloatArray
     nearest: Pose
     nearest_deg: float
 
@@ -47,7 +45,7 @@ class Sensed:
         return angle_deg(self.direction, pose.gravity_body) <= tolerance_deg
 
 
-def sense(accel_counts: Array, candidates: tuple[Pose, ...] | None = None) -> Sensed:
+def sense(accel_counts: FloatArray, candidates: tuple[Pose, ...] | None = None) -> Sensed:
     """The named pose (of ``candidates``, default all) nearest to the mean counts."""
     direction = gravity_direction(accel_counts)
     pool = candidates if candidates is not None else tuple(POSES.values())

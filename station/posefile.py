@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from station.calibration.model import FloatArray
+from station.arrays import FloatArray
 from station.errors import InputError
 
 COLUMNS = ("ax", "ay", "az")

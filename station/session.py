@@ -23,8 +23,12 @@ from collections.abc import Callable
 
 from station.acquisition.pose import PoseResult
 from station.calibration import CalibrationError, Solution, solve
-from station.device import DeviceError, PutterDriver
-from station.device.errors import DeviceDisconnectedError, DeviceTimeoutError
+from station.device import (
+    DeviceDisconnectedError,
+    DeviceError,
+    DeviceTimeoutError,
+    PutterDriver,
+)
 from station.journal import JournalFile, RunJournal
 from station.limits import LimitsProfile, check
 from station.operator_text import pose_words

@@ -4,16 +4,11 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-from numpy.typing import NDArray
-
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
 from station.acquisition.stillness import StillnessDetector, StillnessThresholds, WindowVerdict
-from station.device.driver import PutterDriver
-from station.device.errors import DeviceTimeoutError
-from station.device.stats import LinkStats
-
-Array = NDArray[np.float64]
+from station.arrays import FloatArray
+from station.device import DeviceTimeoutError, LinkStats, PutterDriver
+from station.samples import SampleBlock
 
 
 @dataclass(frozen=True)
@@ -28,10 +23,10 @@ class PoseResult:
     """
 
     pose: str | None
-    accel_mean: Array
-    accel_std: Array
-    gyro_mean: Array
-    gyro_std: Array
+    accel_mean: FloatArray
+    accel_std: FloatArray
+    gyro_mean: FloatArray
+    gyro_std: FloatArray
     temperature_c: float
     temperature_std_c: float
     sample_count: int
@@ -45,7 +40,7 @@ class PoseResult:
     @classmethod
     def from_window(
         cls,
-        window: Array,
+        window: SampleBlock,
         *,
         pose: str | None,
         rate_hz: float,
@@ -53,26 +48,27 @@ class PoseResult:
         link: LinkStats,
         loss_fraction: float,
     ) -> "PoseResult":
-        """Summarise an accepted window (rows as the driver hands them out)."""
+        """Summarise an accepted window."""
+        summary = window.summary()
         return cls(
             pose=pose,
-            accel_mean=window[:, 1:4].mean(axis=0),
-            accel_std=window[:, 1:4].std(axis=0, ddof=1),
-            gyro_mean=window[:, 4:7].mean(axis=0),
-            gyro_std=window[:, 4:7].std(axis=0, ddof=1),
-            temperature_c=float(window[:, 7].mean()),
-            temperature_std_c=float(window[:, 7].std(ddof=1)),
-            sample_count=len(window),
-            first_seq=int(window[0, 0]),
-            last_seq=int(window[-1, 0]),
-            duration_s=(window[-1, 0] - window[0, 0] + 1) / rate_hz,
+            accel_mean=summary.accel_mean,
+            accel_std=summary.accel_std,
+            gyro_mean=summary.gyro_mean,
+            gyro_std=summary.gyro_std,
+            temperature_c=summary.temperature_c,
+            temperature_std_c=summary.temperature_std_c,
+            sample_count=summary.count,
+            first_seq=int(window.seq[0]),
+            last_seq=int(window.seq[-1]),
+            duration_s=window.span / rate_hz,
             wait_s=wait_s,
             loss_fraction=loss_fraction,
             link=link,
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain values for JSON and the database."""
+        """Plain values for JSON."""
         return {
             "pose": self.pose,
             "accel_mean": self.accel_mean.tolist(),
@@ -124,7 +120,7 @@ class PoseAcquisition:
         self._last_arrival = time.monotonic()
         self.result: PoseResult | None = None
         #: The rows the latest :meth:`poll` took in, for a live view of the unit.
-        self.recent: Array = np.empty((0, 8))
+        self.recent: FloatArray = SampleBlock.empty().rows
 
     @property
     def elapsed_s(self) -> float:
@@ -158,23 +154,25 @@ class PoseAcquisition:
                 )
             return None
         self._last_arrival = now
-        rows = rows[rows[:, 0] >= self.from_seq]
-        if not len(rows):
+        block = SampleBlock(rows)
+        block = SampleBlock(rows[block.seq >= self.from_seq])
+        if not len(block):
             return None
         if self._first_seq is None:
-            self._first_seq = float(rows[0, 0])
-        self._last_seq = float(rows[-1, 0])
-        verdict = self.detector.feed(rows)
+            self._first_seq = float(block.seq[0])
+        self._last_seq = float(block.seq[-1])
+        verdict = self.detector.feed(block.rows)
         if verdict is None:
             self._check(self.detector.last)
             return None
         # Waited until the window's last sample, not the last one drained: how many
         # samples one poll takes in depends on how busy the machine is.
+        window = SampleBlock(verdict.window)
         self.result = PoseResult.from_window(
-            verdict.window,
+            window,
             pose=self.pose,
             rate_hz=self._rate,
-            wait_s=(verdict.window[-1, 0] - self._first_seq + 1) / self._rate,
+            wait_s=(window.seq[-1] - self._first_seq + 1) / self._rate,
             link=self.driver.stats - self._stats0,
             loss_fraction=verdict.loss_fraction,
         )

@@ -20,9 +20,10 @@ that is still from the start is accepted after at most ``window + hop`` samples.
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.arrays import FloatArray
+from station.samples import SampleBlock
 from station.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -31,8 +32,6 @@ from station.sensor import (
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
     SAMPLES_PER_POSE,
 )
-
-Array = NDArray[np.float64]
 
 
 class StillnessThresholds(BaseModel):
@@ -101,7 +100,7 @@ class WindowVerdict:
     saturated_axes: tuple[str, ...]
     loss_fraction: float
     motion: bool
-    window: Array
+    window: FloatArray
 
     @property
     def still(self) -> bool:
@@ -109,14 +108,18 @@ class WindowVerdict:
         return not self.reasons
 
 
-def judge_window(window: Array, limits: StillnessThresholds) -> WindowVerdict:
-    """Judge one window of samples (rows as :data:`station.device.SAMPLE_COLUMNS`)."""
-    acc = window[:, 1:4]
-    gyro = window[:, 4:7]
+def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdict:
+    """Judge one window of samples (rows as :data:`station.samples.SAMPLE_COLUMNS`).
+
+    Spreads are the window's sample standard deviations (:meth:`SampleBlock.summary`).
+    """
+    block = SampleBlock(window)
+    acc = block.accel
+    summary = block.summary()
     reasons: list[str] = []
     motion = False
-    span = window[-1, 0] - window[0, 0] + 1
-    loss = 1.0 - len(window) / span if span > 0 else 0.0
+    span = block.span
+    loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
     saturated = tuple(
@@ -126,10 +129,9 @@ def judge_window(window: Array, limits: StillnessThresholds) -> WindowVerdict:
     )
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
-    std = acc.std(axis=0)
-    quarter = max(1, len(window) // 4)
+    quarter = max(1, len(block) // 4)
     drift = np.abs(acc[-quarter:].mean(axis=0) - acc[:quarter].mean(axis=0))
-    for axis, s, d in zip(AXES, std, drift, strict=True):
+    for axis, s, d in zip(AXES, summary.accel_std, drift, strict=True):
         if axis in saturated:
             continue
         if s > limits.accel_std_max_counts:
@@ -140,12 +142,12 @@ def judge_window(window: Array, limits: StillnessThresholds) -> WindowVerdict:
                 f"accel {axis} drifted {d:.1f} counts > {limits.accel_drift_max_counts:g}"
             )
             motion = True
-    nominal_g = (acc.mean(axis=0) - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    nominal_g = (summary.accel_mean - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
     magnitude = float(np.linalg.norm(nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
-    for axis, rate, s in zip(AXES, gyro.mean(axis=0), gyro.std(axis=0), strict=True):
+    for axis, rate, s in zip(AXES, summary.gyro_mean, summary.gyro_std, strict=True):
         if abs(rate) > limits.gyro_rate_max_dps:
             reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
             motion = True
@@ -167,10 +169,10 @@ class StillnessDetector:
         self.limits = limits or StillnessThresholds()
         self.last: WindowVerdict | None = None
         self.samples_seen = 0
-        self._rows: Array = np.empty((0, 8))
+        self._rows: FloatArray = SampleBlock.empty().rows
         self._next_eval = self.limits.window_samples
 
-    def feed(self, rows: Array) -> WindowVerdict | None:
+    def feed(self, rows: FloatArray) -> WindowVerdict | None:
         """Add rows; return the verdict of the first still window they complete, if any."""
         width = self.limits.window_samples
         hop = self.limits.hop_samples

@@ -19,6 +19,7 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
+from station.arrays import FloatArray
 from station.calibration.errors import (
     CalibrationError,
     CoplanarPosesError,
@@ -27,7 +28,6 @@ from station.calibration.errors import (
     RailValueError,
     TooFewPosesError,
 )
-from station.calibration.model import FloatArray
 from station.sensor import (
     ADC_MAX,
     ADC_MIN,

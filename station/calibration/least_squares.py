@@ -29,13 +29,14 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from station.arrays import FloatArray
 from station.calibration.errors import (
     CalibrationError,
     IllConditionedError,
     NonPositiveScaleError,
 )
 from station.calibration.geometry import GeometryLimits, check_poses
-from station.calibration.model import Calibration, FloatArray, Model
+from station.calibration.model import Calibration, Model
 from station.calibration.residual import (
     MAX_CONDITION,
     UPPER,

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from station.arrays import FloatArray
 
 Model = Literal["six", "nine"]
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)

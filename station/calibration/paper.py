@@ -26,6 +26,7 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from station.arrays import FloatArray
 from station.calibration.errors import (
     CalibrationError,
     IllConditionedError,
@@ -33,7 +34,7 @@ from station.calibration.errors import (
     TooFewPosesError,
 )
 from station.calibration.geometry import Finding, GeometryLimits, Screen, screen, screen_error
-from station.calibration.model import Calibration, FloatArray
+from station.calibration.model import Calibration
 from station.calibration.residual import MAX_CONDITION, condition_number, jacobian_six, normalise
 from station.calibration.solution import Solution, quality_of
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G

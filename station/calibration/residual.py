@@ -13,7 +13,7 @@ geometry: cond(J) is the **condition number** reported and bounded for every met
 
 import numpy as np
 
-from station.calibration.model import FloatArray
+from station.arrays import FloatArray
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 #: Default maximum condition number of a solve's Jacobian (normalised counts).

@@ -5,8 +5,9 @@ from typing import Literal
 
 import numpy as np
 
+from station.arrays import FloatArray
 from station.calibration.geometry import Screen
-from station.calibration.model import Calibration, FloatArray, apply
+from station.calibration.model import Calibration, apply
 
 Method = Literal["paper-eq10", "least-squares"]
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.calibration.model import FloatArray
+from station.arrays import FloatArray
 from station.sensor import (
     CROSS_AXIS_TYPICAL,
     NOMINAL_OFFSET_COUNTS,

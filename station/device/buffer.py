@@ -4,22 +4,23 @@ import threading
 from collections.abc import Callable
 
 import numpy as np
-from numpy.typing import NDArray
+
+from station.arrays import FloatArray
+from station.samples import SampleBlock
 
 
 class SampleBuffer:
-    """Rows of ``columns`` float64 values, at most ``capacity`` of them.
+    """Sample rows (:data:`~station.samples.SAMPLE_COLUMNS`), at most ``capacity`` of them.
 
     The reader thread appends blocks; the user drains them. When nobody drains, the
     oldest rows are pushed out and counted in :attr:`overruns`.
     """
 
-    def __init__(self, capacity: int, columns: int) -> None:
+    def __init__(self, capacity: int) -> None:
         if capacity < 1:
             raise ValueError(f"buffer capacity must be positive, got {capacity}")
         self._capacity = capacity
-        self._columns = columns
-        self._blocks: list[NDArray[np.float64]] = []
+        self._blocks: list[FloatArray] = []
         self._rows = 0
         self._lock = threading.Lock()
         self._ready = threading.Condition(self._lock)
@@ -29,7 +30,7 @@ class SampleBuffer:
         with self._lock:
             return self._rows
 
-    def append(self, block: NDArray[np.float64]) -> None:
+    def append(self, block: FloatArray) -> None:
         """Add rows; drop the oldest beyond the capacity."""
         if not len(block):
             return
@@ -50,11 +51,11 @@ class SampleBuffer:
                 excess -= cut
             self._ready.notify_all()
 
-    def drain(self, max_rows: int | None = None) -> NDArray[np.float64]:
+    def drain(self, max_rows: int | None = None) -> FloatArray:
         """Take up to ``max_rows`` (all by default) of the oldest rows."""
         with self._lock:
             if not self._blocks:
-                return np.empty((0, self._columns))
+                return SampleBlock.empty().rows
             rows = np.concatenate(self._blocks) if len(self._blocks) > 1 else self._blocks[0]
             if max_rows is not None and max_rows < len(rows):
                 taken, rest = rows[:max_rows], rows[max_rows:]

@@ -20,8 +20,8 @@ from enum import IntEnum
 from typing import Final
 
 import numpy as np
-from numpy.typing import NDArray
 
+from station.samples import SAMPLE_COLUMNS, SampleBlock
 from station.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 
 PROTOCOL_VERSION: Final = 1
@@ -105,9 +105,6 @@ PAYLOAD_LENGTHS: Final[dict[int, tuple[int, int]]] = {
     FrameType.ERROR: (2, 2 + MAX_ERROR_TEXT),
 }
 
-#: Columns of a block of decoded samples (N-by-8 float64), in order.
-SAMPLE_COLUMNS: Final = ("seq", "ax", "ay", "az", "gx", "gy", "gz", "temp")
-
 
 @dataclass(frozen=True, slots=True)
 class Frame:
@@ -136,7 +133,7 @@ class FrameParser:
     but unknown or malformed command can be answered with an error reply. Counters:
 
     - ``frames``: frames accepted;
-    - ``crc_failures``: well-formed headers whose CRC did not match;
+    - ``crc_errors``: well-formed headers whose CRC did not match;
     - ``bad_headers``: sync words followed by an unknown type or impossible length;
     - ``resyncs``: times the parser lost alignment and skipped bytes to find a frame;
     - ``bytes_discarded``: bytes skipped while hunting.
@@ -147,7 +144,7 @@ class FrameParser:
         self._buf = bytearray()
         self._hunting = False
         self.frames = 0
-        self.crc_failures = 0
+        self.crc_errors = 0
         self.bad_headers = 0
         self.resyncs = 0
         self.bytes_discarded = 0
@@ -193,7 +190,7 @@ class FrameParser:
                 break
             crc = (buf[end - 2] << 8) | buf[end - 1]
             if crc_hqx(buf[pos + 2 : end - 2], CRC_INIT) != crc:
-                self.crc_failures += 1
+                self.crc_errors += 1
                 self._skip(1)
                 pos += 1
                 continue
@@ -212,20 +209,19 @@ def encode_sample(
     return encode_frame(FrameType.SAMPLE, SAMPLE_STRUCT.pack(seq & 0xFFFF, *acc, *gyro, temp))
 
 
-def decode_samples(payloads: list[bytes], calibrated: bool = False) -> NDArray[np.float64]:
-    """Decode SAMPLE (or CAL_SAMPLE) payloads into an N-by-8 block.
+def decode_samples(payloads: list[bytes], calibrated: bool = False) -> SampleBlock:
+    """Decode SAMPLE (or CAL_SAMPLE) payloads into a block of samples.
 
-    Columns are :data:`SAMPLE_COLUMNS`: the 16-bit sequence number as sent,
-    accelerometer x, y, z (ADC counts; g for calibrated samples), gyro x, y, z in
-    deg/s, temperature in °C.
+    The sequence numbers are the 16-bit ones as sent; accelerometer in ADC counts (g
+    for calibrated samples), gyros in deg/s, temperature in °C.
     """
     dtype = CAL_SAMPLE_DTYPE if calibrated else SAMPLE_DTYPE
     rec = np.frombuffer(b"".join(payloads), dtype=dtype)
-    block = np.empty((rec.shape[0], len(SAMPLE_COLUMNS)), dtype=np.float64)
-    block[:, 0] = rec["seq"]
-    block[:, 1:4] = rec["acc"]
-    block[:, 4:7] = rec["gyro"] * GYRO_DPS_PER_LSB
-    block[:, 7] = rec["temp"] * TEMP_C_PER_LSB
+    block = SampleBlock(np.empty((rec.shape[0], len(SAMPLE_COLUMNS)), dtype=np.float64))
+    block.seq[:] = rec["seq"]
+    block.accel[:] = rec["acc"]
+    block.gyro[:] = rec["gyro"] * GYRO_DPS_PER_LSB
+    block.temperature[:] = rec["temp"] * TEMP_C_PER_LSB
     return block
 
 

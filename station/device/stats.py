@@ -7,17 +7,20 @@ from dataclasses import asdict, dataclass, fields
 class LinkStats:
     """Counters of one link since it was opened (or the difference of two snapshots).
 
-    ``samples``: samples accepted; ``samples_lost``: samples missing according to the
-    sequence numbers; ``seq_gaps``: places where samples went missing;
-    ``crc_failures``, ``bad_headers``, ``resyncs``, ``bytes_discarded``: see
-    :class:`station.device.protocol.FrameParser`; ``buffer_overruns``: samples pushed
-    out of the driver's buffer because nobody drained it.
+    The four counters a pose's record stores keep the record's names
+    (:class:`station.records.LinkStats`): ``crc_errors`` (well-formed headers whose CRC
+    did not match), ``gaps`` (places where samples went missing), ``resyncs`` (see
+    :class:`station.device.protocol.FrameParser`) and ``lost_samples`` (samples
+    missing according to the sequence numbers). The link also counts ``samples``
+    accepted, ``bad_headers`` and ``bytes_discarded`` (see the parser) and
+    ``buffer_overruns``: samples pushed out of the driver's buffer because nobody
+    drained it.
     """
 
     samples: int = 0
-    samples_lost: int = 0
-    seq_gaps: int = 0
-    crc_failures: int = 0
+    lost_samples: int = 0
+    gaps: int = 0
+    crc_errors: int = 0
     bad_headers: int = 0
     resyncs: int = 0
     bytes_discarded: int = 0
@@ -26,8 +29,8 @@ class LinkStats:
     @property
     def loss_fraction(self) -> float:
         """Fraction of the samples sent that never arrived (0 when none were expected)."""
-        expected = self.samples + self.samples_lost
-        return self.samples_lost / expected if expected else 0.0
+        expected = self.samples + self.lost_samples
+        return self.lost_samples / expected if expected else 0.0
 
     def __sub__(self, earlier: "LinkStats") -> "LinkStats":
         """Counters accumulated between ``earlier`` and this snapshot."""

@@ -26,9 +26,9 @@ import numpy as np
 from pydantic import BaseModel
 from scipy import special
 
+from station.arrays import FloatArray
 from station.gyro.identifiability import AxisIdentifiability
 from station.gyro.lsq import solve
-from station.gyro.model import FloatArray
 
 ModelName = Literal["none", "bias", "scale-factor", "both"]
 Verdict = Literal["none", "bias", "scale-factor", "both", "indistinguishable"]

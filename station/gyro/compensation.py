@@ -12,7 +12,8 @@ for ω, exact rather than to first order). All samples are solved at once by a b
 
 import numpy as np
 
-from station.gyro.model import FloatArray, GyroErrorModel
+from station.arrays import FloatArray
+from station.gyro.model import GyroErrorModel
 
 
 def compensate(model: GyroErrorModel, gyro: FloatArray, acc: FloatArray) -> FloatArray:

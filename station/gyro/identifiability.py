@@ -31,9 +31,10 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel
 
+from station.arrays import FloatArray
 from station.errors import CalstationError, InputError
 from station.gyro.log import GyroLog
-from station.gyro.model import TERMS_PER_AXIS, FloatArray, regressors, term_names
+from station.gyro.model import TERMS_PER_AXIS, regressors, term_names
 from station.sensor import AXES
 
 RATE_FLOOR_DPS: Final = 1.0

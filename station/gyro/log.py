@@ -23,8 +23,8 @@ from typing import IO, Final
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from station.arrays import FloatArray
 from station.errors import InputError
-from station.gyro.model import FloatArray
 from station.sensor import AXES
 
 RATE_COLUMNS: Final = tuple(f"rate_ref_{a}" for a in AXES)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from station.arrays import FloatArray
 from station.gyro.identifiability import RCOND, normalised
-from station.gyro.model import FloatArray
 
 
 @dataclass(frozen=True)

@@ -19,11 +19,9 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
-from numpy.typing import NDArray
 
+from station.arrays import FloatArray
 from station.sensor import AXES
-
-FloatArray = NDArray[np.float64]
 
 PPM: Final = 1e6
 #: Terms of one gyro axis' row of the model, in regressor column order.

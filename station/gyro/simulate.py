@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from station.arrays import FloatArray
 from station.gyro.log import GyroLog
-from station.gyro.model import PPM, FloatArray, GyroErrorModel
+from station.gyro.model import PPM, GyroErrorModel
 
 G0 = 9.80665  # m/s², standard gravity
 

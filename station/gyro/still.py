@@ -19,9 +19,9 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 from scipy import special
 
+from station.arrays import FloatArray
 from station.errors import InputError
 from station.gyro.lsq import solve
-from station.gyro.model import FloatArray
 from station.record_bounds import MEASURE_MAX, GyroRate, GyroSpread, Measure, Probability, Text
 from station.sensor import AXES
 

@@ -12,11 +12,11 @@ done with it is :class:`station.session.UnitRun`'s business.
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
 from station.acquisition.pose import PoseAcquisition, PoseResult
 from station.acquisition.stillness import WindowVerdict, judge_window
+from station.arrays import FloatArray as Array
 from station.device import PutterDriver
 from station.journal import RunJournal
 from station.operator_text import MOVED_EARLY, capture_refused, pose_words
@@ -25,7 +25,6 @@ from station.poses import Pose
 from station.run.messages import MessageLog
 from station.run.settings import RunSettings
 
-Array = NDArray[np.float64]
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128
 

@@ -8,8 +8,7 @@ takes the messages about the link off the screen when the right unit is back.
 import time
 from collections.abc import Callable
 
-from station.device import DeviceError, PutterDriver
-from station.device.errors import SerialNumberMismatchError
+from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
 from station.operator_text import port_problem, wrong_unit
 from station.run.messages import MessageLog
 

@@ -8,10 +8,10 @@ from collections.abc import Mapping
 from datetime import UTC, datetime
 
 import numpy as np
-from numpy.typing import NDArray
 
 from station import __version__
 from station.acquisition.pose import PoseResult
+from station.arrays import FloatArray as Array
 from station.calibration import Solution, apply
 from station.gyro import summarize_still_poses
 from station.journal import Capture, RunJournal
@@ -30,7 +30,6 @@ from station.records import (
 )
 from station.run.settings import RunSettings
 
-Array = NDArray[np.float64]
 ALGORITHM = "autocal-eq10"
 
 
@@ -75,10 +74,10 @@ def capture_of(
         gyro_mean=_vec(result.gyro_mean),
         temperature_c=result.temperature_c,
         link=LinkStats(
-            crc_errors=result.link.crc_failures,
-            gaps=result.link.seq_gaps,
+            crc_errors=result.link.crc_errors,
+            gaps=result.link.gaps,
             resyncs=result.link.resyncs,
-            lost_samples=result.link.samples_lost,
+            lost_samples=result.link.lost_samples,
         ),
         replaced=replaced,
     )

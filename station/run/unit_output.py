@@ -8,12 +8,10 @@ gathers :data:`UNIT_OUTPUT_SAMPLES` of them and answers how far their mean |g| l
 import time
 
 import numpy as np
-from numpy.typing import NDArray
 
-from station.device import PutterDriver
-from station.device.errors import DeviceTimeoutError
+from station.arrays import FloatArray as Array
+from station.device import DeviceTimeoutError, PutterDriver
 
-Array = NDArray[np.float64]
 #: Calibrated samples averaged to check the unit's own output.
 UNIT_OUTPUT_SAMPLES = 256
 #: Wall-clock seconds without a sample before the unit counts as gone.

@@ -18,10 +18,9 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-Array = NDArray[np.float64]
+from station.arrays import FloatArray
 
 STANDARD_GRAVITY: Final = 9.80665  # m/s²
 UP: Final = np.array([0.0, 0.0, 1.0])
@@ -44,11 +43,11 @@ class Handling:
 class Kinematics:
     """What the sensors see at N instants: specific force (g) and rates (deg/s), body axes."""
 
-    force_g: Array
-    rate_dps: Array
+    force_g: FloatArray
+    rate_dps: FloatArray
 
 
-def _unit(v: Array) -> Array:
+def _unit(v: FloatArray) -> FloatArray:
     return np.asarray(v / np.linalg.norm(v), dtype=np.float64)
 
 
@@ -94,18 +93,18 @@ class MotionModel:
         self._shake_dir = _unit(rng.normal(size=3))
         self._tremor = True
 
-    def _phase(self, t: Array) -> tuple[Array, Array]:
+    def _phase(self, t: FloatArray) -> tuple[FloatArray, FloatArray]:
         tau = np.clip((t - self._t0) / self._duration, 0.0, 1.0)
         s = tau**3 * (10 - 15 * tau + 6 * tau**2)
         s_dot = 30 * tau**2 * (1 - tau) ** 2 / self._duration
         return s, s_dot
 
-    def _orientation(self, t: Array) -> Rotation:
+    def _orientation(self, t: FloatArray) -> Rotation:
         s, _ = self._phase(t)
         phi = (self._from.inv() * self._to).as_rotvec()
         return self._from * Rotation.from_rotvec(s[:, None] * phi)
 
-    def evaluate(self, t: Array) -> Kinematics:
+    def evaluate(self, t: FloatArray) -> Kinematics:
         """Specific force and body rates at simulated times ``t`` (1-D, seconds)."""
         h = self.handling
         T = self._duration

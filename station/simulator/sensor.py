@@ -23,8 +23,8 @@ from dataclasses import dataclass
 from typing import Any, Final
 
 import numpy as np
-from numpy.typing import NDArray
 
+from station.arrays import FloatArray
 from station.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -34,8 +34,6 @@ from station.sensor import (
     OFFSET_SPREAD_COUNTS,
     SENSITIVITY_TOLERANCE,
 )
-
-Array = NDArray[np.float64]
 
 #: Sense axis of each gyro (x, y, z): the tuning forks detect along y, z and x.
 GYRO_SENSE_AXIS: Final = (1, 2, 0)
@@ -54,20 +52,20 @@ GYRO_G_SENSITIVITY_PER_G: Final = 600e-6
 class SensorTruth:
     """The true parameters of one virtual unit (at 25 °C), for checking a calibration."""
 
-    offset_counts: Array
-    sensitivity_counts_per_g: Array
-    cross_axis: Array
+    offset_counts: FloatArray
+    sensitivity_counts_per_g: FloatArray
+    cross_axis: FloatArray
     noise_counts: float
-    offset_tempco_counts_per_c: Array
-    sensitivity_tempco_per_c: Array
-    gyro_bias_dps: Array
-    gyro_scale_error: Array
-    gyro_misalignment: Array
-    gyro_g_sensitivity_per_g: Array
+    offset_tempco_counts_per_c: FloatArray
+    sensitivity_tempco_per_c: FloatArray
+    gyro_bias_dps: FloatArray
+    gyro_scale_error: FloatArray
+    gyro_misalignment: FloatArray
+    gyro_g_sensitivity_per_g: FloatArray
     gyro_noise_dps: float
 
     @property
-    def matrix(self) -> Array:
+    def matrix(self) -> FloatArray:
         """The true counts-to-g matrix ``(diag(s) · C)⁻¹`` at 25 °C."""
         return np.asarray(
             np.linalg.inv(np.diag(self.sensitivity_counts_per_g) @ self.cross_axis),
@@ -123,10 +121,10 @@ class SensorTruth:
 
 def accelerometer_counts(
     truth: SensorTruth,
-    force_g: Array,
-    temperature_c: Array,
+    force_g: FloatArray,
+    temperature_c: FloatArray,
     rng: np.random.Generator,
-) -> Array:
+) -> FloatArray:
     """ADC counts (N-by-3, integers as float) for specific force ``force_g`` (N-by-3, g)."""
     dt = (temperature_c - REFERENCE_TEMPERATURE_C)[:, None]
     offset = truth.offset_counts + truth.offset_tempco_counts_per_c * dt
@@ -140,8 +138,8 @@ def accelerometer_counts(
 
 
 def gyro_rates(
-    truth: SensorTruth, rate_dps: Array, force_g: Array, rng: np.random.Generator
-) -> Array:
+    truth: SensorTruth, rate_dps: FloatArray, force_g: FloatArray, rng: np.random.Generator
+) -> FloatArray:
     """Measured rates (N-by-3, deg/s) for true body rates ``rate_dps`` ([Park2014]_ eq. 4)."""
     sense_force = force_g[:, list(GYRO_SENSE_AXIS)]
     return np.asarray(
@@ -163,6 +161,6 @@ class Thermal:
     self_heating_c: float = 1.5
     time_constant_s: float = 180.0
 
-    def at(self, t: Array) -> Array:
+    def at(self, t: FloatArray) -> FloatArray:
         """Temperature (°C) at simulated times ``t`` (s since power-up)."""
         return self.ambient_c + self.self_heating_c * (1 - np.exp(-t / self.time_constant_s))

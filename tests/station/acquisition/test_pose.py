@@ -124,7 +124,7 @@ def test_a_whole_unit_of_seven_poses_matches_the_truth(
         assert np.all(result.accel_std < StillnessThresholds().accel_std_max_counts)
         np.testing.assert_allclose(result.gyro_mean, unit.truth.gyro_bias_dps, atol=0.03)
         assert 24.0 < result.temperature_c < 27.0
-        assert result.link.samples_lost == 0
+        assert result.link.lost_samples == 0
         assert result.to_dict()["link"]["loss_fraction"] == 0.0
 
 

@@ -83,7 +83,7 @@ def test_stream_delivers_contiguous_samples_that_match_the_truth(
     driver.stop_stream()
     stats = driver.stats
     assert stats.samples >= 3000
-    assert stats.samples_lost == stats.crc_failures == stats.resyncs == 0
+    assert stats.lost_samples == stats.crc_errors == stats.resyncs == 0
 
 
 def test_set_rate_changes_the_device_time_between_samples(
@@ -192,12 +192,12 @@ def test_corrupted_bytes_are_counted_and_never_give_a_wrong_sample(
     unit.faults.corrupt_rate = 0.05
     rows = stream_then_stop(unit, driver, 4000)
     stats = driver.stats
-    assert stats.crc_failures + stats.bad_headers > 50
+    assert stats.crc_errors + stats.bad_headers > 50
     assert stats.resyncs > 50
     # Every corrupted frame is refused: it shows as a lost sample, never as a bad value.
     assert np.all(np.diff(rows[:, 0]) >= 1)
     assert stats.samples == len(rows)
-    assert stats.samples_lost == rows[-1, 0] + 1 - len(rows)
+    assert stats.lost_samples == rows[-1, 0] + 1 - len(rows)
     assert np.abs(rows[:, 1:4] - static_reading(unit, "face_up")).max() < 8
 
 
@@ -205,9 +205,9 @@ def test_dropped_samples_show_as_sequence_gaps(unit: VirtualPutter, driver: Putt
     unit.faults.drop_rate = 0.05
     rows = stream_then_stop(unit, driver, 4000)
     stats = driver.stats
-    assert stats.samples_lost == rows[-1, 0] + 1 - len(rows) > 100
-    assert stats.seq_gaps > 100
-    assert stats.crc_failures == stats.resyncs == 0
+    assert stats.lost_samples == rows[-1, 0] + 1 - len(rows) > 100
+    assert stats.gaps > 100
+    assert stats.crc_errors == stats.resyncs == 0
     assert 0.03 < stats.loss_fraction < 0.07
 
 
@@ -242,7 +242,7 @@ def test_sequence_numbers_unwrap_past_65535_and_gaps_are_counted() -> None:
         stats = drv.stats
     expected = [s + 65536 if s < 100 else s for s in sent]
     np.testing.assert_array_equal(rows[:, 0], expected)
-    assert (stats.samples_lost, stats.seq_gaps) == (2, 1)
+    assert (stats.lost_samples, stats.gaps) == (2, 1)
 
 
 def test_the_putter_answers_unknown_and_malformed_commands_with_an_error(
@@ -326,5 +326,5 @@ def test_any_run_of_sequence_numbers_unwraps_and_counts_its_losses(
         rows = drv.wait_samples(len(counts), timeout=2.0)
         stats = drv.stats
     np.testing.assert_array_equal(rows[:, 0], counts)
-    assert stats.samples_lost == sum(steps) - len(steps)
-    assert stats.seq_gaps == sum(1 for s in steps if s > 1)
+    assert stats.lost_samples == sum(steps) - len(steps)
+    assert stats.gaps == sum(1 for s in steps if s > 1)

@@ -48,7 +48,7 @@ def test_sample_frame_is_22_bytes_and_decodes_to_physical_units() -> None:
     frame = encode_sample(65535, (0, 2048, 4095), (-50, 0, 50), 2512)
     assert len(frame) == 22
     (parsed,) = FrameParser().feed(frame)
-    row = decode_samples([parsed.payload])[0]
+    row = decode_samples([parsed.payload]).rows[0]
     np.testing.assert_allclose(row, [65535, 0, 2048, 4095, -1.0, 0.0, 1.0, 25.12])
 
 
@@ -59,7 +59,7 @@ def test_frames_split_across_reads_come_out_whole() -> None:
     for i in range(0, len(stream), 7):
         frames += parser.feed(stream[i : i + 7])
     assert [SAMPLE_STRUCT.unpack(f.payload)[0] for f in frames] == list(range(50))
-    assert parser.resyncs == parser.crc_failures == parser.bytes_discarded == 0
+    assert parser.resyncs == parser.crc_errors == parser.bytes_discarded == 0
 
 
 def test_garbage_before_a_frame_counts_one_resync() -> None:
@@ -78,7 +78,7 @@ def test_a_corrupted_frame_is_refused_and_the_next_one_read() -> None:
     frames = parser.feed(bytes(bad) + good)
     assert len(frames) == 1
     assert frames[0].payload == good[4:-2]
-    assert parser.crc_failures == 1
+    assert parser.crc_errors == 1
     assert parser.resyncs == 1
 
 
@@ -87,7 +87,7 @@ def test_unknown_type_or_wrong_length_is_refused_before_the_crc() -> None:
     assert parser.feed(encode_frame(0x33, b"")) == []
     assert parser.feed(encode_frame(FrameType.SAMPLE, b"\x00" * 15)) == []
     assert parser.bad_headers == 2
-    assert parser.crc_failures == 0
+    assert parser.crc_errors == 0
 
 
 def test_the_putter_side_parser_passes_any_well_framed_command() -> None:

@@ -1,0 +1,119 @@
+"""The station's side of the wire, as a :class:`serial.threaded.Protocol`.
+
+pyserial's :class:`~serial.threaded.ReaderThread` reads the port and hands every
+chunk to :meth:`PutterLink.data_received`; the link cuts it into frames with the
+:class:`~station.device.protocol.FrameParser` (the putter's frames carry a length
+and a CRC, not the terminator pyserial's ``Packetizer`` splits on), unwraps the
+samples' sequence numbers into the two sample buffers and queues every other frame
+as a reply for the command waiting on it. When the thread ends,
+:meth:`connection_lost` records why, so that nobody waits for a dead link.
+"""
+
+import logging
+import queue
+import threading
+
+import serial
+from serial.threaded import Protocol
+
+from station.arrays import FloatArray
+from station.device.buffer import SampleBuffer
+from station.device.errors import DeviceDisconnectedError, DeviceError, ProtocolError
+from station.device.protocol import Frame, FrameParser, FrameType, decode_samples
+from station.device.sequence import SequenceTracker
+from station.device.stats import LinkStats
+from station.sensor import ADC_MAX
+
+log = logging.getLogger(__name__)
+
+
+class PutterLink(Protocol):
+    """Frames in, samples and replies out; the link's counters and its failure.
+
+    ``name`` is the port, for messages; ``buffer_rows`` the capacity of each of the
+    raw and calibrated sample buffers.
+    """
+
+    def __init__(self, name: str, buffer_rows: int) -> None:
+        self.name = name
+        self.raw = SampleBuffer(buffer_rows)
+        self.calibrated = SampleBuffer(buffer_rows)
+        self.replies: queue.Queue[Frame] = queue.Queue()
+        self.closing = False
+        self._parser = FrameParser()
+        self._seq = SequenceTracker()
+        self._samples = 0
+        self._lock = threading.Lock()
+        self._failure: DeviceError | None = None
+
+    @property
+    def failure(self) -> DeviceError | None:
+        """Why the link ended, if it did."""
+        return self._failure
+
+    def stats(self) -> LinkStats:
+        """A snapshot of the link's counters."""
+        parser = self._parser
+        with self._lock:
+            return LinkStats(
+                samples=self._samples,
+                lost_samples=self._seq.lost,
+                gaps=self._seq.gaps,
+                crc_errors=parser.crc_errors,
+                bad_headers=parser.bad_headers,
+                resyncs=parser.resyncs,
+                bytes_discarded=parser.bytes_discarded,
+                buffer_overruns=self.raw.overruns + self.calibrated.overruns,
+            )
+
+    def restart_sequence(self) -> None:
+        """The unit is about to count its samples from 0 again."""
+        with self._lock:
+            self._seq.restart()
+
+    def fail(self, failure: DeviceError) -> None:
+        """Record the first failure and wake everyone waiting for samples."""
+        if self._failure is None:
+            self._failure = failure
+            # Not a warning: the error reaches the station, which tells the operator in
+            # plain words; Python's last-resort handler would print this raw text over
+            # the screen and leave it there.
+            log.info("%s", failure)
+        self.raw.wake()
+        self.calibrated.wake()
+
+    # -- serial.threaded.Protocol ---------------------------------------------------
+
+    def data_received(self, data: bytes) -> None:
+        """Parse a chunk; store its samples, queue its replies."""
+        with self._lock:
+            frames = self._parser.feed(data)
+        raw = [f.payload for f in frames if f.type == FrameType.SAMPLE]
+        calibrated = [f.payload for f in frames if f.type == FrameType.CAL_SAMPLE]
+        if raw:
+            block = decode_samples(raw)
+            self._store(block.rows[(block.accel <= ADC_MAX).all(axis=1)], self.raw)
+        if calibrated:
+            self._store(decode_samples(calibrated, calibrated=True).rows, self.calibrated)
+        for frame in frames:
+            if frame.type not in (FrameType.SAMPLE, FrameType.CAL_SAMPLE):
+                self.replies.put(frame)
+
+    def connection_lost(self, exc: BaseException | None) -> None:
+        """The reader thread ended: by :meth:`PutterDriver.close`, or the link failed."""
+        if self.closing:
+            return
+        if exc is None or isinstance(exc, (serial.SerialException, OSError)):
+            reason = exc if exc is not None else "port closed"
+            self.fail(DeviceDisconnectedError(f"putter at {self.name} disconnected: {reason}"))
+        else:  # a bug must not leave the station waiting forever, nor pass unseen
+            log.error("putter reader stopped", exc_info=exc)
+            self.fail(ProtocolError(f"putter at {self.name}: reader stopped: {exc!r}"))
+
+    def _store(self, rows: FloatArray, buffer: SampleBuffer) -> None:
+        if not len(rows):
+            return
+        with self._lock:
+            rows[:, 0] = self._seq.unwrap(rows[:, 0])
+            self._samples += len(rows)
+        buffer.append(rows)
