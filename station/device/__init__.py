@@ -5,7 +5,7 @@ Public surface (everything else is private to the package)::
     driver = PutterDriver.open("socket://127.0.0.1:5000")
     driver.identify(expected_serial="PT000001")
     driver.start_stream()
-    rows = driver.drain()          # N-by-8: SAMPLE_COLUMNS
+    block = driver.drain()         # a SampleBlock: block.accel, block.gyro, block.summary()
 
 The protocol itself is documented in ``docs/protocol.md``.
 """
