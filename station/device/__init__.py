@@ -21,13 +21,14 @@ from station.device.errors import (
     SerialNumberMismatchError,
 )
 from station.device.messages import DeviceCalibration, Identity
-from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, PROTOCOL_VERSION
+from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, MAX_RATE_HZ, PROTOCOL_VERSION
 from station.device.stats import LinkStats
 from station.samples import SAMPLE_COLUMNS
 
 __all__ = [
     "DEFAULT_BAUD",
     "DEFAULT_RATE_HZ",
+    "MAX_RATE_HZ",
     "PROTOCOL_VERSION",
     "SAMPLE_COLUMNS",
     "DeviceCalibration",

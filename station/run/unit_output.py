@@ -28,7 +28,7 @@ class UnitOutputCheck:
     def poll(self, driver: PutterDriver) -> float | None:
         """The unit's |g| error in mg once enough samples came (the stream then stops).
 
-        Raises :class:`station.device.errors.DeviceTimeoutError` when the unit went quiet.
+        Raises :class:`station.device.DeviceTimeoutError` when the unit went quiet.
         """
         block = driver.drain_calibrated()
         now = time.monotonic()
