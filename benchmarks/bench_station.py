@@ -27,8 +27,7 @@ from station.acquisition.pose import PoseAcquisition, PoseResult
 from station.app import StationApp
 from station.config import StationConfig
 from station.demo import ScriptedOperator
-from station.device import PutterDriver
-from station.device.protocol import DEFAULT_RATE_HZ
+from station.device import DEFAULT_RATE_HZ, PutterDriver
 from station.limits import load_profile
 from station.session import UNIT_OUTPUT_SAMPLES
 from station.storage import DatabaseStore

@@ -5,6 +5,14 @@ Public surface::
     open_database(url=None) -> Database     embedded SQLite by default, migrated on first use
     RunRepository(session)                  submit and query runs, manage station keys
     DatabaseSettings                        CALSTATION_DATABASE_URL / CALSTATION_DATA_DIR
+
+Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
+
+    station.errors.CalstationError
+    ├── DatabaseUnavailableError    engine.py      the database does not answer
+    ├── SchemaOutOfDateError        migrate.py     the schema is not the one this software
+    │                                              needs (behind, or from a newer calstation)
+    └── RunConflictError            repository.py  a run with this UUID is stored differently
 """
 
 from db.engine import (

@@ -4,6 +4,7 @@ from alembic import command
 from alembic.config import Config
 from alembic.runtime.migration import MigrationContext
 from alembic.script import ScriptDirectory
+from alembic.util.exc import CommandError
 from sqlalchemy import Connection, Engine
 
 from station.errors import CalstationError
@@ -45,7 +46,14 @@ def upgrade(engine: Engine, revision: str = "head") -> None:
     from db.derived import rewrite_if_stale  # it needs the models, which import this
 
     with engine.begin() as connection:
-        command.upgrade(alembic_config(connection), revision)
+        try:
+            command.upgrade(alembic_config(connection), revision)
+        except CommandError as exc:  # a revision the packaged migrations do not know
+            url = engine.url.render_as_string(hide_password=True)
+            raise SchemaOutOfDateError(
+                f"database {url} cannot be migrated to {revision}: {exc} "
+                "(written by a newer calstation?)"
+            ) from None
         if revision == "head":
             rewrite_if_stale(connection)
 

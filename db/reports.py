@@ -66,7 +66,7 @@ from station.quality.figures import (
 from station.quality.parameters import (
     COEFFICIENTS,
     PARAMETERS,
-    Bounds,
+    FamilyBounds,
     ParameterSpec,
     choose_profile,
     profile_bounds,
@@ -198,7 +198,7 @@ class ReportQueries:
 
     # -- parameters --------------------------------------------------------------------
 
-    def parameters(self, bounds: Bounds) -> list[Row[Any]]:
+    def parameters(self, bounds: FamilyBounds) -> list[Row[Any]]:
         """Per parameter: n, Σ(x − c), Σ(x − c)², min, max, out of limits, marginal and
         histogram bins against ``bounds`` (:func:`db.rollups.parameter_contributions`).
 
@@ -422,7 +422,7 @@ def _pareto(rows: Sequence[Row[Any]]) -> list[ParetoEntry]:
     return entries
 
 
-def _parameter(spec: ParameterSpec, bounds: Bounds, row: RowMapping | None) -> ParameterStats:
+def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None) -> ParameterStats:
     """One parameter's statistics from its row of :meth:`ReportQueries.parameters`."""
     lower, upper = bounds[spec.family]
     start, width, _ = histogram_bins(lower, upper)

@@ -81,7 +81,7 @@ from station.quality.capability import HISTOGRAM_BINS, histogram_bins, marginal_
 from station.quality.parameters import (
     COEFFICIENTS,
     PARAMETERS,
-    Bounds,
+    FamilyBounds,
     ParameterSpec,
     profile_bounds,
 )
@@ -403,7 +403,7 @@ def failure_contributions(keys: Sequence[str], where: Sequence[ColumnElement[boo
     )
 
 
-def _limits_of(specs: Sequence[ParameterSpec], bounds: Bounds) -> FromClause:
+def _limits_of(specs: Sequence[ParameterSpec], bounds: FamilyBounds) -> FromClause:
     """One row per parameter: its limits, marginal zones, histogram range and centre."""
     limits: list[Select[Any]] = []
     for spec in specs:
@@ -431,7 +431,7 @@ def _limits_of(specs: Sequence[ParameterSpec], bounds: Bounds) -> FromClause:
 
 
 def parameter_contributions(
-    keys: Sequence[str], where: Sequence[ColumnElement[bool]], bounds: Bounds
+    keys: Sequence[str], where: Sequence[ColumnElement[bool]], bounds: FamilyBounds
 ) -> list[Select[Any]]:
     """Per parameter and ``keys`` (of :data:`BUCKET`): the columns of
     ``report_parameters`` over the runs ``where`` selects, against ``bounds``.
@@ -512,20 +512,20 @@ def _upsert(
     return stmt.on_conflict_do_update(index_elements=list(keys), set_=merged)
 
 
-def stored_bounds(connection: Connection) -> Bounds:
+def stored_bounds(connection: Connection) -> FamilyBounds:
     """The bounds ``report_parameters`` was counted with (empty before any)."""
     rows = connection.execute(select(ReportBounds.family, ReportBounds.lower, ReportBounds.upper))
     return {family: (lower, upper) for family, lower, upper in rows}
 
 
-def _store_bounds(connection: Connection, bounds: Bounds) -> None:
+def _store_bounds(connection: Connection, bounds: FamilyBounds) -> None:
     connection.execute(
         insert(ReportBounds),
         [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
     )
 
 
-def _bounds_for_rollup(connection: Connection) -> Bounds:
+def _bounds_for_rollup(connection: Connection) -> FamilyBounds:
     """The stored bounds; on an empty database, the default profile's, stored now."""
     bounds = stored_bounds(connection)
     if not bounds:
@@ -634,7 +634,7 @@ def record_run(connection: Connection, run_pk: int) -> None:
     connection.execute(do.parameters, {"run_pk": run_pk})
 
 
-def rebuild(connection: Connection, bounds: Bounds | None = None) -> None:
+def rebuild(connection: Connection, bounds: FamilyBounds | None = None) -> None:
     """Recompute every fact and roll-up from the raw tables, in SQL.
 
     Parameters are binned against ``bounds`` (default: the shipped default limits

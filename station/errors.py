@@ -1,12 +1,28 @@
-"""The station's error tree.
+"""The root of every error tree in calstation.
 
 Every error meant for a person (bad input, a refused calibration, a device that does
 not answer) derives from :class:`CalstationError`; the command-line interface prints
-its message as one line and exits with status 2, never a traceback::
+its message as one line and exits with status 2, never a traceback. Each package keeps
+its own branch, drawn in full where it is defined; the station's::
 
     CalstationError
-    ├── InputError            a file, field or value the user gave is unusable
-    └── calibration.CalibrationError   the poses cannot give a trustworthy calibration
+    ├── InputError                          a file, field or value the user gave is unusable
+    ├── calibration.CalibrationError        the poses cannot give a trustworthy calibration
+    │   └── TooFewPosesError, …             station/calibration/errors.py
+    ├── gyro.NotIdentifiableError           the log cannot separate the terms asked for
+    ├── device.DeviceError                  the putter on the wire
+    │   └── DeviceTimeoutError, …           station/device/errors.py
+    ├── acquisition.AcquisitionError        no trustworthy still window for a pose
+    │   └── NotStillError, …                station/acquisition/errors.py
+    ├── storage.StoreError                  a run record could not be stored
+    │   └── StoreUnavailableError, …        station/storage.py
+    └── outbox_files.UnreadableRecordError  an outbox file that is not a run record
+
+The results database (:mod:`db`) and the server (:mod:`api`) derive their own from the
+same root and draw them in their ``__init__``. The station's loop sees the database's
+only as :class:`station.storage.StoreError`: storage translates them. Not in the tree,
+because no person should ever read them: ``run.phases.PhaseError`` (a ``RuntimeError``,
+a bug in the run's state machine).
 """
 
 from pydantic import ValidationError

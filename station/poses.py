@@ -18,8 +18,9 @@ from types import MappingProxyType
 from typing import Final
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
+
+from station.arrays import FloatArray
 
 UP: Final = np.array([0.0, 0.0, 1.0])
 
@@ -33,7 +34,7 @@ class Pose:
     instruction: str
 
     @property
-    def gravity_body(self) -> NDArray[np.float64]:
+    def gravity_body(self) -> FloatArray:
         """Unit vector of the sensed gravity reaction in body axes (in g)."""
         return np.asarray(self.rotation.inv().apply(UP), dtype=np.float64)
 

@@ -25,6 +25,7 @@ from pydantic import (
     model_validator,
 )
 
+from station.calibration.model import Model
 from station.gyro.fit import GyroFitReport
 from station.gyro.log import GyroDwells
 from station.gyro.still import GyroStillSummary
@@ -45,10 +46,11 @@ from station.record_bounds import (
     plain_document,
     printable,
 )
-from station.sensor import ADC_MAX, ADC_MIN
+from station.sensor import ADC_MAX, ADC_MIN, Axis
 
 __all__ = [
     "SERIAL_PATTERN",
+    "Axis",
     "Coefficients",
     "Counts3",
     "Disposition",
@@ -74,8 +76,6 @@ __all__ = [
 Verdict = Literal["pass", "fail"]
 #: Where a unit goes after a run: out of the door, back on a station, or to the repair bench.
 Disposition = Literal["ship", "retest", "rework"]
-Model = Literal["six", "nine"]
-Axis = Literal["x", "y", "z"]
 #: ``fit`` poses feed the calibration solve; ``verify`` poses only check its result.
 PoseRole = Literal["fit", "verify"]
 

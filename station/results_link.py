@@ -14,14 +14,12 @@ from pathlib import Path
 
 from rich.console import RenderableType
 from rich.text import Text
-from sqlalchemy.exc import SQLAlchemyError
 
 from station.disk import DiskWatch
-from station.errors import CalstationError
 from station.journal import JournalFile
 from station.outbox import Outbox, waiting
 from station.records import RunRecord
-from station.storage import RunStore
+from station.storage import RunStore, StoreError
 from station.unit_history import UnitHistory
 
 #: Seconds between attempts to empty a non-empty outbox while idle.
@@ -91,9 +89,9 @@ class ResultsLink:
             if self._store is None:
                 self._store = self._open_store()
             result = self.outbox.sync(self._store)
-        except (SQLAlchemyError, OSError, CalstationError) as exc:
+        except (StoreError, OSError) as exc:  # OSError: the outbox's own disk
             self._drop_store()
-            reason = str(exc) if isinstance(exc, CalstationError) else type(exc).__name__
+            reason = str(exc) if isinstance(exc, StoreError) else type(exc).__name__
             self._store_says(f"{waiting(self.backlog)}: results store unreachable ({reason})")
             return
         self.backlog = result.pending
@@ -119,10 +117,8 @@ class ResultsLink:
         """Connect to the store at start, so the first unit does not wait for it."""
         try:
             self._store = self._open_store()
-        except (SQLAlchemyError, OSError, CalstationError) as exc:
-            self.store_note = (
-                f"results database unreachable ({type(exc).__name__}): runs will wait in the outbox"
-            )
+        except StoreError as exc:
+            self.store_note = f"results database unreachable ({exc}): runs will wait in the outbox"
             self._say_line(self.store_note)
         else:
             self._say_line("results database: connected")

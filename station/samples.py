@@ -8,10 +8,12 @@ names those columns (views, no copies) so that no caller spells ``rows[:, 1:4]``
 are computed.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final, Self
 
 import numpy as np
+import numpy.typing as npt
 
 from station.arrays import FloatArray
 
@@ -67,8 +69,21 @@ class SampleBlock:
         """Assemble a block from its columns (``accel`` and ``gyro`` N-by-3)."""
         return cls(np.column_stack((seq, accel, gyro, temperature)).astype(np.float64))
 
+    @classmethod
+    def concat(cls, blocks: Sequence["SampleBlock"]) -> Self:
+        """The samples of ``blocks``, in order, as one block (no copy for a single one)."""
+        if len(blocks) == 1:
+            return cls(blocks[0].rows)
+        if not blocks:
+            return cls.empty()
+        return cls(np.concatenate([block.rows for block in blocks]))
+
     def __len__(self) -> int:
         return len(self.rows)
+
+    def __getitem__(self, which: slice | npt.NDArray[np.bool_] | np.bool_) -> Self:
+        """The samples a slice or a mask selects, as a block (rows, never columns)."""
+        return type(self)(self.rows[which])
 
     @property
     def seq(self) -> FloatArray:

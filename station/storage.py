@@ -3,9 +3,10 @@
 Both stores are idempotent on the run UUID, so an outbox may resend a record as often as
 it likes: the first delivery stores it, every later one gets the stored run back.
 This module is the station loop's one door to storage: nothing else in the loop imports
-:mod:`db` (an import-linter contract keeps it so), and the settings that say where the
-database is (:data:`DatabaseUrl`, :data:`DataDir`) come through here too.
-Errors tell the outbox what to do::
+:mod:`db`, :mod:`api` or SQLAlchemy (an import-linter contract keeps it so), and the
+settings that say where the database is (:data:`DatabaseUrl`, :data:`DataDir`) come
+through here too. Every failure of a store, whatever the database driver or HTTP client
+raised, leaves this module as one of these errors, which tell the outbox what to do::
 
     CalstationError
     └── StoreError
@@ -23,20 +24,27 @@ Errors tell the outbox what to do::
 from typing import Protocol
 
 import httpx
-from pydantic import BaseModel
-from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError, SQLAlchemyError
+from pydantic import BaseModel, ValidationError
+from sqlalchemy.exc import (
+    ArgumentError,
+    DBAPIError,
+    InterfaceError,
+    OperationalError,
+    SQLAlchemyError,
+)
 
 from db import (
     Database,
     DatabaseUnavailableError,
     RunConflictError,
     RunRepository,
+    SchemaOutOfDateError,
     SubmitOutcome,
     open_database,
 )
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.closing import Closing
-from station.errors import CalstationError
+from station.errors import CalstationError, InputError
 from station.records import RunRecord, RunSummary, StoredRun
 
 __all__ = [
@@ -79,7 +87,10 @@ class SubmissionRefusedError(StoreError):
 
 
 class RunStore(Protocol):
-    """Somewhere run records go: ``submit`` is idempotent on ``record.run_id``."""
+    """Somewhere run records go: ``submit`` is idempotent on ``record.run_id``.
+
+    Opening a store and every method raise only :class:`StoreError` (and its kinds).
+    """
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         """Store ``record`` (or find it stored already) and return the stored run."""
@@ -100,8 +111,14 @@ class DatabaseStore(Closing):
     def __init__(self, url: str | None = None, *, database: Database | None = None) -> None:
         try:
             self.database = database or open_database(url)
-        except DatabaseUnavailableError as exc:
+        except (DatabaseUnavailableError, OSError) as exc:
             raise StoreUnavailableError(str(exc)) from None
+        except (SchemaOutOfDateError, InputError) as exc:
+            raise StoreConfigurationError(str(exc)) from None
+        except ArgumentError as exc:
+            raise StoreConfigurationError(f"database URL: {_first_line(exc)}") from None
+        except SQLAlchemyError as exc:
+            raise StoreUnavailableError(f"database: {_first_line(exc)}") from None
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
         try:
@@ -155,10 +172,13 @@ class HttpStore(Closing):
                 f"results server {self.client.base_url} unreachable: {exc}"
             ) from None
         if response.status_code in (200, 201):
-            return SubmitOutcome(
-                created=response.status_code == 201,
-                run=StoredRun.model_validate_json(response.content),
-            )
+            try:
+                run = StoredRun.model_validate_json(response.content)
+            except ValidationError:
+                raise RecordFailedError(
+                    f"results server answered run {record.run_id} with no stored run"
+                ) from None
+            return SubmitOutcome(created=response.status_code == 201, run=run)
         raise _http_error(self.client.base_url, record, response)
 
     def _post(self, body: dict[str, object]) -> httpx.Response:

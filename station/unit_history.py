@@ -17,9 +17,8 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from station.errors import CalstationError
 from station.records import Disposition, RunRecord, RunSummary
-from station.storage import RunStore
+from station.storage import RunStore, StoreError
 from station.unit_state import UnitCalibration, disposition
 
 Run = RunRecord | RunSummary
@@ -68,7 +67,7 @@ class UnitHistory:
         else:
             try:
                 runs.update((str(r.run_id), r) for r in store.history(serial))
-            except CalstationError as exc:
+            except StoreError as exc:
                 unavailable = str(exc)
         for path in waiting:
             try:

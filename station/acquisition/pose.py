@@ -119,8 +119,8 @@ class PoseAcquisition:
         self._stats0 = driver.stats
         self._last_arrival = time.monotonic()
         self.result: PoseResult | None = None
-        #: The rows the latest :meth:`poll` took in, for a live view of the unit.
-        self.recent: FloatArray = SampleBlock.empty().rows
+        #: The samples the latest :meth:`poll` took in, for a live view of the unit.
+        self.recent = SampleBlock.empty()
 
     @property
     def elapsed_s(self) -> float:
@@ -144,30 +144,29 @@ class PoseAcquisition:
         """
         if self.result is not None:
             return self.result
-        rows = self.driver.drain()
-        self.recent = rows
+        block = self.driver.drain()
+        self.recent = block
         now = time.monotonic()
-        if not len(rows):
+        if not len(block):
             if now - self._last_arrival > self.stall_s:
                 raise DeviceTimeoutError(
                     f"pose {self.pose}: no samples from {self.driver.url} for {self.stall_s:g} s"
                 )
             return None
         self._last_arrival = now
-        block = SampleBlock(rows)
-        block = SampleBlock(rows[block.seq >= self.from_seq])
+        block = block[block.seq >= self.from_seq]
         if not len(block):
             return None
         if self._first_seq is None:
             self._first_seq = float(block.seq[0])
         self._last_seq = float(block.seq[-1])
-        verdict = self.detector.feed(block.rows)
+        verdict = self.detector.feed(block)
         if verdict is None:
             self._check(self.detector.last)
             return None
         # Waited until the window's last sample, not the last one drained: how many
         # samples one poll takes in depends on how busy the machine is.
-        window = SampleBlock(verdict.window)
+        window = verdict.window
         self.result = PoseResult.from_window(
             window,
             pose=self.pose,

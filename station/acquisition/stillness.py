@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from station.arrays import FloatArray
 from station.samples import SampleBlock
 from station.sensor import (
     ADC_MAX,
@@ -100,7 +99,7 @@ class WindowVerdict:
     saturated_axes: tuple[str, ...]
     loss_fraction: float
     motion: bool
-    window: FloatArray
+    window: SampleBlock
 
     @property
     def still(self) -> bool:
@@ -108,12 +107,11 @@ class WindowVerdict:
         return not self.reasons
 
 
-def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdict:
-    """Judge one window of samples (rows as :data:`station.samples.SAMPLE_COLUMNS`).
+def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdict:
+    """Judge one window of samples.
 
     Spreads are the window's sample standard deviations (:meth:`SampleBlock.summary`).
     """
-    block = SampleBlock(window)
     acc = block.accel
     summary = block.summary()
     reasons: list[str] = []
@@ -154,43 +152,42 @@ def judge_window(window: FloatArray, limits: StillnessThresholds) -> WindowVerdi
         if s > limits.gyro_std_max_dps:
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
             motion = True
-    return WindowVerdict(tuple(reasons), saturated, loss, motion, window)
+    return WindowVerdict(tuple(reasons), saturated, loss, motion, block)
 
 
 class StillnessDetector:
     """Feed it sample blocks as they arrive; it returns the first still window.
 
-    Rows are N-by-8 as the driver hands them out (sequence number, accelerometer
-    counts, gyro deg/s, temperature). :attr:`last` is the latest verdict, for telling
-    the operator what keeps the pose from being taken.
+    Blocks are as the driver hands them out (accelerometer in counts). :attr:`last` is
+    the latest verdict, for telling the operator what keeps the pose from being taken.
     """
 
     def __init__(self, limits: StillnessThresholds | None = None) -> None:
         self.limits = limits or StillnessThresholds()
         self.last: WindowVerdict | None = None
         self.samples_seen = 0
-        self._rows: FloatArray = SampleBlock.empty().rows
+        self._held = SampleBlock.empty()
         self._next_eval = self.limits.window_samples
 
-    def feed(self, rows: FloatArray) -> WindowVerdict | None:
-        """Add rows; return the verdict of the first still window they complete, if any."""
+    def feed(self, block: SampleBlock) -> WindowVerdict | None:
+        """Add samples; return the verdict of the first still window they complete, if any."""
         width = self.limits.window_samples
         hop = self.limits.hop_samples
         start = self.samples_seen
-        self._rows = np.concatenate((self._rows, rows)) if len(self._rows) else rows
-        self.samples_seen += len(rows)
-        held_from = start - (len(self._rows) - len(rows))
+        self._held = SampleBlock.concat((self._held, block)) if len(self._held) else block
+        self.samples_seen += len(block)
+        held_from = start - (len(self._held) - len(block))
         while self._next_eval <= self.samples_seen:
             end = self._next_eval - held_from
-            verdict = judge_window(self._rows[end - width : end], self.limits)
+            verdict = judge_window(self._held[end - width : end], self.limits)
             self.last = verdict
             if verdict.still:
                 # The next window starts where this one ended.
                 self._next_eval += width
-                self._rows = self._rows[end:]
+                self._held = self._held[end:]
                 return verdict
             self._next_eval += hop
         keep = width + hop
-        if len(self._rows) > keep:
-            self._rows = self._rows[-keep:]
+        if len(self._held) > keep:
+            self._held = self._held[-keep:]
         return None

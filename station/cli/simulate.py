@@ -16,7 +16,7 @@ import typer
 from pydantic import ValidationError
 
 from station.cli.output import out
-from station.device.protocol import DEFAULT_RATE_HZ, MAX_RATE_HZ
+from station.device import DEFAULT_RATE_HZ, MAX_RATE_HZ
 from station.errors import InputError
 from station.poses import POSES
 from station.simulator.control import ControlChannel

@@ -5,7 +5,7 @@ Public surface (everything else is private to the package)::
     driver = PutterDriver.open("socket://127.0.0.1:5000")
     driver.identify(expected_serial="PT000001")
     driver.start_stream()
-    rows = driver.drain()          # N-by-8: SAMPLE_COLUMNS
+    block = driver.drain()         # a SampleBlock: block.accel, block.gyro, block.summary()
 
 The protocol itself is documented in ``docs/protocol.md``.
 """
@@ -21,13 +21,14 @@ from station.device.errors import (
     SerialNumberMismatchError,
 )
 from station.device.messages import DeviceCalibration, Identity
-from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, PROTOCOL_VERSION
+from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, MAX_RATE_HZ, PROTOCOL_VERSION
 from station.device.stats import LinkStats
 from station.samples import SAMPLE_COLUMNS
 
 __all__ = [
     "DEFAULT_BAUD",
     "DEFAULT_RATE_HZ",
+    "MAX_RATE_HZ",
     "PROTOCOL_VERSION",
     "SAMPLE_COLUMNS",
     "DeviceCalibration",

@@ -3,14 +3,11 @@
 import threading
 from collections.abc import Callable
 
-import numpy as np
-
-from station.arrays import FloatArray
 from station.samples import SampleBlock
 
 
 class SampleBuffer:
-    """Sample rows (:data:`~station.samples.SAMPLE_COLUMNS`), at most ``capacity`` of them.
+    """Blocks of samples (:class:`~station.samples.SampleBlock`), at most ``capacity`` rows.
 
     The reader thread appends blocks; the user drains them. When nobody drains, the
     oldest rows are pushed out and counted in :attr:`overruns`.
@@ -20,7 +17,7 @@ class SampleBuffer:
         if capacity < 1:
             raise ValueError(f"buffer capacity must be positive, got {capacity}")
         self._capacity = capacity
-        self._blocks: list[FloatArray] = []
+        self._blocks: list[SampleBlock] = []
         self._rows = 0
         self._lock = threading.Lock()
         self._ready = threading.Condition(self._lock)
@@ -30,7 +27,7 @@ class SampleBuffer:
         with self._lock:
             return self._rows
 
-    def append(self, block: FloatArray) -> None:
+    def append(self, block: SampleBlock) -> None:
         """Add rows; drop the oldest beyond the capacity."""
         if not len(block):
             return
@@ -51,12 +48,10 @@ class SampleBuffer:
                 excess -= cut
             self._ready.notify_all()
 
-    def drain(self, max_rows: int | None = None) -> FloatArray:
+    def drain(self, max_rows: int | None = None) -> SampleBlock:
         """Take up to ``max_rows`` (all by default) of the oldest rows."""
         with self._lock:
-            if not self._blocks:
-                return SampleBlock.empty().rows
-            rows = np.concatenate(self._blocks) if len(self._blocks) > 1 else self._blocks[0]
+            rows = SampleBlock.concat(self._blocks)
             if max_rows is not None and max_rows < len(rows):
                 taken, rest = rows[:max_rows], rows[max_rows:]
                 self._blocks = [rest]

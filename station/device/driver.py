@@ -19,7 +19,6 @@ from typing import cast
 import serial
 from serial.threaded import ReaderThread
 
-from station.arrays import FloatArray
 from station.closing import Closing
 from station.device.buffer import SampleBuffer
 from station.device.errors import (
@@ -47,6 +46,7 @@ from station.device.protocol import (
     encode_frame,
 )
 from station.device.stats import LinkStats
+from station.samples import SampleBlock
 
 log = logging.getLogger(__name__)
 
@@ -60,11 +60,10 @@ class PutterDriver(Closing):
     """A putter on a serial link.
 
     Open it with :meth:`open`; use it as a context manager or call :meth:`close`.
-    Sample blocks are N-by-8 float64 arrays with columns
-    :data:`~station.samples.SAMPLE_COLUMNS` (:class:`~station.samples.SampleBlock`
-    names them): the unwrapped sequence number (counting from 0 at each
-    :meth:`start_stream`, gaps preserved), accelerometer x, y, z in ADC counts (in g
-    from :meth:`drain_calibrated`), gyro x, y, z in deg/s and temperature in °C.
+    Samples come out as :class:`~station.samples.SampleBlock`: ``seq`` is the
+    unwrapped sequence number (counting from 0 at each :meth:`start_stream`, gaps
+    preserved), ``accel`` in ADC counts (in g from :meth:`drain_calibrated`), ``gyro``
+    in deg/s and ``temperature`` in °C.
     """
 
     def __init__(
@@ -145,15 +144,15 @@ class PutterDriver(Closing):
 
     # -- samples ----------------------------------------------------------------------
 
-    def drain(self, max_rows: int | None = None) -> FloatArray:
-        """Take the raw samples received so far (N-by-8); never blocks.
+    def drain(self, max_rows: int | None = None) -> SampleBlock:
+        """Take the raw samples received so far; never blocks.
 
         Raises the link's failure (e.g. :class:`DeviceDisconnectedError`) only once every
         sample received before it has been handed out.
         """
         return self._take(self._link.raw, max_rows)
 
-    def drain_calibrated(self, max_rows: int | None = None) -> FloatArray:
+    def drain_calibrated(self, max_rows: int | None = None) -> SampleBlock:
         """As :meth:`drain`, for samples of the calibrated stream (acceleration in g)."""
         return self._take(self._link.calibrated, max_rows)
 
@@ -161,7 +160,7 @@ class PutterDriver(Closing):
         """How many raw samples wait in the buffer."""
         return len(self._link.raw)
 
-    def wait_samples(self, count: int, timeout: float, *, calibrated: bool = False) -> FloatArray:
+    def wait_samples(self, count: int, timeout: float, *, calibrated: bool = False) -> SampleBlock:
         """Block until ``count`` samples are buffered, then drain exactly ``count``.
 
         For scripts and tests; an interface loop should poll :meth:`drain` instead.
@@ -177,7 +176,7 @@ class PutterDriver(Closing):
             )
         return buffer.drain(count)
 
-    def _take(self, buffer: SampleBuffer, max_rows: int | None) -> FloatArray:
+    def _take(self, buffer: SampleBuffer, max_rows: int | None) -> SampleBlock:
         # Read the failure first: the reader stores its last samples before it fails, so
         # a failure seen here means the drain below holds everything received.
         failure = self._link.failure

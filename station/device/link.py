@@ -16,12 +16,12 @@ import threading
 import serial
 from serial.threaded import Protocol
 
-from station.arrays import FloatArray
 from station.device.buffer import SampleBuffer
 from station.device.errors import DeviceDisconnectedError, DeviceError, ProtocolError
 from station.device.protocol import Frame, FrameParser, FrameType, decode_samples
 from station.device.sequence import SequenceTracker
 from station.device.stats import LinkStats
+from station.samples import SampleBlock
 from station.sensor import ADC_MAX
 
 log = logging.getLogger(__name__)
@@ -92,9 +92,9 @@ class PutterLink(Protocol):
         calibrated = [f.payload for f in frames if f.type == FrameType.CAL_SAMPLE]
         if raw:
             block = decode_samples(raw)
-            self._store(block.rows[(block.accel <= ADC_MAX).all(axis=1)], self.raw)
+            self._store(block[(block.accel <= ADC_MAX).all(axis=1)], self.raw)
         if calibrated:
-            self._store(decode_samples(calibrated, calibrated=True).rows, self.calibrated)
+            self._store(decode_samples(calibrated, calibrated=True), self.calibrated)
         for frame in frames:
             if frame.type not in (FrameType.SAMPLE, FrameType.CAL_SAMPLE):
                 self.replies.put(frame)
@@ -110,10 +110,10 @@ class PutterLink(Protocol):
             log.error("putter reader stopped", exc_info=exc)
             self.fail(ProtocolError(f"putter at {self.name}: reader stopped: {exc!r}"))
 
-    def _store(self, rows: FloatArray, buffer: SampleBuffer) -> None:
-        if not len(rows):
+    def _store(self, block: SampleBlock, buffer: SampleBuffer) -> None:
+        if not len(block):
             return
         with self._lock:
-            rows[:, 0] = self._seq.unwrap(rows[:, 0])
-            self._samples += len(rows)
-        buffer.append(rows)
+            block.seq[:] = self._seq.unwrap(block.seq)
+            self._samples += len(block)
+        buffer.append(block)

@@ -3,8 +3,8 @@
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from station.arrays import FloatArray
 from station.device.protocol import (
     CALIBRATION_REPLY_STRUCT,
     CALIBRATION_STRUCT,
@@ -42,7 +42,7 @@ class Identity:
         return cls(decode_text(serial), decode_text(firmware), decode_text(part), version)
 
 
-def _vector(value: NDArray[np.float64] | list[float]) -> NDArray[np.float64]:
+def _vector(value: FloatArray | list[float]) -> FloatArray:
     return np.asarray(value, dtype=np.float32).astype(np.float64)
 
 
@@ -56,8 +56,8 @@ class DeviceCalibration:
     ``written`` is False while the unit still holds its factory defaults.
     """
 
-    offset: NDArray[np.float64]
-    matrix: NDArray[np.float64]
+    offset: FloatArray
+    matrix: FloatArray
     written: bool = True
 
     def __post_init__(self) -> None:
@@ -94,7 +94,7 @@ class DeviceCalibration:
             written=False,
         )
 
-    def apply(self, raw: NDArray[np.float64]) -> NDArray[np.float64]:
+    def apply(self, raw: FloatArray) -> FloatArray:
         """N-by-3 counts to N-by-3 g, as the unit does in calibrated mode."""
         return (np.asarray(raw, dtype=np.float64) - self.offset) @ self.matrix.T
 

@@ -14,6 +14,11 @@ Public surface::
     summarize_still_poses, GyroStillSummary     still.py        the station's still poses
 
 The Fig. 10-style plot lives in :mod:`station.report.gyro_plot` (it imports matplotlib).
+
+Errors::
+
+    station.errors.CalstationError
+    └── NotIdentifiableError    identifiability.py  the log cannot separate the terms asked for
 """
 
 from station.gyro.comparison import AxisComparison

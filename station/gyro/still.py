@@ -13,7 +13,7 @@ at level α. Bias is the mean over the poses, checked against a limit when one i
 given; noise the RMS of the per-pose noise.
 """
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -23,7 +23,7 @@ from station.arrays import FloatArray
 from station.errors import InputError
 from station.gyro.lsq import solve
 from station.record_bounds import MEASURE_MAX, GyroRate, GyroSpread, Measure, Probability, Text
-from station.sensor import AXES
+from station.sensor import AXES, Axis
 
 MIN_POSES_FOR_SLOPE = 4
 MIN_POSES_FOR_TEST = 5
@@ -38,7 +38,7 @@ class GyroAxisStill(BaseModel):
 
     model_config = ConfigDict(allow_inf_nan=False)
 
-    axis: Literal["x", "y", "z"]
+    axis: Axis
     bias_dps: GyroRate
     noise_dps: GyroSpread
     slope_dps_per_g: Slope3 | None

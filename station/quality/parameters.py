@@ -14,23 +14,21 @@ from dataclasses import dataclass
 from station.limits import CHECKS, DEFAULT_PROFILE, LimitsProfile, load_profile
 from station.records import LimitsRef
 
-#: ``(lower, upper)``; ``None`` for an unbounded side.
-Bound = tuple[float | None, float | None]
-
-#: Limits family → bounds.
-Bounds = dict[str, Bound]
+#: Limits family → ``(lower, upper)`` of the profile's :class:`station.limits.Bounds`
+#: (``None`` for an unbounded side): the plain pair the database stores and compares.
+FamilyBounds = dict[str, tuple[float | None, float | None]]
 
 #: The limits families the report measures capability against.
 FAMILIES = ("offset", "sensitivity", "verification_error", "pose_noise", "gyro_bias")
 
 
-def profile_bounds(profile: LimitsProfile) -> Bounds:
+def profile_bounds(profile: LimitsProfile) -> FamilyBounds:
     """The bounds of ``profile`` per limits family (counts, counts/g, mg, counts, deg/s)."""
     bounds = {family: getattr(profile, CHECKS[family]) for family in FAMILIES}
     return {family: (b.lower, b.upper) for family, b in bounds.items()}
 
 
-def default_bounds() -> Bounds:
+def default_bounds() -> FamilyBounds:
     """The bounds of the shipped default profile (datasheet figures of the KXM52-1050)."""
     return profile_bounds(load_profile())
 

@@ -24,6 +24,7 @@ from station.orientation import Sensed, angle_deg, gravity_direction, sense
 from station.poses import Pose
 from station.run.messages import MessageLog
 from station.run.settings import RunSettings
+from station.samples import SampleBlock
 
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128
@@ -60,7 +61,7 @@ class PoseCapture:
         self._names = journal.poses
         self.live = LiveView()
         self._acquisition: PoseAcquisition | None = None
-        self._recent: Array = np.empty((0, 8))
+        self._recent = SampleBlock.empty()
         self._still_samples = 0
         self._wrong_pose_said: str | None = None
         #: Whether the unit moved since the last capture (before it has, it still lies
@@ -78,7 +79,7 @@ class PoseCapture:
 
     def forget_window(self) -> None:
         """Drop the live window: the unit was away, its samples are no longer the unit's."""
-        self._recent = np.empty((0, 8))
+        self._recent = SampleBlock.empty()
 
     def clear_view(self) -> None:
         """Show nothing live any more (the run ended)."""
@@ -119,12 +120,13 @@ class PoseCapture:
         self.live = LiveView()
         return result
 
-    def _update_live(self, rows: Array, index: int, target: Pose) -> Saturated | None:
-        if len(rows) == 0:
+    def _update_live(self, block: SampleBlock, index: int, target: Pose) -> Saturated | None:
+        if len(block) == 0:
             return None
-        self._recent = np.concatenate((self._recent, rows))[-LIVE_SAMPLES:]
+        self._recent = SampleBlock.concat((self._recent, block))[-LIVE_SAMPLES:]
         window = self._recent
-        sensed = sense(window[:, 1:4].mean(axis=0))
+        summary = window.summary()
+        sensed = sense(summary.accel_mean)
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
         if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
             return Saturated(verdict)
@@ -134,7 +136,7 @@ class PoseCapture:
             self._moved = True
         refused = self.live.refused if self._still_samples else None
         if matches and not verdict.motion:
-            self._still_samples += len(rows)
+            self._still_samples += len(block)
         else:
             if was_capturing and matches:
                 name = pose_words(target.name)
@@ -147,8 +149,8 @@ class PoseCapture:
         self.live = LiveView(
             sensed=sensed,
             matches=matches,
-            accel_std=window[:, 1:4].std(axis=0),
-            gyro_rate=window[:, 4:7].mean(axis=0),
+            accel_std=summary.accel_std,
+            gyro_rate=summary.gyro_mean,
             moving=verdict.motion,
             progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
             refused=refused,

@@ -29,6 +29,7 @@ from station.records import (
     Vector3,
 )
 from station.run.settings import RunSettings
+from station.samples import SampleBlock
 
 ALGORITHM = "autocal-eq10"
 
@@ -42,17 +43,18 @@ def now() -> datetime:
     return datetime.now(UTC)
 
 
-def window_record(window: Array, index: int, name: str, role: PoseRole) -> PoseRecord:
+def window_record(window: SampleBlock, index: int, name: str, role: PoseRole) -> PoseRecord:
     """The record of a live window kept as evidence (it failed the unit uncaptured)."""
+    summary = window.summary()
     return PoseRecord(
         index=index,
         name=name,
         role=role,
-        mean=_vec(window[:, 1:4].mean(axis=0)),
-        std=_vec(window[:, 1:4].std(axis=0, ddof=1)),
-        sample_count=len(window),
-        gyro_mean=_vec(window[:, 4:7].mean(axis=0)),
-        temperature_c=float(window[:, 7].mean()),
+        mean=_vec(summary.accel_mean),
+        std=_vec(summary.accel_std),
+        sample_count=summary.count,
+        gyro_mean=_vec(summary.gyro_mean),
+        temperature_c=summary.temperature_c,
     )
 
 

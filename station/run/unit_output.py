@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from station.arrays import FloatArray as Array
 from station.device import DeviceTimeoutError, PutterDriver
+from station.samples import SampleBlock
 
 #: Calibrated samples averaged to check the unit's own output.
 UNIT_OUTPUT_SAMPLES = 256
@@ -22,24 +22,24 @@ class UnitOutputCheck:
     """The calibrated samples received so far, and when the last one came."""
 
     def __init__(self) -> None:
-        self._rows: list[Array] = []
+        self._blocks: list[SampleBlock] = []
         self._last_arrival = time.monotonic()
 
     def poll(self, driver: PutterDriver) -> float | None:
         """The unit's |g| error in mg once enough samples came (the stream then stops).
 
-        Raises :class:`station.device.errors.DeviceTimeoutError` when the unit went quiet.
+        Raises :class:`station.device.DeviceTimeoutError` when the unit went quiet.
         """
-        rows = driver.drain_calibrated()
+        block = driver.drain_calibrated()
         now = time.monotonic()
-        if len(rows):
-            self._rows.append(rows)
+        if len(block):
+            self._blocks.append(block)
             self._last_arrival = now
         elif now - self._last_arrival > STALL_S:
             raise DeviceTimeoutError(f"no calibrated samples from {driver.url} for {STALL_S:g} s")
-        got = np.concatenate(self._rows) if self._rows else np.empty((0, 4))
+        got = SampleBlock.concat(self._blocks)
         if len(got) < UNIT_OUTPUT_SAMPLES:
             return None
         driver.stop_stream()
-        g = got[:UNIT_OUTPUT_SAMPLES, 1:4].mean(axis=0)
+        g = got[:UNIT_OUTPUT_SAMPLES].summary().accel_mean
         return abs(float(np.linalg.norm(g)) - 1.0) * 1000.0

@@ -1,8 +1,8 @@
 """Faults the virtual putter can be told to show, for testing the station's reactions."""
 
-from typing import Literal
-
 from pydantic import BaseModel, ConfigDict, Field
+
+from station.sensor import Axis
 
 
 class Faults(BaseModel):
@@ -20,7 +20,7 @@ class Faults(BaseModel):
         None, ge=0, description="pull the cable after this many samples of a stream"
     )
     never_settle: bool = Field(False, description="the unit keeps shaking after every move")
-    saturate_axis: Literal["x", "y", "z"] | None = Field(
+    saturate_axis: Axis | None = Field(
         None, description="this accelerometer axis sits at full scale (4095 counts)"
     )
     serial_mismatch: bool = Field(

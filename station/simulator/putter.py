@@ -16,11 +16,11 @@ from typing import Final
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from station.arrays import FloatArray
 from station.closing import Closing
 from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import DEFAULT_RATE_HZ, FrameParser, encode_text
 from station.poses import Pose, pose
+from station.samples import SampleBlock
 from station.simulator.clock import VirtualClock
 from station.simulator.faults import Faults
 from station.simulator.firmware import Firmware
@@ -251,11 +251,11 @@ class VirtualPutter(Closing):
         if len(t):
             link.send(stream.frames(t, self._firmware.calibration))
 
-    def trace(self, start_s: float, count: int) -> FloatArray:
+    def trace(self, start_s: float, count: int) -> SampleBlock:
         """``count`` raw samples from simulated time ``start_s``, without the wire.
 
-        Rows are as :meth:`station.device.PutterDriver.drain` returns them (sequence
+        A block as :meth:`station.device.PutterDriver.drain` returns it (sequence
         number counting from 0, counts, deg/s, °C), quantised as on the wire: for
         testing what consumes samples at full speed.
         """
-        return self._stream.trace(start_s, count).rows
+        return self._stream.trace(start_s, count)

@@ -201,3 +201,16 @@ def test_no_revision_imports_project_code() -> None:
     for path in versions:
         imported = _imported_packages(path.read_text(encoding="utf-8"))
         assert imported & PROJECT_PACKAGES == set(), path.name
+
+
+def test_a_database_written_by_a_newer_calstation_is_refused_in_one_line(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'newer.sqlite3'}"
+    open_database(url).dispose()
+    engine = make_engine(url)
+    with engine.begin() as connection:
+        connection.execute(text("UPDATE alembic_version SET version_num = 'ffffffffffff'"))
+    engine.dispose()
+    with pytest.raises(SchemaOutOfDateError, match=r"ffffffffffff.*newer calstation"):
+        open_database(url)

@@ -1,5 +1,9 @@
 """The station's run stores: straight into the database, or over HTTP to a live server."""
 
+import sqlite3
+from contextlib import closing
+from pathlib import Path
+
 import httpx
 import pytest
 
@@ -102,6 +106,30 @@ def test_a_database_that_does_not_answer_is_unavailable() -> None:
     with pytest.raises(StoreUnavailableError) as raised:
         DatabaseStore(url)
     assert not isinstance(raised.value, StoreConfigurationError)
+
+
+def test_a_database_the_station_cannot_use_waits_for_its_setting_to_be_fixed(
+    tmp_path: Path,
+) -> None:
+    with pytest.raises(StoreConfigurationError, match="nosuch"):
+        DatabaseStore("nosuch://host/db")
+    url = f"sqlite:///{tmp_path / 'newer.sqlite3'}"
+    DatabaseStore(url).close()
+    with closing(sqlite3.connect(tmp_path / "newer.sqlite3")) as connection, connection:
+        connection.execute("UPDATE alembic_version SET version_num = 'ffffffffffff'")
+    with pytest.raises(StoreConfigurationError, match="newer calstation"):
+        DatabaseStore(url)
+
+
+def test_a_success_answer_without_a_stored_run_blames_the_record() -> None:
+    # A proxy answering 200 with its own page: nothing says the run is stored.
+    transport = httpx.MockTransport(lambda _: httpx.Response(200, text="<html>welcome</html>"))
+    record = make_record()
+    with (
+        HttpStore("http://results", "key", transport=transport) as store,
+        pytest.raises(RecordFailedError, match=f"answered run {record.run_id} with no stored run"),
+    ):
+        store.submit(record)
 
 
 # The real server never answers these (it answers 401, 404, 409, 422 above), so a mock

@@ -9,6 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from station.acquisition import StillnessDetector, StillnessThresholds, judge_window
 from station.poses import POSES, pose
+from station.samples import SampleBlock
 from station.simulator import VirtualPutter
 
 RATE = 500
@@ -17,8 +18,8 @@ WINDOW = LIMITS.window_samples
 
 
 def feed_in_chunks(
-    detector: StillnessDetector, rows: np.ndarray, chunks: list[int]
-) -> tuple[int, np.ndarray] | None:
+    detector: StillnessDetector, rows: SampleBlock, chunks: list[int]
+) -> tuple[int, SampleBlock] | None:
     """Feed ``rows`` in pieces; return (samples up to the accepted window's end, window)."""
     pos = 0
     sizes = iter(chunks * (len(rows) // max(1, sum(chunks)) + 1))
@@ -27,7 +28,7 @@ def feed_in_chunks(
         verdict = detector.feed(rows[pos : pos + size])
         pos += size
         if verdict is not None:
-            return int(verdict.window[-1, 0]) + 1, verdict.window
+            return int(verdict.window.seq[-1]) + 1, verdict.window
     return None
 
 
@@ -50,7 +51,7 @@ def test_a_still_unit_is_accepted_within_window_plus_ten_percent(
     assert accepted_at <= 1.1 * WINDOW
     assert len(window) == WINDOW
     np.testing.assert_allclose(
-        window[:, 1:4].mean(axis=0), static_reading(unit, "toe_down"), atol=0.5
+        window.accel.mean(axis=0), static_reading(unit, "toe_down"), atol=0.5
     )
 
 
@@ -81,28 +82,30 @@ def test_no_window_overlapping_a_move_is_ever_accepted(
         if verdict is None:
             continue
         accepted += 1
-        first, last = verdict.window[0, 0], verdict.window[-1, 0]
+        first, last = verdict.window.seq[0], verdict.window.seq[-1]
         assert last < move_start or first > move_end, "accepted a window while moving"
         expected = static_reading(unit, start if last < move_start else target)
-        np.testing.assert_allclose(verdict.window[:, 1:4].mean(axis=0), expected, atol=1.0)
+        np.testing.assert_allclose(verdict.window.accel.mean(axis=0), expected, atol=1.0)
     # Still before the move (at most 1 s of it) and after it: at least one window after.
     assert accepted >= 1
 
 
 def turning_trace(
     axis_body: np.ndarray, degrees: float, seconds: float, seed: int
-) -> tuple[VirtualPutter, np.ndarray, np.ndarray]:
+) -> tuple[VirtualPutter, SampleBlock, np.ndarray]:
     unit = VirtualPutter(seed=seed, start_pose="face_up")
     start = pose("face_up").rotation
     unit.move_to(start * Rotation.from_rotvec(np.radians(degrees) * axis_body), seconds, at_s=0.0)
     rows = unit.trace(0.0, int(seconds * RATE))
     # True rate of a minimum-jerk turn: 30 τ²(1 − τ)² · angle / T.
-    tau = rows[:, 0] / RATE / seconds
+    tau = rows.seq / RATE / seconds
     rate = 30 * tau**2 * (1 - tau) ** 2 * degrees / seconds
     return unit, rows, rate
 
 
-def windows_turning_faster_than(rows: np.ndarray, rate: np.ndarray, dps: float) -> list[np.ndarray]:
+def windows_turning_faster_than(
+    rows: SampleBlock, rate: np.ndarray, dps: float
+) -> list[SampleBlock]:
     return [
         rows[i : i + WINDOW]
         for i in range(0, len(rows) - WINDOW, 97)
@@ -129,7 +132,7 @@ def test_slow_tilting_with_one_g_is_refused_and_the_gyro_sees_it(seed: int) -> N
     windows = windows_turning_faster_than(rows, rate, 1.5)
     assert windows
     for window in windows:
-        magnitude = np.linalg.norm((window[:, 1:4].mean(axis=0) - 2048) / 819.2)
+        magnitude = np.linalg.norm((window.accel.mean(axis=0) - 2048) / 819.2)
         assert abs(magnitude - 1) < LIMITS.gravity_tolerance_g
         verdict = judge_window(window, LIMITS)
         assert any(reason.startswith("gyro") for reason in verdict.reasons), verdict.reasons
@@ -137,7 +140,9 @@ def test_slow_tilting_with_one_g_is_refused_and_the_gyro_sees_it(seed: int) -> N
 
 def test_a_window_with_missing_samples_is_refused_for_the_link() -> None:
     rows = VirtualPutter(seed=9).trace(0.0, WINDOW + 40)
-    holed = np.delete(rows, np.s_[100:140], axis=0)
+    kept = np.ones(len(rows), dtype=bool)
+    kept[100:140] = False
+    holed = rows[kept]
     verdict = judge_window(holed[:WINDOW], LIMITS)
     assert verdict.reasons == (f"link lost {40 / (WINDOW + 40):.1%} of samples > 1.0%",)
     assert not verdict.motion
@@ -145,7 +150,7 @@ def test_a_window_with_missing_samples_is_refused_for_the_link() -> None:
 
 def test_a_saturated_axis_is_named_and_not_mistaken_for_motion() -> None:
     rows = VirtualPutter(seed=9).trace(0.0, WINDOW)
-    rows[:, 3] = 4095
+    rows.accel[:, 2] = 4095
     verdict = judge_window(rows, LIMITS)
     assert verdict.saturated_axes == ("z",)
     assert not verdict.motion

@@ -24,6 +24,7 @@ from station.device import (
 )
 from station.device.protocol import FrameType, encode_frame, encode_sample
 from station.poses import pose
+from station.samples import SampleBlock
 from station.simulator import VirtualPutter
 from station.simulator.putter import FIRMWARE_VERSION, SENSOR_PART
 
@@ -75,11 +76,11 @@ def test_stream_delivers_contiguous_samples_that_match_the_truth(
 ) -> None:
     driver.start_stream()
     rows = driver.wait_samples(3000, timeout=5.0)
-    np.testing.assert_array_equal(rows[:, 0], np.arange(3000))
-    np.testing.assert_allclose(rows[:, 1:4].mean(axis=0), static_reading(unit, "face_up"), atol=0.5)
+    np.testing.assert_array_equal(rows.seq, np.arange(3000))
+    np.testing.assert_allclose(rows.accel.mean(axis=0), static_reading(unit, "face_up"), atol=0.5)
     # Still: the gyros read their bias (g-sensitivity needs a rate, paper 2).
-    np.testing.assert_allclose(rows[:, 4:7].mean(axis=0), unit.truth.gyro_bias_dps, atol=0.02)
-    assert 24.0 < rows[:, 7].mean() < 28.0
+    np.testing.assert_allclose(rows.gyro.mean(axis=0), unit.truth.gyro_bias_dps, atol=0.02)
+    assert 24.0 < rows.temperature.mean() < 28.0
     driver.stop_stream()
     stats = driver.stats
     assert stats.samples >= 3000
@@ -120,7 +121,7 @@ def test_calibration_written_is_read_back_and_applied_in_calibrated_mode(
     driver.start_stream(calibrated=True)
     rows = driver.wait_samples(2000, timeout=5.0, calibrated=True)
     # The unit applies its calibration: a still unit reads gravity, within noise/temperature.
-    np.testing.assert_allclose(rows[:, 1:4].mean(axis=0), pose("face_up").gravity_body, atol=3e-3)
+    np.testing.assert_allclose(rows.accel.mean(axis=0), pose("face_up").gravity_body, atol=3e-3)
     assert len(driver.drain()) == 0
 
 
@@ -157,10 +158,10 @@ def test_pulling_the_cable_keeps_every_sample_taken_then_says_disconnected(
         time.sleep(0.01)
     assert failure is not None
     assert "disconnected" in str(failure)
-    rows = np.concatenate(taken)
+    rows = SampleBlock.concat(taken)
     # Bytes in flight when the cable goes are lost; every sample received is handed out.
     assert len(rows) == driver.stats.samples > 1000
-    np.testing.assert_array_equal(rows[:, 0], np.arange(len(rows)))
+    np.testing.assert_array_equal(rows.seq, np.arange(len(rows)))
     assert not driver.connected
     with pytest.raises(DeviceDisconnectedError):
         driver.identify()
@@ -177,13 +178,13 @@ def test_after_a_replug_the_unit_answers_again(unit: VirtualPutter, driver: Putt
         assert again.identify().serial == "PT000042"
 
 
-def stream_then_stop(unit: VirtualPutter, driver: PutterDriver, count: int) -> np.ndarray:
+def stream_then_stop(unit: VirtualPutter, driver: PutterDriver, count: int) -> SampleBlock:
     driver.start_stream()
     rows = driver.wait_samples(count, timeout=5.0)
     unit.faults.corrupt_rate = unit.faults.drop_rate = 0.0
     driver.stop_stream()
     time.sleep(0.05)
-    return np.concatenate((rows, driver.drain()))
+    return SampleBlock.concat((rows, driver.drain()))
 
 
 def test_corrupted_bytes_are_counted_and_never_give_a_wrong_sample(
@@ -195,17 +196,17 @@ def test_corrupted_bytes_are_counted_and_never_give_a_wrong_sample(
     assert stats.crc_errors + stats.bad_headers > 50
     assert stats.resyncs > 50
     # Every corrupted frame is refused: it shows as a lost sample, never as a bad value.
-    assert np.all(np.diff(rows[:, 0]) >= 1)
+    assert np.all(np.diff(rows.seq) >= 1)
     assert stats.samples == len(rows)
-    assert stats.lost_samples == rows[-1, 0] + 1 - len(rows)
-    assert np.abs(rows[:, 1:4] - static_reading(unit, "face_up")).max() < 8
+    assert stats.lost_samples == rows.seq[-1] + 1 - len(rows)
+    assert np.abs(rows.accel - static_reading(unit, "face_up")).max() < 8
 
 
 def test_dropped_samples_show_as_sequence_gaps(unit: VirtualPutter, driver: PutterDriver) -> None:
     unit.faults.drop_rate = 0.05
     rows = stream_then_stop(unit, driver, 4000)
     stats = driver.stats
-    assert stats.lost_samples == rows[-1, 0] + 1 - len(rows) > 100
+    assert stats.lost_samples == rows.seq[-1] + 1 - len(rows) > 100
     assert stats.gaps > 100
     assert stats.crc_errors == stats.resyncs == 0
     assert 0.03 < stats.loss_fraction < 0.07
@@ -241,7 +242,7 @@ def test_sequence_numbers_unwrap_past_65535_and_gaps_are_counted() -> None:
         rows = drv.wait_samples(len(sent), timeout=2.0)
         stats = drv.stats
     expected = [s + 65536 if s < 100 else s for s in sent]
-    np.testing.assert_array_equal(rows[:, 0], expected)
+    np.testing.assert_array_equal(rows.seq, expected)
     assert (stats.lost_samples, stats.gaps) == (2, 1)
 
 
@@ -308,7 +309,7 @@ def test_an_undrained_buffer_keeps_the_newest_samples_and_counts_the_overrun() -
         assert drv.pending() == 50
         rows = drv.drain()
         assert drv.stats.buffer_overruns == 70
-    np.testing.assert_array_equal(rows[:, 0], np.arange(70, 120))
+    np.testing.assert_array_equal(rows.seq, np.arange(70, 120))
 
 
 @settings(max_examples=40, deadline=None)
@@ -325,6 +326,6 @@ def test_any_run_of_sequence_numbers_unwraps_and_counts_its_losses(
         port.write(b"".join(encode_sample(int(c), (1, 2, 3), (0, 0, 0), 0) for c in counts))
         rows = drv.wait_samples(len(counts), timeout=2.0)
         stats = drv.stats
-    np.testing.assert_array_equal(rows[:, 0], counts)
+    np.testing.assert_array_equal(rows.seq, counts)
     assert stats.lost_samples == sum(steps) - len(steps)
     assert stats.gaps == sum(1 for s in steps if s > 1)

@@ -9,6 +9,7 @@ def test_device_surface() -> None:
     assert set(station.device.__all__) == {
         "DEFAULT_BAUD",
         "DEFAULT_RATE_HZ",
+        "MAX_RATE_HZ",
         "PROTOCOL_VERSION",
         "SAMPLE_COLUMNS",
         "DeviceCalibration",
