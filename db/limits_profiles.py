@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session
 from db.engine import for_dialect
 from db.models import StoredLimitsProfile
 from station.limits import LimitsProfile, profile_of
-from station.records import LimitsRef, canonical_json
+from station.records import LimitsRef, canonical_json, document_sha256
 
 _INSERT = {
     name: dialect.insert(StoredLimitsProfile).on_conflict_do_nothing(index_elements=["sha256"])
@@ -31,13 +31,23 @@ def store_profile(session: Session, ref: LimitsRef) -> None:
     (:func:`station.limits.profile_of`); the reference itself checked that it hashes to
     ``ref.sha256``, and the stored text is the text that hash was taken over.
     """
-    if profile_of(ref) is None or ref.profile is None:
-        return
-    document = canonical_json(ref.profile)
-    session.execute(
-        for_dialect(session, _INSERT),
-        {"sha256": ref.sha256, "name": ref.name, "version": ref.version, "document": document},
-    )
+    profile = profile_of(ref)
+    if profile is not None:
+        session.execute(for_dialect(session, _INSERT), profile_row(profile))
+
+
+def profile_row(profile: LimitsProfile) -> dict[str, str]:
+    """The ``limits_profiles`` row of ``profile``: its canonical document, keyed by its hash.
+
+    :func:`station.limits.profile_of` checked that a submitted document is this one.
+    """
+    document = profile.document
+    return {
+        "sha256": document_sha256(document),
+        "name": profile.name,
+        "version": profile.version,
+        "document": canonical_json(document),
+    }
 
 
 def stored_profiles(session: Session, sha256s: Collection[str]) -> dict[str, LimitsProfile]:
