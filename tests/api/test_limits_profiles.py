@@ -13,6 +13,7 @@ from station.records import document_sha256
 from tests.db.records import T0, make_record
 
 RUNS = "/api/v1/runs"
+SAFETY_S = 120
 
 #: A profile of this line only: no limits file on the server has its name.
 CUSTOM = load_profile().model_copy(
@@ -79,13 +80,14 @@ def test_report_and_certificate_use_the_stored_profile(
 ) -> None:
     assert _submit(client, station_key, load_profile(), 0).status_code == 201
     assert _submit(client, station_key, CUSTOM, 1).status_code == 201
-    report = client.get("/api/v1/reports/eol").json()
+    # The first report starts the server's report processes: a generous safety net.
+    report = client.get("/api/v1/reports/eol", timeout=SAFETY_S).json()
     offset_x = next(p for p in report["parameters"] if p["name"] == "offset_x")
     assert (offset_x["lower"], offset_x["upper"]) == (1950.0, 2150.0)
     assert "line7-special v4" in report["bounds_source"]
     assert "latest run's" in report["bounds_source"]
     assert offset_x["count"] == 2  # every run in range, against the latest run's bounds
-    page = client.get("/api/v1/units/PT-000001/certificate").text
+    page = client.get("/api/v1/units/PT-000001/certificate", timeout=SAFETY_S).text
     assert "line7-special v4" in page
     assert "1950" in page
     assert "2150" in page
