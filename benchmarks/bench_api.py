@@ -43,12 +43,15 @@ from urllib.parse import urlencode
 import httpx
 import numpy as np
 import uvloop
-from sqlalchemy import make_url, text
+from sqlalchemy import insert, make_url, text
 
 from db import RunRepository, make_engine, open_database
+from db.limits_profiles import profile_row
+from db.models import StoredLimitsProfile
 from db.rollups import rebuild
 from station.calibration import solve
 from station.calibration.synthetic import pose_means, random_unit, six_directions
+from station.limits import load_profile
 from station.records import RunRecord
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -57,6 +60,8 @@ UNITS_PER_RUN = 0.4  # 1,000,000 runs → 400,000 serial numbers, 2.5 runs each
 STATIONS = 8
 T0 = datetime(2026, 1, 1, tzinfo=UTC)
 STEP_S = 15  # one run every 15 s across the plant
+#: What a station sends of its limits profile: the reference and the profile itself.
+LIMITS = load_profile().ref.model_dump(mode="json")
 POST_RUNS = 3000  # at most, submitted as fast as answered
 
 SEED_SQL = """
@@ -72,7 +77,7 @@ SELECT gen_random_uuid(),
        :t0 + make_interval(secs => g * :step),
        :t0 + make_interval(secs => g * :step + 95),
        :t0 + make_interval(secs => g * :step + 96),
-       '1.4.0', 'autocal-ls', 'six', 'kxm52-production', '1', repeat('a', 64),
+       '1.4.0', 'autocal-ls', 'six', 'kxm52-production', '1', :limits_sha256,
        CASE WHEN hashint % 100 < 8 THEN 'fail' ELSE 'pass' END,
        2048 + hashint % 200 - 100, 2048 + hashint % 180 - 90, 2048 + hashint % 160 - 80,
        819.2 + hashint % 40 - 20, 819.2 + hashint % 30 - 15, 819.2 + hashint % 20 - 10,
@@ -182,11 +187,21 @@ def seed(url: str, runs: int) -> tuple[str, int]:
     with database.engine.begin() as connection:
         connection.execute(
             text(SEED_SQL),
-            {"units": units, "stations": STATIONS, "t0": T0, "step": STEP_S, "runs": runs},
+            {
+                "units": units,
+                "stations": STATIONS,
+                "t0": T0,
+                "step": STEP_S,
+                "runs": runs,
+                "limits_sha256": load_profile().sha256,
+            },
         )
         connection.execute(text(SEED_POSES_SQL))
         connection.execute(text(SEED_FAILURES_SQL))
         connection.execute(text("ANALYZE runs; ANALYZE poses; ANALYZE run_failures"))
+        connection.execute(
+            insert(StoredLimitsProfile), profile_row(load_profile())
+        )  # as the first run stored it
         rebuild(connection)  # the report's facts and roll-ups, as the migration builds them
     seeded = time.perf_counter()
     with database.session() as session, session.begin():
@@ -354,7 +369,7 @@ def new_record(rng: random.Random, np_rng: np.random.Generator, index: int) -> R
             "software_version": "1.4.0",
             "algorithm": "autocal-ls",
             "model": "six",
-            "limits": {"name": "kxm52-production", "version": "1", "sha256": "a" * 64},
+            "limits": LIMITS,  # the reference and the profile, as a station sends them
             "verdict": "pass",
             "coefficients": {
                 "offset": dict(zip(xyz, calibration.offset.tolist(), strict=True)),

@@ -1,5 +1,6 @@
 """Between the run record (:mod:`station.records`) and the table rows (:mod:`db.models`)."""
 
+import json
 from datetime import datetime
 from typing import Any
 
@@ -162,6 +163,11 @@ def _pose(pose: Pose) -> dict[str, Any]:
     }
 
 
-def stored_run_of(run: Run, failures: list[RunFailure], poses: list[Pose]) -> StoredRun:
-    """The stored run ``run`` with every pose."""
-    return StoredRun.model_validate({**_header(run, failures), "poses": [_pose(p) for p in poses]})
+def stored_run_of(
+    run: Run, failures: list[RunFailure], poses: list[Pose], profile: str | None = None
+) -> StoredRun:
+    """The stored run ``run`` with every pose and its stored limits ``profile`` (JSON)."""
+    header = _header(run, failures)
+    if profile is not None:
+        header["limits"]["profile"] = json.loads(profile)
+    return StoredRun.model_validate({**header, "poses": [_pose(p) for p in poses]})

@@ -311,6 +311,24 @@ for _bin in range(HISTOGRAM_BINS):
     )
 
 
+class StoredLimitsProfile(Base):
+    """A limits profile as a run submitted it: its canonical JSON, keyed by its SHA-256.
+
+    Stored the first time a run carries it (:mod:`db.limits_profiles`), never changed:
+    ``document`` hashes to ``sha256``. ``runs.limits_sha256`` refers to it; no foreign
+    key, because runs from stations older than stored profiles refer to profiles whose
+    content the server never received (and SQLite could add the key only by copying
+    ``runs``).
+    """
+
+    __tablename__ = "limits_profiles"
+
+    sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    name: Mapped[str] = mapped_column(String(NAME))
+    version: Mapped[str] = mapped_column(String(NAME))
+    document: Mapped[str] = mapped_column(Text())
+
+
 class ReportBounds(Base):
     """The limits (per limits family) the ``report_parameters`` bins were counted with."""
 

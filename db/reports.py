@@ -30,6 +30,7 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import Session, aliased
 
+from db.limits_profiles import stored_profiles
 from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts
 from db.rollups import (
     COUNT_VALUES,
@@ -42,7 +43,7 @@ from db.rollups import (
     parameter_contributions,
     stored_bounds,
 )
-from station.limits import LimitsProfile, load_profiles
+from station.limits import LimitsProfile
 from station.quality.capability import (
     cp,
     cpk,
@@ -68,7 +69,6 @@ from station.quality.parameters import (
     PARAMETERS,
     FamilyBounds,
     ParameterSpec,
-    choose_profile,
     profile_bounds,
 )
 from station.records import LimitsRef
@@ -198,19 +198,22 @@ class ReportQueries:
 
     # -- parameters --------------------------------------------------------------------
 
-    def parameters(self, bounds: FamilyBounds) -> list[Row[Any]]:
+    def parameters(self, bounds: FamilyBounds) -> tuple[dict[str, RowMapping], bool]:
         """Per parameter: n, Σ(x − c), Σ(x − c)², min, max, out of limits, marginal and
-        histogram bins against ``bounds`` (:func:`db.rollups.parameter_contributions`).
+        histogram bins against ``bounds`` (:func:`db.rollups.parameter_contributions`),
+        and whether the roll-ups answered.
 
         The roll-ups answer when they were counted with ``bounds``; otherwise every run
-        in range is aggregated.
+        in range is aggregated (seconds over a long history), and the report says so.
         """
-        if stored_bounds(self.session.connection()) == bounds:
+        rolled_up = stored_bounds(self.session.connection()) == bounds
+        if rolled_up:
             rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
         else:
             rolled, raw = None, self.conditions()
         selects = [] if raw is None else parameter_contributions([], raw, bounds)
-        return self._merged(ReportParameters, PARAMETER_VALUES, ["parameter"], rolled, selects)
+        rows = self._merged(ReportParameters, PARAMETER_VALUES, ["parameter"], rolled, selects)
+        return {row.parameter: row._mapping for row in rows}, rolled_up
 
     # -- control charts ----------------------------------------------------------------
 
@@ -474,10 +477,12 @@ def _chart_limits(
     A range narrowed only in time holds consecutive runs of the line: their moving
     ranges are the stored ones (each run's to the line's previous run with
     coefficients) but the first run's, whose previous run lies before the range. Runs
-    narrowed by station, operator or lot are ordered and differenced in SQL.
+    narrowed by station, operator or lot, or reported without limits (no statistics),
+    are ordered and differenced in SQL.
     """
     f = queries.filter
-    if f.station_id is not None or f.operator_id is not None or f.lot is not None:
+    narrowed = f.station_id is not None or f.operator_id is not None or f.lot is not None
+    if narrowed or not all(name in stats for name in COEFFICIENTS):
         row = queries.chart_limits()._mapping
         return _ChartLimits(
             count=int(row["n"]),
@@ -530,20 +535,54 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
     return charts
 
 
+def report_bounds(session: Session, counts: Sequence[Row[Any]]) -> tuple[FamilyBounds | None, str]:
+    """The bounds capability is measured against, and a line saying which and why.
+
+    The stored profile (:mod:`db.limits_profiles`) of the latest run in range (by
+    finish), or of the latest whose profile is stored; with none stored (runs from
+    stations older than stored profiles, or no run in range), the bounds the roll-ups
+    were counted with; with none of those either, ``None``: no capability.
+    """
+    finished: dict[LimitsRef, datetime] = {}
+    for row in counts:
+        ref = LimitsRef(name=row.limits_name, version=row.limits_version, sha256=row.limits_sha256)
+        finished[ref] = max(row.last_finish, finished.get(ref, row.last_finish))
+    latest_first = sorted(finished, key=lambda ref: finished[ref], reverse=True)
+    stored = stored_profiles(session, {ref.sha256 for ref in latest_first})
+    for ref in latest_first:
+        if ref.sha256 in stored:
+            if len(latest_first) == 1:
+                why = "every run in range"
+            elif ref == latest_first[0]:
+                why = f"the latest run's, of {len(latest_first)} profiles in range"
+            else:
+                why = "the latest run's whose profile is stored"
+            return profile_bounds(stored[ref.sha256]), f"limits profile {_named(ref)} ({why})"
+    binned = stored_bounds(session.connection())
+    missing = "no run in range" if not latest_first else "no profile of the runs in range stored"
+    if binned:
+        return binned, f"the bounds the roll-ups were counted with ({missing})"
+    return None, f"no limits ({missing}): no capability"
+
+
+def _named(ref: LimitsRef) -> str:
+    return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
+
+
 def eol_report(
     session: Session,
     filter: ReportFilter,
     *,
-    profiles: Mapping[str, LimitsProfile] | None = None,
+    profile: LimitsProfile | None = None,
     unit_limit: int | None = None,
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
-    Capability is measured against the profile of ``profiles`` (default: the shipped
-    limits file) that :func:`station.quality.parameters.choose_profile` picks for the runs in
-    range; ``unit_limit`` cuts the unit list to the latest units.
+    Capability is measured against ``profile`` when given (``calstation report
+    --limits``), else against the stored profile :func:`report_bounds` picks for the
+    runs in range; ``unit_limit`` cuts the unit list to the latest units.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -553,11 +592,17 @@ def eol_report(
             {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
         )
     ]
-    profile, bounds_source = choose_profile(used, profiles or load_profiles())
-    bounds = profile_bounds(profile)
+    if profile is None:
+        bounds, bounds_source = report_bounds(session, counts)
+    else:
+        bounds, bounds_source = profile_bounds(profile), f"limits profile {_named(profile.ref)}"
     hours = _hours(filter, counts)
-    rows = {row.parameter: row._mapping for row in queries.parameters(bounds)}
-    parameters = [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS]
+    parameters = []
+    if bounds is not None:
+        rows, rolled = queries.parameters(bounds)
+        if not rolled:
+            bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
+        parameters = [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)

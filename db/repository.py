@@ -14,7 +14,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Literal, cast
+from typing import Any, Literal, cast
 from uuid import UUID
 
 from sqlalchemy import insert, select, text, tuple_, update
@@ -24,8 +24,9 @@ from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
 from db.engine import for_dialect, open_database
+from db.limits_profiles import store_profile
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
-from db.models import GyroFit, Pose, Run, RunFailure, StationKey
+from db.models import GyroFit, Pose, Run, RunFailure, StationKey, StoredLimitsProfile
 from db.rollups import lock_submissions, record_run
 from db.units import record_units, refresh_answers
 from station.errors import CalstationError, InputError
@@ -98,10 +99,15 @@ class RunPage:
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
-    A record without a lot or a disposition is hashed without the field, as before the
-    field existed, so a retry from an older station matches the run it stored.
+    A record without a lot, a disposition or its limits profile is hashed without the
+    field, as before the field existed, so a retry from an older station matches the run
+    it stored.
     """
-    unset = {name for name in ("lot", "disposition") if getattr(record, name) is None}
+    unset: dict[str, Any] = {
+        name: True for name in ("lot", "disposition") if getattr(record, name) is None
+    }
+    if record.limits.profile is None:
+        unset["limits"] = {"profile"}
     return hashlib.sha256(record.model_dump_json(exclude=unset or None).encode()).hexdigest()
 
 
@@ -168,6 +174,7 @@ class RunRepository:
             stored = self.get(record.run_id)
             assert stored is not None
             return SubmitOutcome(created=False, run=stored)
+        store_profile(self.session, record.limits)
         self.session.execute(insert(_POSES), [pose_row(pk, pose) for pose in record.poses])
         if record.failures:
             self.session.execute(insert(_FAILURES), failure_rows(pk, record))
@@ -189,7 +196,12 @@ class RunRepository:
         poses = self.session.scalars(
             select(Pose).where(Pose.run_pk == run.id).order_by(Pose.index)
         ).all()
-        return stored_run_of(run, self._failures([run.id])[run.id], list(poses))
+        profile = self.session.scalar(
+            select(StoredLimitsProfile.document).where(
+                StoredLimitsProfile.sha256 == run.limits_sha256
+            )
+        )
+        return stored_run_of(run, self._failures([run.id])[run.id], list(poses), profile)
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""

@@ -75,8 +75,9 @@ from db.models import (
     Run,
     RunFacts,
     RunFailure,
+    StoredLimitsProfile,
 )
-from station.limits import load_profile
+from station.limits import LimitsProfile
 from station.quality.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
 from station.quality.parameters import (
     COEFFICIENTS,
@@ -525,13 +526,33 @@ def _store_bounds(connection: Connection, bounds: FamilyBounds) -> None:
     )
 
 
-def _bounds_for_rollup(connection: Connection) -> FamilyBounds:
-    """The stored bounds; on an empty database, the default profile's, stored now."""
+def _bounds_for_rollup(connection: Connection, run_pk: int) -> FamilyBounds | None:
+    """The stored bounds (empty: the run's profile is not stored either, nothing is binned
+    yet); before any, the bounds of the run's stored profile, with every stored run,
+    ``run_pk`` too, counted against them now by :func:`rebuild` (``None``)."""
     bounds = stored_bounds(connection)
-    if not bounds:
-        bounds = profile_bounds(load_profile())
-        _store_bounds(connection, bounds)
-    return bounds
+    if bounds:
+        return bounds
+    profile = connection.execute(
+        select(StoredLimitsProfile.document)
+        .join(Run, Run.limits_sha256 == StoredLimitsProfile.sha256)
+        .where(Run.id == run_pk)
+    ).scalar_one_or_none()
+    if profile is not None:
+        rebuild(connection, profile_bounds(LimitsProfile.model_validate_json(profile)))
+        return None
+    return {}
+
+
+def _latest_stored_bounds(connection: Connection) -> FamilyBounds | None:
+    """The bounds of the stored profile of the latest run that has one."""
+    document = connection.execute(
+        select(StoredLimitsProfile.document)
+        .join(Run, Run.limits_sha256 == StoredLimitsProfile.sha256)
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(1)
+    ).scalar_one_or_none()
+    return None if document is None else profile_bounds(LimitsProfile.model_validate_json(document))
 
 
 def lock_submissions(connection: Connection) -> None:
@@ -557,7 +578,8 @@ class _Submission:
     facts: Executable
     counts: Executable
     failures: Executable
-    parameters: Executable
+    #: ``None`` before any bounds: nothing to bin against.
+    parameters: Executable | None
 
 
 @cache
@@ -580,7 +602,17 @@ def _submission(
     same_unit = select(Run.id).where(Run.serial == bindparam("serial", type_=Run.serial.type))
     keys, failures = [*BUCKET, *LIMITS], [*BUCKET, "code"]
     new = [Run.id == run_pk]
-    rows = union_all(*parameter_contributions(BUCKET, new, dict(bounds))).subquery("parameters")
+    parameters = None
+    if bounds:
+        rows = union_all(*parameter_contributions(BUCKET, new, dict(bounds))).subquery("parameters")
+        parameters = _upsert(
+            dialect,
+            ReportParameters,
+            ["parameter", *BUCKET],
+            PARAMETER_VALUES,
+            # WHERE: SQLite reads an ON after a bare FROM as a join's.
+            select(*rows.c).where(true()),
+        )
     return _Submission(
         changed=union(same_unit, select(following.c.id)),
         take_out=_upsert(
@@ -598,14 +630,7 @@ def _submission(
         failures=_upsert(
             dialect, ReportFailures, failures, FAILURE_VALUES, failure_contributions(failures, new)
         ),
-        parameters=_upsert(
-            dialect,
-            ReportParameters,
-            ["parameter", *BUCKET],
-            PARAMETER_VALUES,
-            # WHERE: SQLite reads an ON after a bare FROM as a join's.
-            select(*rows.c).where(true()),
-        ),
+        parameters=parameters,
     )
 
 
@@ -616,7 +641,9 @@ def record_run(connection: Connection, run_pk: int) -> None:
     line with coefficients, are taken out of ``report_counts``, their facts recomputed,
     and added back with the new run.
     """
-    bounds = _bounds_for_rollup(connection)
+    bounds = _bounds_for_rollup(connection, run_pk)
+    if bounds is None:
+        return
     do = _submission(connection.dialect.name, tuple(sorted(bounds.items())))
     serial, started_at = connection.execute(
         select(Run.serial, Run.started_at).where(Run.id == run_pk)
@@ -631,19 +658,22 @@ def record_run(connection: Connection, run_pk: int) -> None:
     connection.execute(do.facts, {"both": [*changed, run_pk]})
     connection.execute(do.counts, {"both": [*changed, run_pk]})
     connection.execute(do.failures, {"run_pk": run_pk})
-    connection.execute(do.parameters, {"run_pk": run_pk})
+    if do.parameters is not None:
+        connection.execute(do.parameters, {"run_pk": run_pk})
 
 
 def rebuild(connection: Connection, bounds: FamilyBounds | None = None) -> None:
     """Recompute every fact and roll-up from the raw tables, in SQL.
 
-    Parameters are binned against ``bounds`` (default: the shipped default limits
-    profile's), which are stored in ``report_bounds``.
+    Parameters are binned against ``bounds`` (default: the stored limits profile of the
+    latest run that has one), which are stored in ``report_bounds``; with neither, no
+    parameter is binned (until a run brings a profile: :func:`record_run`).
     """
-    bounds = bounds or profile_bounds(load_profile())
+    bounds = bounds or _latest_stored_bounds(connection)
     for table in (ReportParameters, ReportFailures, ReportCounts, RunFacts, ReportBounds):
         connection.execute(delete(table))
-    _store_bounds(connection, bounds)
+    if bounds is not None:
+        _store_bounds(connection, bounds)
     connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([])))
     connection.execute(
         insert(ReportCounts).from_select(
@@ -655,7 +685,7 @@ def rebuild(connection: Connection, bounds: FamilyBounds | None = None) -> None:
             [*BUCKET, "code", *FAILURE_VALUES], failure_contributions([*BUCKET, "code"], [])
         )
     )
-    for rows in parameter_contributions(BUCKET, [], bounds):
+    for rows in parameter_contributions(BUCKET, [], bounds) if bounds is not None else []:
         connection.execute(
             insert(ReportParameters).from_select(["parameter", *BUCKET, *PARAMETER_VALUES], rows)
         )

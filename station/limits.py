@@ -10,18 +10,16 @@ returns a typed :class:`station.records.FailureReason` (code, measured value, bo
 axis or pose) rather than free text.
 """
 
-import hashlib
-import json
 import math
 import tomllib
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Self
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, JsonValue, ValidationError, model_validator
 
 from station.errors import InputError
-from station.records import Axis, FailureReason, LimitsRef
+from station.records import Axis, FailureReason, LimitsRef, document_sha256
 from station.unit_state import DEFAULT_RETEST_LIMIT
 
 DEFAULT_PROFILE = "kxm52-production"
@@ -87,20 +85,47 @@ class LimitsProfile(BaseModel):
         return self.retest_limit if self.retest_limit is not None else DEFAULT_RETEST_LIMIT
 
     @property
-    def sha256(self) -> str:
-        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace).
+    def document(self) -> dict[str, JsonValue]:
+        """The profile as the JSON document its SHA-256 is taken over (and a run carries).
 
-        A profile without a retest limit hashes as before the field existed.
+        A profile without a retest limit leaves the field out, so it hashes as before
+        the field existed.
         """
         unset = {"retest_limit"} if self.retest_limit is None else None
-        document = self.model_dump(mode="json", exclude=unset)
-        canonical = json.dumps(document, sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(canonical.encode()).hexdigest()
+        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset)
+        return document
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace)."""
+        return document_sha256(self.document)
 
     @property
     def ref(self) -> LimitsRef:
-        """What a stored run records of its profile."""
-        return LimitsRef(name=self.name, version=self.version, sha256=self.sha256)
+        """What a stored run records of its profile: the reference and the profile itself."""
+        document = self.document
+        return LimitsRef(
+            name=self.name, version=self.version, sha256=document_sha256(document), profile=document
+        )
+
+
+def profile_of(ref: LimitsRef) -> LimitsProfile | None:
+    """The profile a run's reference carries (``None`` when it carries only the reference).
+
+    :class:`InputError` when the document, though it hashes to the reference, is not a
+    limits profile as this software writes it (one that would hash otherwise).
+    """
+    if ref.profile is None:
+        return None
+    try:
+        profile = LimitsProfile.model_validate(ref.profile)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise InputError(f"limits.profile: {field}: {first['msg']}") from None
+    if profile.sha256 != ref.sha256:
+        raise InputError("limits.profile is not a profile's canonical document")
+    return profile
 
 
 #: Check codes: one per kind of bound, each with the profile field it reads.

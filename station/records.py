@@ -9,8 +9,10 @@ matrix maps counts to g (``g = matrix @ (raw − offset)``), gyro rates in deg/s
 temperatures in °C, residuals and errors in mg (1 mg = 0.001 g), times in UTC.
 """
 
+import hashlib
+import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from datetime import UTC, datetime, timedelta
 from typing import Annotated, Literal, Self
 from uuid import UUID
@@ -21,6 +23,7 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    JsonValue,
     StringConstraints,
     model_validator,
 )
@@ -255,12 +258,44 @@ class GyroSummary(_Record):
     still: GyroStillSummary | None = None
 
 
+def document_sha256(document: Mapping[str, JsonValue]) -> str:
+    """SHA-256 of a JSON document's canonical text (sorted keys, no whitespace, ASCII):
+    a limits profile's identity (:attr:`station.limits.LimitsProfile.sha256`)."""
+    return hashlib.sha256(canonical_json(document).encode()).hexdigest()
+
+
+def canonical_json(document: Mapping[str, JsonValue]) -> str:
+    """The canonical text of a JSON document, the one its SHA-256 is taken over."""
+    return json.dumps(document, sort_keys=True, separators=(",", ":"))
+
+
 class LimitsRef(_Record):
-    """The named, versioned limits profile the verdict was taken against."""
+    """The named, versioned limits profile the verdict was taken against.
+
+    ``profile``, the profile's canonical document, travels with the run so the results
+    server stores the bounds themselves the first time a run uses them (keyed by
+    ``sha256``); records from older stations carry only the reference.
+    """
 
     name: Identifier
     version: Identifier
     sha256: Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{64}$")]
+    profile: dict[str, JsonValue] | None = Field(
+        default=None,
+        description="the limits profile itself (its canonical JSON document, as "
+        "station.limits.LimitsProfile): its SHA-256 must be `sha256`, its name and "
+        "version `name` and `version`",
+    )
+
+    @model_validator(mode="after")
+    def _profile_is_the_referenced_one(self) -> Self:
+        if self.profile is None:
+            return self
+        if self.profile.get("name") != self.name or self.profile.get("version") != self.version:
+            raise ValueError("the profile's name and version are not the reference's")
+        if document_sha256(self.profile) != self.sha256:
+            raise ValueError("the profile's SHA-256 is not `sha256`")
+        return self
 
 
 class _RunHeader(_Record):

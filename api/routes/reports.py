@@ -16,11 +16,10 @@ from api.errors import invalid
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
+from db.limits_profiles import stored_profiles
 from db.reports import eol_report
 from station.errors import InputError
-from station.limits import load_profiles
 from station.quality.figures import EolReport, ReportFilter
-from station.quality.parameters import choose_profile
 from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
 from station.report.html import certificate_page, dashboard_page
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
@@ -133,12 +132,13 @@ async def get_certificate(
     repository: ReaderDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
-    limits."""
+    and the limits stored with the run's profile."""
     run = await repository.run(lambda r: _latest_run(r, serial))
     if run is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
-    profile, _ = choose_profile([run.limits], load_profiles())
+    stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
+    profile = stored.get(run.limits.sha256)
     return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit))
 
 

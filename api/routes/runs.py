@@ -7,11 +7,14 @@ from uuid import UUID
 from fastapi import APIRouter, HTTPException, Query, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
+from api.errors import invalid
 from api.responses import json_response, problems
 from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
+from station.errors import InputError
+from station.limits import profile_of
 from station.records import (
     IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
@@ -84,7 +87,8 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             409,
             422,
             _403="the API key belongs to another station",
-            _422="invalid (each offending field named), or the poses give other coefficients",
+            _422="invalid (each offending field named: a limits profile that does not hash to "
+            "its sha256 is one), or the poses give other coefficients",
         ),
     },
 )
@@ -102,6 +106,10 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
             "run %s serial=%s station=%s refused: %s", record.run_id, record.serial, station, exc
         )
         raise
+    try:
+        profile_of(record.limits)
+    except InputError as exc:
+        raise invalid(("body", "limits", "profile"), str(exc)) from None
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
     log.info(

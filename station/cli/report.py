@@ -11,7 +11,7 @@ from db.reports import eol_report
 from station.cli.db import DatabaseUrlOption
 from station.cli.output import err, out
 from station.errors import CalstationError
-from station.limits import load_profiles
+from station.limits import load_profile
 from station.quality.figures import ReportFilter
 from station.report.period import parse_period
 from station.report.render import FORMATS, render
@@ -36,7 +36,8 @@ def report(
         Path | None,
         typer.Option(
             "--limits",
-            help="Limits profiles file (TOML) for Cp/Cpk (default: the shipped profiles).",
+            help="Measure Cp/Cpk against this limits file's profile (its only one, or "
+            "kxm52-production) instead of the profile stored with the runs.",
             show_default=False,
         ),
     ] = None,
@@ -57,12 +58,12 @@ def report(
         operator_id=operator,
         lot=lot,
     )
-    profiles = load_profiles(limits)
+    profile = None if limits is None else load_profile(limits)
     url = database_url or DatabaseSettings.from_environment().url()
     database = open_database(url)
     try:
         with database.session() as session:
-            report_ = eol_report(session, report_filter, profiles=profiles, unit_limit=units)
+            report_ = eol_report(session, report_filter, profile=profile, unit_limit=units)
     except OperationalError as exc:
         raise DatabaseUnavailableError.of(url, exc) from None
     finally:

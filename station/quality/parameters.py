@@ -8,11 +8,9 @@ limits family (``offset``, ``sensitivity``, ``verification_error``, ``pose_noise
 (:mod:`station.limits`).
 """
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from station.limits import CHECKS, DEFAULT_PROFILE, LimitsProfile, load_profile
-from station.records import LimitsRef
+from station.limits import CHECKS, LimitsProfile, load_profile
 
 #: Limits family → ``(lower, upper)`` of the profile's :class:`station.limits.Bounds`
 #: (``None`` for an unbounded side): the plain pair the database stores and compares.
@@ -31,29 +29,6 @@ def profile_bounds(profile: LimitsProfile) -> FamilyBounds:
 def default_bounds() -> FamilyBounds:
     """The bounds of the shipped default profile (datasheet figures of the KXM52-1050)."""
     return profile_bounds(load_profile())
-
-
-def choose_profile(
-    used: Sequence[LimitsRef], known: Mapping[str, LimitsProfile]
-) -> tuple[LimitsProfile, str]:
-    """The profile capability is measured against, and a line saying why that one.
-
-    The profile every run in range was judged by when it is in ``known`` with the same
-    hash; otherwise the default profile (or the first one known).
-    """
-    if len(used) == 1:
-        ref = used[0]
-        profile = known.get(ref.name)
-        if profile is not None and profile.sha256 == ref.sha256:
-            return profile, f"limits profile {ref.name} v{ref.version}, as every run in range"
-    default = known.get(DEFAULT_PROFILE) or next(iter(known.values()))
-    if not used:
-        why = "no run in range"
-    elif len(used) > 1:
-        why = f"the runs in range were judged by {len(used)} profiles"
-    else:
-        why = f"the runs' profile {used[0].name} v{used[0].version} is not in the limits file"
-    return default, f"limits profile {default.name} v{default.version} ({why})"
 
 
 @dataclass(frozen=True)

@@ -60,14 +60,15 @@ def dashboard_page(report: EolReport, *, refresh_s: int = DASHBOARD_REFRESH_S) -
 
 def certificate_page(
     run: StoredRun,
-    profile: LimitsProfile,
+    profile: LimitsProfile | None,
     issued_at: datetime,
     gyro_fit: GyroFitRecord | None = None,
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``.
 
-    ``profile`` is the limits profile shown next to the coefficients: the run's own
-    when it is known (same hash), else the default one, which the page says.
+    ``profile`` is the run's limits profile as the results database stores it, shown
+    next to the coefficients; ``None`` when the run's station never sent it (older
+    stations), which the page says.
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
     """
@@ -80,8 +81,7 @@ def certificate_page(
     return _env.get_template("certificate.html").render(
         run=run,
         profile=profile,
-        bounds=profile_bounds(profile),
-        own_profile=profile.sha256 == run.limits.sha256,
+        bounds=None if profile is None else profile_bounds(profile),
         issued_at=issued_at,
         gyro_fit=gyro_fit,
         gyro_plot=Markup(plot) if plot is not None else None,

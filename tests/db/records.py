@@ -1,12 +1,12 @@
 """Run records for tests, built from a known calibration so every number is consistent."""
 
-import hashlib
 import uuid
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import numpy as np
 
+from station.limits import load_profile
 from station.records import RunRecord
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
@@ -24,7 +24,8 @@ DIRECTIONS = np.array(
 )
 DIRECTIONS /= np.linalg.norm(DIRECTIONS, axis=1, keepdims=True)
 POSE_NAMES = ("z_up", "z_down", "x_up", "x_down", "y_up", "y_down", "verify")
-LIMITS_SHA256 = hashlib.sha256(b"limits putter-kxm52 v3").hexdigest()
+#: The shipped limits profile, as a station sends it: the reference and the profile.
+LIMITS = load_profile().ref.model_dump(mode="json")
 T0 = datetime(2026, 11, 2, 8, 0, tzinfo=UTC)
 
 
@@ -91,7 +92,7 @@ def make_record(
         "software_version": "1.4.0",
         "algorithm": "autocal-ls",
         "model": "six",
-        "limits": {"name": "putter-kxm52", "version": "3", "sha256": LIMITS_SHA256},
+        "limits": LIMITS,
         "verdict": verdict,
         "failures": failures,
         "coefficients": {

@@ -27,10 +27,12 @@ from db import (
 from db.base import Base
 from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
-from db.models import ReportCounts, Run, RunFailure, Unit
+from db.models import ReportCounts, Run, RunFailure, StoredLimitsProfile, Unit
+from db.reports import eol_report
 from db.repository import KeyHolder, key_sha256
 from db.units import answer_json
-from tests.db.records import T0, make_record
+from station.quality.figures import ReportFilter
+from tests.db.records import LIMITS, T0, make_record
 from tests.db.test_rollups import rollup_rows
 
 
@@ -214,3 +216,34 @@ def test_a_database_written_by_a_newer_calstation_is_refused_in_one_line(
     engine.dispose()
     with pytest.raises(SchemaOutOfDateError, match=r"ffffffffffff.*newer calstation"):
         open_database(url)
+
+
+def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str) -> None:
+    """The shipped profile those runs used is stored by the migration; another one stays
+    unknown: the report then measures against the bounds the roll-ups were counted with."""
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine, "0006")
+        shipped = make_record(limits={k: v for k, v in LIMITS.items() if k != "profile"})
+        other = make_record(
+            serial="PT-000002",
+            started_at=T0 + timedelta(hours=1),
+            limits={"name": "old-line", "version": "2", "sha256": "ab" * 32},
+        )
+        with engine.begin() as connection:
+            for record in (shipped, other):
+                row = run_row(record, received_at=T0, record_sha256="0" * 64)
+                connection.execute(insert(Run), row)
+        upgrade(engine)
+        with Session(engine) as session:
+            stored = session.scalars(select(StoredLimitsProfile.sha256)).all()
+            assert stored == [LIMITS["sha256"]]
+            latest_only = ReportFilter(since=T0 + timedelta(minutes=30))
+            report = eol_report(session, latest_only)
+            assert report.bounds_source.startswith("the bounds the roll-ups were counted with")
+            assert report.parameters[0].lower == LIMITS["profile"]["offset_counts"]["lower"]
+            assert eol_report(session, ReportFilter()).bounds_source.startswith(
+                "limits profile kxm52-production v1"
+            )
+    finally:
+        engine.dispose()

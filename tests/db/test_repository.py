@@ -14,7 +14,7 @@ from db.models import Pose, StationKey
 from db.repository import KeyHolder, encode_cursor, record_sha256
 from station.errors import InputError
 from station.records import StoredRun
-from tests.db.records import T0, make_record
+from tests.db.records import LIMITS, T0, make_record
 
 
 def test_a_submitted_run_reads_back_field_for_field(session: Session) -> None:
@@ -157,10 +157,12 @@ def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:
 
 
 def test_a_record_without_a_lot_or_disposition_hashes_as_before_those_existed() -> None:
-    record = make_record()
+    reference_only = {key: value for key, value in LIMITS.items() if key != "profile"}
+    record = make_record(limits=reference_only)  # an older station's: no profile either
     document = json.loads(record.model_dump_json())
-    del document["lot"], document["disposition"]
+    del document["lot"], document["disposition"], document["limits"]["profile"]
     before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
     assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
     assert record_sha256(make_record(lot="L1")) != record_sha256(record)
     assert record_sha256(make_record(disposition="ship")) != record_sha256(record)
+    assert record_sha256(make_record()) != record_sha256(record)  # with its profile

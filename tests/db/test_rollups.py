@@ -239,12 +239,11 @@ def test_late_runs_and_retests_keep_the_report_exact(
         for run in submitted:
             repository.submit(_record(run))
         session.flush()
-        profiles = None
+        profile = None
         if narrower:
-            profile = load_profile()
             offset = Bounds(lower=1900.0, upper=2200.0)
-            profiles = {profile.name: profile.model_copy(update={"offset_counts": offset})}
-        report = eol_report(session, report_filter, profiles=profiles)
+            profile = load_profile().model_copy(update={"offset_counts": offset})
+        report = eol_report(session, report_filter, profile=profile)
         offset_x = next(p for p in report.parameters if p.name == "offset_x")
         assert offset_x.lower == (1900.0 if narrower else 1841.0)
         _check(report, history, report_filter)
