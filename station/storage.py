@@ -64,6 +64,9 @@ __all__ = [
 
 RUNS_PATH = "/api/v1/runs"
 UNITS_PATH = "/api/v1/units"
+#: Seconds the scan waits for a unit's history from the results server: the operator
+#: stands at the station, and without an answer the unit is calibrated all the same.
+HISTORY_TIMEOUT_S = 2.0
 
 
 class StoreError(CalstationError):
@@ -196,7 +199,7 @@ class HttpStore(Closing):
     def history(self, serial: str) -> list[RunSummary]:
         """``GET /api/v1/units/{serial}/runs``; a unit the server does not know has none."""
         try:
-            response = self.client.get(f"{UNITS_PATH}/{serial}/runs")
+            response = self.client.get(f"{UNITS_PATH}/{serial}/runs", timeout=HISTORY_TIMEOUT_S)
             if response.status_code == 404:
                 return []
             response.raise_for_status()
