@@ -1,8 +1,20 @@
 """Screening of pose sets before a solve: values, spacing and coverage.
 
 Every check is vectorised over units: poses come as a (K, N, 3) array of mean counts
-(K units, N poses each). The spacing and coverage measures use only differences
-between poses, so they do not depend on the unknown offsets:
+(K units, N poses each), and every one takes memory linear in N (the closest pose of
+each pose comes from a k-d tree beyond a few dozen poses, never from an N×N table).
+
+The values are checked first, each refusal naming its real cause:
+
+* **not counts** — every value within ±:data:`NOT_COUNTS_BELOW`: acceleration in g or
+  m/s² (|a| ≈ 1 or 9.8), not ADC counts (0…4095);
+* **at the rail** — a mean within :data:`RAIL_MARGIN_COUNTS` of 0 or 4095: samples of
+  that axis sat at the converter's end, the mean is clipped;
+* **beyond the datasheet** — an axis further from 2048 than any KXM52 can read at 1 g
+  (:data:`DATASHEET_REACH_COUNTS`): the unit was moving, or the sensor is out of spec.
+
+The spacing and coverage measures use only differences between poses, so they do not
+depend on the unknown offsets:
 
 * **angle between poses** — two still poses i, j with gravity directions u_i, u_j are
   |a_i − a_j| ≈ s·|u_i − u_j| = 2·s·sin(θ/2) counts apart, so
@@ -18,13 +30,16 @@ from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from station.arrays import FloatArray
 from station.calibration.errors import (
+    BeyondDatasheetError,
     CalibrationError,
     CoplanarPosesError,
     DuplicatePoseError,
     InvalidValueError,
+    NotCountsError,
     RailValueError,
     TooFewPosesError,
 )
@@ -34,12 +49,30 @@ from station.sensor import (
     AXES,
     NOMINAL_OFFSET_COUNTS,
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
+    OFFSET_SPREAD_COUNTS,
+    SENSITIVITY_TOLERANCE,
 )
 
 #: Default minimum angle between two poses' gravity directions, degrees.
 MIN_POSE_ANGLE_DEG = 10.0
 #: Default minimum coverage √(λ_min/λ_max) of the pose set.
 MIN_COVERAGE = 0.2
+#: A pose mean this close to 0 or 4095 counts is clipped: with the 8-counts sample spread
+#: the stillness limit allows, samples 2σ above such a mean sat at the rail.
+RAIL_MARGIN_COUNTS = 16.0
+#: Farthest an axis can read from 2048 counts at 1 g: the datasheet's offset spread
+#: (±207) plus its largest sensitivity (819.2 · 1.05) with 5 % cross-axis
+#: (·√(1 + 2·0.05²)), plus the rail margin for noise: 1 110 counts.
+DATASHEET_REACH_COUNTS = round(
+    OFFSET_SPREAD_COUNTS
+    + NOMINAL_SENSITIVITY_COUNTS_PER_G * (1 + SENSITIVITY_TOLERANCE) * np.sqrt(1 + 2 * 0.05**2)
+    + RAIL_MARGIN_COUNTS
+)
+#: Every value within ± this: the file holds g or m/s², never counts of a still pose.
+NOT_COUNTS_BELOW = 20.0
+#: Up to this many poses the closest pair comes from all pairs at once (vectorised over
+#: units); beyond it, from a k-d tree, one unit at a time.
+PAIRWISE_MAX_POSES = 32
 
 
 @dataclass(frozen=True)
@@ -58,14 +91,19 @@ class Finding(IntEnum):
     AT_RAIL = 2
     DUPLICATE = 3
     COPLANAR = 4
+    NOT_COUNTS = 5
+    BEYOND_DATASHEET = 6
 
 
 @dataclass(frozen=True)
 class Screen:
     """Per-unit screening result; arrays have shape (K,).
 
-    ``pose`` and ``other`` locate the finding: the pose index and, for AT_RAIL the
-    axis, for DUPLICATE the earlier pose it repeats (−1 where not applicable).
+    ``pose`` and ``other`` locate the finding: the pose index and, for AT_RAIL and
+    BEYOND_DATASHEET the axis, for DUPLICATE the other pose of the closest pair (−1
+    where not applicable). ``closest`` holds the closest pair (K, 2), ``near`` how many
+    poses lie closer than the minimum angle to another pose: reported, and refused only
+    where the caller refuses duplicates (the paper's exactly determined eq. 10).
     """
 
     finding: NDArray[np.int64]
@@ -73,6 +111,8 @@ class Screen:
     other: NDArray[np.int64]
     min_angle_deg: FloatArray
     coverage: FloatArray
+    closest: NDArray[np.int64]
+    near: NDArray[np.int64]
 
 
 def chord_to_angle_deg(chord: FloatArray) -> FloatArray:
@@ -98,13 +138,20 @@ def coverage(poses: FloatArray) -> FloatArray:
     return np.asarray(np.sqrt(np.clip(ratio, 0.0, 1.0)), dtype=np.float64)
 
 
-def screen(poses: FloatArray, limits: GeometryLimits = GeometryLimits()) -> Screen:
-    """Screen K units' poses, shape (K, N, 3); the first finding per unit wins."""
+def screen(
+    poses: FloatArray, limits: GeometryLimits = GeometryLimits(), *, refuse_duplicates: bool = True
+) -> Screen:
+    """Screen K units' poses, shape (K, N, 3); the first finding per unit wins.
+
+    ``refuse_duplicates``: whether a pair closer than the minimum angle is a finding
+    (eq. 10 with six poses degenerates on it) or only counted in ``near`` (least squares).
+    """
     k, n, _ = poses.shape
     units = np.arange(k)
     finding = np.zeros(k, dtype=np.int64)
     where = np.full(k, -1, dtype=np.int64)
     other = np.full(k, -1, dtype=np.int64)
+    none = np.full(k, -1, dtype=np.int64)
 
     def mark(
         code: Finding, bad: NDArray[np.bool_], pose: NDArray[np.int64], extra: NDArray[np.int64]
@@ -121,24 +168,53 @@ def screen(poses: FloatArray, limits: GeometryLimits = GeometryLimits()) -> Scre
         first = bad.argmax(axis=1)
         mark(Finding.NON_FINITE, bad[units, first], first // 3, first % 3)
         flat = np.where(finite, flat, NOMINAL_OFFSET_COUNTS)
-    rail = (flat <= ADC_MIN) | (flat >= ADC_MAX)
+    small = np.all(np.abs(flat) < NOT_COUNTS_BELOW, axis=1)
+    mark(Finding.NOT_COUNTS, small, none, none)
+    rail = (flat <= ADC_MIN + RAIL_MARGIN_COUNTS) | (flat >= ADC_MAX - RAIL_MARGIN_COUNTS)
     first = rail.argmax(axis=1)
     mark(Finding.AT_RAIL, rail[units, first], first // 3, first % 3)
-    if rail.any():  # values beyond the ADC's range would only overflow what follows
-        flat = np.where(rail, NOMINAL_OFFSET_COUNTS, flat)
+    beyond = np.abs(flat - NOMINAL_OFFSET_COUNTS) > DATASHEET_REACH_COUNTS
+    first = beyond.argmax(axis=1)
+    mark(Finding.BEYOND_DATASHEET, beyond[units, first], first // 3, first % 3)
+    if rail.any() or beyond.any():  # such values would only overflow what follows
+        flat = np.where(rail | beyond, NOMINAL_OFFSET_COUNTS, flat)
 
     clean = flat.reshape(k, n, 3)
-    earlier, later = np.triu_indices(n, 1)
-    diff = clean[:, later, :] - clean[:, earlier, :]
-    chord2 = np.einsum("kpi,kpi->kp", diff, diff)
-    closest = chord2.argmin(axis=1)
-    min_angle = chord_to_angle_deg(np.sqrt(chord2[units, closest]))
-    mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, later[closest], earlier[closest])
+    nearest, neighbour = _nearest(clean)
+    closest = nearest.argmin(axis=1)
+    pair = np.stack([closest, neighbour[units, closest]], axis=1)
+    pair.sort(axis=1)
+    min_angle = chord_to_angle_deg(nearest[units, closest])
+    near = (chord_to_angle_deg(nearest) < limits.min_angle_deg).sum(axis=1)
+    if refuse_duplicates:
+        mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, pair[:, 1], pair[:, 0])
 
     cover = coverage(clean)
-    none = np.full(k, -1, dtype=np.int64)
     mark(Finding.COPLANAR, cover < limits.min_coverage, none, none)
-    return Screen(finding, where, other, min_angle, cover)
+    return Screen(finding, where, other, min_angle, cover, pair, near.astype(np.int64))
+
+
+def _nearest(poses: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Distance (counts) from every pose to its closest other pose, and which one it is.
+
+    Both (K, N). Few poses: all pairs at once, vectorised over units; many: a k-d tree
+    per unit (:class:`scipy.spatial.cKDTree`), memory linear in N.
+    """
+    k, n, _ = poses.shape
+    if n <= PAIRWISE_MAX_POSES:
+        diff = poses[:, :, None, :] - poses[:, None, :, :]
+        chord2 = np.einsum("kijd,kijd->kij", diff, diff)
+        chord2[:, np.arange(n), np.arange(n)] = np.inf
+        neighbour = chord2.argmin(axis=2)
+        nearest = np.sqrt(np.take_along_axis(chord2, neighbour[..., None], axis=2)[..., 0])
+        return nearest, neighbour.astype(np.int64)
+    nearest = np.empty((k, n))
+    neighbour = np.empty((k, n), dtype=np.int64)
+    for unit in range(k):
+        distance, index = cKDTree(poses[unit]).query(poses[unit], k=2)
+        nearest[unit] = np.asarray(distance)[:, 1]
+        neighbour[unit] = np.asarray(index)[:, 1]
+    return nearest, neighbour
 
 
 def screen_error(
@@ -152,10 +228,22 @@ def screen_error(
         return InvalidValueError(
             f"pose {pose + 1}: {AXES[other]} is not a finite number", pose=pose
         )
+    if code is Finding.NOT_COUNTS:
+        return NotCountsError(
+            f"the values look like acceleration in g or m/s² (all within ±{NOT_COUNTS_BELOW:g}), "
+            f"not ADC counts ({ADC_MIN}…{ADC_MAX}): give the raw counts of each pose"
+        )
     if code is Finding.AT_RAIL:
         return RailValueError(
-            f"pose {pose + 1}: {AXES[other]} is at the ADC rail ({ADC_MIN} or {ADC_MAX} counts): "
-            "the axis is saturated",
+            f"pose {pose + 1}: {AXES[other]} is at the ADC rail (within {RAIL_MARGIN_COUNTS:g} "
+            f"counts of {ADC_MIN} or {ADC_MAX}): the axis is saturated, its mean clipped",
+            pose=pose,
+        )
+    if code is Finding.BEYOND_DATASHEET:
+        return BeyondDatasheetError(
+            f"pose {pose + 1}: {AXES[other]} reads beyond the datasheet's reach at 1 g "
+            f"({NOMINAL_OFFSET_COUNTS:g} ± {DATASHEET_REACH_COUNTS} counts): the unit was "
+            "moving, or the sensor is out of spec",
             pose=pose,
         )
     if code is Finding.DUPLICATE:
@@ -175,9 +263,16 @@ def screen_error(
 
 
 def check_poses(
-    poses: FloatArray, min_poses: int, limits: GeometryLimits = GeometryLimits()
+    poses: FloatArray,
+    min_poses: int,
+    limits: GeometryLimits = GeometryLimits(),
+    *,
+    refuse_duplicates: bool = False,
 ) -> Screen:
     """Screen one unit's poses, shape (N, 3), raising the first refusal found.
+
+    Near-duplicate poses are refused only with ``refuse_duplicates``; otherwise the
+    screen counts them (least squares loses nothing by them but their information).
 
     Raises:
         TooFewPosesError: fewer than ``min_poses`` poses.
@@ -189,7 +284,7 @@ def check_poses(
         raise TooFewPosesError(
             f"{poses.shape[0]} poses given, this model needs at least {min_poses}"
         )
-    result = screen(poses[None], limits)
+    result = screen(poses[None], limits, refuse_duplicates=refuse_duplicates)
     error = screen_error(result, 0, limits)
     if error is not None:
         raise error

@@ -172,6 +172,7 @@ def run_record(
             residual_max_mg=q.residual_max_mg,
             condition_number=max(1.0, q.condition_number),
             verification_error_mg=verification_error_mg,
+            excluded_poses=solution.excluded or None,
         )
     return RunRecord(
         run_id=journal.run_id,
