@@ -24,7 +24,7 @@ Method = Literal["paper-eq10", "least-squares"]
 MIN_DOF_SHOWN = 3
 #: What the JSON ``sensitivity`` is, per model: for nine it depends on the convention
 #: that makes C unique (upper-triangular, i.e. x is the reference axis and y lies in the
-#: x-y plane), and differs from each axis' own counts/g by up to ~0.7 counts/g at 2 %
+#: x-y plane), and differs from each axis' own counts/g by up to ~0.8 counts/g at 2 %
 #: cross-axis coupling.
 SENSITIVITY_CONVENTION = {
     "six": "1/diag(C), C diagonal",
