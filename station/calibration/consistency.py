@@ -35,7 +35,7 @@ import numpy as np
 
 from station.arrays import FloatArray
 from station.calibration.errors import CalibrationError, InconsistentPosesError
-from station.calibration.geometry import GeometryLimits
+from station.calibration.geometry import GeometryLimits, refuse_beyond_datasheet
 from station.calibration.least_squares import UNKNOWNS, solve_least_squares
 from station.calibration.model import Model, apply
 from station.calibration.residual import MAX_CONDITION
@@ -98,6 +98,7 @@ def solve_consistent(
     )
     hint = " (or cross-axis coupling: try the nine-parameter model)" if judge == "six" else ""
     if spare < EXCLUSION_MIN_SPARE:
+        refuse_beyond_datasheet(poses)  # the likelier cause, where one pose shows it
         raise InconsistentPosesError(
             f"{head}; with {n} poses ({spare} spare) one bad pose cannot be told from the "
             f"others{hint}: take the poses again, or add {EXCLUSION_MIN_SPARE - spare} or more"
@@ -121,6 +122,7 @@ def solve_consistent(
             else solve_least_squares(poses[keep], model, limits, max_condition)
         )
         return _judged(_excluding(final, pose, poses), _excluding(refit, pose, poses), judge, limit)
+    refuse_beyond_datasheet(poses)
     if explained:
         named = " or ".join(f"pose {c + 1}" for c, _ in explained)
         raise InconsistentPosesError(

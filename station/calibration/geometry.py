@@ -12,6 +12,9 @@ The values are checked first, each refusal naming its real cause:
   that axis sat at the converter's end, the mean is clipped;
 * **beyond the datasheet** — an axis further from 2048 than any KXM52 can read at 1 g
   (:data:`DATASHEET_REACH_COUNTS`): the unit was moving, or the sensor is out of spec.
+  Not a refusal of its own (an out-of-spec unit still calibrates, and fails on its
+  limits with the values measured), but the cause named when the poses are refused
+  (:func:`refuse_beyond_datasheet`).
 
 The spacing and coverage measures use only differences between poses, so they do not
 depend on the unknown offsets:
@@ -92,18 +95,17 @@ class Finding(IntEnum):
     DUPLICATE = 3
     COPLANAR = 4
     NOT_COUNTS = 5
-    BEYOND_DATASHEET = 6
 
 
 @dataclass(frozen=True)
 class Screen:
     """Per-unit screening result; arrays have shape (K,).
 
-    ``pose`` and ``other`` locate the finding: the pose index and, for AT_RAIL and
-    BEYOND_DATASHEET the axis, for DUPLICATE the other pose of the closest pair (−1
-    where not applicable). ``closest`` holds the closest pair (K, 2), ``near`` how many
-    poses lie closer than the minimum angle to another pose: reported, and refused only
-    where the caller refuses duplicates (the paper's exactly determined eq. 10).
+    ``pose`` and ``other`` locate the finding: the pose index and, for AT_RAIL the
+    axis, for DUPLICATE the other pose of the closest pair (−1 where not applicable).
+    ``closest`` holds the closest pair (K, 2), ``near`` how many poses lie closer than
+    the minimum angle to another pose: reported, and refused only where the caller
+    refuses duplicates (the paper's exactly determined eq. 10).
     """
 
     finding: NDArray[np.int64]
@@ -173,14 +175,11 @@ def screen(
     rail = (flat <= ADC_MIN + RAIL_MARGIN_COUNTS) | (flat >= ADC_MAX - RAIL_MARGIN_COUNTS)
     first = rail.argmax(axis=1)
     mark(Finding.AT_RAIL, rail[units, first], first // 3, first % 3)
-    beyond = np.abs(flat - NOMINAL_OFFSET_COUNTS) > DATASHEET_REACH_COUNTS
-    first = beyond.argmax(axis=1)
-    mark(Finding.BEYOND_DATASHEET, beyond[units, first], first // 3, first % 3)
-    if rail.any() or beyond.any():  # such values would only overflow what follows
-        flat = np.where(rail | beyond, NOMINAL_OFFSET_COUNTS, flat)
+    if rail.any():  # values beyond the ADC's range would only overflow what follows
+        flat = np.where(rail, NOMINAL_OFFSET_COUNTS, flat)
 
     clean = flat.reshape(k, n, 3)
-    nearest, neighbour = _nearest(clean)
+    nearest, neighbour = _nearest(clean, finding != Finding.OK)
     closest = nearest.argmin(axis=1)
     pair = np.stack([closest, neighbour[units, closest]], axis=1)
     pair.sort(axis=1)
@@ -194,11 +193,13 @@ def screen(
     return Screen(finding, where, other, min_angle, cover, pair, near.astype(np.int64))
 
 
-def _nearest(poses: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+def _nearest(poses: FloatArray, refused: NDArray[np.bool_]) -> tuple[FloatArray, NDArray[np.int64]]:
     """Distance (counts) from every pose to its closest other pose, and which one it is.
 
     Both (K, N). Few poses: all pairs at once, vectorised over units; many: a k-d tree
-    per unit (:class:`scipy.spatial.cKDTree`), memory linear in N.
+    per unit (:class:`scipy.spatial.cKDTree`), memory linear in N, skipping the units
+    already ``refused`` (their stand-in values may all coincide, a k-d tree's worst
+    case); theirs read ∞.
     """
     k, n, _ = poses.shape
     if n <= PAIRWISE_MAX_POSES:
@@ -208,12 +209,34 @@ def _nearest(poses: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
         neighbour = chord2.argmin(axis=2)
         nearest = np.sqrt(np.take_along_axis(chord2, neighbour[..., None], axis=2)[..., 0])
         return nearest, neighbour.astype(np.int64)
-    nearest = np.empty((k, n))
-    neighbour = np.empty((k, n), dtype=np.int64)
-    for unit in range(k):
-        distance, index = cKDTree(poses[unit]).query(poses[unit], k=2)
-        nearest[unit] = np.asarray(distance)[:, 1]
-        neighbour[unit] = np.asarray(index)[:, 1]
+    nearest = np.full((k, n), np.inf)
+    neighbour = np.zeros((k, n), dtype=np.int64)
+    for unit in np.flatnonzero(~refused):
+        nearest[unit], neighbour[unit] = _nearest_one(poses[unit])
+    return nearest, neighbour
+
+
+def _nearest_one(points: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
+    """:func:`_nearest` of one unit's many poses (N, 3): a k-d tree over the distinct
+    poses (identical ones would pile into one leaf, the tree's quadratic worst case);
+    a pose repeated exactly is 0 from its twin."""
+    distinct, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    nearest = np.zeros(len(points))
+    neighbour = np.zeros(len(points), dtype=np.int64)
+    if len(distinct) > 1:
+        distance, index = cKDTree(distinct).query(distinct, k=2)
+        nearest = np.asarray(distance)[:, 1][inverse]
+        neighbour = first[np.asarray(index)[:, 1]][inverse]
+    order = np.argsort(inverse, kind="stable")  # twins side by side
+    group = inverse[order]
+    twin_next = np.flatnonzero(group[1:] == group[:-1])
+    for mine, twin in (
+        (order[twin_next], order[twin_next + 1]),
+        (order[twin_next + 1], order[twin_next]),
+    ):
+        nearest[mine] = 0.0
+        neighbour[mine] = twin
     return nearest, neighbour
 
 
@@ -237,13 +260,6 @@ def screen_error(
         return RailValueError(
             f"pose {pose + 1}: {AXES[other]} is at the ADC rail (within {RAIL_MARGIN_COUNTS:g} "
             f"counts of {ADC_MIN} or {ADC_MAX}): the axis is saturated, its mean clipped",
-            pose=pose,
-        )
-    if code is Finding.BEYOND_DATASHEET:
-        return BeyondDatasheetError(
-            f"pose {pose + 1}: {AXES[other]} reads beyond the datasheet's reach at 1 g "
-            f"({NOMINAL_OFFSET_COUNTS:g} ± {DATASHEET_REACH_COUNTS} counts): the unit was "
-            "moving, or the sensor is out of spec",
             pose=pose,
         )
     if code is Finding.DUPLICATE:
@@ -289,3 +305,18 @@ def check_poses(
     if error is not None:
         raise error
     return result
+
+
+def refuse_beyond_datasheet(poses: FloatArray) -> None:
+    """Raise :class:`BeyondDatasheetError` for the first pose (N, 3) with an axis further
+    from 2048 counts than any KXM52 reads at 1 g: called before refusing the poses for
+    another reason, as it is the likelier cause (a moving unit, or an out-of-spec sensor)."""
+    beyond = np.abs(poses - NOMINAL_OFFSET_COUNTS) > DATASHEET_REACH_COUNTS
+    if beyond.any():
+        pose, axis = (int(i) for i in np.argwhere(beyond)[0])
+        raise BeyondDatasheetError(
+            f"pose {pose + 1}: {AXES[axis]} reads beyond the datasheet's reach at 1 g "
+            f"({NOMINAL_OFFSET_COUNTS:g} ± {DATASHEET_REACH_COUNTS} counts): the unit was "
+            "moving, or the sensor is out of spec",
+            pose=pose,
+        )

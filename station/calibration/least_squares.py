@@ -35,7 +35,7 @@ from station.calibration.errors import (
     IllConditionedError,
     NonPositiveScaleError,
 )
-from station.calibration.geometry import GeometryLimits, check_poses
+from station.calibration.geometry import GeometryLimits, check_poses, refuse_beyond_datasheet
 from station.calibration.model import Calibration, Model
 from station.calibration.residual import (
     MAX_CONDITION,
@@ -139,6 +139,7 @@ def solve_least_squares(
         theta0 = param.pack(*algebraic_start(v, model))
     except NonPositiveScaleError:
         _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_beyond_datasheet(p)
         raise
     fit = least_squares(param.residual, theta0, jac=param.jacobian, method="lm", args=(v,))
     if fit.status <= 0 or not np.all(np.isfinite(fit.x)):
@@ -149,6 +150,7 @@ def solve_least_squares(
     offset_n, c_n = param.unpack(fit.x)
     if np.any(np.diag(c_n) <= 0):
         _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_beyond_datasheet(p)
         raise NonPositiveScaleError(
             "the fit found a non-positive scale though the geometry is sound: a pose was not still"
         )

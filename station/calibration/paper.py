@@ -33,7 +33,14 @@ from station.calibration.errors import (
     NonPositiveScaleError,
     TooFewPosesError,
 )
-from station.calibration.geometry import Finding, GeometryLimits, Screen, screen, screen_error
+from station.calibration.geometry import (
+    Finding,
+    GeometryLimits,
+    Screen,
+    refuse_beyond_datasheet,
+    screen,
+    screen_error,
+)
 from station.calibration.model import Calibration
 from station.calibration.residual import MAX_CONDITION, condition_number, jacobian_six, normalise
 from station.calibration.solution import Solution, quality_of
@@ -200,6 +207,7 @@ def solve_paper(
             f"{batch.condition[0]:.3g} > {max_condition:.3g}): spread them over more directions"
         )
     if outcome is Outcome.NON_POSITIVE_SCALE:
+        refuse_beyond_datasheet(p)
         raise NonPositiveScaleError(
             "no ellipsoid fits these poses though their geometry is sound (k1, k2 or s_x² is not "
             "positive): a pose was not still, or poses are mislabelled"

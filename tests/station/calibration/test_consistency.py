@@ -144,7 +144,7 @@ def test_clean_poses_exclude_nothing(
     The limit is 8σ at that noise: a false alarm per pose of 2·(1 − Φ(8)) ≈ 1.2e-15.
     """
     rng = np.random.default_rng(seed)
-    model = "nine" if n >= 9 else "six"
+    model = "nine" if n >= 10 else "six"  # at least one spare equation to check
     if model == "six":
         unit = TrueUnit(unit.offset, np.diag(unit.sensitivity))
     poses = pose_means(unit, rotation.apply(spread_directions(n)), sigma, rng)

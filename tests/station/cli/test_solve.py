@@ -174,7 +174,11 @@ def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -
     ("rows", "message"),
     [
         ("0.01,-0.02,1.00\n" * 7, "look like acceleration in g or m/s²"),
-        ("2048,2048,3400\n" + "2048,2048,1000\n" * 6, "pose 1: z reads beyond the datasheet"),
+        (
+            "2048,2048,3400\n2048,2048,1229\n2867,2048,2048\n1229,2048,2048\n"
+            "2048,2867,2048\n2048,1229,2048\n2521,2521,2521\n",
+            "pose 1: z reads beyond the datasheet",
+        ),
     ],
 )
 def test_refusals_name_the_real_cause(
