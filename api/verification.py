@@ -2,13 +2,16 @@
 
 A station sends the mean counts of every pose and the coefficients it wrote into the
 unit; the server recomputes them with :func:`station.calibration.solve` from the ``fit``
-poses and refuses the run when they disagree beyond the tolerances below.
+poses (with the residual limit of the run's own limits profile, so a pose the station
+left out as inconsistent is left out again) and refuses the run when they disagree beyond
+the tolerances below, or when the poses left out differ.
 """
 
 import numpy as np
 
 from station.calibration import CalibrationError, solve
 from station.errors import CalstationError
+from station.limits import profile_of
 from station.records import RunRecord
 
 #: Offsets may differ by this much, counts (floating-point noise is ~1e-9).
@@ -31,13 +34,22 @@ def check_coefficients(record: RunRecord) -> None:
     if submitted is None:
         return
     poses = np.array([pose.mean.as_tuple() for pose in record.fit_poses()])
+    profile = profile_of(record.limits)
+    limit = None if profile is None else profile.max_residual_counts
     try:
-        recomputed = solve(poses, model=record.model).calibration
+        solution = solve(poses, model=record.model, max_residual_counts=limit)
     except (CalibrationError, np.linalg.LinAlgError, FloatingPointError) as exc:
         # Numerical failures on absurd poses are the poses' fault too, not the server's.
         raise CalibrationMismatchError(
             f"coefficients submitted but the fit poses give no calibration: {exc}"
         ) from None
+    recomputed = solution.calibration
+    excluded = record.quality.excluded_poses if record.quality is not None else None
+    if solution.excluded != (excluded or ()):
+        shown = ", ".join(str(p) for p in solution.excluded) or "none"
+        raise CalibrationMismatchError(
+            f"quality.excluded_poses: submitted {list(excluded or ())}, the poses give [{shown}]"
+        )
     offset = np.array(submitted.offset.as_tuple())
     sensitivity = np.array(submitted.sensitivity.as_tuple())
     matrix = np.array(submitted.matrix)

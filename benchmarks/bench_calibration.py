@@ -7,10 +7,15 @@
     Cramér–Rao bound for the same pose geometry and noise; efficiency = CRB / MSE.
 (b) The classic ±1 g method against autocalibration when the jig is misplaced.
 (c) Speed: one unit's solve, and the batch path (K × 6 poses) against a Python loop.
+(d) Many poses: time and peak memory of one solve over 1e3, 1e4 and 1e5 poses (each in
+    its own process, so its peak RSS is its own), and the robust fit on 12 poses with
+    one bad pose.
 """
 
 import argparse
 import resource
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -20,6 +25,7 @@ from station.calibration import solve, solve_classic, solve_paper, solve_paper_b
 from station.calibration.synthetic import (
     TrueUnit,
     pose_means,
+    random_directions,
     random_unit,
     six_directions,
     spread_directions,
@@ -182,13 +188,58 @@ def speed(batch_units: int) -> None:
     )
 
 
+def one_size(n: int, model: str) -> None:
+    """Solve n random poses of a coupled unit; print seconds and this process's peak RSS."""
+    rng = np.random.default_rng(n)
+    poses = pose_means(random_unit(rng, cross_axis=0.02), random_directions(rng, n), 0.05, rng)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    solution = solve(poses, model)  # type: ignore[arg-type]
+    seconds = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    print(f"{seconds:.3f} {before / 1024:.0f} {peak / 1024:.0f} {len(solution.excluded)}")
+
+
+def many_poses() -> None:
+    print("\n(d) many poses: one solve, random directions, 2 % coupling, σ = 0.05 counts")
+    table("poses", "model", "time", "peak RSS (MiB)", "RSS before the solve (MiB)")
+    for n in (1_000, 10_000, 100_000):
+        for model in ("six", "nine"):
+            answer = subprocess.run(
+                [sys.executable, __file__, "--one-size", str(n), "--model", model],
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout.split()
+            seconds, before, peak = float(answer[0]), answer[1], answer[2]
+            row(f"{n:,}", model, f"{seconds:.2f} s", peak, before)
+    rng = np.random.default_rng(12)
+    found, trials = 0, 200
+    for _ in range(trials):
+        unit = random_unit(rng, cross_axis=0.02)
+        directions = Rotation.random(random_state=rng).apply(spread_directions(12))
+        poses = pose_means(unit, directions, 0.05, rng)
+        bad = int(rng.integers(12))
+        poses[bad] += 100.0 * directions[bad]
+        found += solve(poses, "nine").excluded == (bad,)
+    print(f"\n100-count outlier on one of 12 poses (nine model): excluded {found}/{trials}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer trials and units")
+    parser.add_argument("--one-size", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--model", default="six", help=argparse.SUPPRESS)
+    parser.add_argument("--only-many", action="store_true", help="only (d), the many-pose rows")
     args = parser.parse_args()
-    accuracy(trials=300 if args.quick else 2000, sigma=0.1)
-    jig(units=100 if args.quick else 1000)
-    speed(batch_units=100_000 if args.quick else 1_000_000)
+    if args.one_size:
+        one_size(args.one_size, args.model)
+        return
+    if not args.only_many:
+        accuracy(trials=300 if args.quick else 2000, sigma=0.1)
+        jig(units=100 if args.quick else 1000)
+        speed(batch_units=100_000 if args.quick else 1_000_000)
+    many_poses()
 
 
 if __name__ == "__main__":

@@ -99,8 +99,8 @@ class RunPage:
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
-    A record without a lot, a disposition or its limits profile is hashed without the
-    field, as before the field existed, so a retry from an older station matches the run
+    A record without a lot, a disposition, its limits profile or excluded poses is hashed
+    without the field, as before the field existed, so a retry from an older station matches the run
     it stored.
     """
     unset: dict[str, Any] = {
@@ -108,6 +108,8 @@ def record_sha256(record: RunRecord) -> str:
     }
     if record.limits.profile is None:
         unset["limits"] = {"profile"}
+    if record.quality is not None and record.quality.excluded_poses is None:
+        unset["quality"] = {"excluded_poses"}
     return hashlib.sha256(record.model_dump_json(exclude=unset or None).encode()).hexdigest()
 
 

@@ -78,6 +78,18 @@ class LimitsProfile(BaseModel):
         int | None,
         Field(ge=1, le=100, description="attempts per unit (aborts not counted) before rework"),
     ] = None
+    fit_residual_counts: Annotated[
+        Bounds | None,
+        Field(
+            description="largest |studentised residual| of a least-squares fit's poses, counts; "
+            "left out, the model's default (station.calibration.consistency)"
+        ),
+    ] = None
+
+    @property
+    def max_residual_counts(self) -> float | None:
+        """The fit's residual limit, counts (``None``: the calibration's default)."""
+        return None if self.fit_residual_counts is None else self.fit_residual_counts.upper
 
     @property
     def attempts_allowed(self) -> int:
@@ -88,11 +100,11 @@ class LimitsProfile(BaseModel):
     def document(self) -> dict[str, JsonValue]:
         """The profile as the JSON document its SHA-256 is taken over (and a run carries).
 
-        A profile without a retest limit leaves the field out, so it hashes as before
-        the field existed.
+        A profile without a retest limit or a fit residual limit leaves the field out, so
+        it hashes as before the field existed.
         """
-        unset = {"retest_limit"} if self.retest_limit is None else None
-        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset)
+        unset = {name for name in _OPTIONAL if getattr(self, name) is None}
+        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset or None)
         return document
 
     @property
@@ -107,6 +119,10 @@ class LimitsProfile(BaseModel):
         return LimitsRef(
             name=self.name, version=self.version, sha256=document_sha256(document), profile=document
         )
+
+
+#: Settings added after profiles were first stored: left out of the document when unset.
+_OPTIONAL = ("retest_limit", "fit_residual_counts")
 
 
 def profile_of(ref: LimitsRef) -> LimitsProfile | None:

@@ -236,12 +236,18 @@ class Coefficients(_Record):
 
 
 class QualityMetrics(_Record):
-    """How well the calibration explains the poses."""
+    """How well the calibration explains the poses.
+
+    ``excluded_poses``: the fit poses (0-based, as ``PoseRecord.index``) the solve left
+    out as inconsistent with the others (:mod:`station.calibration.consistency`); left
+    out of the record when none was, so older records hash as before.
+    """
 
     residual_rms_mg: ErrorMg
     residual_max_mg: ErrorMg
     condition_number: ConditionNumber
     verification_error_mg: ErrorMg | None = None
+    excluded_poses: tuple[Count, ...] | None = None
 
 
 class GyroSummary(_Record):

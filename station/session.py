@@ -223,7 +223,9 @@ class UnitRun:
         self._go(Phase.SOLVE)
         try:
             means = record.fit_means(self.journal.captures, self.fit_count)
-            self.solution = solve(means, self.settings.model)
+            self.solution = solve(
+                means, self.settings.model, max_residual_counts=self.profile.max_residual_counts
+            )
         except CalibrationError as exc:
             self._failures.add(calibration_failed(exc))
             self._finish(store=True)

@@ -100,16 +100,16 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
             f"this API key belongs to station {station}, the run to {record.station_id}",
         )
     try:
+        profile_of(record.limits)
+    except InputError as exc:
+        raise invalid(("body", "limits", "profile"), str(exc)) from None
+    try:
         check_coefficients(record)
     except CalibrationMismatchError as exc:
         log.warning(
             "run %s serial=%s station=%s refused: %s", record.run_id, record.serial, station, exc
         )
         raise
-    try:
-        profile_of(record.limits)
-    except InputError as exc:
-        raise invalid(("body", "limits", "profile"), str(exc)) from None
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
     log.info(

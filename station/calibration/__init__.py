@@ -6,6 +6,7 @@ Public surface::
     solve_paper(poses)         the paper's six-position eq. 10
     solve_paper_batch(poses)   eq. 10 for K units at once, (K, 6, 3)
     solve_least_squares(...)   6- or 9-parameter maximum-likelihood fit, N ≥ 6 / 9
+    solve_consistent(...)      least squares that leaves out one inconsistent pose
     solve_classic(plus, minus) the ±1 g baseline, eqs. 2 and 3
     apply(calibration, raw)    counts → g
 
@@ -14,13 +15,21 @@ Public surface::
 """
 
 from station.calibration.classic import solve_classic
+from station.calibration.consistency import (
+    DEFAULT_RESIDUAL_LIMIT_COUNTS,
+    residual_limit,
+    solve_consistent,
+)
 from station.calibration.errors import (
+    BeyondDatasheetError,
     CalibrationError,
     CoplanarPosesError,
     DuplicatePoseError,
     IllConditionedError,
+    InconsistentPosesError,
     InvalidValueError,
     NonPositiveScaleError,
+    NotCountsError,
     RailValueError,
     TooFewPosesError,
 )
@@ -29,21 +38,33 @@ from station.calibration.least_squares import UNKNOWNS, solve_least_squares
 from station.calibration.model import Calibration, Model, apply
 from station.calibration.paper import Outcome, PaperBatch, solve_paper, solve_paper_batch
 from station.calibration.residual import MAX_CONDITION
-from station.calibration.solution import Quality, Solution, StandardErrors
+from station.calibration.solution import (
+    MIN_DOF_SHOWN,
+    SENSITIVITY_CONVENTION,
+    Quality,
+    Solution,
+    StandardErrors,
+)
 from station.calibration.solve import solve
 
 __all__ = [
+    "DEFAULT_RESIDUAL_LIMIT_COUNTS",
     "MAX_CONDITION",
+    "MIN_DOF_SHOWN",
+    "SENSITIVITY_CONVENTION",
     "UNKNOWNS",
+    "BeyondDatasheetError",
     "Calibration",
     "CalibrationError",
     "CoplanarPosesError",
     "DuplicatePoseError",
     "GeometryLimits",
     "IllConditionedError",
+    "InconsistentPosesError",
     "InvalidValueError",
     "Model",
     "NonPositiveScaleError",
+    "NotCountsError",
     "Outcome",
     "PaperBatch",
     "Quality",
@@ -54,8 +75,10 @@ __all__ = [
     "apply",
     "coverage",
     "pair_angles_deg",
+    "residual_limit",
     "solve",
     "solve_classic",
+    "solve_consistent",
     "solve_least_squares",
     "solve_paper",
     "solve_paper_batch",

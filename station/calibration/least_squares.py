@@ -35,7 +35,7 @@ from station.calibration.errors import (
     IllConditionedError,
     NonPositiveScaleError,
 )
-from station.calibration.geometry import GeometryLimits, check_poses
+from station.calibration.geometry import GeometryLimits, check_poses, refuse_beyond_datasheet
 from station.calibration.model import Calibration, Model
 from station.calibration.residual import (
     MAX_CONDITION,
@@ -43,6 +43,7 @@ from station.calibration.residual import (
     condition_number,
     jacobian_nine,
     jacobian_six,
+    leverage,
     normalise,
 )
 from station.calibration.solution import Solution, StandardErrors, quality_of
@@ -90,7 +91,8 @@ def algebraic_start(v: FloatArray, model: Model) -> tuple[FloatArray, FloatArray
         design = np.column_stack(
             [x * x, y * y, z * z, 2 * x * y, 2 * x * z, 2 * y * z, x, y, z, ones]
         )
-    q = np.linalg.svd(design)[2][-1]
+    # The full right factor, but never the N×N left one (only a few rows need it whole).
+    q = np.linalg.svd(design, full_matrices=len(design) < design.shape[1])[2][-1]
     if model == "six":
         m = np.diag(q[:3])
         b, c = q[3:6], q[6]
@@ -133,21 +135,30 @@ def solve_least_squares(
     v = normalise(p)
     param = _Parametrisation(model)
 
-    theta0 = param.pack(*algebraic_start(v, model))
+    try:
+        theta0 = param.pack(*algebraic_start(v, model))
+    except NonPositiveScaleError:
+        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_beyond_datasheet(p)
+        raise
     fit = least_squares(param.residual, theta0, jac=param.jacobian, method="lm", args=(v,))
     if fit.status <= 0 or not np.all(np.isfinite(fit.x)):
-        raise CalibrationError(f"the least-squares fit did not converge: {fit.message}")
+        _refuse_degenerate_geometry(v, model, max_condition)
+        raise CalibrationError(
+            f"the least-squares fit did not converge though the geometry is sound: {fit.message}"
+        )
     offset_n, c_n = param.unpack(fit.x)
     if np.any(np.diag(c_n) <= 0):
-        raise NonPositiveScaleError("the fit found a non-positive scale: a pose was not still")
+        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_beyond_datasheet(p)
+        raise NonPositiveScaleError(
+            "the fit found a non-positive scale though the geometry is sound: a pose was not still"
+        )
 
     jac = param.jacobian(fit.x, v)
     condition = float(condition_number(jac))
     if not condition <= max_condition:
-        raise IllConditionedError(
-            f"the poses are ill-conditioned (condition number {condition:.3g} > "
-            f"{max_condition:.3g}): spread the poses over more directions"
-        )
+        raise _degenerate(condition, model, max_condition)
 
     calibration = Calibration(
         model=model,
@@ -157,10 +168,34 @@ def solve_least_squares(
     return Solution(
         calibration=calibration,
         method="least-squares",
-        quality=quality_of(calibration, p, condition, screened),
+        quality=quality_of(calibration, p, condition, screened, leverage(jac)),
         standard_errors=_standard_errors(jac, fit.fun, c_n, model),
         k=_k(calibration) if model == "six" else None,
     )
+
+
+def _degenerate(condition: float, model: Model, max_condition: float) -> IllConditionedError:
+    """The refusal of poses whose geometry does not determine the ``model``."""
+    hint = (
+        "add poses between the axes: the cross-axis terms need them"
+        if model == "nine"
+        else "spread the poses over more directions"
+    )
+    return IllConditionedError(
+        f"pose geometry degenerate: the poses cannot determine the {model}-parameter model "
+        f"(condition number {condition:.3g} > {max_condition:.3g}): {hint}"
+    )
+
+
+def _refuse_degenerate_geometry(v: FloatArray, model: Model, max_condition: float) -> None:
+    """Raise the geometry refusal when the poses v (N, 3) cannot determine the model even
+    for the nominal sensor: a failed fit on such poses is their geometry's fault."""
+    c = np.eye(3)
+    offset = np.zeros(3)
+    jac = jacobian_six(offset, np.ones(3), v) if model == "six" else jacobian_nine(offset, c, v)
+    condition = float(condition_number(jac))
+    if not condition <= max_condition:
+        raise _degenerate(condition, model, max_condition)
 
 
 def _standard_errors(
@@ -174,11 +209,11 @@ def _standard_errors(
     cov = sigma2 * np.linalg.pinv(jac.T @ jac)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) * NOMINAL_SENSITIVITY_COUNTS_PER_G
     if model == "six":
-        return StandardErrors(offset=se[:3], sensitivity=se[3:6])
+        return StandardErrors(offset=se[:3], sensitivity=se[3:6], dof=n - p)
     # sensitivity_j = 819.2 / C_jj (normalised): se = 819.2·se(C_jj)/C_jj²
     diag_index = [3, 6, 8]  # positions of C_00, C_11, C_22 in θ
     c_diag = np.diag(c_n)
-    return StandardErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2)
+    return StandardErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2, dof=n - p)
 
 
 def _k(calibration: Calibration) -> tuple[float, float]:

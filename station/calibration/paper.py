@@ -33,7 +33,14 @@ from station.calibration.errors import (
     NonPositiveScaleError,
     TooFewPosesError,
 )
-from station.calibration.geometry import Finding, GeometryLimits, Screen, screen, screen_error
+from station.calibration.geometry import (
+    Finding,
+    GeometryLimits,
+    Screen,
+    refuse_beyond_datasheet,
+    screen,
+    screen_error,
+)
 from station.calibration.model import Calibration
 from station.calibration.residual import MAX_CONDITION, condition_number, jacobian_six, normalise
 from station.calibration.solution import Solution, quality_of
@@ -120,6 +127,8 @@ def solve_paper_batch(
             other=cat("other", "screen").astype(np.int64),
             min_angle_deg=cat("min_angle_deg", "screen"),
             coverage=cat("coverage", "screen"),
+            closest=cat("closest", "screen").astype(np.int64),
+            near=cat("near", "screen").astype(np.int64),
         ),
     )
 
@@ -157,12 +166,15 @@ def _solve_chunk(p: FloatArray, limits: GeometryLimits, max_condition: float) ->
             normalise(work),
         )
     )
-    outcome[(outcome == Outcome.OK) & ~(condition <= max_condition)] = Outcome.ILL_CONDITIONED
+    # Degenerate geometry is named before "no ellipsoid fits": on such poses noise alone
+    # can make k1, k2 or s_x² negative, and the poses, not their stillness, are at fault.
+    degenerate = usable & ~(condition <= max_condition)
+    outcome[degenerate] = Outcome.ILL_CONDITIONED
 
     bad = outcome != Outcome.OK
     for arr in (offset, sensitivity, k):
         arr[bad] = np.nan
-    condition[~usable | ~positive] = np.nan
+    condition[~usable | (~positive & ~degenerate)] = np.nan
     return PaperBatch(offset, sensitivity, k, condition, outcome.astype(np.int64), screened)
 
 
@@ -191,13 +203,14 @@ def solve_paper(
         raise error
     if outcome is Outcome.ILL_CONDITIONED:
         raise IllConditionedError(
-            f"the poses are ill-conditioned (condition number {batch.condition[0]:.3g} > "
-            f"{max_condition:.3g}): spread the poses over more directions"
+            f"pose geometry degenerate: the poses are ill-conditioned (condition number "
+            f"{batch.condition[0]:.3g} > {max_condition:.3g}): spread them over more directions"
         )
     if outcome is Outcome.NON_POSITIVE_SCALE:
+        refuse_beyond_datasheet(p)
         raise NonPositiveScaleError(
-            "no ellipsoid fits these poses (k1, k2 or s_x² is not positive): a pose was not still, "
-            "or poses are mislabelled"
+            "no ellipsoid fits these poses though their geometry is sound (k1, k2 or s_x² is not "
+            "positive): a pose was not still, or poses are mislabelled"
         )
     calibration = Calibration.from_sensitivity(batch.offset[0], batch.sensitivity[0])
     return Solution(

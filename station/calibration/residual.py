@@ -71,3 +71,14 @@ def condition_number(jacobian: FloatArray) -> FloatArray:
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = eig[..., -1] / eig[..., 0]
     return np.asarray(np.sqrt(np.where(eig[..., 0] > 0, ratio, np.inf)), dtype=np.float64)
+
+
+def leverage(jacobian: FloatArray) -> FloatArray:
+    """Each pose's leverage h_i, the diagonal of the hat matrix J(JᵀJ)⁻¹Jᵀ, shape (N,).
+
+    Computed row by row, (J(JᵀJ)⁻¹ ∘ J)·1, in memory linear in N: the N×N hat matrix is
+    never formed. h_i is how strongly pose i pulls the fit toward itself (Σh = p); under
+    noise σ its residual has standard deviation σ·√(1 − h_i).
+    """
+    inverse = np.linalg.pinv(jacobian.T @ jacobian)
+    return np.asarray(np.einsum("ij,ij->i", jacobian @ inverse, jacobian), dtype=np.float64)

@@ -3,8 +3,8 @@
 import numpy as np
 from numpy.typing import ArrayLike
 
+from station.calibration.consistency import solve_consistent
 from station.calibration.geometry import GeometryLimits
-from station.calibration.least_squares import solve_least_squares
 from station.calibration.model import Model
 from station.calibration.paper import PAPER_POSES, solve_paper
 from station.calibration.residual import MAX_CONDITION
@@ -16,13 +16,17 @@ def solve(
     model: Model = "six",
     limits: GeometryLimits = GeometryLimits(),
     max_condition: float = MAX_CONDITION,
+    max_residual_counts: float | None = None,
 ) -> Solution:
     """Calibrate from N still poses, shape (N, 3), mean counts.
 
     ``model="six"``: the paper's eq. 10 for exactly six poses, least squares for more.
-    ``model="nine"``: the 9-parameter least-squares fit (N ≥ 9).
+    ``model="nine"``: the 9-parameter least-squares fit (N ≥ 9). A least-squares fit
+    checks its studentised residuals against ``max_residual_counts`` (default: the
+    model's, :mod:`station.calibration.consistency`), leaving out one inconsistent pose
+    when there are enough poses to tell which, refusing otherwise.
     """
     p = np.asarray(poses, dtype=np.float64)
     if model == "six" and p.ndim == 2 and p.shape[0] == PAPER_POSES:
         return solve_paper(p, limits, max_condition)
-    return solve_least_squares(p, model, limits, max_condition)
+    return solve_consistent(p, model, limits, max_condition, max_residual_counts)

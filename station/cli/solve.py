@@ -7,10 +7,17 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from station.calibration import CalibrationError, Solution, solve
+from station.calibration import (
+    MIN_DOF_SHOWN,
+    SENSITIVITY_CONVENTION,
+    CalibrationError,
+    Solution,
+    solve,
+)
 from station.cli.output import out, print_json
 from station.errors import InputError
-from station.posefile import read_pose_file
+from station.limits import load_profile
+from station.posefile import PoseFile, read_pose_file
 from station.sensor import AXES
 
 
@@ -31,27 +38,38 @@ def solve_command(
             help="six: the paper's eq. 10 (least squares beyond six poses); nine: with cross-axis."
         ),
     ] = ModelChoice.six,
+    limits: Annotated[
+        Path | None,
+        typer.Option("--limits", help="Limits profiles file (default: the shipped profiles)."),
+    ] = None,
+    profile: Annotated[
+        str | None,
+        typer.Option("--profile", help="Profile whose fit_residual_counts limits the residuals."),
+    ] = None,
     as_json: Annotated[
         bool, typer.Option("--json", help="Print the result as JSON on stdout.")
     ] = False,
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
+    max_residual = load_profile(limits, profile).max_residual_counts
     pose_file = read_pose_file(file)
     try:
-        solution = solve(pose_file.poses, model.value)
+        solution = solve(pose_file.poses, model.value, max_residual_counts=max_residual)
     except CalibrationError as exc:
         raise InputError(f"{pose_file.where(exc.pose)}: {exc}") from None
     if as_json:
         print_json(solution.to_dict())
     else:
-        out.print(_table(solution, file))
+        out.print(_table(solution, pose_file))
 
 
-def _table(solution: Solution, file: Path) -> Table:
+def _table(solution: Solution, pose_file: PoseFile) -> Table:
     cal, q = solution.calibration, solution.quality
     se = solution.standard_errors
+    shown = se is not None and se.dof >= MIN_DOF_SHOWN
     table = Table(
-        title=f"{file}: {solution.poses} poses, {cal.model}-parameter model ({solution.method})"
+        title=f"{pose_file.path}: {solution.poses} poses, {cal.model}-parameter model "
+        f"({solution.method})"
     )
     table.add_column("axis")
     table.add_column("offset (counts)", justify="right")
@@ -59,21 +77,46 @@ def _table(solution: Solution, file: Path) -> Table:
     for i, axis in enumerate(AXES):
         off = f"{cal.offset[i]:.4f}"
         sens = f"{cal.sensitivity[i]:.4f}"
-        if se is not None:
+        if shown and se is not None:
             off += f" ± {se.offset[i]:.4f}"
             sens += f" ± {se.sensitivity[i]:.4f}"
         table.add_row(axis, off, sens)
     lines = [
         f"residual |g|−1: rms {q.residual_rms_mg:.3f} mg, max {q.residual_max_mg:.3f} mg",
         f"condition number {q.condition_number:.3g}, coverage {q.coverage:.3f}, "
-        f"closest poses {q.min_angle_deg:.1f}°",
+        f"closest poses {q.closest_pair[0] + 1} and {q.closest_pair[1] + 1}, "
+        f"{q.min_angle_deg:.1f}°",
     ]
+    if se is not None:
+        lines.append(
+            f"± 1-σ standard errors, {se.dof} degrees of freedom"
+            if shown
+            else f"no ± shown: {se.dof} degree(s) of freedom, too few to estimate the noise"
+        )
+    if q.studentised_max_counts is not None:
+        lines.append(
+            f"studentised residual max {q.studentised_max_counts:.3g} counts "
+            f"(limit {solution.residual_limit_counts:g}, {solution.checked_with}-parameter check)"
+        )
     if solution.k is not None:
         lines.insert(0, f"k1 = {solution.k[0]:.6f}, k2 = {solution.k[1]:.6f}")
     if cal.model == "nine":
+        lines.append(f"sensitivity = {SENSITIVITY_CONVENTION['nine']}")
         lines.append(
             "matrix (counts → g): "
             + "; ".join(" ".join(f"{v:+.6e}" for v in row) for row in cal.matrix)
+        )
+    if q.near_duplicates:
+        lines.insert(
+            0,
+            f"NOTE near-duplicates: {q.near_duplicates} poses lie within 10° of another "
+            "(they add little; least squares needs no rule against them)",
+        )
+    for pose in solution.excluded:
+        lines.insert(
+            0,
+            f"EXCLUDED pose {pose + 1} ({pose_file.where(pose)}): inconsistent with the others, "
+            f"{(q.pose_g[pose] - 1) * 819.2:+.1f} counts off; fit redone without it",
         )
     table.caption = "\n".join(lines)
     return table

@@ -146,6 +146,18 @@ def pose_records(
     )
 
 
+def quality_metrics(solution: Solution, verification_error_mg: float | None) -> QualityMetrics:
+    """The record's quality part, with the fit poses the solve left out as inconsistent."""
+    q = solution.quality
+    return QualityMetrics(
+        residual_rms_mg=q.residual_rms_mg,
+        residual_max_mg=q.residual_max_mg,
+        condition_number=max(1.0, q.condition_number),
+        verification_error_mg=verification_error_mg,
+        excluded_poses=solution.excluded or None,
+    )
+
+
 def run_record(
     journal: RunJournal,
     settings: RunSettings,
@@ -166,13 +178,7 @@ def run_record(
             sensitivity=Vector3.model_validate(cal["sensitivity"]),
             matrix=tuple(tuple(row) for row in solution.calibration.matrix.tolist()),
         )
-        q = solution.quality
-        quality = QualityMetrics(
-            residual_rms_mg=q.residual_rms_mg,
-            residual_max_mg=q.residual_max_mg,
-            condition_number=max(1.0, q.condition_number),
-            verification_error_mg=verification_error_mg,
-        )
+        quality = quality_metrics(solution, verification_error_mg)
     return RunRecord(
         run_id=journal.run_id,
         serial=journal.serial,

@@ -200,3 +200,14 @@ def test_any_pose_means_get_an_answer_never_a_5xx(
         pose["mean"] = dict(zip("xyz", mean, strict=True))
     answer = client.post(RUNS, json=body, headers=_auth(station_key))
     assert answer.status_code in (201, 422), answer.text
+
+
+def test_poses_left_out_must_be_the_ones_the_poses_give(
+    client: httpx.Client, station_key: str
+) -> None:
+    # Six fit poses leave nothing to leave out: a record claiming pose 3 was is refused.
+    body = make_record().model_dump(mode="json")
+    body["quality"]["excluded_poses"] = [2]
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422
+    assert "quality.excluded_poses: submitted [2], the poses give [none]" in answer.text

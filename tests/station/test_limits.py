@@ -110,3 +110,16 @@ def test_unknown_profile_lists_the_known_ones(tmp_path: Path) -> None:
         load_profile(path, "line-b")
     with pytest.raises(InputError, match="cannot read"):
         load_profiles(tmp_path / "missing.toml")
+
+
+def test_a_fit_residual_limit_is_optional_and_hashes_only_when_set(tmp_path: Path) -> None:
+    plain = tmp_path / "plain.toml"
+    plain.write_text(PROFILE)
+    limited = tmp_path / "limited.toml"
+    limited.write_text(PROFILE + "fit_residual_counts = { upper = 5.0 }\n")
+    without, with_limit = load_profile(plain), load_profile(limited)
+    assert without.max_residual_counts is None
+    assert "fit_residual_counts" not in without.document  # hashes as before the setting
+    assert with_limit.max_residual_counts == 5.0
+    assert with_limit.sha256 != without.sha256
+    assert load_profile().max_residual_counts is None  # the shipped profile: the default

@@ -6,16 +6,20 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.calibration import (
+    BeyondDatasheetError,
     CalibrationError,
     CoplanarPosesError,
     DuplicatePoseError,
+    IllConditionedError,
     InvalidValueError,
+    NotCountsError,
     RailValueError,
     coverage,
     pair_angles_deg,
     solve,
 )
-from station.calibration.synthetic import random_directions, six_directions
+from station.calibration.geometry import GeometryLimits, screen
+from station.calibration.synthetic import random_directions, six_directions, spread_directions
 from tests.station.calibration.test_paper import TABLE_2
 
 NOMINAL = 2048.0 + 819.2 * six_directions()
@@ -99,3 +103,86 @@ def test_any_poses_give_a_calibration_or_a_refusal(
         return
     assert message
     assert "\n" not in message
+
+
+def test_values_in_g_are_named_as_such_not_as_saturated() -> None:
+    directions = random_directions(np.random.default_rng(1), 12)
+    for scale in (1.0, 9.80665):  # g, m/s²
+        with pytest.raises(NotCountsError, match="look like acceleration in g or m/s²"):
+            solve(scale * directions)
+
+
+def test_a_pose_beyond_the_datasheet_is_named_as_the_cause() -> None:
+    # Seven poses: inconsistent, too few to leave one out; the pose no KXM52 could read
+    # (1352 counts from 2048 at 1 g) is the cause named. With twelve it is left out.
+    directions = spread_directions(12)
+    poses = 2048.0 + 819.2 * directions
+    poses[6, 0] = 3400.0
+    seven = 2048.0 + 819.2 * spread_directions(7)
+    seven[6, 0] = 3400.0
+    with pytest.raises(BeyondDatasheetError, match="pose 7: x reads beyond the datasheet") as info:
+        solve(seven)
+    assert info.value.pose == 6
+    assert solve(poses).excluded == (6,)
+
+
+def test_an_out_of_spec_unit_still_calibrates_with_six_poses() -> None:
+    # The station then fails it on its offset and sensitivity limits, with the values.
+    poses = 2300.0 + 1000.0 * six_directions()
+    np.testing.assert_allclose(solve(poses).calibration.offset, 2300.0)
+
+
+def test_degenerate_geometry_is_named_not_blamed_on_stillness() -> None:
+    # Six poses in one hemisphere: eq. 10 gives a negative k here, which used to read "a
+    # pose was not still"; the cause is the geometry (cond(J) 1556 at the nominal sensor).
+    poses = np.array(
+        [
+            [2651.5, 1405.1, 1838.0],
+            [2795.2, 1599.8, 2115.3],
+            [2574.7, 1738.0, 1419.4],
+            [1705.9, 2572.9, 1643.2],
+            [2558.7, 2012.7, 1382.2],
+            [2686.4, 2452.2, 2055.8],
+        ]
+    )
+    with pytest.raises(IllConditionedError, match="pose geometry degenerate"):
+        solve(poses)
+
+
+def test_an_unidentifiable_nine_parameter_set_is_named_not_unconverged() -> None:
+    # Poses only along the axes say nothing about the cross-axis terms.
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    poses = 2048.0 + 819.2 * np.vstack([axes, axes])
+    poses += np.random.default_rng(3).normal(0.0, 0.05, poses.shape)
+    with pytest.raises(IllConditionedError, match="cross-axis terms need them"):
+        solve(poses, "nine")
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(12, 60))
+def test_near_duplicates_are_reported_not_refused_by_least_squares(seed: int, n: int) -> None:
+    rng = np.random.default_rng(seed)
+    directions = random_directions(rng, n)
+    directions[1] = directions[0] + 0.02 * rng.standard_normal(3)  # ~1° apart
+    directions[1] /= np.linalg.norm(directions[1])
+    poses = 2048.0 + 819.2 * directions + rng.normal(0.0, 0.05, (n, 3))
+    try:
+        quality = solve(poses, "nine").quality
+    except (CoplanarPosesError, IllConditionedError):  # random sets may lack coverage
+        return
+    assert quality.near_duplicates >= 2
+    assert quality.min_angle_deg < 10.0
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(33, 120), repeats=st.integers(0, 20))
+def test_the_closest_poses_of_many_match_all_pairs(seed: int, n: int, repeats: int) -> None:
+    # Beyond 32 poses a k-d tree (over the distinct poses) stands in for all pairs.
+    rng = np.random.default_rng(seed)
+    poses = 2048.0 + 819.2 * random_directions(rng, n)
+    poses[rng.integers(0, n, repeats)] = poses[0]  # exact repeats, the tree's worst case
+    result = screen(poses[None], GeometryLimits(), refuse_duplicates=False)
+    angles = pair_angles_deg(poses)
+    np.fill_diagonal(angles, np.inf)
+    assert float(result.min_angle_deg[0]) == pytest.approx(angles.min(), abs=1e-6)
+    assert int(result.near[0]) == int((angles.min(axis=1) < 10.0).sum())

@@ -8,7 +8,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from station.calibration.synthetic import pose_means, random_unit, spread_directions
+from station.calibration.synthetic import (
+    pose_means,
+    random_directions,
+    random_unit,
+    spread_directions,
+)
 from station.errors import InputError
 from station.posefile import read_pose_file
 from tests.conftest import REPO_ROOT, CliRunner
@@ -122,3 +127,86 @@ def test_pose_reader_never_crashes_on_garbage(
         return
     assert message.startswith(str(path))
     assert "\n" not in message
+
+
+def _write(path: Path, poses: np.ndarray) -> Path:
+    np.savetxt(path, poses, delimiter=",", header="ax,ay,az", comments="", fmt="%.4f")
+    return path
+
+
+def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path: Path) -> None:
+    rng = np.random.default_rng(12)
+    unit = random_unit(rng, cross_axis=0.02)
+    directions = spread_directions(12)
+    poses = pose_means(unit, directions, 0.05, rng)
+    poses[2] += 100.0 * directions[2]  # pose 3, line 4
+    path = _write(tmp_path / "poses.csv", poses)
+    result = run_cli("solve", str(path), "--model", "nine", "--json")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["excluded"] == [3]
+    assert data["residual_limit_counts"] == pytest.approx(2.0)
+    assert data["sensitivity_convention"].startswith("1/diag(C), C upper-triangular")
+    assert data["standard_errors"]["dof"] == 11 - 9
+    np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset, atol=0.5)
+    text = run_cli("solve", str(path), "--model", "nine")
+    assert f"EXCLUDED pose 3 ({path}:4)" in text.stdout
+    assert "no ± shown: 2 degree(s) of freedom" in text.stdout
+
+
+def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -> None:
+    rng = np.random.default_rng(13)
+    unit = random_unit(rng)
+    directions = spread_directions(12)
+    poses = pose_means(unit, directions, 0.05, rng)
+    poses[5] += 30.0 * directions[5]
+    path = _write(tmp_path / "poses.csv", poses)
+    limits = tmp_path / "limits.toml"
+    shipped = (REPO_ROOT / "station" / "profiles" / "limits.toml").read_text()
+    limits.write_text(shipped + "fit_residual_counts = { upper = 50.0 }\n")
+    loose = json.loads(run_cli("solve", str(path), "--limits", str(limits), "--json").stdout)
+    strict = json.loads(run_cli("solve", str(path), "--json").stdout)
+    assert (loose["excluded"], loose["residual_limit_counts"]) == ([], 50.0)
+    assert strict["excluded"] == [6]
+
+
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        ("0.01,-0.02,1.00\n" * 7, "look like acceleration in g or m/s²"),
+        (
+            "2048,2048,3400\n2048,2048,1229\n2867,2048,2048\n1229,2048,2048\n"
+            "2048,2867,2048\n2048,1229,2048\n2521,2521,2521\n",
+            "pose 1: z reads beyond the datasheet",
+        ),
+    ],
+)
+def test_refusals_name_the_real_cause(
+    run_cli: CliRunner, tmp_path: Path, rows: str, message: str
+) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_text("ax,ay,az\n" + rows)
+    result = run_cli("solve", str(path))
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.timeout(300)
+def test_100000_poses_solve_or_refuse_in_one_line(run_cli: CliRunner, tmp_path: Path) -> None:
+    # Memory linear in the poses: no N×N table (1e5² would be 75 GiB of float64).
+    rng = np.random.default_rng(14)
+    unit = random_unit(rng, cross_axis=0.02)
+    poses = pose_means(unit, random_directions(rng, 100_000), 0.05, rng)
+    result = run_cli(
+        "solve", str(_write(tmp_path / "many.csv", poses)), "--model", "nine", "--json"
+    )
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["poses"] == 100_000
+    assert data["excluded"] == []
+    assert data["near_duplicates"] > 0  # reported, not refused
+    in_g = run_cli("solve", str(_write(tmp_path / "g.csv", (poses - 2048) / 819.2)))
+    assert in_g.returncode == 2
+    assert "Traceback" not in in_g.stderr
+    assert len(in_g.stderr.strip().splitlines()) == 1
