@@ -70,7 +70,9 @@ class RecordedStream:
         step = np.diff(self.t)
         if (step <= 0).any():
             k = int(np.argmax(step <= 0)) + 1
-            raise StreamError(f"stream: t does not increase at sample {k} (t = {self.t[k]:.6g})")
+            raise StreamError(
+                f"stream: t does not increase at data row {k + 1} (t = {self.t[k]:.6g})"
+            )
 
     @property
     def rate_hz(self) -> float:
