@@ -59,10 +59,7 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
         )
     lines = [
         f"gyro K {axis}: "
-        + "  ".join(
-            f"{v:+.5f}" + ("" if se is None else f" ±{se[i, j]:.5f}")
-            for j, v in enumerate(gyro.scale_matrix[i])
-        )
+        + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
         for i, axis in enumerate(AXES)
     ]
     lines += [

@@ -11,7 +11,7 @@ Public surface::
     Move(t, rates_dps, gravity_before, gravity_after)          moves.py
         .problem() -> str | None          why it cannot be integrated (gaps, ...)
     fit_gyro_matrix(moves, bias_dps) -> GyroMatrixFit           matrix_fit.py
-        GyroMatrixFit.scale_matrix (3, 3), .standard_errors (3, 3) | None,
+        GyroMatrixFit.scale_matrix (3, 3), .standard_errors (3, 3),
         .bias_dps (3,), .used, .residual_deg, .residual_identity_deg,
         .unusable (UnusableMove(index, reason)), .condition_number, .to_dict()
     integrate_rates(t, rates_rad_s) -> Rotation                 integrate.py

@@ -32,7 +32,7 @@ from station.gyro.motion.moves import GAP_FACTOR, Move
 K_UNKNOWNS: Final = 9
 #: Constraints one move gives (two: the turn about gravity is invisible).
 CONSTRAINTS_PER_MOVE: Final = 2
-#: The fewest usable moves that determine K: 2 × 5 = 10 ≥ 9.
+#: The fewest usable moves that determine K, with a degree of freedom left: 2 × 5 = 10 > 9.
 MIN_MOVES: Final = 5
 #: Above this condition number of the Jacobian the moves do not determine K.
 MAX_CONDITION: Final = 1e6
@@ -52,8 +52,8 @@ class GyroMatrixFit:
 
     Attributes:
         scale_matrix: shape (3, 3), K in ``m = b + K·ω``.
-        standard_errors: shape (3, 3), 1-σ of each element of K; None when the moves
-            leave no degree of freedom (exactly five moves' worth).
+        standard_errors: shape (3, 3), 1-σ of each element of K (five moves or more
+            leave at least one degree of freedom).
         bias_dps: shape (3,), the bias the rates were corrected with, deg/s.
         used: indices of the moves fitted, in order.
         residual_deg: shape (len(used),), each used move's residual with the fitted K.
@@ -63,7 +63,7 @@ class GyroMatrixFit:
     """
 
     scale_matrix: FloatArray
-    standard_errors: FloatArray | None
+    standard_errors: FloatArray
     bias_dps: FloatArray
     used: tuple[int, ...]
     residual_deg: FloatArray
@@ -78,11 +78,10 @@ class GyroMatrixFit:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready (the ``"gyro"`` object of ``calstation solve --stream --json``)."""
-        se = self.standard_errors
         return {
             "bias_dps": self.bias_dps.tolist(),
             "scale_matrix": self.scale_matrix.tolist(),
-            "scale_matrix_standard_errors": None if se is None else se.tolist(),
+            "scale_matrix_standard_errors": self.standard_errors.tolist(),
             "moves": len(self.used) + len(self.unusable),
             "moves_used": list(self.used),
             "residual_deg": self.residual_deg.tolist(),
@@ -161,10 +160,8 @@ def fit_gyro_matrix(
             f"(condition number {condition:.3g} > {MAX_CONDITION:g})"
         )
     dof = CONSTRAINTS_PER_MOVE * len(used) - K_UNKNOWNS
-    errors = None
-    if dof > 0:
-        sigma2 = float(result.fun @ result.fun) / dof
-        errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
+    sigma2 = float(result.fun @ result.fun) / dof
+    errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
     return GyroMatrixFit(
         scale_matrix=k,
         standard_errors=errors,

@@ -51,7 +51,6 @@ def test_noisy_stream_gives_k_within_its_standard_errors(seed: int) -> None:
     imu, stream = _unit_and_stream(seed, PLAN)
     result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
     se = result.gyro.standard_errors
-    assert se is not None
     error = np.abs(result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine"))
     assert (error <= 5 * se + INTEGRATION_FLOOR).all(), (error, se)
     still_samples = sum(len(s) for s in result.stills)
