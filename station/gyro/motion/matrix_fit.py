@@ -12,7 +12,8 @@ gravity direction into the start pose's::
 
 The nine elements of K minimise Σ|r_j|² (:func:`scipy.optimize.least_squares`, from
 K = I). Each move constrains two degrees of freedom (a turn about gravity is invisible
-to it), so at least five usable moves are needed, about varied axes. Standard errors
+to it), so five moves would just determine it; at least six usable moves are asked
+for (:data:`MIN_MOVES`), about varied axes. Standard errors
 are ``σ·√diag((JᵀJ)⁻¹)`` with σ² = Σ|r|² / (2·moves − 9); a move's residual is the
 angle between ``R·u_after`` and ``u_before``, in degrees.
 """
@@ -32,8 +33,10 @@ from station.gyro.motion.moves import GAP_FACTOR, Move
 K_UNKNOWNS: Final = 9
 #: Constraints one move gives (two: the turn about gravity is invisible).
 CONSTRAINTS_PER_MOVE: Final = 2
-#: The fewest usable moves that determine K, with a degree of freedom left: 2 × 5 = 10 > 9.
-MIN_MOVES: Final = 5
+#: The fewest usable moves fitted: 2 × 6 = 12 equations for 9 unknowns. Five moves (one
+#: spare equation) determine K in principle but not in practice: over 200 simulated
+#: six-pose units the worst came out 128 % off (docs/benchmarks.md).
+MIN_MOVES: Final = 6
 #: Above this condition number of the Jacobian the moves do not determine K.
 MAX_CONDITION: Final = 1e6
 
@@ -52,8 +55,8 @@ class GyroMatrixFit:
 
     Attributes:
         scale_matrix: shape (3, 3), K in ``m = b + K·ω``.
-        standard_errors: shape (3, 3), 1-σ of each element of K (five moves or more
-            leave at least one degree of freedom).
+        standard_errors: shape (3, 3), 1-σ of each element of K (six moves or more
+            leave at least three degrees of freedom).
         bias_dps: shape (3,), the bias the rates were corrected with, deg/s.
         used: indices of the moves fitted, in order.
         residual_deg: shape (len(used),), each used move's residual with the fitted K.
@@ -122,17 +125,26 @@ class _Moves:
 
 
 def fit_gyro_matrix(
-    moves: list[Move], bias_dps: FloatArray, *, gap_factor: float = GAP_FACTOR
+    moves: list[Move],
+    bias_dps: FloatArray,
+    *,
+    gap_factor: float = GAP_FACTOR,
+    min_moves: int = MIN_MOVES,
 ) -> GyroMatrixFit:
     """Fit K from ``moves`` with the gyro bias ``bias_dps`` (3,) removed.
 
     Moves with gaps or too few samples are left out and named in ``unusable``.
+    ``min_moves`` below :data:`MIN_MOVES` (down to 5) is for measuring why it is the
+    default.
 
     Raises:
-        GyroMatrixError: fewer than :data:`MIN_MOVES` usable moves, or moves whose axes
+        ValueError: ``min_moves`` below 5 (no degree of freedom left).
+        GyroMatrixError: fewer than ``min_moves`` usable moves, or moves whose axes
             do not determine all nine elements (condition number above
             :data:`MAX_CONDITION`).
     """
+    if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
+        raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
     bias = np.asarray(bias_dps, dtype=np.float64)
     unusable: list[UnusableMove] = []
     used: list[int] = []
@@ -142,10 +154,10 @@ def fit_gyro_matrix(
             used.append(index)
         else:
             unusable.append(UnusableMove(index, problem))
-    if len(used) < MIN_MOVES:
+    if len(used) < min_moves:
         why = "; ".join(f"move {u.index}: {u.reason}" for u in unusable)
         raise GyroMatrixError(
-            f"gyro matrix needs {MIN_MOVES} usable moves, got {len(used)} of {len(moves)}"
+            f"gyro matrix needs {min_moves} usable moves, got {len(used)} of {len(moves)}"
             + (f" ({why})" if why else "")
         )
     data = _Moves([moves[i] for i in used], bias)

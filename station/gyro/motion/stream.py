@@ -27,7 +27,7 @@ import numpy as np
 from station.arrays import FloatArray
 from station.calibration import GeometryLimits, Model, Solution, apply, solve
 from station.gyro.motion.errors import StreamError
-from station.gyro.motion.matrix_fit import GyroMatrixFit, fit_gyro_matrix
+from station.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.gyro.motion.moves import Move
 from station.samples import SampleBlock
 from station.stillness import StillnessThresholds, StillSegment, still_segments
@@ -137,8 +137,11 @@ def calibrate_stream(
     model: Model = "nine",
     *,
     thresholds: StillnessThresholds | None = None,
+    min_moves: int = MIN_MOVES,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
+
+    ``min_moves`` goes to :func:`~station.gyro.motion.matrix_fit.fit_gyro_matrix`.
 
     Raises:
         StreamError: fewer still poses than ``model`` needs.
@@ -177,5 +180,5 @@ def calibrate_stream(
         gravity=gravity,
         bias_dps=bias,
         moves=moves,
-        gyro=fit_gyro_matrix(moves, bias),
+        gyro=fit_gyro_matrix(moves, bias, min_moves=min_moves),
     )

@@ -1,12 +1,16 @@
 """``calstation solve LOG.csv --stream``: JSON contract, truth recovered, bad input."""
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from station.calibration.synthetic import spread_directions
+from station.errors import InputError
+from station.gyro.motion import StreamError
+from station.gyro.motion.stream_file import read_stream_file
 from station.gyro.motion.synthetic import (
     StreamPlan,
     SyntheticImu,
@@ -96,22 +100,29 @@ def test_missing_column_is_refused(run_cli: CliRunner, tmp_path: Path) -> None:
     assert "header lacks column(s) gz" in _refused(run_cli, path)
 
 
-def test_time_going_back_is_refused(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+def test_time_going_back_is_named(
+    tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
 ) -> None:
     _, rows = recorded
     back = rows.copy()
     back[100, 0] = back[98, 0]
     path = _write(tmp_path / "back.csv", back)
-    assert "t does not increase at data row 101" in _refused(run_cli, path)
+    with pytest.raises(StreamError, match="t does not increase at data row 101"):
+        read_stream_file(path)
 
 
-def test_a_cell_that_is_not_a_number_is_named_with_its_line(
-    run_cli: CliRunner, tmp_path: Path
-) -> None:
+def test_a_cell_that_is_not_a_number_is_named_with_its_line(tmp_path: Path) -> None:
     path = tmp_path / "text.csv"
     path.write_text(f"{HEADER}\n0,2048,2048,2867,0,0,0\n0.01,2048,abc,2867,0,0,0\n")
-    assert f"{path}:3: column ay: 'abc' is not a number" in _refused(run_cli, path)
+    with pytest.raises(InputError, match=re.escape(f"{path}:3: column ay: 'abc' is not a number")):
+        read_stream_file(path)
+
+
+def test_a_short_row_is_named_with_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "short.csv"
+    path.write_text(f"{HEADER}\n0,2048,2048,2867,0,0,0\n0.01,2048,2048\n")
+    with pytest.raises(InputError, match=re.escape(f"{path}:3: 3 cells, the header has 7")):
+        read_stream_file(path)
 
 
 def test_too_few_stills_are_refused(
