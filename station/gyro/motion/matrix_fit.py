@@ -96,24 +96,34 @@ class GyroMatrixFit:
 
 
 class _Moves:
-    """The usable moves' raw steps, bias removed, padded into one (moves, steps, 3) array.
+    """The usable moves' raw steps, bias removed, in arrays of (moves, steps, 3).
 
     The corrected rates are linear in the raw ones, so each step's rotation vector for
-    a trial K is the raw step's ``K⁻¹·φ_raw``: one product per evaluation.
+    a trial K is the raw step's ``K⁻¹·φ_raw``: one product per evaluation. Moves are
+    grouped by their step count rounded up to a power of two and padded with zero
+    steps (identity rotations) to it, so the arrays hold under twice the steps.
     """
 
     def __init__(self, moves: list[Move], bias_dps: FloatArray) -> None:
         raw = [step_rotvecs(m.t, np.radians(m.rates_dps - bias_dps)) for m in moves]
-        self.steps = np.zeros((len(raw), max(len(r) for r in raw), 3))
-        for row, r in zip(self.steps, raw, strict=True):
-            row[: len(r)] = r
+        widths = [1 << max(0, len(r) - 1).bit_length() for r in raw]
+        self.groups: list[tuple[list[int], FloatArray]] = []
+        for width in sorted(set(widths)):
+            members = [i for i, w in enumerate(widths) if w == width]
+            steps = np.zeros((len(members), width, 3))
+            for row, i in zip(steps, members, strict=True):
+                row[: len(raw[i])] = raw[i]
+            self.groups.append((members, steps))
         self.before = np.array([m.gravity_before for m in moves])
         self.after = np.array([m.gravity_after for m in moves])
 
     def carried(self, k: FloatArray) -> FloatArray:
         """Each move's ``R(K)·u_after``, shape (moves, 3)."""
-        rotations = integrate_steps(self.steps @ np.linalg.inv(k).T)
-        return np.asarray(rotations.apply(self.after), dtype=np.float64)
+        k_inv_t = np.linalg.inv(k).T
+        out = np.empty_like(self.after)
+        for members, steps in self.groups:
+            out[members] = integrate_steps(steps @ k_inv_t).apply(self.after[members])
+        return out
 
     def residual(self, theta: FloatArray) -> FloatArray:
         return np.asarray((self.carried(theta.reshape(3, 3)) - self.before).ravel())
