@@ -2,16 +2,19 @@
 
 ``GET /api/v1/units/{serial}`` is the plant's most frequent question. Its answer, the
 JSON of :class:`station.unit_state.UnitCalibration` (what the unit holds, its latest
-attempt, its verdict), is written when a run is stored (:func:`record_units`, in the
-submission's transaction, from every run of the unit) and read back as text by primary
-key (:class:`UnitLookups`): no ORM, no validation and no serialisation on the read path,
-and one statement for all the lookups that arrive while the previous one is out.
+attempt, its verdict), is written when a run is stored (:func:`record_unit_run`, in the
+submission's transaction) and read back as text by primary key (:class:`UnitLookups`):
+no ORM, no validation and no serialisation on the read path, and one statement for all
+the lookups that arrive while the previous one is out.
 
-Runs are ordered as ``ix_runs_serial_started_at`` orders them: ``(started_at, id)``, so
-a run delivered late by a station's outbox takes its place in the unit's history.
-Submissions are serialised (:func:`db.rollups.lock_submissions`), so each one reads
-every run stored before it. Answers of an older shape are rewritten when the database
-is upgraded (:func:`answers_are_stale`, :func:`refresh_answers`).
+Runs are ordered as ``ix_runs_serial_started_at`` orders them: ``(started_at, id)``. A
+run later than the unit's stored latest updates the stored answer
+(:meth:`UnitCalibration.then`); a run delivered late by a station's outbox takes its
+place in the unit's history, and the answer is rebuilt from every run of the unit
+(:func:`record_units`). Submissions are serialised (:func:`db.rollups.lock_submissions`),
+so each one reads every run and answer stored before it. Answers of an older shape are
+rewritten when the database is upgraded (:func:`answers_are_stale`,
+:func:`refresh_answers`).
 """
 
 import asyncio
@@ -89,6 +92,33 @@ def record_units(session: Session, serials: Sequence[str]) -> None:
             }
         )
     session.execute(for_dialect(session, _UPSERT), rows)
+
+
+def record_unit_run(session: Session, run_pk: int, run: RunSummary | StoredRun) -> None:
+    """Write the answer about the unit of ``run``, just stored with the key ``run_pk``.
+
+    The answer holds the run as ``runs`` gives it back: its limits without the profile
+    (stored apart, :mod:`db.limits_profiles`).
+    """
+    run = run.model_copy(update={"limits": run.limits.model_copy(update={"profile": None})})
+    stored = session.execute(
+        select(Unit.run_pk, Unit.started_at, Unit.calibration).where(Unit.serial == run.serial)
+    ).one_or_none()
+    if stored is not None and (run.started_at, run_pk) < (stored.started_at, stored.run_pk):
+        record_units(session, [run.serial])  # a late run: its place is in the history
+        return
+    answer = (
+        UnitCalibration.of_history([run])
+        if stored is None
+        else UnitCalibration.model_validate_json(stored.calibration).then(run)
+    )
+    row = {
+        "serial": run.serial,
+        "run_pk": run_pk,
+        "started_at": run.started_at,
+        "calibration": answer.model_dump_json(),
+    }
+    session.execute(for_dialect(session, _UPSERT), [row])
 
 
 def refresh_answers(session: Session, batch: int = 500) -> int:
