@@ -169,6 +169,14 @@ class UnitLookups:
     connection checkout and execution cost more CPU than the query itself: about
     0.3 ms a statement against 0.1 ms on the driver (``docs/benchmarks.md``). A
     connection that fails is dropped, and the next lookup opens another.
+
+    Kept for the lookup targets of ``docs/benchmarks.md`` (at least 1,000/s; p99 under
+    20 ms at 1,000/s beside submissions). The plain form, one session read by primary
+    key per request through the read pool as the other read routes do, answered 493
+    lookups/s at 0.95 ms of server CPU each, against 2,999/s at 0.20 ms with this class
+    (``benchmarks/bench_api.py --runs 100000``, the two back to back on a loaded
+    machine). In one process, CPU per lookup: 400–500 µs through the pool's session,
+    215–290 µs for a Core statement on a pooled connection, 11–105 µs here.
     """
 
     def __init__(self, engine: AsyncEngine, batch: int = 200) -> None:
