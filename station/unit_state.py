@@ -185,12 +185,12 @@ class UnitCalibration(_Part):
         attempt and gives the verdict if it counts (the verdict of a unit with no attempt
         that counts is its latest run's); it is what the unit holds if it wrote the unit.
         """
-        counted = counts(run)
+        counted, held = counts(run), _held(run)
         return UnitCalibration(
             serial=run.serial,
             verdict=run.verdict if counted or not self.attempts else self.verdict,
             attempts=self.attempts + counted,
-            holds=_held(run) or self.holds,
+            holds=self.holds if held is None else held,
             latest=_attempt(run),
             gyro=run.gyro,
         )
