@@ -28,7 +28,7 @@ from db.limits_profiles import store_profile
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey, StoredLimitsProfile
 from db.rollups import lock_submissions, record_run
-from db.units import record_units, refresh_answers
+from db.units import record_unit_run, refresh_answers
 from station.errors import CalstationError, InputError
 from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
@@ -183,7 +183,7 @@ class RunRepository:
         record_run(self.session.connection(), pk)
         # Already validated: build the answer without validating it again.
         stored = StoredRun.model_construct(**dict(record), received_at=received_at)
-        record_units(self.session, [record.serial])
+        record_unit_run(self.session, pk, stored)
         return SubmitOutcome(created=True, run=stored)
 
     def _insert_new_run(self) -> ReturningInsert[int]:

@@ -244,6 +244,13 @@ def _inline(value: float | str | None) -> ColumnElement[Any]:
     on every execution; the parameters statement of a submission took 1.6 ms of CPU
     with its 391 parameters and 0.2 ms with them inline. Floats: see
     :class:`exact_double`.
+
+    Kept for the submissions target of ``docs/benchmarks.md`` (submissions as fast as
+    before, within noise): with every constant bound instead (plain ``literal``), a
+    submission took 7.2 and 7.4 ms of CPU in the server's process against 4.7 and
+    5.4 ms inline (``benchmarks/bench_submit.py --runs 20000``, medians of 200 new
+    units' runs, the two forms back to back twice on a loaded machine), about a fifth
+    of the submissions/s through the API.
     """
     if value is None:
         return null()

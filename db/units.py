@@ -2,16 +2,19 @@
 
 ``GET /api/v1/units/{serial}`` is the plant's most frequent question. Its answer, the
 JSON of :class:`station.unit_state.UnitCalibration` (what the unit holds, its latest
-attempt, its verdict), is written when a run is stored (:func:`record_units`, in the
-submission's transaction, from every run of the unit) and read back as text by primary
-key (:class:`UnitLookups`): no ORM, no validation and no serialisation on the read path,
-and one statement for all the lookups that arrive while the previous one is out.
+attempt, its verdict), is written when a run is stored (:func:`record_unit_run`, in the
+submission's transaction) and read back as text by primary key (:class:`UnitLookups`):
+no ORM, no validation and no serialisation on the read path, and one statement for all
+the lookups that arrive while the previous one is out.
 
-Runs are ordered as ``ix_runs_serial_started_at`` orders them: ``(started_at, id)``, so
-a run delivered late by a station's outbox takes its place in the unit's history.
-Submissions are serialised (:func:`db.rollups.lock_submissions`), so each one reads
-every run stored before it. Answers of an older shape are rewritten when the database
-is upgraded (:func:`answers_are_stale`, :func:`refresh_answers`).
+Runs are ordered as ``ix_runs_serial_started_at`` orders them: ``(started_at, id)``. A
+run later than the unit's stored latest updates the stored answer
+(:meth:`UnitCalibration.then`); a run delivered late by a station's outbox takes its
+place in the unit's history, and the answer is rebuilt from every run of the unit
+(:func:`record_units`). Submissions are serialised (:func:`db.rollups.lock_submissions`),
+so each one reads every run and answer stored before it. Answers of an older shape are
+rewritten when the database is upgraded (:func:`answers_are_stale`,
+:func:`refresh_answers`).
 """
 
 import asyncio
@@ -91,6 +94,33 @@ def record_units(session: Session, serials: Sequence[str]) -> None:
     session.execute(for_dialect(session, _UPSERT), rows)
 
 
+def record_unit_run(session: Session, run_pk: int, run: RunSummary | StoredRun) -> None:
+    """Write the answer about the unit of ``run``, just stored with the key ``run_pk``.
+
+    The answer holds the run as ``runs`` gives it back: its limits without the profile
+    (stored apart, :mod:`db.limits_profiles`).
+    """
+    run = run.model_copy(update={"limits": run.limits.model_copy(update={"profile": None})})
+    stored = session.execute(
+        select(Unit.run_pk, Unit.started_at, Unit.calibration).where(Unit.serial == run.serial)
+    ).one_or_none()
+    if stored is not None and (run.started_at, run_pk) < (stored.started_at, stored.run_pk):
+        record_units(session, [run.serial])  # a late run: its place is in the history
+        return
+    answer = (
+        UnitCalibration.of_history([run])
+        if stored is None
+        else UnitCalibration.model_validate_json(stored.calibration).then(run)
+    )
+    row = {
+        "serial": run.serial,
+        "run_pk": run_pk,
+        "started_at": run.started_at,
+        "calibration": answer.model_dump_json(),
+    }
+    session.execute(for_dialect(session, _UPSERT), [row])
+
+
 def refresh_answers(session: Session, batch: int = 500) -> int:
     """Rewrite every unit's answer from ``runs``; return the number of units."""
     serials = list(session.scalars(select(Run.serial).distinct().order_by(Run.serial)))
@@ -139,6 +169,14 @@ class UnitLookups:
     connection checkout and execution cost more CPU than the query itself: about
     0.3 ms a statement against 0.1 ms on the driver (``docs/benchmarks.md``). A
     connection that fails is dropped, and the next lookup opens another.
+
+    Kept for the lookup targets of ``docs/benchmarks.md`` (at least 1,000/s; p99 under
+    20 ms at 1,000/s beside submissions). The plain form, one session read by primary
+    key per request through the read pool as the other read routes do, answered 493
+    lookups/s at 0.95 ms of server CPU each, against 2,999/s at 0.20 ms with this class
+    (``benchmarks/bench_api.py --runs 100000``, the two back to back on a loaded
+    machine). In one process, CPU per lookup: 400–500 µs through the pool's session,
+    215–290 µs for a Core statement on a pooled connection, 11–105 µs here.
     """
 
     def __init__(self, engine: AsyncEngine, batch: int = 200) -> None:

@@ -168,40 +168,67 @@ class UnitCalibration(_Part):
         latest = runs[-1]
         counted = [r for r in runs if counts(r)]
         writer = next((r for r in reversed(runs) if wrote_unit(r)), None)
-        holds = None
-        if writer is not None and writer.coefficients is not None:
-            cal = writer.coefficients
-            holds = HeldCalibration(
-                run_id=writer.run_id,
-                verdict=writer.verdict,
-                written_at=writer.finished_at,
-                station_id=writer.station_id,
-                model=writer.model,
-                limits=writer.limits,
-                offset=cal.offset,
-                sensitivity=cal.sensitivity,
-                matrix=cal.matrix,
-                quality=writer.quality,
-            )
         return cls(
             serial=latest.serial,
             verdict=(counted[-1] if counted else latest).verdict,
             attempts=len(counted),
-            holds=holds,
-            latest=UnitAttempt(
-                run_id=latest.run_id,
-                verdict=latest.verdict,
-                disposition=latest.disposition,
-                started_at=latest.started_at,
-                finished_at=latest.finished_at,
-                station_id=latest.station_id,
-                operator_id=latest.operator_id,
-                lot=latest.lot,
-                software_version=latest.software_version,
-                model=latest.model,
-                limits=latest.limits,
-                wrote_unit=wrote_unit(latest),
-                failures=latest.failures,
-            ),
+            holds=None if writer is None else _held(writer),
+            latest=_attempt(latest),
             gyro=latest.gyro,
         )
+
+    def then(self, run: Run) -> "UnitCalibration":
+        """The unit's state after ``run``, a run later than every run this state is of.
+
+        The same as :meth:`of_history` of those runs and ``run`` (a property test holds
+        them equal), from this state alone: ``run`` is the latest attempt; it is one more
+        attempt and gives the verdict if it counts (the verdict of a unit with no attempt
+        that counts is its latest run's); it is what the unit holds if it wrote the unit.
+        """
+        counted, held = counts(run), _held(run)
+        return UnitCalibration(
+            serial=run.serial,
+            verdict=run.verdict if counted or not self.attempts else self.verdict,
+            attempts=self.attempts + counted,
+            holds=self.holds if held is None else held,
+            latest=_attempt(run),
+            gyro=run.gyro,
+        )
+
+
+def _held(writer: Run) -> HeldCalibration | None:
+    """What ``writer`` put into the unit; ``None`` if it wrote nothing (:func:`wrote_unit`)."""
+    cal = writer.coefficients
+    if cal is None or not wrote_unit(writer):
+        return None
+    return HeldCalibration(
+        run_id=writer.run_id,
+        verdict=writer.verdict,
+        written_at=writer.finished_at,
+        station_id=writer.station_id,
+        model=writer.model,
+        limits=writer.limits,
+        offset=cal.offset,
+        sensitivity=cal.sensitivity,
+        matrix=cal.matrix,
+        quality=writer.quality,
+    )
+
+
+def _attempt(run: Run) -> UnitAttempt:
+    """``run`` as the unit's latest attempt."""
+    return UnitAttempt(
+        run_id=run.run_id,
+        verdict=run.verdict,
+        disposition=run.disposition,
+        started_at=run.started_at,
+        finished_at=run.finished_at,
+        station_id=run.station_id,
+        operator_id=run.operator_id,
+        lot=run.lot,
+        software_version=run.software_version,
+        model=run.model,
+        limits=run.limits,
+        wrote_unit=wrote_unit(run),
+        failures=run.failures,
+    )

@@ -114,3 +114,18 @@ def make_record(
     }
     payload.update(overrides)
     return RunRecord.model_validate(payload)
+
+
+def _failed(code: str, **more: Any) -> dict[str, Any]:
+    return {"verdict": "fail", "failures": [{"code": code, "message": "out of limits"}], **more}
+
+
+#: What a run can be for its unit: it wrote the unit or not, it counts or not.
+OUTCOMES: dict[str, dict[str, Any]] = {
+    "pass": {},
+    "fail, written": _failed("sensitivity_out_of_range"),
+    "fail, no coefficients": _failed("calibration", coefficients=None, quality=None),
+    "write-back failed": _failed("writeback"),
+    "saturated": _failed("saturated", coefficients=None, quality=None),
+    "aborted": _failed("aborted", coefficients=None, quality=None, gyro=None),
+}
