@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.arrays import FloatArray
 from station.samples import SampleBlock
 from station.sensor import (
     ADC_MAX,
@@ -103,6 +104,8 @@ class WindowVerdict:
     loss_fraction: float
     motion: bool
     window: SampleBlock
+    #: The window's per-axis accelerometer spread (sample standard deviation, counts).
+    accel_std: FloatArray
 
     @property
     def still(self) -> bool:
@@ -155,7 +158,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
         if s > limits.gyro_std_max_dps:
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
             motion = True
-    return WindowVerdict(tuple(reasons), saturated, loss, motion, block)
+    return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary.accel_std)
 
 
 @dataclass(frozen=True)
