@@ -354,15 +354,16 @@ def _total(rows: Sequence[Row[Any]], column: str) -> int:
     return sum(int(row._mapping[column]) for row in rows)
 
 
-def _counts(rows: Sequence[Row[Any]], prefix: str) -> _Counts:
-    """The counts of ``rows`` of :meth:`ReportQueries.station_counts`, units counted by
-    the ``prefix`` columns (``line_``: on the line, ``''``: at the station)."""
+def _counts(rows: Sequence[Row[Any]]) -> _Counts:
+    """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of their days):
+    a unit counts where its first run on the line is, so a station's units are those
+    whose first attempt was there, and the stations' rows add up to the line's."""
     return _Counts(
         runs=_total(rows, "runs"),
         runs_passed=_total(rows, "runs_passed"),
-        units=_total(rows, f"{prefix}units"),
-        first_pass=_total(rows, f"{prefix}first_pass"),
-        final_pass=_total(rows, f"{prefix}final_pass"),
+        units=_total(rows, "line_units"),
+        first_pass=_total(rows, "line_first_pass"),
+        final_pass=_total(rows, "line_final_pass"),
         seconds=_total(rows, "duration_ms") / 1000 if rows else None,
         poses=_total(rows, "poses"),
     )
@@ -625,9 +626,9 @@ def eol_report(
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
-        summary=_summary(_counts(counts, "line_"), hours),
+        summary=_summary(_counts(counts), hours),
         stations=[
-            StationSummary(station_id=station, summary=_summary(_counts(rows_, ""), hours))
+            StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
             for station, rows_ in sorted(by_station.items())
         ],
         pareto=_pareto(queries.first_failures()),

@@ -33,10 +33,12 @@ class ReportFilter(_Part):
 class Summary(_Part):
     """Counts and yields of the runs in range.
 
-    A unit's first and latest run are its first and latest run *ever* (on the line; at
-    the station, in a per-station summary), by start time. The units are those whose
-    first run is in range (the cohort of first-pass and final yield); retests are the
-    runs in range that are not a unit's first.
+    A unit's first and latest run are its first and latest run *ever* on the line, by
+    start time. The units are those whose first run is in range (the cohort of
+    first-pass and final yield); retests are the runs in range that are not a unit's
+    first. A station's summary counts the units whose first run (their first attempt)
+    was at the station and the station's runs, so the stations' summaries add up to
+    the line's.
     """
 
     runs: int
@@ -45,7 +47,7 @@ class Summary(_Part):
     units_passed: int = Field(description="units whose latest run passed")
     units_failed: int
     first_pass_units: int = Field(description="units whose first run passed")
-    report_yield: float | None = Field(description="passing runs / runs")
+    report_yield: float | None = Field(description="run yield: passing runs / runs")
     first_pass_yield: float | None = Field(description="units whose first run passed / units")
     final_yield: float | None = Field(description="units whose latest run passed / units")
     retests: int = Field(description="runs that are not a unit's first")

@@ -157,10 +157,10 @@ def as_text(report: EolReport) -> str:
                 [
                     c.name,
                     number(c.count),
-                    number(c.mean, 6),
+                    number(c.mean),
                     number(c.mr_bar),
-                    number(c.lcl, 6),
-                    number(c.ucl, 6),
+                    number(c.lcl),
+                    number(c.ucl),
                     number(c.mr_ucl),
                 ]
                 for c in report.control_charts

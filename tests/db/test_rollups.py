@@ -152,16 +152,20 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     def unit(a: Planned, b: Planned) -> bool:
         return a.serial == b.serial
 
-    def unit_at_station(a: Planned, b: Planned) -> bool:
-        return a.serial == b.serial and a.station == b.station
-
     assert _counts_of(report.summary) == _expected_counts(history, chosen, unit)
     assert report.summary.poses == 7 * len(chosen)
     stations = {s.station_id: s.summary for s in report.stations}
     assert sorted(stations) == sorted({r.station for r in chosen})
     for station, summary in stations.items():
+        # A station's row: the units whose first run on the line was there (and is
+        # selected), their first and final passes, and every run at the station.
         at = [r for r in chosen if r.station == station]
-        assert _counts_of(summary) == _expected_counts(history, at, unit_at_station)
+        assert _counts_of(summary) == _expected_counts(history, at, unit)
+        assert summary.retests == len(at) - summary.units_tested
+    # So the rows add up to the "all" row, on a filtered page too.
+    for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
+        assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
+    assert sum(s.retests for s in stations.values()) == report.summary.retests
     codes = [r.code for r in chosen if r.code is not None]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
     latest = {r.serial: r for r in sorted(history, key=_latest)}
