@@ -43,8 +43,10 @@ from db.rollups import (
     parameter_contributions,
     stored_bounds,
 )
+from db.trends import TREND_DAYS, day_key, trend_days
 from station.limits import LimitsProfile
 from station.quality.capability import (
+    D2,
     cp,
     cpk,
     histogram_bins,
@@ -52,6 +54,8 @@ from station.quality.capability import (
     shifted_moments,
     tolerance,
 )
+from station.quality.control import moving_range_sigma, western_electric
+from station.quality.days import is_utc, midnight, plant_days
 from station.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -62,6 +66,7 @@ from station.quality.figures import (
     ReportFilter,
     StationSummary,
     Summary,
+    TrendDay,
     UnitVerdict,
 )
 from station.quality.parameters import (
@@ -79,6 +84,8 @@ CHART_POINTS = 200
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 DAY = timedelta(days=1)
+#: The last moment before an exclusive end.
+EPSILON = timedelta(microseconds=1)
 
 
 class ReportQueries:
@@ -207,13 +214,47 @@ class ReportQueries:
         in range is aggregated (seconds over a long history), and the report says so.
         """
         rolled_up = stored_bounds(self.session.connection()) == bounds
+        rows = self._parameter_rows(bounds, [], rolled_up, None)
+        return {row.parameter: row._mapping for row in rows}, rolled_up
+
+    def _parameter_rows(
+        self,
+        bounds: FamilyBounds,
+        group: list[str],
+        rolled_up: bool,
+        columns: Mapping[str, ColumnElement[Any]] | None,
+    ) -> list[Row[Any]]:
+        """The parameters' sums per ``group``: from the roll-ups and the partial days when
+        ``rolled_up``, else from every run in range (``columns``: other keys)."""
         if rolled_up:
             rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
         else:
             rolled, raw = None, self.conditions()
-        selects = [] if raw is None else parameter_contributions([], raw, bounds)
-        rows = self._merged(ReportParameters, PARAMETER_VALUES, ["parameter"], rolled, selects)
-        return {row.parameter: row._mapping for row in rows}, rolled_up
+        selects = [] if raw is None else parameter_contributions(group, raw, bounds, columns)
+        return self._merged(
+            ReportParameters, PARAMETER_VALUES, ["parameter", *group], rolled, selects
+        )
+
+    # -- trend -------------------------------------------------------------------------
+
+    def daily_counts(self, day: ColumnElement[int] | None) -> list[Row[Any]]:
+        """The sums of ``report_counts`` per day: the roll-ups' UTC days (``day`` ``None``)
+        or the plant's days ``day`` numbers the runs with (from the runs)."""
+        if day is None:
+            edges = self._edge_conditions()
+            raw = [] if edges is None else [count_contributions(["day"], edges)]
+            rolled = self._rolled_conditions(ReportCounts)
+            return self._merged(ReportCounts, COUNT_VALUES, ["day"], rolled, raw)
+        raw = [count_contributions(["day"], self.conditions(), columns={"day": day})]
+        return self._merged(ReportCounts, COUNT_VALUES, ["day"], None, raw)
+
+    def daily_parameters(
+        self, bounds: FamilyBounds, day: ColumnElement[int] | None
+    ) -> list[Row[Any]]:
+        """The parameters' sums per parameter and day (as :meth:`daily_counts`)."""
+        rolled_up = day is None and stored_bounds(self.session.connection()) == bounds
+        columns = None if day is None else {"day": day}
+        return self._parameter_rows(bounds, ["day"], rolled_up, columns)
 
     # -- control charts ----------------------------------------------------------------
 
@@ -509,9 +550,19 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
         mean, mr_bar = limits.means[name], limits.mr_bars[name]
         if mean is None or not limits.count:
             continue
-        lcl = ucl = mr_ucl = None
+        lcl = ucl = mr_ucl = sigma = mr_sigma = None
+        values = [float(getattr(p, name)) for p in points]
+        ranges = [getattr(p, f"mr_{name}") for p in points]
+        signals: list[list[int]] = [[] for _ in points]
+        mr_signals: list[list[int]] = [[] for _ in points]
         if mr_bar is not None:
             lcl, ucl, mr_ucl = individuals_limits(float(mean), float(mr_bar))
+            sigma, mr_sigma = float(mr_bar) / D2, moving_range_sigma(float(mr_bar))
+            signals = western_electric(values, float(mean), sigma)
+            # The first point's moving range may reach before the plotted points.
+            plotted = [r for r in ranges if r is not None]
+            flags = iter(western_electric(plotted, float(mr_bar), mr_sigma))
+            mr_signals = [[] if r is None else next(flags) for r in ranges]
         charts.append(
             ControlChart(
                 name=name,
@@ -522,14 +573,20 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
                 lcl=lcl,
                 ucl=ucl,
                 mr_ucl=mr_ucl,
+                sigma=sigma,
+                mr_sigma=mr_sigma,
                 points=[
                     ChartPoint(
                         started_at=p.started_at,
                         serial=p.serial,
-                        value=getattr(p, name),
-                        moving_range=getattr(p, f"mr_{name}"),
+                        value=value,
+                        moving_range=moving_range,
+                        signals=signal,
+                        mr_signals=mr_signal,
                     )
-                    for p in points
+                    for p, value, moving_range, signal, mr_signal in zip(
+                        points, values, ranges, signals, mr_signals, strict=True
+                    )
                 ],
             )
         )
@@ -570,6 +627,28 @@ def _named(ref: LimitsRef) -> str:
     return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
 
 
+def _trend(
+    session: Session,
+    filter: ReportFilter,
+    counts: Sequence[Row[Any]],
+    bounds: FamilyBounds | None,
+    zone: str,
+) -> list[TrendDay]:
+    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`)."""
+    if not counts:
+        return []
+    start = filter.since or min(row.first_start for row in counts)
+    end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
+    days = plant_days(start, end, zone, TREND_DAYS)
+    since = midnight(days[0], zone)
+    queries = ReportQueries(
+        session, filter.model_copy(update={"since": max(since, filter.since or since)})
+    )
+    key = None if is_utc(zone) else day_key(days, zone)
+    parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
+    return trend_days(days, queries.daily_counts(key), parameters, bounds)
+
+
 def eol_report(
     session: Session,
     filter: ReportFilter,
@@ -578,12 +657,14 @@ def eol_report(
     unit_limit: int | None = None,
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
+    zone: str = "UTC",
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
     Capability is measured against ``profile`` when given (``calstation report
     --limits``), else against the stored profile :func:`report_bounds` picks for the
-    runs in range; ``unit_limit`` cuts the unit list to the latest units.
+    runs in range; ``unit_limit`` cuts the unit list to the latest units. ``zone`` is
+    the plant's time zone: the trend's days are its days.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -631,6 +712,8 @@ def eol_report(
             StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
             for station, rows_ in sorted(by_station.items())
         ],
+        timezone=zone,
+        trend=_trend(session, filter, counts, bounds, zone),
         pareto=_pareto(queries.first_failures()),
         parameters=parameters,
         control_charts=_charts(limits, queries.chart_points(chart_points)),

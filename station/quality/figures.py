@@ -4,7 +4,7 @@ Yields and rates are fractions (0…1), times are seconds, parameter values are 
 ``unit``. ``None`` means "not defined for this range" (no runs, no spread, no limit).
 """
 
-from datetime import datetime
+from datetime import date, datetime
 from typing import Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field
@@ -113,10 +113,18 @@ class ChartPoint(_Part):
     serial: str
     value: float
     moving_range: float | None
+    signals: list[int] = Field(
+        description="Western Electric rules (1–4) the value completes on the individuals chart"
+    )
+    mr_signals: list[int] = Field(
+        description="Western Electric rules (1–4) the moving range completes on its chart"
+    )
 
 
 class ControlChart(_Part):
-    """Individuals and moving-range chart of one coefficient (limits from every run)."""
+    """Individuals and moving-range chart of one coefficient: ``count`` runs in range set
+    its limits, the latest of them are ``points``, each with the Western Electric rules
+    it completes (:mod:`station.quality.control`) among the points plotted."""
 
     name: str
     unit: str
@@ -126,7 +134,26 @@ class ControlChart(_Part):
     lcl: float | None
     ucl: float | None
     mr_ucl: float | None
-    points: list[ChartPoint] = Field(description="the latest runs, oldest first")
+    sigma: float | None = Field(description="short-term σ of the values, MR̄/d₂")
+    mr_sigma: float | None = Field(description="σ of the moving ranges, d₃·MR̄/d₂")
+    points: list[ChartPoint] = Field(
+        description="the latest runs, oldest first (their count is the plotted count)"
+    )
+
+
+class TrendDay(_Part):
+    """One of the plant's days (in its time zone) of the range: the units whose first run
+    on the line was that day, with their first-pass and final yield, its runs, and the
+    Cpk of its values."""
+
+    day: date
+    runs: int
+    runs_passed: int
+    units: int = Field(description="units whose first run on the line was that day")
+    first_pass_yield: float | None
+    final_yield: float | None = Field(description="of that day's units, latest run passed")
+    run_yield: float | None = Field(description="passing runs / runs of that day")
+    cpk: dict[str, float | None] = Field(description="Cpk per parameter of that day's values")
 
 
 class UnitVerdict(_Part):
@@ -152,6 +179,10 @@ class EolReport(_Part):
     limits_profiles: list[LimitsRef] = Field(description="profiles the runs were judged by")
     summary: Summary
     stations: list[StationSummary]
+    timezone: str = Field("UTC", description="the plant's time zone the pages show times in")
+    trend: list[TrendDay] = Field(
+        default_factory=list, description="per plant day of the range, the latest days"
+    )
     pareto: list[ParetoEntry]
     parameters: list[ParameterStats]
     control_charts: list[ControlChart]

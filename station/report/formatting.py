@@ -1,6 +1,7 @@
 """How numbers read in the text and HTML renderings (the same in both)."""
 
 from datetime import datetime
+from zoneinfo import ZoneInfo
 
 
 def percent(value: float | None) -> str:
@@ -22,6 +23,13 @@ def seconds(value: float | None) -> str:
     return "–" if value is None else f"{value:.1f} s"
 
 
-def moment(value: datetime | None) -> str:
-    """A UTC moment to the second."""
-    return "–" if value is None else value.strftime("%Y-%m-%d %H:%M:%S UTC")
+def moment(value: datetime | None, zone: str = "UTC") -> str:
+    """A moment to the second, in the plant's time ``zone`` (an IANA name)."""
+    if value is None:
+        return "–"
+    return value.astimezone(ZoneInfo(zone)).strftime("%Y-%m-%d %H:%M:%S %Z")
+
+
+def clock(value: datetime, zone: str = "UTC") -> str:
+    """A chart's time label in the plant's ``zone``: ``11-02 14:05``."""
+    return value.astimezone(ZoneInfo(zone)).strftime("%m-%d %H:%M")

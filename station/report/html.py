@@ -37,7 +37,7 @@ _env.globals.update(
     version=__version__,
     histogram=lambda stats: Markup(svg.histogram(stats)),
     pareto=lambda entries: Markup(svg.pareto(entries)),
-    control_chart=lambda chart: Markup(svg.control_chart(chart)),
+    control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
 )
 
 

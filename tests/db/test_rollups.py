@@ -11,9 +11,10 @@ tables must give the rows the submissions left.
 import math
 import statistics
 from dataclasses import dataclass
-from datetime import datetime, timedelta
+from datetime import date, datetime, timedelta
 from itertools import pairwise
 from typing import Any
+from zoneinfo import ZoneInfo
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -166,6 +167,7 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
         assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
     assert sum(s.retests for s in stations.values()) == report.summary.retests
+    _check_trend(report, history, chosen)
     codes = [r.code for r in chosen if r.code is not None]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
     latest = {r.serial: r for r in sorted(history, key=_latest)}
@@ -203,6 +205,40 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         assert chart.mr_bar is None
 
 
+def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned]) -> None:
+    """Each plant day's units (first run on the line that day), yields and Cpk."""
+    zone = ZoneInfo(report.timezone)
+    days = [d.day for d in report.trend]
+    assert days == sorted(days)
+    assert all((b - a).days == 1 for a, b in pairwise(days))
+
+    def day_of(run: Planned) -> date:
+        return run.started_at.astimezone(zone).date()
+
+    assert {day_of(r) for r in chosen} <= set(days)
+    for trend_day in report.trend:
+        that_day = [r for r in chosen if day_of(r) == trend_day.day]
+        runs, passed, units, first, final = _expected_counts(
+            history, that_day, lambda a, b: a.serial == b.serial
+        )
+        assert (trend_day.runs, trend_day.runs_passed, trend_day.units) == (runs, passed, units)
+        assert trend_day.first_pass_yield == (first / units if units else None)
+        assert trend_day.final_yield == (final / units if units else None)
+        xs = [r.offset_x for r in that_day if r.charted]
+        params = {p.name: p for p in report.parameters}
+        lower, upper = params["offset_x"].lower, params["offset_x"].upper
+        assert lower is not None
+        assert upper is not None
+        if len(xs) > 1 and statistics.stdev(xs) > 0:
+            mean, std = statistics.mean(xs), statistics.stdev(xs)
+            expected = min(upper - mean, mean - lower) / (3 * std)
+            assert trend_day.cpk["offset_x"] == pytest.approx(expected, rel=1e-9)
+        elif len(xs) < 2:
+            assert trend_day.cpk["offset_x"] is None
+    assert sum(d.units for d in report.trend) == report.summary.units_tested
+    assert sum(d.runs for d in report.trend) == report.summary.runs
+
+
 def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     """Every roll-up and fact row, floats rounded to 6 digits (sums in another order)."""
 
@@ -227,6 +263,7 @@ def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     order=st.randoms(use_true_random=False),
     report_filter=filters,
     narrower=st.booleans(),
+    zone=st.sampled_from(["UTC", "America/New_York", "Asia/Kolkata"]),
 )
 def test_late_runs_and_retests_keep_the_report_exact(
     migrated_database: Database,
@@ -234,6 +271,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
     order: Any,
     report_filter: ReportFilter,
     narrower: bool,
+    zone: str,
 ) -> None:
     """``narrower``: capability against offset limits other than the roll-ups' bins."""
     submitted = list(history)
@@ -247,7 +285,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
         if narrower:
             offset = Bounds(lower=1900.0, upper=2200.0)
             profile = load_profile().model_copy(update={"offset_counts": offset})
-        report = eol_report(session, report_filter, profile=profile)
+        report = eol_report(session, report_filter, profile=profile, zone=zone)
         offset_x = next(p for p in report.parameters if p.name == "offset_x")
         assert offset_x.lower == (1900.0 if narrower else 1841.0)
         _check(report, history, report_filter)
