@@ -88,6 +88,29 @@ DAY = timedelta(days=1)
 EPSILON = timedelta(microseconds=1)
 
 
+def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
+    """The station, operator and lot conditions of ``filter`` on ``columns`` (``runs``
+    or a roll-up)."""
+    where = []
+    if filter.station_id is not None:
+        where.append(columns.station_id == filter.station_id)
+    if filter.operator_id is not None:
+        where.append(columns.operator_id == filter.operator_id)
+    if filter.lot is not None:
+        where.append(columns.lot == filter.lot)
+    return where
+
+
+def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
+    """The ``WHERE`` clauses on ``runs`` of ``filter``."""
+    where = []
+    if filter.since is not None:
+        where.append(Run.started_at >= filter.since)
+    if filter.until is not None:
+        where.append(Run.started_at < filter.until)
+    return [*where, *dimensions(filter, Run)]
+
+
 class ReportQueries:
     """The report's queries over the runs ``filter`` selects, in the caller's session.
 
@@ -112,23 +135,11 @@ class ReportQueries:
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
         """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
-        f, where = self.filter, []
-        if f.station_id is not None:
-            where.append(columns.station_id == f.station_id)
-        if f.operator_id is not None:
-            where.append(columns.operator_id == f.operator_id)
-        if f.lot is not None:
-            where.append(columns.lot == f.lot)
-        return where
+        return dimensions(self.filter, columns)
 
     def conditions(self) -> list[ColumnElement[bool]]:
         """The ``WHERE`` clauses on ``runs`` of the filter."""
-        f, where = self.filter, []
-        if f.since is not None:
-            where.append(Run.started_at >= f.since)
-        if f.until is not None:
-            where.append(Run.started_at < f.until)
-        return [*where, *self._dimensions(Run)]
+        return conditions(self.filter)
 
     def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
         """The runs of the partial days at the range's ends; ``None`` when there are none."""
@@ -329,9 +340,25 @@ class ReportQueries:
 
     # -- units -------------------------------------------------------------------------
 
-    def latest_runs(self, limit: int | None) -> list[Row[Any]]:
-        """The units whose latest run is in range, with that run, their run count and its
-        first failure code, newest first."""
+    def _latest(self, held: bool) -> list[ColumnElement[bool]]:
+        """The units' latest runs in range (``held``: only those that failed)."""
+        where: list[ColumnElement[bool]] = [RunFacts.line_latest.is_(True), *self.conditions()]
+        return [*where, Run.verdict == "fail"] if held else where
+
+    def held_units(self) -> int:
+        """How many units' latest run is in range and failed (they are held)."""
+        stmt = (
+            select(func.count())
+            .select_from(Run)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .where(*self._latest(True))
+        )
+        return int(self.session.execute(stmt).scalar_one())
+
+    def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
+        """The units whose latest run is in range (``held``: and failed), with that run,
+        their run count and its first failure code, newest first; ``offset`` skips the
+        newest (a page)."""
         columns: list[Any] = [
             Run.id,
             Run.serial,
@@ -345,9 +372,10 @@ class ReportQueries:
         stmt = (
             select(*columns)
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(RunFacts.line_latest, *self.conditions())
+            .where(*self._latest(held))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
+            .offset(offset or None)
         )
         return list(self.session.execute(stmt).all())
 
@@ -658,13 +686,16 @@ def eol_report(
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
     zone: str = "UTC",
+    held_only: bool = False,
+    unit_offset: int = 0,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
     Capability is measured against ``profile`` when given (``calstation report
     --limits``), else against the stored profile :func:`report_bounds` picks for the
     runs in range; ``unit_limit`` cuts the unit list to the latest units. ``zone`` is
-    the plant's time zone: the trend's days are its days.
+    the plant's time zone: the trend's days are its days. ``held_only`` lists only the
+    held units (latest run failed), ``unit_offset`` skips the newest (pages).
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -699,7 +730,7 @@ def eol_report(
             operator_id=row.operator_id,
             failure=row.code,
         )
-        for row in queries.latest_runs(unit_limit)
+        for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     return EolReport(
@@ -719,4 +750,8 @@ def eol_report(
         control_charts=_charts(limits, queries.chart_points(chart_points)),
         units=units,
         units_total=_total(counts, "listed"),
+        units_held=queries.held_units() if held_only else None,
+        units_listed="held" if held_only else "all",
+        units_offset=unit_offset,
+        units_limit=unit_limit,
     )

@@ -190,3 +190,11 @@ class EolReport(_Part):
     units_total: int = Field(
         description="units whose latest run is in range (the list may be cut to the latest)"
     )
+    units_listed: Literal["all", "held"] = Field(
+        "all", description="which units the list holds: all, or the held ones (latest run failed)"
+    )
+    units_held: int | None = Field(
+        None, description="held units (latest run in range failed), when the list holds them"
+    )
+    units_offset: int = Field(0, description="units before this page of the list, newest first")
+    units_limit: int | None = Field(None, description="the most units a page of the list holds")

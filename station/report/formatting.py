@@ -33,3 +33,14 @@ def moment(value: datetime | None, zone: str = "UTC") -> str:
 def clock(value: datetime, zone: str = "UTC") -> str:
     """A chart's time label in the plant's ``zone``: ``11-02 14:05``."""
     return value.astimezone(ZoneInfo(zone)).strftime("%m-%d %H:%M")
+
+
+def field(value: datetime | None, zone: str = "UTC") -> str:
+    """A moment as the report's form shows it, in the plant's ``zone``: a date at
+    midnight, else the date and time (``2026-11-02``, ``2026-11-02T14:30``)."""
+    if value is None:
+        return ""
+    local = value.astimezone(ZoneInfo(zone))
+    if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0):
+        return local.date().isoformat()
+    return local.replace(tzinfo=None).isoformat(timespec="seconds" if local.second else "minutes")

@@ -17,6 +17,7 @@ from station.report.formatting import moment, number, percent
 from station.report.tables import (
     PARAMETER_HEADER,
     SUMMARY_HEADER,
+    listed,
     parameter_cells,
     summary_cells,
 )
@@ -52,6 +53,14 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     for station in doc["stations"]:
         for key, value in station["summary"].items():
             yield ("station", station["station_id"], key, value)
+    yield ("trend", "", "timezone", doc["timezone"])
+    for day in doc["trend"]:
+        for key, value in day.items():
+            if key == "cpk":
+                for name, cpk in value.items():
+                    yield ("trend", day["day"], f"cpk:{name}", cpk)
+            elif key != "day":
+                yield ("trend", day["day"], key, value)
     for entry in doc["pareto"]:
         for key in ("count", "share", "cumulative_share"):
             yield ("pareto", entry["code"], key, entry[key])
@@ -80,6 +89,9 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
                 point["value"],
             )
     yield ("units", "", "total", doc["units_total"])
+    yield ("units", "", "listed", doc["units_listed"])
+    yield ("units", "", "held", doc["units_held"])
+    yield ("units", "", "offset", doc["units_offset"])
     for unit in doc["units"]:
         for key, value in unit.items():
             if key != "serial":
@@ -112,8 +124,8 @@ def as_text(report: EolReport) -> str:
     scope = ", ".join(
         f"{label} {value}"
         for label, value in (
-            ("from", moment(f.since) if f.since else None),
-            ("to", moment(f.until) if f.until else None),
+            ("from", moment(f.since, report.timezone) if f.since else None),
+            ("to", moment(f.until, report.timezone) if f.until else None),
             ("station", f.station_id),
             ("operator", f.operator_id),
             ("lot", f.lot),
@@ -121,13 +133,30 @@ def as_text(report: EolReport) -> str:
         if value
     )
     out = [
-        f"End-of-line report ({scope or 'all runs'}), generated {moment(report.generated_at)}",
+        f"End-of-line report ({scope or 'all runs'}), "
+        f"generated {moment(report.generated_at, report.timezone)}",
         "",
         *_table(
             SUMMARY_HEADER,
             [
                 summary_cells("all", report.summary),
                 *(summary_cells(s.station_id, s.summary) for s in report.stations),
+            ],
+        ),
+        "",
+        f"Trend per day ({report.timezone}; units counted on the day of their first run)",
+        *_table(
+            ["day", "units", "first-pass yield", "final yield", "runs", "run yield"],
+            [
+                [
+                    d.day.isoformat(),
+                    number(d.units),
+                    percent(d.first_pass_yield),
+                    percent(d.final_yield),
+                    number(d.runs),
+                    percent(d.run_yield),
+                ]
+                for d in report.trend
             ],
         ),
         "",
@@ -167,7 +196,7 @@ def as_text(report: EolReport) -> str:
             ],
         ),
         "",
-        f"Units ({len(report.units)} of {report.units_total}, latest first)",
+        f"Units ({listed(report)}, latest first)",
         *_table(
             ["serial", "disposition", "runs", "last run", "station", "operator", "failure"],
             [
@@ -175,7 +204,7 @@ def as_text(report: EolReport) -> str:
                     u.serial,
                     u.disposition,
                     number(u.runs),
-                    moment(u.last_started_at),
+                    moment(u.last_started_at, report.timezone),
                     u.station_id,
                     u.operator_id,
                     u.failure or "",

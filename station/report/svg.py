@@ -3,6 +3,7 @@ Pareto, individuals and moving-range (I-MR) control charts. No script, no extern
 """
 
 from collections.abc import Callable, Sequence
+from datetime import date
 from xml.sax.saxutils import escape
 
 from station.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
@@ -206,3 +207,75 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
         height,
         CHART_WIDTH,
     )
+
+
+#: A trend chart's colours, one per series.
+SERIES_COLOURS = ("#3b6ea5", "#2c7a2c", "#b06a00", "#7a3b8f")
+
+
+def trend_chart(
+    title: str,
+    days: Sequence[date],
+    series: Sequence[tuple[str, Sequence[float | None]]],
+    *,
+    bars: Sequence[int] | None = None,
+    percent_axis: bool = False,
+) -> str:
+    """Values per day: ``bars`` (counts) and/or ``series`` of lines (a gap where a day has
+    no value), a date axis below and a value axis on the left with its range labelled."""
+    left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
+    levels = [v for _, values in series for v in values if v is not None]
+    low, high = (0.0, 1.0) if percent_axis else (min(levels, default=0.0), max(levels, default=1.0))
+    if bars is not None:
+        low, high = 0.0, float(max(bars, default=1) or 1)
+    if high <= low:
+        high = low + (abs(low) or 1.0)
+
+    def x_of(i: int) -> float:
+        return left + (right - left) * (i + 0.5) / max(len(days), 1)
+
+    def y_of(value: float) -> float:
+        return bottom - (bottom - top) * (value - low) / (high - low)
+
+    label = percent if percent_axis else number
+    body = [
+        _text(left, 12, title),
+        _line(left, top, left, bottom, AXIS_COLOUR),
+        _line(left, bottom, right, bottom, AXIS_COLOUR),
+        _text(left - 3, top + 3, label(high), "end"),
+        _text(left - 3, bottom + 3, label(low), "end"),
+    ]
+    ticks = sorted({round(k * (len(days) - 1) / 3) for k in range(4)}) if days else []
+    for i in ticks:
+        body.append(
+            f'<g class="tick">{_line(x_of(i), bottom, x_of(i), bottom + 3, AXIS_COLOUR)}</g>'
+        )
+        body.append(_text(x_of(i), bottom + 13, days[i].strftime("%m-%d"), "middle"))
+    if bars is not None:
+        bar_w = max((right - left) / max(len(days), 1) - 2, 1)
+        for i, count in enumerate(bars):
+            body.append(
+                f'<rect class="bar" x="{x_of(i) - bar_w / 2:.1f}" y="{y_of(count):.1f}" '
+                f'width="{bar_w:.1f}" height="{bottom - y_of(count):.1f}" fill="{BAR_COLOUR}">'
+                f"<title>{days[i].isoformat()}: {count}</title></rect>"
+            )
+    for k, (name, values) in enumerate(series):
+        colour = SERIES_COLOURS[k % len(SERIES_COLOURS)]
+        legend_x = right - 96 * (len(series) - 1 - k)
+        body.append(_text(legend_x, 12, f"— {name}", "end", colour))
+        runs: list[list[str]] = [[]]
+        for i, v in enumerate(values):
+            if v is None:
+                runs.append([])
+                continue
+            runs[-1].append(f"{x_of(i):.1f},{y_of(v):.1f}")
+            body.append(
+                f'<circle class="trend-point" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2" '
+                f'fill="{colour}"><title>{days[i].isoformat()}: {label(v)}</title></circle>'
+            )
+        body += [
+            f'<polyline points="{" ".join(run)}" fill="none" stroke="{colour}"/>'
+            for run in runs
+            if len(run) > 1
+        ]
+    return _svg(title, body, HEIGHT, CHART_WIDTH)

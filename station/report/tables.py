@@ -76,3 +76,13 @@ def parameter_cells(report: EolReport) -> list[list[str]]:
         ]
         for p in report.parameters
     ]
+
+
+def listed(report: EolReport) -> str:
+    """What the unit list holds: ``3 of 12 held``, ``1–50 of 6020``."""
+    total = report.units_held if report.units_listed == "held" else report.units_total
+    which = " held" if report.units_listed == "held" else ""
+    if not report.units:
+        return f"none of {total}{which}"
+    first = report.units_offset + 1
+    return f"{first}–{report.units_offset + len(report.units)} of {total}{which}"
