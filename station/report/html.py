@@ -24,6 +24,8 @@ from station.report.tables import (
     summary_cells,
 )
 
+#: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
+CPK_TARGET = ("target", 1.33)
 #: Seconds between the dashboard's reloads.
 DASHBOARD_REFRESH_S = 30
 
@@ -77,7 +79,11 @@ def trend_charts(report: EolReport) -> list[str]:
     for p in report.parameters:
         values = [d.cpk.get(p.name) for d in report.trend]
         if any(v is not None for v in values):
-            charts.append(svg.trend_chart(f"Cpk of {p.name} per day", days, [("Cpk", values)]))
+            charts.append(
+                svg.trend_chart(
+                    f"Cpk of {p.name} per day", days, [("Cpk", values)], reference=CPK_TARGET
+                )
+            )
     return charts
 
 

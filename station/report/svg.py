@@ -15,6 +15,8 @@ AXIS_COLOUR = "#999"
 #: The control chart's size: room on the left for the time axis' first label, on the
 #: right for the values of the centre and limit lines.
 CHART_WIDTH, CHART_LEFT, CHART_RIGHT, PANEL = 480, 36, 84, 130
+#: Least distance between two labels of lines, one above the other.
+LABEL_GAP = 10
 
 
 def _svg(title: str, body: Sequence[str], height: float = HEIGHT, width: float = WIDTH) -> str:
@@ -81,11 +83,11 @@ def pareto(entries: Sequence[ParetoEntry]) -> str:
     plot_w = width - label_w - 96  # room right of the longest bar for its label
     top = max((e.count for e in rows), default=1)
     body = [_line(label_w, top_h, label_w + plot_w, top_h, AXIS_COLOUR)]
-    for share in (0.0, 0.5, 1.0):
+    for share, anchor in ((0.0, "start"), (0.5, "middle"), (1.0, "end")):
         x = label_w + plot_w * share
         body.append(_line(x, top_h - 3, x, top_h, AXIS_COLOUR))
-        body.append(_text(x, top_h - 6, percent(share), "middle", CENTRE_COLOUR))
-    body.append(_text(label_w - 4, top_h - 6, "cumulative", "end", CENTRE_COLOUR))
+        body.append(_text(x, top_h - 6, percent(share), anchor, CENTRE_COLOUR))
+    body.append(_text(label_w - 6, top_h - 6, "cumulative share", "end", CENTRE_COLOUR))
     cumulative = []
     for i, entry in enumerate(rows):
         y = top_h + 4 + i * row_h
@@ -146,12 +148,16 @@ def _panel(
         return bottom - (bottom - top) * (value - low) / (high - low)
 
     body = [_line(CHART_LEFT, top, CHART_LEFT, bottom, AXIS_COLOUR)]
-    for label, level, dashed in lines:
-        if level is None:
-            continue
+    drawn_lines = sorted(
+        (y_of(level), label, level, dashed) for label, level, dashed in lines if level is not None
+    )
+    label_y = top - LABEL_GAP
+    for y, label, level, dashed in drawn_lines:
         colour = LIMIT_COLOUR if dashed else CENTRE_COLOUR
-        body.append(_line(CHART_LEFT, y_of(level), right, y_of(level), colour, dash=dashed))
-        body.append(_text(right + 3, y_of(level) + 3, f"{label} {number(level)}", colour=colour))
+        body.append(_line(CHART_LEFT, y, right, y, colour, dash=dashed))
+        # Lines close together (no spread) keep their labels apart, top to bottom.
+        label_y = max(y + 3, label_y + LABEL_GAP)
+        body.append(_text(right + 3, label_y, f"{label} {number(level)}", colour=colour))
     drawn = [(i, v) for i, v in enumerate(values) if v is not None]
     if drawn:
         path = " ".join(f"{x_of(i):.1f},{y_of(v):.1f}" for i, v in drawn)
@@ -180,8 +186,9 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
     def x_of(i: int) -> float:
         return CHART_LEFT + plot_w * (i / max(len(points) - 1, 1))
 
-    plotted = f"latest {len(points)} of {chart.count}" if len(points) < chart.count else "all"
-    body = [_text(CHART_LEFT, 12, f"{chart.name} ({chart.unit}): {plotted} runs in range")]
+    latest = "latest " if len(points) < chart.count else ""
+    plotted = f"{latest}{len(points)} of {chart.count} runs in range plotted"
+    body = [_text(CHART_LEFT, 12, f"{chart.name} ({chart.unit}): {plotted}")]
     body += _panel(
         [p.value for p in points],
         [p.signals for p in points],
@@ -220,12 +227,16 @@ def trend_chart(
     *,
     bars: Sequence[int] | None = None,
     percent_axis: bool = False,
+    reference: tuple[str, float] | None = None,
 ) -> str:
     """Values per day: ``bars`` (counts) and/or ``series`` of lines (a gap where a day has
-    no value), a date axis below and a value axis on the left with its range labelled."""
+    no value), a date axis below, a value axis on the left from 0 with its range
+    labelled, and a ``reference`` line (a target such as Cpk 1.33)."""
     left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
     levels = [v for _, values in series for v in values if v is not None]
-    low, high = (0.0, 1.0) if percent_axis else (min(levels, default=0.0), max(levels, default=1.0))
+    if reference is not None:
+        levels.append(reference[1] * 1.2)
+    low, high = (0.0, 1.0) if percent_axis else (min([0.0, *levels]), max(levels, default=1.0))
     if bars is not None:
         low, high = 0.0, float(max(bars, default=1) or 1)
     if high <= low:
@@ -245,6 +256,12 @@ def trend_chart(
         _text(left - 3, top + 3, label(high), "end"),
         _text(left - 3, bottom + 3, label(low), "end"),
     ]
+    if reference is not None:
+        name, level = reference
+        body.append(_line(left, y_of(level), right, y_of(level), LIMIT_COLOUR, dash=True))
+        body.append(
+            _text(left + 3, y_of(level) - 3, f"{name} {number(level)}", colour=LIMIT_COLOUR)
+        )
     ticks = sorted({round(k * (len(days) - 1) / 3) for k in range(4)}) if days else []
     for i in ticks:
         body.append(
