@@ -12,9 +12,9 @@ profiles: a few dozen) and applies the capability formulas of
 
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta
-from typing import Any
+from typing import Any, NamedTuple
 
 from sqlalchemy import (
     ColumnElement,
@@ -44,6 +44,7 @@ from db.rollups import (
     stored_bounds,
 )
 from db.trends import TREND_DAYS, day_key, trend_days
+from db.what_if import rejudged
 from station.limits import LimitsProfile
 from station.quality.capability import (
     D2,
@@ -68,6 +69,7 @@ from station.quality.figures import (
     Summary,
     TrendDay,
     UnitVerdict,
+    WhatIf,
 )
 from station.quality.parameters import (
     COEFFICIENTS,
@@ -470,7 +472,16 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     return float((end - start).total_seconds() / 3600)
 
 
-def _pareto(rows: Sequence[Row[Any]]) -> list[ParetoEntry]:
+class _Failing(NamedTuple):
+    """Failing runs of one first failure reason, station and operator (a Pareto row)."""
+
+    code: str
+    station_id: str
+    operator_id: str
+    runs: int
+
+
+def _pareto(rows: Sequence[Row[Any] | _Failing]) -> list[ParetoEntry]:
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
@@ -655,6 +666,39 @@ def _named(ref: LimitsRef) -> str:
     return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
 
 
+def _capability(queries: ReportQueries, bounds: FamilyBounds) -> tuple[list[ParameterStats], bool]:
+    """Every parameter's statistics against ``bounds``, and whether the roll-ups answered."""
+    rows, rolled = queries.parameters(bounds)
+    return [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS], rolled
+
+
+def _what_if(
+    queries: ReportQueries,
+    candidate: LimitsProfile,
+    current: _Counts,
+    hours: float | None,
+) -> WhatIf:
+    """The runs in range re-judged against ``candidate``: yields, Pareto, capability."""
+    judged = rejudged(queries.session, queries.conditions(), candidate)
+    counts = replace(
+        current,
+        runs=judged.runs,
+        runs_passed=judged.runs_passed,
+        units=judged.units,
+        first_pass=judged.first_pass,
+        final_pass=judged.final_pass,
+    )
+    parameters, _ = _capability(queries, profile_bounds(candidate))
+    return WhatIf(
+        limits=candidate.ref,
+        summary=_summary(counts, hours),
+        pareto=_pareto([_Failing(*key, n) for key, n in judged.failures.items()]),
+        parameters=parameters,
+        pass_to_fail=judged.pass_to_fail,
+        fail_to_pass=judged.fail_to_pass,
+    )
+
+
 def _trend(
     session: Session,
     filter: ReportFilter,
@@ -681,7 +725,7 @@ def eol_report(
     session: Session,
     filter: ReportFilter,
     *,
-    profile: LimitsProfile | None = None,
+    candidate: LimitsProfile | None = None,
     unit_limit: int | None = None,
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
@@ -691,9 +735,10 @@ def eol_report(
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
-    Capability is measured against ``profile`` when given (``calstation report
-    --limits``), else against the stored profile :func:`report_bounds` picks for the
-    runs in range; ``unit_limit`` cuts the unit list to the latest units. ``zone`` is
+    Capability is measured against the stored profile :func:`report_bounds` picks for
+    the runs in range. A ``candidate`` profile adds the what-if: the runs re-judged
+    against it (:mod:`db.what_if`), nothing stored changed. ``unit_limit`` cuts the unit
+    list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days. ``held_only`` lists only the
     held units (latest run failed), ``unit_offset`` skips the newest (pages).
     """
@@ -705,17 +750,13 @@ def eol_report(
             {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
         )
     ]
-    if profile is None:
-        bounds, bounds_source = report_bounds(session, counts)
-    else:
-        bounds, bounds_source = profile_bounds(profile), f"limits profile {_named(profile.ref)}"
+    bounds, bounds_source = report_bounds(session, counts)
     hours = _hours(filter, counts)
-    parameters = []
+    parameters: list[ParameterStats] = []
     if bounds is not None:
-        rows, rolled = queries.parameters(bounds)
+        parameters, rolled = _capability(queries, bounds)
         if not rolled:
             bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
-        parameters = [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)
@@ -733,12 +774,14 @@ def eol_report(
         for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
+    line = _counts(counts)
+    what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
-        summary=_summary(_counts(counts), hours),
+        summary=_summary(line, hours),
         stations=[
             StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
             for station, rows_ in sorted(by_station.items())
@@ -754,4 +797,5 @@ def eol_report(
         units_listed="held" if held_only else "all",
         units_offset=unit_offset,
         units_limit=unit_limit,
+        what_if=what_if,
     )

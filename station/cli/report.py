@@ -36,8 +36,9 @@ def report(
         Path | None,
         typer.Option(
             "--limits",
-            help="Measure Cp/Cpk against this limits file's profile (its only one, or "
-            "kxm52-production) instead of the profile stored with the runs.",
+            help="What-if: re-judge the runs against this limits file's profile (its only "
+            "one, or kxm52-production): yields, Pareto and Cp/Cpk beside the current ones; "
+            "nothing stored changes.",
             show_default=False,
         ),
     ] = None,
@@ -74,7 +75,7 @@ def report(
     try:
         with database.session() as session:
             report_ = eol_report(
-                session, report_filter, profile=profile, unit_limit=units, zone=zone
+                session, report_filter, candidate=profile, unit_limit=units, zone=zone
             )
     except OperationalError as exc:
         raise DatabaseUnavailableError.of(url, exc) from None

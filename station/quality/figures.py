@@ -170,6 +170,18 @@ class UnitVerdict(_Part):
     failure: str | None = Field(description="first failure reason of the latest run")
 
 
+class WhatIf(_Part):
+    """The report's runs re-judged against a candidate limits profile, nothing stored
+    changed: yields, Pareto and capability as they would have been."""
+
+    limits: LimitsRef = Field(description="the candidate profile")
+    summary: Summary
+    pareto: list[ParetoEntry]
+    parameters: list[ParameterStats] = Field(description="capability against the candidate")
+    pass_to_fail: int = Field(description="runs that passed and would fail")
+    fail_to_pass: int = Field(description="runs that failed and would pass")
+
+
 class EolReport(_Part):
     """The end-of-line report over ``filter``."""
 
@@ -198,3 +210,6 @@ class EolReport(_Part):
     )
     units_offset: int = Field(0, description="units before this page of the list, newest first")
     units_limit: int | None = Field(None, description="the most units a page of the list holds")
+    what_if: WhatIf | None = Field(
+        None, description="the runs re-judged against a candidate limits profile, when given"
+    )

@@ -10,7 +10,7 @@ tables must give the rows the submissions left.
 
 import math
 import statistics
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import date, datetime, timedelta
 from itertools import pairwise
 from typing import Any
@@ -23,7 +23,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
-from db.models import ReportCounts, ReportFailures, ReportParameters, RunFacts
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.limits import Bounds, load_profile
@@ -239,6 +239,54 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
     assert sum(d.runs for d in report.trend) == report.summary.runs
 
 
+def stored_verdicts(session: Session) -> list[tuple[Any, ...]]:
+    """Every run's verdict and failures as stored."""
+    runs = session.execute(select(Run.id, Run.verdict).order_by(Run.id)).all()
+    failures = session.execute(
+        select(RunFailure.run_pk, RunFailure.position, RunFailure.code).order_by(
+            RunFailure.run_pk, RunFailure.position
+        )
+    ).all()
+    return [*map(tuple, runs), *map(tuple, failures)]
+
+
+def _check_what_if(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
+    """Against offsets 1900…2200: a run would fail on its offset outside them, an abort
+    stays an abort, and every other stored reason (offset, sensitivity against the
+    generous defaults) is judged again on the stored values, which pass."""
+
+    def judged(run: Planned) -> Planned:
+        if run.code == "aborted":
+            return run
+        outside = run.charted and not 1900.0 <= run.offset_x <= 2200.0
+        return replace(run, code="offset" if outside else None)
+
+    again = [judged(r) for r in history]
+    chosen = sorted((r for r in again if _selected(r, f)), key=_start)
+    what_if = report.what_if
+    assert what_if is not None
+    assert (
+        what_if.limits.sha256 != report.limits_profiles[0].sha256
+        if report.limits_profiles
+        else True
+    )
+    expected = _expected_counts(again, chosen, lambda a, b: a.serial == b.serial)
+    assert _counts_of(what_if.summary) == expected
+    codes = [r.code for r in chosen if r.code is not None]
+    assert {e.code: e.count for e in what_if.pareto} == {c: codes.count(c) for c in set(codes)}
+    before = sorted((r for r in history if _selected(r, f)), key=_start)
+    pairs = list(zip(before, chosen, strict=True))
+    assert what_if.pass_to_fail == sum(a.passed and not b.passed for a, b in pairs)
+    assert what_if.fail_to_pass == sum(b.passed and not a.passed for a, b in pairs)
+    xs = [r.offset_x for r in chosen if r.charted]
+    x = next(p for p in what_if.parameters if p.name == "offset_x")
+    assert (x.lower, x.upper, x.count) == (1900.0, 2200.0, len(xs))
+    assert x.out_of_limits == sum(not 1900.0 <= v <= 2200.0 for v in xs)
+    h = x.histogram
+    bins = [min(max(math.floor((v - h.start) / h.width), 0), len(h.counts) - 1) for v in xs]
+    assert h.counts == [bins.count(i) for i in range(len(h.counts))]
+
+
 def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     """Every roll-up and fact row, floats rounded to 6 digits (sums in another order)."""
 
@@ -281,14 +329,20 @@ def test_late_runs_and_retests_keep_the_report_exact(
         for run in submitted:
             repository.submit(_record(run))
         session.flush()
-        profile = None
+        candidate = None
         if narrower:
             offset = Bounds(lower=1900.0, upper=2200.0)
-            profile = load_profile().model_copy(update={"offset_counts": offset})
-        report = eol_report(session, report_filter, profile=profile, zone=zone)
+            candidate = load_profile().model_copy(update={"offset_counts": offset})
+        before = stored_verdicts(session)
+        report = eol_report(session, report_filter, candidate=candidate, zone=zone)
+        assert stored_verdicts(session) == before  # the what-if changes nothing stored
         offset_x = next(p for p in report.parameters if p.name == "offset_x")
-        assert offset_x.lower == (1900.0 if narrower else 1841.0)
+        assert offset_x.lower == 1841.0
         _check(report, history, report_filter)
+        if candidate is not None:
+            _check_what_if(report, history, report_filter)
+        else:
+            assert report.what_if is None
         kept = rollup_rows(session)
         rebuild(session.connection())
         assert rollup_rows(session) == kept
