@@ -11,7 +11,18 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Depends, HTTPException, Path, Query, Request, status
+from fastapi import (
+    APIRouter,
+    Depends,
+    File,
+    Form,
+    HTTPException,
+    Path,
+    Query,
+    Request,
+    UploadFile,
+    status,
+)
 from fastapi.responses import HTMLResponse, Response, StreamingResponse
 from pydantic import BeforeValidator
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
@@ -25,6 +36,7 @@ from db.limits_profiles import stored_profiles
 from db.reports import eol_report
 from db.run_export import HEADER, run_page
 from station.errors import InputError
+from station.limits import LimitsProfile, parse_profiles, pick_profile
 from station.quality.figures import EolReport, ReportFilter
 from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
 from station.report.html import certificate_page, dashboard_page
@@ -120,40 +132,85 @@ class Period:
 PeriodDep = Annotated[Period, Depends()]
 
 
-@router.get(
-    "/reports/eol",
-    response_class=Response,
-    responses={
-        200: {
-            "model": EolReport,
-            "content": {
-                MEDIA_TYPES["csv"]: {"schema": {"type": "string"}},
-                MEDIA_TYPES["html"]: {"schema": {"type": "string"}},
-            },
-            "description": "the report in the requested format",
+_REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
+    200: {
+        "model": EolReport,
+        "content": {
+            MEDIA_TYPES["csv"]: {"schema": {"type": "string"}},
+            MEDIA_TYPES["html"]: {"schema": {"type": "string"}},
         },
+        "description": "the report in the requested format",
     },
-)
+}
+Format = Literal["json", "csv", "html"]
+Listed = Annotated[
+    Literal["held", "all"],
+    Query(alias="list", description="the units listed: held ones (latest run failed) or all"),
+]
+PageSize = Annotated[int, Query(ge=1, le=MAX_PAGE_UNITS, description="units per page of the list")]
+PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page of the list")]
+
+
+@router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
 async def get_eol_report(
     repository: ReportPoolDep,
     period: PeriodDep,
     zone: PlantZoneDep,
-    format: Literal["json", "csv", "html"] = "json",
-    listed: Annotated[
-        Literal["held", "all"],
-        Query(alias="list", description="the units listed: held ones (latest run failed) or all"),
-    ] = "held",
-    units: Annotated[
-        int, Query(ge=1, le=MAX_PAGE_UNITS, description="units per page of the list")
-    ] = PAGE_UNITS,
-    page: Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page of the list")] = 1,
+    format: Format = "json",
+    listed: Listed = "held",
+    units: PageSize = PAGE_UNITS,
+    page: PageNumber = 1,
 ) -> Response:
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
     (or all) units of a period."""
-    report_filter = period.filter(zone)
     pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
-    body = await repository.run(eol_body, report_filter, pages, format, zone)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, None)
     return Response(body, media_type=MEDIA_TYPES[format])
+
+
+@router.post(
+    "/reports/eol",
+    response_class=Response,
+    responses={**_REPORT_ANSWERS, **problems(400, _400="the body is not multipart form data")},
+    summary="Report with what-if limits",
+)
+async def post_eol_what_if(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    limits: Annotated[
+        UploadFile, File(description="the candidate limits file (TOML, as the station's)")
+    ],
+    profile: Annotated[
+        str | None,
+        Blank,
+        Form(
+            description="the profile of the file to use (default: its only one, or "
+            "kxm52-production)"
+        ),
+    ] = None,
+    format: Format = "html",
+    listed: Listed = "held",
+    units: PageSize = PAGE_UNITS,
+    page: PageNumber = 1,
+) -> Response:
+    """The report of ``GET /reports/eol`` with its runs re-judged against a candidate
+    limits profile (uploaded): yields, Pareto and capability beside the current ones.
+    Nothing is stored: not the profile, not a verdict."""
+    candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
+    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, candidate)
+    return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def _candidate(content: bytes, shown: str, name: str | None) -> LimitsProfile:
+    """The candidate profile of an uploaded limits file, or a 422 saying what is wrong."""
+    try:
+        return pick_profile(parse_profiles(content.decode("utf-8"), shown), name)
+    except UnicodeDecodeError:
+        raise invalid(("body", "limits"), f"{shown}: not UTF-8 text") from None
+    except InputError as exc:
+        raise invalid(("body", "limits"), str(exc)) from None
 
 
 @dataclass(frozen=True)
@@ -166,12 +223,18 @@ class _Pages:
 
 
 def eol_body(
-    repository: RunRepository, filter: ReportFilter, pages: _Pages, format: str, zone: str
+    repository: RunRepository,
+    filter: ReportFilter,
+    pages: _Pages,
+    format: str,
+    zone: str,
+    candidate: LimitsProfile | None,
 ) -> str:
     """The report rendered (in a report process: :mod:`api.report_pool`)."""
     report = eol_report(
         repository.session,
         filter,
+        candidate=candidate,
         unit_limit=pages.size,
         unit_offset=pages.offset,
         held_only=pages.held,

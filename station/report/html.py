@@ -17,11 +17,15 @@ from station.records import GyroFitRecord, StoredRun
 from station.report import formatting, svg
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
+    CAPABILITY_HEADER,
     PARAMETER_HEADER,
     SUMMARY_HEADER,
+    WHAT_IF_HEADER,
+    capability_cells,
     listed,
     parameter_cells,
     summary_cells,
+    what_if_cells,
 )
 
 #: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
@@ -55,6 +59,10 @@ _env.globals.update(
     summary_cells=summary_cells,
     parameter_header=PARAMETER_HEADER,
     listed=listed,
+    what_if_header=WHAT_IF_HEADER,
+    what_if_cells=what_if_cells,
+    capability_header=CAPABILITY_HEADER,
+    capability_cells=capability_cells,
 )
 
 

@@ -15,11 +15,15 @@ from station.quality.figures import EolReport
 from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
+    CAPABILITY_HEADER,
     PARAMETER_HEADER,
     SUMMARY_HEADER,
+    WHAT_IF_HEADER,
+    capability_cells,
     listed,
     parameter_cells,
     summary_cells,
+    what_if_cells,
 )
 
 Format = Literal["text", "csv", "json", "html"]
@@ -88,6 +92,20 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
                 f"{point['started_at']} {point['serial']}",
                 point["value"],
             )
+    what_if = doc["what_if"]
+    if what_if is not None:
+        for key, value in what_if["limits"].items():
+            yield ("what_if", "limits", key, value)
+        for key in ("pass_to_fail", "fail_to_pass"):
+            yield ("what_if", "", key, what_if[key])
+        for key, value in what_if["summary"].items():
+            yield ("what_if", "summary", key, value)
+        for entry in what_if["pareto"]:
+            for key in ("count", "share", "cumulative_share"):
+                yield ("what_if", f"pareto:{entry['code']}", key, entry[key])
+        for stats in what_if["parameters"]:
+            for key in ("lower", "upper", "count", "cp", "cpk", "out_of_limits", "marginal"):
+                yield ("what_if", f"parameter:{stats['name']}", key, stats[key])
     yield ("units", "", "total", doc["units_total"])
     yield ("units", "", "listed", doc["units_listed"])
     yield ("units", "", "held", doc["units_held"])
@@ -196,6 +214,7 @@ def as_text(report: EolReport) -> str:
             ],
         ),
         "",
+        *_what_if_text(report),
         f"Units ({listed(report)}, latest first)",
         *_table(
             ["serial", "disposition", "runs", "last run", "station", "operator", "failure"],
@@ -214,6 +233,30 @@ def as_text(report: EolReport) -> str:
         ),
     ]
     return "\n".join(out) + "\n"
+
+
+def _what_if_text(report: EolReport) -> list[str]:
+    """The what-if section: yields, Pareto and capability under the candidate."""
+    w = report.what_if
+    if w is None:
+        return []
+    ref = w.limits
+    return [
+        f"What-if: the runs re-judged against {ref.name} v{ref.version} ({ref.sha256[:12]}); "
+        "nothing stored changed",
+        *_table(WHAT_IF_HEADER, what_if_cells(report)),
+        "",
+        *_table(
+            ["reason (what-if)", "runs", "share", "cumulative"],
+            [
+                [e.code, number(e.count), percent(e.share), percent(e.cumulative_share)]
+                for e in w.pareto
+            ],
+        ),
+        "",
+        *_table(CAPABILITY_HEADER, capability_cells(report)),
+        "",
+    ]
 
 
 def render(report: EolReport, format: str) -> str:

@@ -86,3 +86,42 @@ def listed(report: EolReport) -> str:
         return f"none of {total}{which}"
     first = report.units_offset + 1
     return f"{first}–{report.units_offset + len(report.units)} of {total}{which}"
+
+
+WHAT_IF_HEADER = ["", "current", "what-if"]
+CAPABILITY_HEADER = ["parameter", "Cpk", "Cpk what-if", "out", "out what-if"]
+
+
+def what_if_cells(report: EolReport) -> list[list[str]]:
+    """The yields now and under the candidate profile (text and HTML)."""
+    w = report.what_if
+    if w is None:
+        return []
+    now, then = report.summary, w.summary
+    return [
+        ["runs passed", number(now.runs_passed), number(then.runs_passed)],
+        ["run yield", percent(now.report_yield), percent(then.report_yield)],
+        ["first-pass yield", percent(now.first_pass_yield), percent(then.first_pass_yield)],
+        ["final yield", percent(now.final_yield), percent(then.final_yield)],
+        ["units passed", number(now.units_passed), number(then.units_passed)],
+        ["runs that would fail", "", number(w.pass_to_fail)],
+        ["runs that would pass", "", number(w.fail_to_pass)],
+    ]
+
+
+def capability_cells(report: EolReport) -> list[list[str]]:
+    """Each parameter's Cpk and values out of limits, now and under the candidate."""
+    w = report.what_if
+    if w is None:
+        return []
+    now = {p.name: p for p in report.parameters}
+    return [
+        [
+            p.name,
+            number(now[p.name].cpk) if p.name in now else "–",
+            number(p.cpk),
+            number(now[p.name].out_of_limits) if p.name in now else "–",
+            number(p.out_of_limits),
+        ]
+        for p in w.parameters
+    ]

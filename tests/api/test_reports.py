@@ -4,11 +4,14 @@ import csv
 import io
 import re
 from datetime import timedelta
+from importlib import resources
 
 import httpx
 import pytest
+from sqlalchemy import select
 
 from db import Database, RunRepository
+from db.models import Run, RunFailure
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
 
@@ -201,3 +204,61 @@ def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Data
     assert rows[0]["offset_x"] != ""
     schema = client.get("/openapi.json").json()["paths"]["/api/v1/reports/eol/runs.csv"]
     assert "text/csv; charset=utf-8" in schema["get"]["responses"]["200"]["content"]
+
+
+#: The shipped limits file with the offsets' upper limit at 2051 counts, not 2255.
+CANDIDATE = (
+    resources.files("station.profiles")
+    .joinpath("limits.toml")
+    .read_text(encoding="utf-8")
+    .replace("[profiles.kxm52-production]", "[profiles.candidate]")
+    .replace('version = "1"', 'version = "2"', 1)
+    .replace(
+        "offset_counts = { lower = 1841.0, upper = 2255.0 }",
+        "offset_counts = { lower = 1841.0, upper = 2051.0 }",
+    )
+)
+
+
+@pytest.mark.usefixtures("line")
+def test_what_if_limits_re_judge_the_runs_and_store_nothing(
+    client: httpx.Client, database: Database
+) -> None:
+    def stored() -> list[tuple[object, ...]]:
+        with database.session() as session:
+            runs = session.execute(select(Run.id, Run.verdict).order_by(Run.id))
+            failures = session.execute(
+                select(RunFailure.run_pk, RunFailure.position, RunFailure.code).order_by(
+                    RunFailure.run_pk, RunFailure.position
+                )
+            )
+            return [*map(tuple, runs), *map(tuple, failures)]
+
+    assert "2051.0" in CANDIDATE
+    before = stored()
+    upload = {"limits": ("candidate.toml", CANDIDATE.encode())}
+    answer = client.post("/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload)
+    assert answer.status_code == 200, answer.text
+    what_if = answer.json()["what_if"]
+    assert (what_if["limits"]["name"], what_if["limits"]["version"]) == ("candidate", "2")
+    # Recomputed from the raw runs: a run passes when its offsets (z: 1960.5 in every
+    # run of the history) lie in 1841…2051; its other stored reasons (sensitivity,
+    # verification error) are judged again on its values, which pass: U2's first run
+    # (sensitivity, offset x 2050) would pass, U3's second (offset x 2052) fail on offset.
+    in_range = [run for run in RUNS if run[0] < 120]
+    passes = [all(1841.0 <= v <= 2051.0 for v in (x, y, 1960.5)) for *_, x, y in in_range]
+    passed_before = [run[4] is None for run in in_range]
+    pairs = list(zip(passed_before, passes, strict=True))
+    assert what_if["summary"]["runs"] == len(in_range)
+    assert what_if["summary"]["runs_passed"] == sum(passes)
+    assert what_if["pass_to_fail"] == sum(a and not b for a, b in pairs)
+    assert what_if["fail_to_pass"] == sum(b and not a for a, b in pairs) == 1
+    assert stored() == before
+    page = client.post("/api/v1/reports/eol", params=RANGE, files=upload)
+    assert page.headers["content-type"].startswith("text/html")
+    assert "candidate v2" in page.text
+    bad = client.post(
+        "/api/v1/reports/eol", files={"limits": ("bad.toml", b"[profiles.x]\noffset = 3")}
+    )
+    assert bad.status_code == 422
+    assert bad.json()["errors"][0]["loc"] == "body.limits"

@@ -2,6 +2,7 @@
 
 import json
 import os
+from importlib import resources
 from pathlib import Path
 
 import pytest
@@ -135,3 +136,31 @@ def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
     assert report["timezone"] == "Pacific/Kiritimati"
     assert report["filter"]["since"].startswith("2026-11-02T10:00:00")
     assert [(d["day"], d["runs"]) for d in report["trend"]] == [("2026-11-03", 1)]
+
+
+@pytest.mark.usefixtures("line")
+def test_limits_re_judge_the_runs_beside_the_current_figures(
+    run_cli: CliRunner, database_url: str, tmp_path: Path
+) -> None:
+    shipped = resources.files("station.profiles").joinpath("limits.toml")
+    candidate = tmp_path / "candidate.toml"
+    candidate.write_text(
+        shipped.read_text(encoding="utf-8").replace(
+            "offset_counts = { lower = 1841.0, upper = 2255.0 }",
+            "offset_counts = { lower = 1841.0, upper = 2047.0 }",
+        ),
+        encoding="utf-8",
+    )
+    result = run_cli(
+        "report", *RANGE, "--limits", str(candidate), "--database-url", database_url, env=_env()
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert any(
+        line.startswith("What-if: the runs re-judged against kxm52-production") for line in lines
+    )
+    # Offsets up to 2047: every run's offset y is 2048, so the 3 passing runs would fail.
+    row = next(line for line in lines if line.startswith("runs passed"))
+    assert row.split()[2:] == ["3", "0"]
+    would_fail = next(line for line in lines if line.startswith("runs that would fail"))
+    assert would_fail.split()[-1] == "3"
