@@ -87,6 +87,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         lifespan=lifespan,
         responses=problems(413, 503),
     )
+    app.state.plant_timezone = settings.plant_timezone
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
     reads = [Depends(require_key)] if settings.read_requires_key else []

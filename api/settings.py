@@ -2,9 +2,18 @@
 
 from typing import Annotated
 
-from pydantic import Field
+from pydantic import AfterValidator, Field
 
 from db.settings import DatabaseSettings
+from station.errors import InputError
+from station.report.period import plant_zone
+
+
+def _zone(name: str) -> str:
+    try:
+        return plant_zone(name)
+    except InputError as exc:
+        raise ValueError(str(exc)) from None
 
 
 class ApiSettings(DatabaseSettings):
@@ -18,7 +27,9 @@ class ApiSettings(DatabaseSettings):
     from the others so that readers never take the stations' connections.
     ``read_timeout_s``: longest statement of a read (PostgreSQL ``statement_timeout``;
     on SQLite the report's statements only); ``report_wait_s``: longest wait for a free
-    report connection. Either exceeded answers 503.
+    report connection. Either exceeded answers 503. ``plant_timezone``
+    (``CALSTATION_PLANT_TIMEZONE``, an IANA name): the zone the report and dashboard show
+    times and days in, and read dates without a zone in; stored times stay UTC.
     """
 
     read_requires_key: bool = False
@@ -28,3 +39,4 @@ class ApiSettings(DatabaseSettings):
     report_pool_size: Annotated[int, Field(ge=1)] = 1
     read_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 30.0
     report_wait_s: Annotated[float, Field(gt=0, le=3600)] = 10.0
+    plant_timezone: Annotated[str, AfterValidator(_zone)] = "UTC"

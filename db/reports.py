@@ -12,9 +12,9 @@ profiles: a few dozen) and applies the capability formulas of
 
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime, timedelta
-from typing import Any
+from typing import Any, NamedTuple
 
 from sqlalchemy import (
     ColumnElement,
@@ -44,8 +44,11 @@ from db.rollups import (
     parameter_contributions,
     stored_bounds,
 )
+from db.trends import TREND_DAYS, day_key, trend_days
+from db.what_if import rejudged
 from station.limits import LimitsProfile
 from station.quality.capability import (
+    D2,
     cp,
     cpk,
     histogram_bins,
@@ -53,6 +56,8 @@ from station.quality.capability import (
     shifted_moments,
     tolerance,
 )
+from station.quality.control import moving_range_sigma, western_electric
+from station.quality.days import is_utc, midnight, plant_days
 from station.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -63,7 +68,9 @@ from station.quality.figures import (
     ReportFilter,
     StationSummary,
     Summary,
+    TrendDay,
     UnitVerdict,
+    WhatIf,
 )
 from station.quality.parameters import (
     COEFFICIENTS,
@@ -80,6 +87,32 @@ CHART_POINTS = 200
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 DAY = timedelta(days=1)
+#: The last moment before an exclusive end.
+EPSILON = timedelta(microseconds=1)
+
+
+def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
+    """The station, operator and lot conditions of ``filter`` on ``columns`` (``runs``
+    or a roll-up)."""
+    where = []
+    if filter.station_id is not None:
+        where.append(columns.station_id == filter.station_id)
+    if filter.operator_id is not None:
+        where.append(columns.operator_id == filter.operator_id)
+    if filter.lot is not None:
+        where.append(columns.lot == filter.lot)
+    return where
+
+
+def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
+    """The ``WHERE`` clauses on ``runs`` of ``filter``: production runs only (golden-unit
+    checks are no production units)."""
+    where = []
+    if filter.since is not None:
+        where.append(Run.started_at >= filter.since)
+    if filter.until is not None:
+        where.append(Run.started_at < filter.until)
+    return [*where, PRODUCTION, *dimensions(filter, Run)]
 
 
 class ReportQueries:
@@ -106,23 +139,11 @@ class ReportQueries:
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
         """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
-        f, where = self.filter, []
-        if f.station_id is not None:
-            where.append(columns.station_id == f.station_id)
-        if f.operator_id is not None:
-            where.append(columns.operator_id == f.operator_id)
-        if f.lot is not None:
-            where.append(columns.lot == f.lot)
-        return where
+        return dimensions(self.filter, columns)
 
     def conditions(self) -> list[ColumnElement[bool]]:
         """The ``WHERE`` clauses on ``runs`` of the filter."""
-        f, where = self.filter, []
-        if f.since is not None:
-            where.append(Run.started_at >= f.since)
-        if f.until is not None:
-            where.append(Run.started_at < f.until)
-        return [*where, PRODUCTION, *self._dimensions(Run)]
+        return conditions(self.filter)
 
     def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
         """The runs of the partial days at the range's ends; ``None`` when there are none."""
@@ -208,13 +229,47 @@ class ReportQueries:
         in range is aggregated (seconds over a long history), and the report says so.
         """
         rolled_up = stored_bounds(self.session.connection()) == bounds
+        rows = self._parameter_rows(bounds, [], rolled_up, None)
+        return {row.parameter: row._mapping for row in rows}, rolled_up
+
+    def _parameter_rows(
+        self,
+        bounds: FamilyBounds,
+        group: list[str],
+        rolled_up: bool,
+        columns: Mapping[str, ColumnElement[Any]] | None,
+    ) -> list[Row[Any]]:
+        """The parameters' sums per ``group``: from the roll-ups and the partial days when
+        ``rolled_up``, else from every run in range (``columns``: other keys)."""
         if rolled_up:
             rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
         else:
             rolled, raw = None, self.conditions()
-        selects = [] if raw is None else parameter_contributions([], raw, bounds)
-        rows = self._merged(ReportParameters, PARAMETER_VALUES, ["parameter"], rolled, selects)
-        return {row.parameter: row._mapping for row in rows}, rolled_up
+        selects = [] if raw is None else parameter_contributions(group, raw, bounds, columns)
+        return self._merged(
+            ReportParameters, PARAMETER_VALUES, ["parameter", *group], rolled, selects
+        )
+
+    # -- trend -------------------------------------------------------------------------
+
+    def daily_counts(self, day: ColumnElement[int] | None) -> list[Row[Any]]:
+        """The sums of ``report_counts`` per day: the roll-ups' UTC days (``day`` ``None``)
+        or the plant's days ``day`` numbers the runs with (from the runs)."""
+        if day is None:
+            edges = self._edge_conditions()
+            raw = [] if edges is None else [count_contributions(["day"], edges)]
+            rolled = self._rolled_conditions(ReportCounts)
+            return self._merged(ReportCounts, COUNT_VALUES, ["day"], rolled, raw)
+        raw = [count_contributions(["day"], self.conditions(), columns={"day": day})]
+        return self._merged(ReportCounts, COUNT_VALUES, ["day"], None, raw)
+
+    def daily_parameters(
+        self, bounds: FamilyBounds, day: ColumnElement[int] | None
+    ) -> list[Row[Any]]:
+        """The parameters' sums per parameter and day (as :meth:`daily_counts`)."""
+        rolled_up = day is None and stored_bounds(self.session.connection()) == bounds
+        columns = None if day is None else {"day": day}
+        return self._parameter_rows(bounds, ["day"], rolled_up, columns)
 
     # -- control charts ----------------------------------------------------------------
 
@@ -289,9 +344,25 @@ class ReportQueries:
 
     # -- units -------------------------------------------------------------------------
 
-    def latest_runs(self, limit: int | None) -> list[Row[Any]]:
-        """The units whose latest run is in range, with that run, their run count and its
-        first failure code, newest first."""
+    def _latest(self, held: bool) -> list[ColumnElement[bool]]:
+        """The units' latest runs in range (``held``: only those that failed)."""
+        where: list[ColumnElement[bool]] = [RunFacts.line_latest.is_(True), *self.conditions()]
+        return [*where, Run.verdict == "fail"] if held else where
+
+    def held_units(self) -> int:
+        """How many units' latest run is in range and failed (they are held)."""
+        stmt = (
+            select(func.count())
+            .select_from(Run)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .where(*self._latest(True))
+        )
+        return int(self.session.execute(stmt).scalar_one())
+
+    def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
+        """The units whose latest run is in range (``held``: and failed), with that run,
+        their run count and its first failure code, newest first; ``offset`` skips the
+        newest (a page)."""
         columns: list[Any] = [
             Run.id,
             Run.serial,
@@ -305,9 +376,10 @@ class ReportQueries:
         stmt = (
             select(*columns)
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(RunFacts.line_latest, *self.conditions())
+            .where(*self._latest(held))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
+            .offset(offset or None)
         )
         return list(self.session.execute(stmt).all())
 
@@ -355,15 +427,16 @@ def _total(rows: Sequence[Row[Any]], column: str) -> int:
     return sum(int(row._mapping[column]) for row in rows)
 
 
-def _counts(rows: Sequence[Row[Any]], prefix: str) -> _Counts:
-    """The counts of ``rows`` of :meth:`ReportQueries.station_counts`, units counted by
-    the ``prefix`` columns (``line_``: on the line, ``''``: at the station)."""
+def _counts(rows: Sequence[Row[Any]]) -> _Counts:
+    """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of their days):
+    a unit counts where its first run on the line is, so a station's units are those
+    whose first attempt was there, and the stations' rows add up to the line's."""
     return _Counts(
         runs=_total(rows, "runs"),
         runs_passed=_total(rows, "runs_passed"),
-        units=_total(rows, f"{prefix}units"),
-        first_pass=_total(rows, f"{prefix}first_pass"),
-        final_pass=_total(rows, f"{prefix}final_pass"),
+        units=_total(rows, "line_units"),
+        first_pass=_total(rows, "line_first_pass"),
+        final_pass=_total(rows, "line_final_pass"),
         seconds=_total(rows, "duration_ms") / 1000 if rows else None,
         poses=_total(rows, "poses"),
     )
@@ -401,7 +474,16 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     return float((end - start).total_seconds() / 3600)
 
 
-def _pareto(rows: Sequence[Row[Any]]) -> list[ParetoEntry]:
+class _Failing(NamedTuple):
+    """Failing runs of one first failure reason, station and operator (a Pareto row)."""
+
+    code: str
+    station_id: str
+    operator_id: str
+    runs: int
+
+
+def _pareto(rows: Sequence[Row[Any] | _Failing]) -> list[ParetoEntry]:
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
@@ -509,9 +591,19 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
         mean, mr_bar = limits.means[name], limits.mr_bars[name]
         if mean is None or not limits.count:
             continue
-        lcl = ucl = mr_ucl = None
+        lcl = ucl = mr_ucl = sigma = mr_sigma = None
+        values = [float(getattr(p, name)) for p in points]
+        ranges = [getattr(p, f"mr_{name}") for p in points]
+        signals: list[list[int]] = [[] for _ in points]
+        mr_signals: list[list[int]] = [[] for _ in points]
         if mr_bar is not None:
             lcl, ucl, mr_ucl = individuals_limits(float(mean), float(mr_bar))
+            sigma, mr_sigma = float(mr_bar) / D2, moving_range_sigma(float(mr_bar))
+            signals = western_electric(values, float(mean), sigma)
+            # The first point's moving range may reach before the plotted points.
+            plotted = [r for r in ranges if r is not None]
+            flags = iter(western_electric(plotted, float(mr_bar), mr_sigma))
+            mr_signals = [[] if r is None else next(flags) for r in ranges]
         charts.append(
             ControlChart(
                 name=name,
@@ -522,14 +614,20 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
                 lcl=lcl,
                 ucl=ucl,
                 mr_ucl=mr_ucl,
+                sigma=sigma,
+                mr_sigma=mr_sigma,
                 points=[
                     ChartPoint(
                         started_at=p.started_at,
                         serial=p.serial,
-                        value=getattr(p, name),
-                        moving_range=getattr(p, f"mr_{name}"),
+                        value=value,
+                        moving_range=moving_range,
+                        signals=signal,
+                        mr_signals=mr_signal,
                     )
-                    for p in points
+                    for p, value, moving_range, signal, mr_signal in zip(
+                        points, values, ranges, signals, mr_signals, strict=True
+                    )
                 ],
             )
         )
@@ -570,20 +668,81 @@ def _named(ref: LimitsRef) -> str:
     return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
 
 
+def _capability(queries: ReportQueries, bounds: FamilyBounds) -> tuple[list[ParameterStats], bool]:
+    """Every parameter's statistics against ``bounds``, and whether the roll-ups answered."""
+    rows, rolled = queries.parameters(bounds)
+    return [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS], rolled
+
+
+def _what_if(
+    queries: ReportQueries,
+    candidate: LimitsProfile,
+    current: _Counts,
+    hours: float | None,
+) -> WhatIf:
+    """The runs in range re-judged against ``candidate``: yields, Pareto, capability."""
+    judged = rejudged(queries.session, queries.conditions(), candidate)
+    counts = replace(
+        current,
+        runs=judged.runs,
+        runs_passed=judged.runs_passed,
+        units=judged.units,
+        first_pass=judged.first_pass,
+        final_pass=judged.final_pass,
+    )
+    parameters, _ = _capability(queries, profile_bounds(candidate))
+    return WhatIf(
+        limits=candidate.ref,
+        summary=_summary(counts, hours),
+        pareto=_pareto([_Failing(*key, n) for key, n in judged.failures.items()]),
+        parameters=parameters,
+        pass_to_fail=judged.pass_to_fail,
+        fail_to_pass=judged.fail_to_pass,
+    )
+
+
+def _trend(
+    session: Session,
+    filter: ReportFilter,
+    counts: Sequence[Row[Any]],
+    bounds: FamilyBounds | None,
+    zone: str,
+) -> list[TrendDay]:
+    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`)."""
+    if not counts:
+        return []
+    start = filter.since or min(row.first_start for row in counts)
+    end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
+    days = plant_days(start, end, zone, TREND_DAYS)
+    since = midnight(days[0], zone)
+    queries = ReportQueries(
+        session, filter.model_copy(update={"since": max(since, filter.since or since)})
+    )
+    key = None if is_utc(zone) else day_key(days, zone)
+    parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
+    return trend_days(days, queries.daily_counts(key), parameters, bounds)
+
+
 def eol_report(
     session: Session,
     filter: ReportFilter,
     *,
-    profile: LimitsProfile | None = None,
+    candidate: LimitsProfile | None = None,
     unit_limit: int | None = None,
     chart_points: int = CHART_POINTS,
     now: datetime | None = None,
+    zone: str = "UTC",
+    held_only: bool = False,
+    unit_offset: int = 0,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
-    Capability is measured against ``profile`` when given (``calstation report
-    --limits``), else against the stored profile :func:`report_bounds` picks for the
-    runs in range; ``unit_limit`` cuts the unit list to the latest units.
+    Capability is measured against the stored profile :func:`report_bounds` picks for
+    the runs in range. A ``candidate`` profile adds the what-if: the runs re-judged
+    against it (:mod:`db.what_if`), nothing stored changed. ``unit_limit`` cuts the unit
+    list to the latest units. ``zone`` is
+    the plant's time zone: the trend's days are its days. ``held_only`` lists only the
+    held units (latest run failed), ``unit_offset`` skips the newest (pages).
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -593,17 +752,13 @@ def eol_report(
             {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
         )
     ]
-    if profile is None:
-        bounds, bounds_source = report_bounds(session, counts)
-    else:
-        bounds, bounds_source = profile_bounds(profile), f"limits profile {_named(profile.ref)}"
+    bounds, bounds_source = report_bounds(session, counts)
     hours = _hours(filter, counts)
-    parameters = []
+    parameters: list[ParameterStats] = []
     if bounds is not None:
-        rows, rolled = queries.parameters(bounds)
+        parameters, rolled = _capability(queries, bounds)
         if not rolled:
             bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
-        parameters = [_parameter(spec, bounds, rows.get(spec.name)) for spec in PARAMETERS]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)
@@ -618,22 +773,31 @@ def eol_report(
             operator_id=row.operator_id,
             failure=row.code,
         )
-        for row in queries.latest_runs(unit_limit)
+        for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
+    line = _counts(counts)
+    what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
-        summary=_summary(_counts(counts, "line_"), hours),
+        summary=_summary(line, hours),
         stations=[
-            StationSummary(station_id=station, summary=_summary(_counts(rows_, ""), hours))
+            StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
             for station, rows_ in sorted(by_station.items())
         ],
+        timezone=zone,
+        trend=_trend(session, filter, counts, bounds, zone),
         pareto=_pareto(queries.first_failures()),
         parameters=parameters,
         control_charts=_charts(limits, queries.chart_points(chart_points)),
         units=units,
         units_total=_total(counts, "listed"),
+        units_held=queries.held_units() if held_only else None,
+        units_listed="held" if held_only else "all",
+        units_offset=unit_offset,
+        units_limit=unit_limit,
+        what_if=what_if,
     )

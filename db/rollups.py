@@ -26,7 +26,7 @@ roll-ups always equal the aggregate of the facts. Counts and times are integers
 """
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -360,10 +360,14 @@ def _count_if(condition: ColumnElement[bool] | InstrumentedAttribute[bool]) -> C
 
 
 def count_contributions(
-    keys: Sequence[str], where: Sequence[ColumnElement[bool]], sign: int = 1
+    keys: Sequence[str],
+    where: Sequence[ColumnElement[bool]],
+    sign: int = 1,
+    columns: Mapping[str, ColumnElement[Any]] | None = None,
 ) -> Select[Any]:
-    """Per ``keys`` (of :data:`BUCKET` and :data:`LIMITS`): the columns of
-    ``report_counts`` over the runs ``where`` selects, sums times ``sign``."""
+    """Per ``keys`` (of :data:`BUCKET` and :data:`LIMITS`, or of ``columns``: another
+    ``day``): the columns of ``report_counts`` over the runs ``where`` selects, sums
+    times ``sign``."""
     previous = aliased(Run, name="previous")
     passed = Run.verdict == _PASS
     facts = RunFacts
@@ -387,14 +391,14 @@ def count_contributions(
             for name in COEFFICIENTS
         },
     }
-    columns = {
+    values = {
         **{name: (value * _inline(sign) if sign != 1 else value) for name, value in sums.items()},
         "first_start": func.min(Run.started_at),
         "last_finish": func.max(Run.finished_at),
     }
-    picked = _keys(keys, {})
+    picked = _keys(keys, dict(columns or {}))
     return (
-        select(*picked, *(columns[name].label(name) for name in COUNT_VALUES))
+        select(*picked, *(values[name].label(name) for name in COUNT_VALUES))
         .select_from(Run)
         .join(facts, facts.run_pk == Run.id)
         .outerjoin(previous, previous.id == facts.chart_previous)
@@ -443,10 +447,14 @@ def _limits_of(specs: Sequence[ParameterSpec], bounds: FamilyBounds) -> FromClau
 
 
 def parameter_contributions(
-    keys: Sequence[str], where: Sequence[ColumnElement[bool]], bounds: FamilyBounds
+    keys: Sequence[str],
+    where: Sequence[ColumnElement[bool]],
+    bounds: FamilyBounds,
+    columns: Mapping[str, ColumnElement[Any]] | None = None,
 ) -> list[Select[Any]]:
-    """Per parameter and ``keys`` (of :data:`BUCKET`): the columns of
-    ``report_parameters`` over the runs ``where`` selects, against ``bounds``.
+    """Per parameter and ``keys`` (of :data:`BUCKET`, or of ``columns``: another
+    ``day``): the columns of ``report_parameters`` over the runs ``where`` selects,
+    against ``bounds``.
 
     ``c`` is the centre of the tolerance, bins those of
     :func:`station.quality.capability.histogram_bins`, marginal and out-of-limits as
@@ -469,7 +477,7 @@ def parameter_contributions(
         v = (
             select(
                 limits,
-                *_keys(keys, {}),
+                *_keys(keys, dict(columns or {})),
                 value.label("x"),
                 case(
                     (value < limits.c.start, _ZERO),

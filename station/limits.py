@@ -208,6 +208,11 @@ def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
             raise InputError(
                 f"{shown}: cannot read the limits file: {exc.strerror or exc}"
             ) from None
+    return parse_profiles(text, shown)
+
+
+def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:
+    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors)."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -228,7 +233,11 @@ def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
 
 def load_profile(path: Path | None = None, name: str | None = None) -> LimitsProfile:
     """One profile by name (default: the only one, or ``kxm52-production``)."""
-    profiles = load_profiles(path)
+    return pick_profile(load_profiles(path), name)
+
+
+def pick_profile(profiles: dict[str, LimitsProfile], name: str | None = None) -> LimitsProfile:
+    """One of ``profiles`` by name (default: the only one, or ``kxm52-production``)."""
     if name is None:
         name = next(iter(profiles)) if len(profiles) == 1 else DEFAULT_PROFILE
     try:

@@ -118,6 +118,13 @@ class Browser:
             raise AssertionError(f"{expression}: {answer['exceptionDetails']}")
         return answer["result"].get("value")
 
+    def follow(self, expression: str) -> None:
+        """Evaluate ``expression``, which navigates (a form submitted, a link clicked),
+        and wait for the new page's load event."""
+        self.events.clear()
+        self.evaluate(expression)
+        self._wait_for("Page.loadEventFired")
+
     def screenshot(self, name: str) -> Path:
         """A full-page PNG of the current page under ``artifacts/``."""
         height = int(self.evaluate("document.documentElement.scrollHeight"))

@@ -4,21 +4,39 @@
 (HTML) and ``GET /`` (the dashboard page, reloading itself).
 """
 
+import csv
+import io
+from collections.abc import AsyncIterator, Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, HTTPException, Path, Query, status
-from fastapi.responses import HTMLResponse, Response
-from pydantic import BeforeValidator, WithJsonSchema
+from fastapi import (
+    APIRouter,
+    Depends,
+    File,
+    Form,
+    HTTPException,
+    Path,
+    Query,
+    Request,
+    UploadFile,
+    status,
+)
+from fastapi.responses import HTMLResponse, Response, StreamingResponse
+from pydantic import BeforeValidator
+from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from api.deps import ReaderDep, ReportPoolDep
+from api.deps import ReaderDep, ReadersDep, ReportPoolDep
 from api.errors import invalid
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
 from db.limits_profiles import stored_profiles
 from db.reports import eol_report
+from db.run_export import HEADER, run_page
 from station.errors import InputError
+from station.limits import LimitsProfile, parse_profiles, pick_profile
 from station.quality.figures import EolReport, ReportFilter
 from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
 from station.report.html import certificate_page, dashboard_page
@@ -43,73 +61,235 @@ router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 
 
-def _moment(name: str) -> BeforeValidator:
-    def parse(text: object) -> object:
-        try:
-            return parse_moment(text, name=name) if isinstance(text, str) else text
-        except InputError as exc:
-            raise ValueError(str(exc)) from None
-
-    return BeforeValidator(parse)
+def _blank_is_none(text: object) -> object:
+    """An empty field of the report's form means "no filter"."""
+    return None if text == "" else text
 
 
-_MOMENT_SCHEMA = WithJsonSchema({"type": "string", "examples": ["2026-11-02", "2026-11-02T14:00Z"]})
-Since = Annotated[datetime, _moment("from"), _MOMENT_SCHEMA]
-Until = Annotated[datetime, _moment("to"), _MOMENT_SCHEMA]
+Blank = BeforeValidator(_blank_is_none)
 Name = Annotated[str, Query(pattern=IDENTIFIER_PATTERN)]
+Moment = Annotated[
+    str, Query(max_length=64, examples=["2026-11-02", "2026-11-02T14:00", "2026-11-02T14:00Z"])
+]
+
+#: Units on a page of the report's list.
+PAGE_UNITS = 50
+#: The most units a page may hold.
+MAX_PAGE_UNITS = 1000
 
 
-@router.get(
-    "/reports/eol",
-    response_class=Response,
-    responses={
-        200: {
-            "model": EolReport,
-            "content": {
-                MEDIA_TYPES["csv"]: {"schema": {"type": "string"}},
-                MEDIA_TYPES["html"]: {"schema": {"type": "string"}},
-            },
-            "description": "the report in the requested format",
+async def get_plant_zone(request: Request) -> str:
+    """The plant's time zone (``CALSTATION_PLANT_TIMEZONE``)."""
+    zone: str = request.app.state.plant_timezone
+    return zone
+
+
+PlantZoneDep = Annotated[str, Depends(get_plant_zone)]
+
+
+@dataclass(frozen=True)
+class Period:
+    """The report's filter as the query gives it: ``from``/``to`` without a zone are the
+    plant's time; an empty field is no filter; ``from`` must come before ``to``."""
+
+    since: Annotated[
+        Moment | None,
+        Blank,
+        Query(
+            alias="from",
+            description="start (inclusive), ISO date or time; the plant's "
+            "time zone unless one is given",
+        ),
+    ] = None
+    until: Annotated[
+        Moment | None, Blank, Query(alias="to", description="end (exclusive), as `from`")
+    ] = None
+    station: Annotated[Name | None, Blank, Query(description="only this station")] = None
+    operator: Annotated[Name | None, Blank, Query(description="only this operator")] = None
+    lot: Annotated[Name | None, Blank, Query(description="only this production lot")] = None
+
+    def filter(self, zone: str) -> ReportFilter:
+        """The filter, or a 422 naming the bound that is wrong."""
+        bounds = []
+        for name, text in (("from", self.since), ("to", self.until)):
+            try:
+                bounds.append(parse_moment(text, name=name, zone=zone) if text else None)
+            except InputError as exc:
+                raise invalid(("query", name), str(exc)) from None
+        try:
+            check_order(bounds[0], bounds[1], names=("from", "to"))
+        except InputError as exc:
+            raise invalid(("query", "from"), str(exc)) from None
+        return ReportFilter(
+            since=bounds[0],
+            until=bounds[1],
+            station_id=self.station,
+            operator_id=self.operator,
+            lot=self.lot,
+        )
+
+
+PeriodDep = Annotated[Period, Depends()]
+
+
+_REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
+    200: {
+        "model": EolReport,
+        "content": {
+            MEDIA_TYPES["csv"]: {"schema": {"type": "string"}},
+            MEDIA_TYPES["html"]: {"schema": {"type": "string"}},
         },
+        "description": "the report in the requested format",
     },
-)
+}
+Format = Literal["json", "csv", "html"]
+Listed = Annotated[
+    Literal["held", "all"],
+    Query(alias="list", description="the units listed: held ones (latest run failed) or all"),
+]
+PageSize = Annotated[int, Query(ge=1, le=MAX_PAGE_UNITS, description="units per page of the list")]
+PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page of the list")]
+
+
+@router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
 async def get_eol_report(
     repository: ReportPoolDep,
-    since: Annotated[
-        Since | None,
-        Query(alias="from", description="start, ISO date or time (UTC if no zone)"),
-    ] = None,
-    until: Annotated[Until | None, Query(alias="to", description="end (exclusive)")] = None,
-    station: Annotated[Name | None, Query(description="only this station")] = None,
-    operator: Annotated[Name | None, Query(description="only this operator")] = None,
-    lot: Annotated[Name | None, Query(description="only this production lot")] = None,
-    format: Literal["json", "csv", "html"] = "json",
-    units: Annotated[
-        int | None,
-        Query(ge=1, le=MAX_LISTED_UNITS, description="list only the latest N units"),
-    ] = None,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    format: Format = "json",
+    listed: Listed = "held",
+    units: PageSize = PAGE_UNITS,
+    page: PageNumber = 1,
 ) -> Response:
-    """Yields, failure Pareto, capability, control charts and ship/hold list of a range."""
-    try:
-        check_order(since, until, names=("from", "to"))
-    except InputError as exc:
-        raise invalid(("query", "from"), str(exc)) from None
-    report_filter = ReportFilter(
-        since=since,
-        until=until,
-        station_id=station,
-        operator_id=operator,
-        lot=lot,
-    )
-    body = await repository.run(eol_body, report_filter, units, format)
+    """Yields, trend, failure Pareto, capability, control charts and a page of the held
+    (or all) units of a period."""
+    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, None)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
+@router.post(
+    "/reports/eol",
+    response_class=Response,
+    responses={**_REPORT_ANSWERS, **problems(400, _400="the body is not multipart form data")},
+    summary="Report with what-if limits",
+)
+async def post_eol_what_if(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    limits: Annotated[
+        UploadFile, File(description="the candidate limits file (TOML, as the station's)")
+    ],
+    profile: Annotated[
+        str | None,
+        Blank,
+        Form(
+            description="the profile of the file to use (default: its only one, or "
+            "kxm52-production)"
+        ),
+    ] = None,
+    format: Format = "html",
+    listed: Listed = "held",
+    units: PageSize = PAGE_UNITS,
+    page: PageNumber = 1,
+) -> Response:
+    """The report of ``GET /reports/eol`` with its runs re-judged against a candidate
+    limits profile (uploaded): yields, Pareto and capability beside the current ones.
+    Nothing is stored: not the profile, not a verdict."""
+    candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
+    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, candidate)
+    return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def _candidate(content: bytes, shown: str, name: str | None) -> LimitsProfile:
+    """The candidate profile of an uploaded limits file, or a 422 saying what is wrong."""
+    try:
+        return pick_profile(parse_profiles(content.decode("utf-8"), shown), name)
+    except UnicodeDecodeError:
+        raise invalid(("body", "limits"), f"{shown}: not UTF-8 text") from None
+    except InputError as exc:
+        raise invalid(("body", "limits"), str(exc)) from None
+
+
+@dataclass(frozen=True)
+class _Pages:
+    """Which units the list holds: held ones or all, ``size`` of them after ``offset``."""
+
+    held: bool
+    size: int
+    offset: int
+
+
 def eol_body(
-    repository: RunRepository, filter: ReportFilter, units: int | None, format: str
+    repository: RunRepository,
+    filter: ReportFilter,
+    pages: _Pages,
+    format: str,
+    zone: str,
+    candidate: LimitsProfile | None,
 ) -> str:
     """The report rendered (in a report process: :mod:`api.report_pool`)."""
-    return render(eol_report(repository.session, filter, unit_limit=units), format)
+    report = eol_report(
+        repository.session,
+        filter,
+        candidate=candidate,
+        unit_limit=pages.size,
+        unit_offset=pages.offset,
+        held_only=pages.held,
+        zone=zone,
+    )
+    return render(report, format)
+
+
+@router.get(
+    "/reports/eol/runs.csv",
+    response_class=StreamingResponse,
+    responses={
+        200: {
+            "content": {MEDIA_TYPES["csv"]: {"schema": {"type": "string"}}},
+            "description": "one row per run of the period, oldest first, with a header row: "
+            + ", ".join(HEADER),
+        }
+    },
+)
+async def get_run_export(
+    period: PeriodDep, zone: PlantZoneDep, readers: ReadersDep
+) -> StreamingResponse:
+    """Every run of a period (and station, operator, lot) as CSV, streamed a page of runs
+    at a time: any length of period, in constant memory."""
+    report_filter = period.filter(zone)
+    return StreamingResponse(
+        _csv_pages(readers, report_filter),
+        media_type=MEDIA_TYPES["csv"],
+        headers={"Content-Disposition": 'attachment; filename="runs.csv"'},
+    )
+
+
+async def _csv_pages(
+    readers: async_sessionmaker[AsyncSession], filter: ReportFilter
+) -> AsyncIterator[str]:
+    """The export's CSV text, a page of runs at a time (a session of its own: it outlives
+    the request's handler)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(HEADER)
+    after: tuple[datetime, int] | None = None
+    async with readers() as session:
+        while True:
+            rows, after = await session.run_sync(run_page, filter, after)
+            writer.writerows(_csv_row(row) for row in rows)
+            yield buffer.getvalue()
+            buffer.seek(0)
+            buffer.truncate()
+            if after is None:
+                return
+
+
+def _csv_row(row: Sequence[object]) -> list[object]:
+    """Moments in ISO 8601 (UTC), the rest as they are; no value is an empty cell."""
+    return [v.isoformat() if isinstance(v, datetime) else v for v in row]
 
 
 def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
@@ -143,18 +323,20 @@ async def get_certificate(
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
-async def get_dashboard(repository: ReportPoolDep) -> HTMLResponse:
-    """The line dashboard: today's (UTC) counts and yields, latest units, Pareto, charts."""
-    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC)))
+async def get_dashboard(repository: ReportPoolDep, zone: PlantZoneDep) -> HTMLResponse:
+    """The line dashboard: the plant's today: counts and yields, latest units, Pareto, charts."""
+    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC), zone))
 
 
-def dashboard_body(repository: RunRepository, now: datetime) -> str:
-    """The dashboard page at ``now`` (in a report process: :mod:`api.report_pool`)."""
+def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") -> str:
+    """The dashboard page at ``now`` (in a report process: :mod:`api.report_pool`): the
+    runs since the plant's midnight (its time ``zone``)."""
     report = eol_report(
         repository.session,
-        ReportFilter(since=start_of_day(now)),
+        ReportFilter(since=start_of_day(now, zone)),
         unit_limit=DASHBOARD_UNITS,
         chart_points=DASHBOARD_CHART_POINTS,
         now=now,
+        zone=zone,
     )
     return dashboard_page(report)

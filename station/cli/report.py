@@ -13,7 +13,7 @@ from station.cli.output import err, out
 from station.errors import CalstationError
 from station.limits import load_profile
 from station.quality.figures import ReportFilter
-from station.report.period import parse_period
+from station.report.period import parse_period, plant_zone
 from station.report.render import FORMATS, render
 
 
@@ -36,11 +36,21 @@ def report(
         Path | None,
         typer.Option(
             "--limits",
-            help="Measure Cp/Cpk against this limits file's profile (its only one, or "
-            "kxm52-production) instead of the profile stored with the runs.",
+            help="What-if: re-judge the runs against this limits file's profile (its only "
+            "one, or kxm52-production): yields, Pareto and Cp/Cpk beside the current ones; "
+            "nothing stored changes.",
             show_default=False,
         ),
     ] = None,
+    timezone: Annotated[
+        str,
+        typer.Option(
+            "--timezone",
+            envvar="CALSTATION_PLANT_TIMEZONE",
+            help="The plant's time zone (IANA name): days and times shown in it, "
+            "--from/--to without a zone read in it.",
+        ),
+    ] = "UTC",
     output: Annotated[
         Path | None,
         typer.Option("--out", help="Write to this file instead of standard output."),
@@ -50,7 +60,8 @@ def report(
     """End-of-line report: yields, failure Pareto, capability, control charts, ship/hold."""
     if format not in FORMATS:
         raise CalstationError(f"--format {format!r} is not one of {', '.join(FORMATS)}")
-    start, end = parse_period(since, until)
+    zone = plant_zone(timezone)
+    start, end = parse_period(since, until, zone=zone)
     report_filter = ReportFilter(
         since=start,
         until=end,
@@ -63,7 +74,9 @@ def report(
     database = open_database(url)
     try:
         with database.session() as session:
-            report_ = eol_report(session, report_filter, profile=profile, unit_limit=units)
+            report_ = eol_report(
+                session, report_filter, candidate=profile, unit_limit=units, zone=zone
+            )
     except OperationalError as exc:
         raise DatabaseUnavailableError.of(url, exc) from None
     finally:

@@ -4,7 +4,7 @@ Yields and rates are fractions (0…1), times are seconds, parameter values are 
 ``unit``. ``None`` means "not defined for this range" (no runs, no spread, no limit).
 """
 
-from datetime import datetime
+from datetime import date, datetime
 from typing import Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field
@@ -33,10 +33,12 @@ class ReportFilter(_Part):
 class Summary(_Part):
     """Counts and yields of the runs in range.
 
-    A unit's first and latest run are its first and latest run *ever* (on the line; at
-    the station, in a per-station summary), by start time. The units are those whose
-    first run is in range (the cohort of first-pass and final yield); retests are the
-    runs in range that are not a unit's first.
+    A unit's first and latest run are its first and latest run *ever* on the line, by
+    start time. The units are those whose first run is in range (the cohort of
+    first-pass and final yield); retests are the runs in range that are not a unit's
+    first. A station's summary counts the units whose first run (their first attempt)
+    was at the station and the station's runs, so the stations' summaries add up to
+    the line's.
     """
 
     runs: int
@@ -45,7 +47,7 @@ class Summary(_Part):
     units_passed: int = Field(description="units whose latest run passed")
     units_failed: int
     first_pass_units: int = Field(description="units whose first run passed")
-    report_yield: float | None = Field(description="passing runs / runs")
+    report_yield: float | None = Field(description="run yield: passing runs / runs")
     first_pass_yield: float | None = Field(description="units whose first run passed / units")
     final_yield: float | None = Field(description="units whose latest run passed / units")
     retests: int = Field(description="runs that are not a unit's first")
@@ -111,10 +113,18 @@ class ChartPoint(_Part):
     serial: str
     value: float
     moving_range: float | None
+    signals: list[int] = Field(
+        description="Western Electric rules (1–4) the value completes on the individuals chart"
+    )
+    mr_signals: list[int] = Field(
+        description="Western Electric rules (1–4) the moving range completes on its chart"
+    )
 
 
 class ControlChart(_Part):
-    """Individuals and moving-range chart of one coefficient (limits from every run)."""
+    """Individuals and moving-range chart of one coefficient: ``count`` runs in range set
+    its limits, the latest of them are ``points``, each with the Western Electric rules
+    it completes (:mod:`station.quality.control`) among the points plotted."""
 
     name: str
     unit: str
@@ -124,7 +134,26 @@ class ControlChart(_Part):
     lcl: float | None
     ucl: float | None
     mr_ucl: float | None
-    points: list[ChartPoint] = Field(description="the latest runs, oldest first")
+    sigma: float | None = Field(description="short-term σ of the values, MR̄/d₂")
+    mr_sigma: float | None = Field(description="σ of the moving ranges, d₃·MR̄/d₂")
+    points: list[ChartPoint] = Field(
+        description="the latest runs, oldest first (their count is the plotted count)"
+    )
+
+
+class TrendDay(_Part):
+    """One of the plant's days (in its time zone) of the range: the units whose first run
+    on the line was that day, with their first-pass and final yield, its runs, and the
+    Cpk of its values."""
+
+    day: date
+    runs: int
+    runs_passed: int
+    units: int = Field(description="units whose first run on the line was that day")
+    first_pass_yield: float | None
+    final_yield: float | None = Field(description="of that day's units, latest run passed")
+    run_yield: float | None = Field(description="passing runs / runs of that day")
+    cpk: dict[str, float | None] = Field(description="Cpk per parameter of that day's values")
 
 
 class UnitVerdict(_Part):
@@ -141,6 +170,18 @@ class UnitVerdict(_Part):
     failure: str | None = Field(description="first failure reason of the latest run")
 
 
+class WhatIf(_Part):
+    """The report's runs re-judged against a candidate limits profile, nothing stored
+    changed: yields, Pareto and capability as they would have been."""
+
+    limits: LimitsRef = Field(description="the candidate profile")
+    summary: Summary
+    pareto: list[ParetoEntry]
+    parameters: list[ParameterStats] = Field(description="capability against the candidate")
+    pass_to_fail: int = Field(description="runs that passed and would fail")
+    fail_to_pass: int = Field(description="runs that failed and would pass")
+
+
 class EolReport(_Part):
     """The end-of-line report over ``filter``."""
 
@@ -150,10 +191,25 @@ class EolReport(_Part):
     limits_profiles: list[LimitsRef] = Field(description="profiles the runs were judged by")
     summary: Summary
     stations: list[StationSummary]
+    timezone: str = Field("UTC", description="the plant's time zone the pages show times in")
+    trend: list[TrendDay] = Field(
+        default_factory=list, description="per plant day of the range, the latest days"
+    )
     pareto: list[ParetoEntry]
     parameters: list[ParameterStats]
     control_charts: list[ControlChart]
     units: list[UnitVerdict]
     units_total: int = Field(
         description="units whose latest run is in range (the list may be cut to the latest)"
+    )
+    units_listed: Literal["all", "held"] = Field(
+        "all", description="which units the list holds: all, or the held ones (latest run failed)"
+    )
+    units_held: int | None = Field(
+        None, description="held units (latest run in range failed), when the list holds them"
+    )
+    units_offset: int = Field(0, description="units before this page of the list, newest first")
+    units_limit: int | None = Field(None, description="the most units a page of the list holds")
+    what_if: WhatIf | None = Field(
+        None, description="the runs re-judged against a candidate limits profile, when given"
     )

@@ -1,6 +1,7 @@
 """How numbers read in the text and HTML renderings (the same in both)."""
 
 from datetime import datetime
+from zoneinfo import ZoneInfo
 
 
 def percent(value: float | None) -> str:
@@ -22,6 +23,24 @@ def seconds(value: float | None) -> str:
     return "–" if value is None else f"{value:.1f} s"
 
 
-def moment(value: datetime | None) -> str:
-    """A UTC moment to the second."""
-    return "–" if value is None else value.strftime("%Y-%m-%d %H:%M:%S UTC")
+def moment(value: datetime | None, zone: str = "UTC") -> str:
+    """A moment to the second, in the plant's time ``zone`` (an IANA name)."""
+    if value is None:
+        return "–"
+    return value.astimezone(ZoneInfo(zone)).strftime("%Y-%m-%d %H:%M:%S %Z")
+
+
+def clock(value: datetime, zone: str = "UTC") -> str:
+    """A chart's time label in the plant's ``zone``: ``11-02 14:05``."""
+    return value.astimezone(ZoneInfo(zone)).strftime("%m-%d %H:%M")
+
+
+def field(value: datetime | None, zone: str = "UTC") -> str:
+    """A moment as the report's form shows it, in the plant's ``zone``: a date at
+    midnight, else the date and time (``2026-11-02``, ``2026-11-02T14:30``)."""
+    if value is None:
+        return ""
+    local = value.astimezone(ZoneInfo(zone))
+    if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0):
+        return local.date().isoformat()
+    return local.replace(tzinfo=None).isoformat(timespec="seconds" if local.second else "minutes")

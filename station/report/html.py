@@ -16,8 +16,20 @@ from station.quality.parameters import profile_bounds
 from station.records import GyroFitRecord, StoredRun
 from station.report import formatting, svg
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
-from station.report.tables import PARAMETER_HEADER, SUMMARY_HEADER, parameter_cells, summary_cells
+from station.report.tables import (
+    CAPABILITY_HEADER,
+    PARAMETER_HEADER,
+    SUMMARY_HEADER,
+    WHAT_IF_HEADER,
+    capability_cells,
+    listed,
+    parameter_cells,
+    summary_cells,
+    what_if_cells,
+)
 
+#: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
+CPK_TARGET = ("target", 1.33)
 #: Seconds between the dashboard's reloads.
 DASHBOARD_REFRESH_S = 30
 
@@ -32,24 +44,63 @@ _env.filters.update(
     number=formatting.number,
     seconds=formatting.seconds,
     moment=formatting.moment,
+    field=formatting.field,
 )
 _env.globals.update(
     version=__version__,
     histogram=lambda stats: Markup(svg.histogram(stats)),
     pareto=lambda entries: Markup(svg.pareto(entries)),
-    control_chart=lambda chart: Markup(svg.control_chart(chart)),
+    control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
 )
 
 
 _env.globals.update(
-    summary_header=SUMMARY_HEADER, summary_cells=summary_cells, parameter_header=PARAMETER_HEADER
+    summary_header=SUMMARY_HEADER,
+    summary_cells=summary_cells,
+    parameter_header=PARAMETER_HEADER,
+    listed=listed,
+    what_if_header=WHAT_IF_HEADER,
+    what_if_cells=what_if_cells,
+    capability_header=CAPABILITY_HEADER,
+    capability_cells=capability_cells,
 )
+
+
+def trend_charts(report: EolReport) -> list[str]:
+    """The trend as charts: units per day, first-pass and final yield per day, and the
+    Cpk per day of each parameter that has one."""
+    days = [d.day for d in report.trend]
+    charts = [
+        svg.trend_chart(
+            "units per day (first run on the line)", days, [], bars=[d.units for d in report.trend]
+        ),
+        svg.trend_chart(
+            "yield per day",
+            days,
+            [
+                ("first-pass", [d.first_pass_yield for d in report.trend]),
+                ("final", [d.final_yield for d in report.trend]),
+            ],
+            percent_axis=True,
+        ),
+    ]
+    for p in report.parameters:
+        values = [d.cpk.get(p.name) for d in report.trend]
+        if any(v is not None for v in values):
+            charts.append(
+                svg.trend_chart(
+                    f"Cpk of {p.name} per day", days, [("Cpk", values)], reference=CPK_TARGET
+                )
+            )
+    return charts
 
 
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
-        report=report, parameter_rows=parameter_cells(report)
+        report=report,
+        parameter_rows=parameter_cells(report),
+        trend_charts=[Markup(chart) for chart in trend_charts(report)] if report.trend else [],
     )
 
 

@@ -1,4 +1,5 @@
-"""Reading the report's time bounds: ISO dates or moments, UTC unless a zone is given.
+"""Reading the report's time bounds: ISO dates or moments, in the plant's time zone
+unless they name one (stored times stay UTC).
 
 One place for the CLI (``--from``/``--to``) and the API (``from``/``to``): a bound must
 read as a date or time, stay a valid moment once shifted to UTC, and leave room for the
@@ -7,6 +8,7 @@ come before ``to``.
 """
 
 from datetime import UTC, date, datetime, time
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from station.errors import InputError
 
@@ -19,8 +21,21 @@ LATEST = datetime(9999, 12, 31, tzinfo=UTC)
 MAX_LISTED_UNITS = 1_000_000
 
 
-def parse_moment(text: str, *, name: str) -> datetime:
-    """``2026-11-02`` (midnight UTC), ``2026-11-02T14:00`` (UTC) or with a zone, in UTC.
+def plant_zone(name: str) -> str:
+    """``name`` if it is an IANA time zone (``Europe/Berlin``, ``UTC``), else
+    :class:`InputError`."""
+    try:
+        ZoneInfo(name)
+    except (ZoneInfoNotFoundError, ValueError):
+        raise InputError(
+            f"time zone {name!r} is unknown: give an IANA name such as Europe/Berlin or UTC"
+        ) from None
+    return name
+
+
+def parse_moment(text: str, *, name: str, zone: str = "UTC") -> datetime:
+    """``2026-11-02`` (the plant's midnight), ``2026-11-02T14:00`` (the plant's time) or
+    with a zone, in UTC; ``zone`` is the plant's time zone (IANA name).
 
     Raises :class:`InputError` naming the option ``name`` for anything else, or for a
     moment outside :data:`EARLIEST` … :data:`LATEST` (UTC).
@@ -35,7 +50,8 @@ def parse_moment(text: str, *, name: str) -> datetime:
                 f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or 2026-11-02T14:00Z)"
             ) from None
     try:
-        utc = moment.replace(tzinfo=UTC) if moment.tzinfo is None else moment.astimezone(UTC)
+        local = moment.replace(tzinfo=ZoneInfo(zone)) if moment.tzinfo is None else moment
+        utc = local.astimezone(UTC)
     except OverflowError:  # the zone shifts it past year 1 or 9999
         utc = None
     if utc is None or not EARLIEST <= utc <= LATEST:
@@ -58,15 +74,21 @@ def check_order(
 
 
 def parse_period(
-    since: str | None, until: str | None, *, names: tuple[str, str] = ("--from", "--to")
+    since: str | None,
+    until: str | None,
+    *,
+    names: tuple[str, str] = ("--from", "--to"),
+    zone: str = "UTC",
 ) -> tuple[datetime | None, datetime | None]:
-    """Both bounds (either may be absent); :class:`InputError` unless ``since < until``."""
-    start = parse_moment(since, name=names[0]) if since else None
-    end = parse_moment(until, name=names[1]) if until else None
+    """Both bounds (either may be absent; without a zone in the plant's ``zone``);
+    :class:`InputError` unless ``since < until``."""
+    start = parse_moment(since, name=names[0], zone=zone) if since else None
+    end = parse_moment(until, name=names[1], zone=zone) if until else None
     check_order(start, end, names=names)
     return start, end
 
 
-def start_of_day(now: datetime) -> datetime:
-    """Midnight UTC of the day ``now`` is in."""
-    return datetime.combine(now.astimezone(UTC).date(), time(), tzinfo=UTC)
+def start_of_day(now: datetime, zone: str = "UTC") -> datetime:
+    """The plant's midnight (in its ``zone``) that began the day ``now`` is in, in UTC."""
+    local = ZoneInfo(zone)
+    return datetime.combine(now.astimezone(local).date(), time(), tzinfo=local).astimezone(UTC)

@@ -15,10 +15,15 @@ from station.quality.figures import EolReport
 from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
+    CAPABILITY_HEADER,
     PARAMETER_HEADER,
     SUMMARY_HEADER,
+    WHAT_IF_HEADER,
+    capability_cells,
+    listed,
     parameter_cells,
     summary_cells,
+    what_if_cells,
 )
 
 Format = Literal["text", "csv", "json", "html"]
@@ -52,6 +57,14 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     for station in doc["stations"]:
         for key, value in station["summary"].items():
             yield ("station", station["station_id"], key, value)
+    yield ("trend", "", "timezone", doc["timezone"])
+    for day in doc["trend"]:
+        for key, value in day.items():
+            if key == "cpk":
+                for name, cpk in value.items():
+                    yield ("trend", day["day"], f"cpk:{name}", cpk)
+            elif key != "day":
+                yield ("trend", day["day"], key, value)
     for entry in doc["pareto"]:
         for key in ("count", "share", "cumulative_share"):
             yield ("pareto", entry["code"], key, entry[key])
@@ -79,7 +92,24 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
                 f"{point['started_at']} {point['serial']}",
                 point["value"],
             )
+    what_if = doc["what_if"]
+    if what_if is not None:
+        for key, value in what_if["limits"].items():
+            yield ("what_if", "limits", key, value)
+        for key in ("pass_to_fail", "fail_to_pass"):
+            yield ("what_if", "", key, what_if[key])
+        for key, value in what_if["summary"].items():
+            yield ("what_if", "summary", key, value)
+        for entry in what_if["pareto"]:
+            for key in ("count", "share", "cumulative_share"):
+                yield ("what_if", f"pareto:{entry['code']}", key, entry[key])
+        for stats in what_if["parameters"]:
+            for key in ("lower", "upper", "count", "cp", "cpk", "out_of_limits", "marginal"):
+                yield ("what_if", f"parameter:{stats['name']}", key, stats[key])
     yield ("units", "", "total", doc["units_total"])
+    yield ("units", "", "listed", doc["units_listed"])
+    yield ("units", "", "held", doc["units_held"])
+    yield ("units", "", "offset", doc["units_offset"])
     for unit in doc["units"]:
         for key, value in unit.items():
             if key != "serial":
@@ -112,8 +142,8 @@ def as_text(report: EolReport) -> str:
     scope = ", ".join(
         f"{label} {value}"
         for label, value in (
-            ("from", moment(f.since) if f.since else None),
-            ("to", moment(f.until) if f.until else None),
+            ("from", moment(f.since, report.timezone) if f.since else None),
+            ("to", moment(f.until, report.timezone) if f.until else None),
             ("station", f.station_id),
             ("operator", f.operator_id),
             ("lot", f.lot),
@@ -121,13 +151,30 @@ def as_text(report: EolReport) -> str:
         if value
     )
     out = [
-        f"End-of-line report ({scope or 'all runs'}), generated {moment(report.generated_at)}",
+        f"End-of-line report ({scope or 'all runs'}), "
+        f"generated {moment(report.generated_at, report.timezone)}",
         "",
         *_table(
             SUMMARY_HEADER,
             [
                 summary_cells("all", report.summary),
                 *(summary_cells(s.station_id, s.summary) for s in report.stations),
+            ],
+        ),
+        "",
+        f"Trend per day ({report.timezone}; units counted on the day of their first run)",
+        *_table(
+            ["day", "units", "first-pass yield", "final yield", "runs", "run yield"],
+            [
+                [
+                    d.day.isoformat(),
+                    number(d.units),
+                    percent(d.first_pass_yield),
+                    percent(d.final_yield),
+                    number(d.runs),
+                    percent(d.run_yield),
+                ]
+                for d in report.trend
             ],
         ),
         "",
@@ -157,17 +204,18 @@ def as_text(report: EolReport) -> str:
                 [
                     c.name,
                     number(c.count),
-                    number(c.mean, 6),
+                    number(c.mean),
                     number(c.mr_bar),
-                    number(c.lcl, 6),
-                    number(c.ucl, 6),
+                    number(c.lcl),
+                    number(c.ucl),
                     number(c.mr_ucl),
                 ]
                 for c in report.control_charts
             ],
         ),
         "",
-        f"Units ({len(report.units)} of {report.units_total}, latest first)",
+        *_what_if_text(report),
+        f"Units ({listed(report)}, latest first)",
         *_table(
             ["serial", "disposition", "runs", "last run", "station", "operator", "failure"],
             [
@@ -175,7 +223,7 @@ def as_text(report: EolReport) -> str:
                     u.serial,
                     u.disposition,
                     number(u.runs),
-                    moment(u.last_started_at),
+                    moment(u.last_started_at, report.timezone),
                     u.station_id,
                     u.operator_id,
                     u.failure or "",
@@ -185,6 +233,30 @@ def as_text(report: EolReport) -> str:
         ),
     ]
     return "\n".join(out) + "\n"
+
+
+def _what_if_text(report: EolReport) -> list[str]:
+    """The what-if section: yields, Pareto and capability under the candidate."""
+    w = report.what_if
+    if w is None:
+        return []
+    ref = w.limits
+    return [
+        f"What-if: the runs re-judged against {ref.name} v{ref.version} ({ref.sha256[:12]}); "
+        "nothing stored changed",
+        *_table(WHAT_IF_HEADER, what_if_cells(report)),
+        "",
+        *_table(
+            ["reason (what-if)", "runs", "share", "cumulative"],
+            [
+                [e.code, number(e.count), percent(e.share), percent(e.cumulative_share)]
+                for e in w.pareto
+            ],
+        ),
+        "",
+        *_table(CAPABILITY_HEADER, capability_cells(report)),
+        "",
+    ]
 
 
 def render(report: EolReport, format: str) -> str:

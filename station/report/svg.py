@@ -2,20 +2,27 @@
 Pareto, individuals and moving-range (I-MR) control charts. No script, no external file.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from datetime import date
 from xml.sax.saxutils import escape
 
-from station.quality.figures import ControlChart, ParameterStats, ParetoEntry
-from station.report.formatting import number, percent
+from station.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
+from station.report.formatting import clock, number, percent
 
 WIDTH, HEIGHT, PAD = 360, 150, 28
 LIMIT_COLOUR, CENTRE_COLOUR, BAR_COLOUR, ALARM_COLOUR = "#c0392b", "#2c7a2c", "#3b6ea5", "#c0392b"
+AXIS_COLOUR = "#999"
+#: The control chart's size: room on the left for the time axis' first label, on the
+#: right for the values of the centre and limit lines.
+CHART_WIDTH, CHART_LEFT, CHART_RIGHT, PANEL = 480, 36, 84, 130
+#: Least distance between two labels of lines, one above the other.
+LABEL_GAP = 10
 
 
-def _svg(title: str, body: Sequence[str], height: int = HEIGHT) -> str:
+def _svg(title: str, body: Sequence[str], height: float = HEIGHT, width: float = WIDTH) -> str:
     return (
         f'<svg class="chart" role="img" xmlns="http://www.w3.org/2000/svg" '
-        f'viewBox="0 0 {WIDTH} {height}" width="{WIDTH}" height="{height}">'
+        f'viewBox="0 0 {width} {height}" width="{width}" height="{height}">'
         f"<title>{escape(title)}</title>{''.join(body)}</svg>"
     )
 
@@ -67,84 +74,225 @@ def histogram(stats: ParameterStats) -> str:
 
 
 def pareto(entries: Sequence[ParetoEntry]) -> str:
-    """Failing runs per first failure reason, largest first, with the cumulative share."""
+    """Failing runs per first failure reason, largest first: each bar labelled with its
+    count and its own share; the cumulative share a line against the top axis (0–100 %)."""
     rows = list(entries)[:10]
-    row_h = 18
-    height = max(len(rows), 1) * row_h + 2 * 10
-    label_w, plot_w = 150, WIDTH - 150 - 60
+    row_h, top_h, width = 18, 22, CHART_WIDTH
+    height = max(len(rows), 1) * row_h + top_h + 8
+    label_w = 150
+    plot_w = width - label_w - 96  # room right of the longest bar for its label
     top = max((e.count for e in rows), default=1)
-    body = []
+    body = [_line(label_w, top_h, label_w + plot_w, top_h, AXIS_COLOUR)]
+    for share, anchor in ((0.0, "start"), (0.5, "middle"), (1.0, "end")):
+        x = label_w + plot_w * share
+        body.append(_line(x, top_h - 3, x, top_h, AXIS_COLOUR))
+        body.append(_text(x, top_h - 6, percent(share), anchor, CENTRE_COLOUR))
+    body.append(_text(label_w - 6, top_h - 6, "cumulative share", "end", CENTRE_COLOUR))
+    cumulative = []
     for i, entry in enumerate(rows):
-        y = 10 + i * row_h
+        y = top_h + 4 + i * row_h
         bar = plot_w * entry.count / top
         body.append(_text(label_w - 4, y + 12, entry.code[:28], "end"))
         body.append(
             f'<rect class="bar" x="{label_w}" y="{y + 2}" width="{max(bar, 1):.1f}" '
             f'height="{row_h - 4}" fill="{BAR_COLOUR}"><title>{entry.count}</title></rect>'
         )
+        body.append(_text(label_w + bar + 4, y + 12, f"{entry.count} ({percent(entry.share)})"))
+        cumulative.append((label_w + plot_w * entry.cumulative_share, y + row_h / 2))
+    if cumulative:
+        path = " ".join(f"{x:.1f},{y:.1f}" for x, y in cumulative)
         body.append(
-            _text(label_w + bar + 4, y + 12, f"{entry.count} ({percent(entry.cumulative_share)})")
+            f'<polyline class="cumulative" points="{path}" fill="none" stroke="{CENTRE_COLOUR}"/>'
         )
-    if not rows:
-        body.append(_text(WIDTH / 2, 24, "no failures", "middle"))
-    return _svg("failure Pareto", body, height)
+        body += [
+            f'<circle cx="{x:.1f}" cy="{y:.1f}" r="2" fill="{CENTRE_COLOUR}"/>'
+            for x, y in cumulative
+        ]
+    else:
+        body.append(_text(width / 2, top_h + 16, "no failures", "middle"))
+    return _svg("failure Pareto: runs per first failure reason", body, height, width)
 
 
-def control_chart(chart: ControlChart) -> str:
-    """Individuals (top) and moving ranges (bottom) of the latest runs with their limits."""
+def _time_axis(
+    points: Sequence[ChartPoint], x_of: Callable[[int], float], y: float, zone: str
+) -> list[str]:
+    """The run-order axis along ``y`` with the start time of four runs as ticks."""
+    body = [_line(CHART_LEFT, y, CHART_WIDTH - CHART_RIGHT, y, AXIS_COLOUR)]
+    ticks = sorted({round(k * (len(points) - 1) / 3) for k in range(4)}) if points else []
+    for i in ticks:
+        x = x_of(i)
+        body.append(f'<g class="tick">{_line(x, y, x, y + 3, AXIS_COLOUR)}</g>')
+        body.append(_text(x, y + 12, clock(points[i].started_at, zone), "middle"))
+    return body
+
+
+def _panel(
+    values: Sequence[float | None],
+    signals: Sequence[Sequence[int]],
+    lines: Sequence[tuple[str, float | None, bool]],
+    top: float,
+    x_of: Callable[[int], float],
+    what: str,
+) -> list[str]:
+    """One panel of an I-MR chart: the y axis, the centre and limit lines labelled with
+    their values, the points joined in run order, points completing a Western Electric
+    rule in red with the rules' numbers; ``what`` is the points' CSS class."""
+    shown = [v for v in values if v is not None]
+    levels = [v for _, v, _ in lines if v is not None]
+    low, high = min([*shown, *levels], default=0.0), max([*shown, *levels], default=1.0)
+    pad = (high - low) * 0.05 or abs(high) * 0.01 or 1.0
+    low, high = low - pad, high + pad
+    bottom, right = top + PANEL - 30, CHART_WIDTH - CHART_RIGHT
+
+    def y_of(value: float) -> float:
+        return bottom - (bottom - top) * (value - low) / (high - low)
+
+    body = [_line(CHART_LEFT, top, CHART_LEFT, bottom, AXIS_COLOUR)]
+    drawn_lines = sorted(
+        (y_of(level), label, level, dashed) for label, level, dashed in lines if level is not None
+    )
+    label_y = top - LABEL_GAP
+    for y, label, level, dashed in drawn_lines:
+        colour = LIMIT_COLOUR if dashed else CENTRE_COLOUR
+        body.append(_line(CHART_LEFT, y, right, y, colour, dash=dashed))
+        # Lines close together (no spread) keep their labels apart, top to bottom.
+        label_y = max(y + 3, label_y + LABEL_GAP)
+        body.append(_text(right + 3, label_y, f"{label} {number(level)}", colour=colour))
+    drawn = [(i, v) for i, v in enumerate(values) if v is not None]
+    if drawn:
+        path = " ".join(f"{x_of(i):.1f},{y_of(v):.1f}" for i, v in drawn)
+        body.append(f'<polyline points="{path}" fill="none" stroke="{BAR_COLOUR}"/>')
+    for i, v in drawn:
+        rules = signals[i]
+        colour = ALARM_COLOUR if rules else BAR_COLOUR
+        flag = f" rule {', '.join(map(str, rules))}" if rules else ""
+        css = f"{what} signal" if rules else what
+        body.append(
+            f'<circle class="{css}" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" '
+            f'r="{3 if rules else 2}" fill="{colour}"><title>{number(v)}{flag}</title></circle>'
+        )
+        if rules:
+            body.append(_text(x_of(i), y_of(v) - 5, ",".join(map(str, rules)), "middle", colour))
+    return body
+
+
+def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
+    """Individuals (top) and moving ranges (bottom) of the latest runs with their limits,
+    a time axis under each (the runs in order, ticks at their start in ``zone``)."""
     points = chart.points
-    height = 2 * HEIGHT - PAD
-    plot_w = WIDTH - 2 * PAD
-    i_top, i_bottom = PAD, HEIGHT - PAD
-    mr_top, mr_bottom = HEIGHT, height - PAD
-    values = [p.value for p in points]
-    ranges = [p.moving_range for p in points if p.moving_range is not None]
-    low = min([*values, *(v for v in (chart.lcl, chart.mean) if v is not None)])
-    high = max([*values, *(v for v in (chart.ucl, chart.mean) if v is not None)])
-    high = high if high > low else low + 1
-    mr_high = max([*ranges, chart.mr_ucl or 0.0]) or 1.0
+    plot_w = CHART_WIDTH - CHART_LEFT - CHART_RIGHT
+    height = 18 + 2 * PANEL
 
     def x_of(i: int) -> float:
-        return PAD + plot_w * (i / max(len(points) - 1, 1))
+        return CHART_LEFT + plot_w * (i / max(len(points) - 1, 1))
 
-    def y_i(value: float) -> float:
-        return i_bottom - (i_bottom - i_top) * (value - low) / (high - low)
+    latest = "latest " if len(points) < chart.count else ""
+    plotted = f"{latest}{len(points)} of {chart.count} runs in range plotted"
+    body = [_text(CHART_LEFT, 12, f"{chart.name} ({chart.unit}): {plotted}")]
+    body += _panel(
+        [p.value for p in points],
+        [p.signals for p in points],
+        [("UCL", chart.ucl, True), ("x̄", chart.mean, False), ("LCL", chart.lcl, True)],
+        18 + 8,
+        x_of,
+        "point",
+    )
+    body += _time_axis(points, x_of, 18 + PANEL - 22, zone)
+    body.append(_text(CHART_LEFT, 18 + PANEL + 4, "moving range"))
+    body += _panel(
+        [p.moving_range for p in points],
+        [p.mr_signals for p in points],
+        [("UCL", chart.mr_ucl, True), ("MR̄", chart.mr_bar, False)],
+        18 + PANEL + 8,
+        x_of,
+        "mr-point",
+    )
+    body += _time_axis(points, x_of, 18 + 2 * PANEL - 22, zone)
+    return _svg(
+        f"I-MR chart of {chart.name}, {len(points)} of {chart.count} runs plotted",
+        body,
+        height,
+        CHART_WIDTH,
+    )
 
-    def y_mr(value: float) -> float:
-        return mr_bottom - (mr_bottom - mr_top) * value / mr_high
 
-    body = [_text(PAD, 12, f"{chart.name} ({chart.unit}), {chart.count} runs")]
-    body.append(_line(PAD, y_i(chart.mean), WIDTH - PAD, y_i(chart.mean), CENTRE_COLOUR))
-    body.append(_text(WIDTH - PAD + 2, y_i(chart.mean) + 3, "x̄", colour=CENTRE_COLOUR))
-    for label, limit in (("UCL", chart.ucl), ("LCL", chart.lcl)):
-        if limit is not None:
-            body.append(_line(PAD, y_i(limit), WIDTH - PAD, y_i(limit), LIMIT_COLOUR, dash=True))
-            body.append(_text(WIDTH - PAD + 2, y_i(limit) + 3, label, colour=LIMIT_COLOUR))
-    if chart.mr_bar is not None and chart.mr_ucl is not None:
-        body.append(_line(PAD, y_mr(chart.mr_bar), WIDTH - PAD, y_mr(chart.mr_bar), CENTRE_COLOUR))
+#: A trend chart's colours, one per series.
+SERIES_COLOURS = ("#3b6ea5", "#2c7a2c", "#b06a00", "#7a3b8f")
+
+
+def trend_chart(
+    title: str,
+    days: Sequence[date],
+    series: Sequence[tuple[str, Sequence[float | None]]],
+    *,
+    bars: Sequence[int] | None = None,
+    percent_axis: bool = False,
+    reference: tuple[str, float] | None = None,
+) -> str:
+    """Values per day: ``bars`` (counts) and/or ``series`` of lines (a gap where a day has
+    no value), a date axis below, a value axis on the left from 0 with its range
+    labelled, and a ``reference`` line (a target such as Cpk 1.33)."""
+    left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
+    levels = [v for _, values in series for v in values if v is not None]
+    if reference is not None:
+        levels.append(reference[1] * 1.2)
+    low, high = (0.0, 1.0) if percent_axis else (min([0.0, *levels]), max(levels, default=1.0))
+    if bars is not None:
+        low, high = 0.0, float(max(bars, default=1) or 1)
+    if high <= low:
+        high = low + (abs(low) or 1.0)
+
+    def x_of(i: int) -> float:
+        return left + (right - left) * (i + 0.5) / max(len(days), 1)
+
+    def y_of(value: float) -> float:
+        return bottom - (bottom - top) * (value - low) / (high - low)
+
+    label = percent if percent_axis else number
+    body = [
+        _text(left, 12, title),
+        _line(left, top, left, bottom, AXIS_COLOUR),
+        _line(left, bottom, right, bottom, AXIS_COLOUR),
+        _text(left - 3, top + 3, label(high), "end"),
+        _text(left - 3, bottom + 3, label(low), "end"),
+    ]
+    if reference is not None:
+        name, level = reference
+        body.append(_line(left, y_of(level), right, y_of(level), LIMIT_COLOUR, dash=True))
         body.append(
-            _line(PAD, y_mr(chart.mr_ucl), WIDTH - PAD, y_mr(chart.mr_ucl), LIMIT_COLOUR, True)
+            _text(left + 3, y_of(level) - 3, f"{name} {number(level)}", colour=LIMIT_COLOUR)
         )
-        body.append(_text(WIDTH - PAD + 2, y_mr(chart.mr_ucl) + 3, "UCL", colour=LIMIT_COLOUR))
-    body.append(_text(PAD, mr_top - 4, "moving range"))
-    if points:
-        path = " ".join(f"{x_of(i):.1f},{y_i(p.value):.1f}" for i, p in enumerate(points))
-        body.append(f'<polyline points="{path}" fill="none" stroke="{BAR_COLOUR}"/>')
-        mr_path = " ".join(
-            f"{x_of(i):.1f},{y_mr(p.moving_range):.1f}"
-            for i, p in enumerate(points)
-            if p.moving_range is not None
+    ticks = sorted({round(k * (len(days) - 1) / 3) for k in range(4)}) if days else []
+    for i in ticks:
+        body.append(
+            f'<g class="tick">{_line(x_of(i), bottom, x_of(i), bottom + 3, AXIS_COLOUR)}</g>'
         )
-        if mr_path:
-            body.append(f'<polyline points="{mr_path}" fill="none" stroke="{BAR_COLOUR}"/>')
-        for i, p in enumerate(points):
-            alarm = bool(chart.mr_bar) and (
-                (chart.ucl is not None and p.value > chart.ucl)
-                or (chart.lcl is not None and p.value < chart.lcl)
-            )
-            colour = ALARM_COLOUR if alarm else BAR_COLOUR
+        body.append(_text(x_of(i), bottom + 13, days[i].strftime("%m-%d"), "middle"))
+    if bars is not None:
+        bar_w = max((right - left) / max(len(days), 1) - 2, 1)
+        for i, count in enumerate(bars):
             body.append(
-                f'<circle class="point" cx="{x_of(i):.1f}" cy="{y_i(p.value):.1f}" r="2" '
-                f'fill="{colour}"><title>{escape(p.serial)} {number(p.value, 6)}</title></circle>'
+                f'<rect class="bar" x="{x_of(i) - bar_w / 2:.1f}" y="{y_of(count):.1f}" '
+                f'width="{bar_w:.1f}" height="{bottom - y_of(count):.1f}" fill="{BAR_COLOUR}">'
+                f"<title>{days[i].isoformat()}: {count}</title></rect>"
             )
-    return _svg(f"I-MR chart of {chart.name}", body, height)
+    for k, (name, values) in enumerate(series):
+        colour = SERIES_COLOURS[k % len(SERIES_COLOURS)]
+        legend_x = right - 96 * (len(series) - 1 - k)
+        body.append(_text(legend_x, 12, f"— {name}", "end", colour))
+        runs: list[list[str]] = [[]]
+        for i, v in enumerate(values):
+            if v is None:
+                runs.append([])
+                continue
+            runs[-1].append(f"{x_of(i):.1f},{y_of(v):.1f}")
+            body.append(
+                f'<circle class="trend-point" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2" '
+                f'fill="{colour}"><title>{days[i].isoformat()}: {label(v)}</title></circle>'
+            )
+        body += [
+            f'<polyline points="{" ".join(run)}" fill="none" stroke="{colour}"/>'
+            for run in runs
+            if len(run) > 1
+        ]
+    return _svg(title, body, HEIGHT, CHART_WIDTH)

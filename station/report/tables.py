@@ -9,7 +9,7 @@ SUMMARY_HEADER = [
     "passed",
     "failed",
     "runs",
-    "report yield",
+    "run yield",
     "first-pass yield",
     "final yield",
     "retests",
@@ -63,16 +63,65 @@ def parameter_cells(report: EolReport) -> list[list[str]]:
             p.name,
             p.unit,
             number(p.count),
-            number(p.mean, 6),
+            number(p.mean),
             number(p.std),
-            number(p.min, 6),
-            number(p.max, 6),
-            number(p.lower, 6),
-            number(p.upper, 6),
-            number(p.cp, 3),
-            number(p.cpk, 3),
+            number(p.min),
+            number(p.max),
+            number(p.lower),
+            number(p.upper),
+            number(p.cp),
+            number(p.cpk),
             number(p.out_of_limits),
             number(p.marginal),
         ]
         for p in report.parameters
+    ]
+
+
+def listed(report: EolReport) -> str:
+    """What the unit list holds: ``3 of 12 held``, ``1–50 of 6020``."""
+    total = report.units_held if report.units_listed == "held" else report.units_total
+    which = " held" if report.units_listed == "held" else ""
+    if not report.units:
+        return f"none of {total}{which}"
+    first = report.units_offset + 1
+    return f"{first}–{report.units_offset + len(report.units)} of {total}{which}"
+
+
+WHAT_IF_HEADER = ["", "current", "what-if"]
+CAPABILITY_HEADER = ["parameter", "Cpk", "Cpk what-if", "out", "out what-if"]
+
+
+def what_if_cells(report: EolReport) -> list[list[str]]:
+    """The yields now and under the candidate profile (text and HTML)."""
+    w = report.what_if
+    if w is None:
+        return []
+    now, then = report.summary, w.summary
+    return [
+        ["runs passed", number(now.runs_passed), number(then.runs_passed)],
+        ["run yield", percent(now.report_yield), percent(then.report_yield)],
+        ["first-pass yield", percent(now.first_pass_yield), percent(then.first_pass_yield)],
+        ["final yield", percent(now.final_yield), percent(then.final_yield)],
+        ["units passed", number(now.units_passed), number(then.units_passed)],
+        ["runs that would fail", "", number(w.pass_to_fail)],
+        ["runs that would pass", "", number(w.fail_to_pass)],
+    ]
+
+
+def capability_cells(report: EolReport) -> list[list[str]]:
+    """Each parameter's Cpk and values out of limits, now and under the candidate."""
+    w = report.what_if
+    if w is None:
+        return []
+    now = {p.name: p for p in report.parameters}
+    return [
+        [
+            p.name,
+            number(now[p.name].cpk) if p.name in now else "–",
+            number(p.cpk),
+            number(now[p.name].out_of_limits) if p.name in now else "–",
+            number(p.out_of_limits),
+        ]
+        for p in w.parameters
     ]

@@ -2,21 +2,22 @@
 
 Every pose's noise and link loss, the solved offsets and sensitivities, the verification
 pose's calibrated |g| and the gyro biases, each against the limits profile
-(:func:`station.limits.check`). Kept apart from :class:`station.session.UnitRun`, which
-drives the run, so the checks read as one list; :mod:`station.run.verdict` adds them to
-the failures found on the way.
+(:func:`station.judging.limit_checks`, which the report's re-judging uses too). Kept
+apart from :class:`station.session.UnitRun`, which drives the run, so the checks read as
+one list; :mod:`station.run.verdict` adds them to the failures found on the way.
 """
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from station.calibration import Calibration, apply
 from station.journal import Capture
-from station.limits import LimitsProfile, check
+from station.judging import Measured, Triple, limit_checks
+from station.limits import LimitsProfile
 from station.records import FailureReason, GyroSummary
-from station.sensor import AXES
 
 
 @dataclass(frozen=True)
@@ -34,24 +35,22 @@ def run_checks(
     fit_count: int,
     gyro: GyroSummary | None,
 ) -> CheckResult:
-    """Check the poses taken, the solved ``calibration`` and the ``gyro`` summary."""
-    reasons: list[FailureReason | None] = []
-    for i, capture in sorted(captures.items()):
-        for axis, std in zip(AXES, capture.record.std.as_tuple(), strict=True):
-            reasons.append(check(profile, "pose_noise", std, axis=axis, pose=i))
-        reasons.append(check(profile, "link_loss", capture.loss_fraction, pose=i))
+    """Check the poses taken, the solved ``calibration`` and the ``gyro`` summary
+    (:func:`station.judging.limit_checks` on what they measured)."""
     error = None
-    if calibration is not None:
-        for i, axis in enumerate(AXES):
-            reasons.append(check(profile, "offset", float(calibration.offset[i]), axis=axis))
-        for i, axis in enumerate(AXES):
-            value = float(calibration.sensitivity[i])
-            reasons.append(check(profile, "sensitivity", value, axis=axis))
-        if fit_count in captures:
-            raw = np.array(captures[fit_count].record.mean.as_tuple())
-            error = abs(float(np.linalg.norm(apply(calibration, raw))) - 1.0) * 1000.0
-            reasons.append(check(profile, "verification_error", error, pose=fit_count))
-    if gyro is not None:
-        for axis, bias in zip(AXES, gyro.bias.as_tuple(), strict=True):
-            reasons.append(check(profile, "gyro_bias", bias, axis=axis))
-    return CheckResult([r for r in reasons if r is not None], error)
+    if calibration is not None and fit_count in captures:
+        raw = np.array(captures[fit_count].record.mean.as_tuple())
+        error = abs(float(np.linalg.norm(apply(calibration, raw))) - 1.0) * 1000.0
+    measured = Measured(
+        pose_noise={i: c.record.std.as_tuple() for i, c in captures.items()},
+        link_loss={i: c.loss_fraction for i, c in captures.items()},
+        offset=_triple(calibration.offset) if calibration is not None else None,
+        sensitivity=_triple(calibration.sensitivity) if calibration is not None else None,
+        verification=None if error is None else (fit_count, error),
+        gyro_bias=None if gyro is None else gyro.bias.as_tuple(),
+    )
+    return CheckResult(limit_checks(profile, measured), error)
+
+
+def _triple(values: Any) -> Triple:
+    return (float(values[0]), float(values[1]), float(values[2]))

@@ -11,6 +11,7 @@ from collections.abc import Mapping
 
 from station.calibration import CalibrationError, Solution
 from station.journal import Capture
+from station.judging import verdict_failures
 from station.limits import LimitsProfile
 from station.records import FailureReason, GyroSummary
 from station.run.checks import CheckResult, run_checks
@@ -82,5 +83,5 @@ class Failures:
             return CheckResult(list(self.found), None)
         calibration = solution.calibration if solution is not None else None
         checked = run_checks(profile, captures, calibration, fit_count, gyro)
-        reasons = self.found + [f for f in checked.reasons if f not in self.found]
+        reasons = verdict_failures(self.found, checked.reasons)
         return CheckResult(reasons, checked.verification_error_mg)

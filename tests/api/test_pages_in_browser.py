@@ -64,10 +64,12 @@ def test_report_page_renders_every_chart(
     with database.session() as session:
         insert_line_history(session)
     url = f"{live_url}/api/v1/reports/eol?format=html&from=2026-11-02&to=2026-11-03"
-    # the Pareto, 13 histograms, 6 control charts
-    _check(browser, url, f"eol-report-{database.engine.dialect.name}", charts=20)
+    # the Pareto, 13 histograms, 6 control charts; the trend: units, yields and the Cpk
+    # of the two parameters that vary in the history (offset_x, offset_y)
+    _check(browser, url, f"eol-report-{database.engine.dialect.name}", charts=20 + 2 + 2)
     assert browser.evaluate("document.querySelectorAll('rect.bar').length") >= 3 + 13
-    assert browser.evaluate("document.querySelectorAll('table.units tr').length") == 1 + 6
+    # the held units: U3 and U5
+    assert browser.evaluate("document.querySelectorAll('table.units tr').length") == 1 + 2
 
 
 def test_dashboard_renders_today_and_reloads_itself(

@@ -86,7 +86,7 @@ def test_every_unusable_query_parameter_gets_422_naming_it(
         f"{EOL}?from=9999-12-31",
         f"{EOL}?to=0001-01-02",
         f"{EOL}?from=0001-01-02T00:00:00Z&to=9999-12-31T00:00:00Z",
-        f"{EOL}?units=1000000&format=csv",
+        f"{EOL}?units=1000&page=1000000&format=csv",
         f"{RUNS}?since=0001-01-01T00:00:00Z&until=9999-12-31T23:59:59Z",
     ],
 )

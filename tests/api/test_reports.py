@@ -4,12 +4,15 @@ import csv
 import io
 import re
 from datetime import timedelta
+from importlib import resources
 
 import httpx
 import pytest
+from sqlalchemy import select
 
 from db import Database, RunRepository
-from tests.db.eol_data import insert_line_history
+from db.models import Run, RunFailure
+from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
@@ -61,7 +64,12 @@ def test_csv_and_html_show_the_numbers_of_the_json(client: httpx.Client) -> None
     s = report["summary"]
     for fraction in (s["report_yield"], s["first_pass_yield"], s["final_yield"]):
         assert f"{100 * fraction:.1f} %" in html
-    assert html.count("<svg") == 1 + len(report["parameters"]) + len(report["control_charts"])
+    cpk_trends = sum(
+        any(day["cpk"][p["name"]] is not None for day in report["trend"])
+        for p in report["parameters"]
+    )
+    charts = 1 + len(report["parameters"]) + len(report["control_charts"]) + 2 + cpk_trends
+    assert html.count("<svg") == charts
     assert "http://" not in html.replace('xmlns="http://www.w3.org/2000/svg"', "")
 
 
@@ -111,7 +119,7 @@ def test_lot_filters_the_report_and_the_run_list_and_shows_on_the_pages(
                 make_record(serial=f"U{i}", lot=lot, started_at=T0 + timedelta(minutes=i))
             )
         session.commit()
-    report = client.get("/api/v1/reports/eol", params={**RANGE, "lot": "L-7"}).json()
+    report = client.get("/api/v1/reports/eol", params={**RANGE, "lot": "L-7", "list": "all"}).json()
     assert (report["summary"]["runs"], report["filter"]["lot"]) == (1, "L-7")
     assert [u["serial"] for u in report["units"]] == ["U0"]
     runs = client.get("/api/v1/runs", params={"lot": "L-8"}).json()
@@ -119,3 +127,138 @@ def test_lot_filters_the_report_and_the_run_list_and_shows_on_the_pages(
     html = client.get("/api/v1/reports/eol", params={**RANGE, "lot": "L-7", "format": "html"})
     assert "· lot L-7" in html.text
     assert "<tr><th>lot</th><td>L-8</td></tr>" in client.get("/api/v1/units/U1/certificate").text
+
+
+@pytest.mark.usefixtures("line")
+def test_the_trend_in_json_and_csv_counts_each_days_units(client: httpx.Client) -> None:
+    report = client.get("/api/v1/reports/eol").json()
+    # Recomputed from the raw runs: a unit counts on the day of its first run.
+    firsts: dict[str, tuple[int, str]] = {}
+    for minute, serial, _, _, code, *_ in RUNS:
+        firsts.setdefault(serial, (minute, code))
+    day = (T0 + timedelta(minutes=RUNS[0][0])).date().isoformat()
+    [only] = report["trend"]  # every run on 2026-11-02 (UTC)
+    assert only["day"] == day
+    assert only["units"] == len(firsts)
+    assert only["runs"] == len(RUNS)
+    passed_first = sum(code is None for _, code in firsts.values())
+    assert only["first_pass_yield"] == pytest.approx(passed_first / len(firsts))
+    assert {"day", "units", "first_pass_yield", "final_yield"} <= set(only)
+    rows = list(
+        csv.DictReader(
+            io.StringIO(client.get("/api/v1/reports/eol", params={"format": "csv"}).text)
+        )
+    )
+    cells = {(r["item"], r["metric"]): r["value"] for r in rows if r["section"] == "trend"}
+    for key in ("units", "runs", "first_pass_yield", "final_yield", "run_yield"):
+        assert cells[day, key] == str(only[key])
+    assert cells[day, "cpk:offset_x"] == str(only["cpk"]["offset_x"])
+
+
+@pytest.mark.usefixtures("line")
+def test_from_after_to_is_refused_with_one_line(client: httpx.Client) -> None:
+    for path in ("/api/v1/reports/eol", "/api/v1/reports/eol/runs.csv"):
+        answer = client.get(path, params={"from": "2026-11-03", "to": "2026-11-02"})
+        assert answer.status_code == 422
+        [error] = answer.json()["errors"]
+        assert error["loc"] == "query.from"
+        assert "is not before to" in error["msg"]
+
+
+@pytest.mark.usefixtures("line")
+def test_the_units_list_shows_held_units_a_page_at_a_time(client: httpx.Client) -> None:
+    everything = client.get("/api/v1/reports/eol", params={**RANGE, "list": "all"}).json()
+    held = [u["serial"] for u in everything["units"] if u["disposition"] == "hold"]
+    assert len(held) >= 2
+    pages = [
+        client.get("/api/v1/reports/eol", params={**RANGE, "units": 1, "page": p}).json()
+        for p in (1, 2)
+    ]
+    assert [[u["serial"] for u in p["units"]] for p in pages] == [held[:1], held[1:2]]
+    assert pages[0]["units_held"] == len(held)
+    html = client.get(
+        "/api/v1/reports/eol", params={**RANGE, "units": 1, "page": 2, "format": "html"}
+    ).text
+    assert f"2–2 of {len(held)} held" in html
+    assert 'rel="prev"' in html
+
+
+def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Database) -> None:
+    with database.session() as session:
+        repository = RunRepository(session)
+        for i in range(1005):  # more than a page of the export
+            repository.submit(
+                make_record(serial=f"U{i}", started_at=T0 + timedelta(seconds=10 * i))
+            )
+        session.commit()
+    params = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z", "station": ""}
+    with client.stream("GET", "/api/v1/reports/eol/runs.csv", params=params) as answer:
+        assert answer.status_code == 200
+        assert answer.headers["content-type"].startswith("text/csv")
+        assert "content-length" not in answer.headers  # streamed
+        text = "".join(answer.iter_text())
+    rows = list(csv.DictReader(io.StringIO(text)))
+    in_range = [i for i in range(1005) if 10 * i < 2 * 3600]
+    assert [r["serial"] for r in rows] == [f"U{i}" for i in in_range]
+    assert rows[0]["started_at"].startswith("2026-11-02T08:00:00")
+    assert rows[0]["offset_x"] != ""
+    schema = client.get("/openapi.json").json()["paths"]["/api/v1/reports/eol/runs.csv"]
+    assert "text/csv; charset=utf-8" in schema["get"]["responses"]["200"]["content"]
+
+
+#: The shipped limits file with the offsets' upper limit at 2051 counts, not 2255.
+CANDIDATE = (
+    resources.files("station.profiles")
+    .joinpath("limits.toml")
+    .read_text(encoding="utf-8")
+    .replace("[profiles.kxm52-production]", "[profiles.candidate]")
+    .replace('version = "1"', 'version = "2"', 1)
+    .replace(
+        "offset_counts = { lower = 1841.0, upper = 2255.0 }",
+        "offset_counts = { lower = 1841.0, upper = 2051.0 }",
+    )
+)
+
+
+@pytest.mark.usefixtures("line")
+def test_what_if_limits_re_judge_the_runs_and_store_nothing(
+    client: httpx.Client, database: Database
+) -> None:
+    def stored() -> list[tuple[object, ...]]:
+        with database.session() as session:
+            runs = session.execute(select(Run.id, Run.verdict).order_by(Run.id))
+            failures = session.execute(
+                select(RunFailure.run_pk, RunFailure.position, RunFailure.code).order_by(
+                    RunFailure.run_pk, RunFailure.position
+                )
+            )
+            return [*map(tuple, runs), *map(tuple, failures)]
+
+    assert "2051.0" in CANDIDATE
+    before = stored()
+    upload = {"limits": ("candidate.toml", CANDIDATE.encode())}
+    answer = client.post("/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload)
+    assert answer.status_code == 200, answer.text
+    what_if = answer.json()["what_if"]
+    assert (what_if["limits"]["name"], what_if["limits"]["version"]) == ("candidate", "2")
+    # Recomputed from the raw runs: a run passes when its offsets (z: 1960.5 in every
+    # run of the history) lie in 1841…2051; its other stored reasons (sensitivity,
+    # verification error) are judged again on its values, which pass: U2's first run
+    # (sensitivity, offset x 2050) would pass, U3's second (offset x 2052) fail on offset.
+    in_range = [run for run in RUNS if run[0] < 120]
+    passes = [all(1841.0 <= v <= 2051.0 for v in (x, y, 1960.5)) for *_, x, y in in_range]
+    passed_before = [run[4] is None for run in in_range]
+    pairs = list(zip(passed_before, passes, strict=True))
+    assert what_if["summary"]["runs"] == len(in_range)
+    assert what_if["summary"]["runs_passed"] == sum(passes)
+    assert what_if["pass_to_fail"] == sum(a and not b for a, b in pairs)
+    assert what_if["fail_to_pass"] == sum(b and not a for a, b in pairs) == 1
+    assert stored() == before
+    page = client.post("/api/v1/reports/eol", params=RANGE, files=upload)
+    assert page.headers["content-type"].startswith("text/html")
+    assert "candidate v2" in page.text
+    bad = client.post(
+        "/api/v1/reports/eol", files={"limits": ("bad.toml", b"[profiles.x]\noffset = 3")}
+    )
+    assert bad.status_code == 422
+    assert bad.json()["errors"][0]["loc"] == "body.limits"

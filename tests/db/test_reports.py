@@ -3,7 +3,8 @@
 import itertools
 import math
 import statistics
-from datetime import timedelta
+from datetime import date, timedelta
+from zoneinfo import ZoneInfo
 
 import pytest
 from sqlalchemy.orm import Session
@@ -13,7 +14,7 @@ from db.reports import eol_report
 from db.rollups import rebuild
 from station.quality.figures import EolReport, ReportFilter
 from station.quality.parameters import default_bounds
-from tests.db.eol_data import IN_RANGE, SINCE, UNTIL, insert_line_history
+from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 
 RUN_SECONDS = 95.0  # every test run lasts 95 s
@@ -244,3 +245,58 @@ def test_golden_unit_checks_are_stored_marked_and_never_counted(session: Session
         without.pareto,
         without.parameters,
     )
+
+
+def test_a_station_filtered_page_agrees_with_itself(session: Session) -> None:
+    """The issue's contradiction: a unit first tested at st2 and retested at st1 made the
+    st1 row count it as st1's unit, first-pass, with no retest, while the "all" row of
+    the same st1 page counted it nowhere and its run as a retest."""
+    repository = RunRepository(session)
+    plan = [("U1", "st2", "fail", 0), ("U1", "st1", "pass", 10), ("U2", "st1", "fail", 20)]
+    for serial, station, verdict, minute in plan:
+        repository.submit(
+            make_record(
+                serial=serial,
+                station_id=station,
+                verdict=verdict,
+                started_at=T0 + timedelta(minutes=minute),
+            )
+        )
+    session.commit()
+    page = eol_report(session, ReportFilter(station_id="st1"))
+    (row,) = page.stations
+    assert row.station_id == "st1"
+    assert row.summary == page.summary
+    # st1's own units: those whose first run on the line was there (U2 only), and its runs.
+    s = page.summary
+    assert (s.units_tested, s.runs, s.retests, s.first_pass_units) == (1, 2, 1, 0)
+    assert s.report_yield == pytest.approx(1 / 2)
+    everything = eol_report(session, ReportFilter())
+    rows = {r.station_id: r.summary for r in everything.stations}
+    assert rows["st2"].units_tested == 1
+    assert rows["st2"].final_yield == pytest.approx(1.0)  # U1's latest run passed (at st1)
+    assert sum(r.units_tested for r in rows.values()) == everything.summary.units_tested == 2
+    assert sum(r.retests for r in rows.values()) == everything.summary.retests == 1
+
+
+@pytest.mark.parametrize("zone", ["UTC", "Pacific/Kiritimati"])
+def test_the_trend_counts_the_plants_days(session: Session, zone: str) -> None:
+    """Kiritimati is UTC+14: the runs of the hand-built history (08:00–09:00 UTC) fall on
+    22:00–23:00 local, and U9's (13:00 UTC) on the next local day."""
+    insert_line_history(session)
+    report = eol_report(session, ReportFilter(), zone=zone)
+    local = ZoneInfo(zone)
+    by_day: dict[date, list[tuple[int, str]]] = {}
+    for minute, serial, *_ in RUNS:
+        started = (T0 + timedelta(minutes=minute)).astimezone(local).date()
+        by_day.setdefault(started, []).append((minute, serial))
+    assert [d.day for d in report.trend] == sorted(by_day)
+    assert len(report.trend) == (2 if zone != "UTC" else 1)
+    for trend_day in report.trend:
+        runs = by_day[trend_day.day]
+        assert trend_day.runs == len(runs)
+        firsts = {serial for _, serial in runs} - {
+            serial for m, serial, *_ in RUNS if m < min(m for m, _ in runs)
+        }
+        assert trend_day.units == len(firsts)
+    assert report.timezone == zone

@@ -10,10 +10,11 @@ tables must give the rows the submissions left.
 
 import math
 import statistics
-from dataclasses import dataclass
-from datetime import datetime, timedelta
+from dataclasses import dataclass, replace
+from datetime import date, datetime, timedelta
 from itertools import pairwise
 from typing import Any
+from zoneinfo import ZoneInfo
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -22,7 +23,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
-from db.models import ReportCounts, ReportFailures, ReportParameters, RunFacts
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.limits import Bounds, load_profile
@@ -152,16 +153,21 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     def unit(a: Planned, b: Planned) -> bool:
         return a.serial == b.serial
 
-    def unit_at_station(a: Planned, b: Planned) -> bool:
-        return a.serial == b.serial and a.station == b.station
-
     assert _counts_of(report.summary) == _expected_counts(history, chosen, unit)
     assert report.summary.poses == 7 * len(chosen)
     stations = {s.station_id: s.summary for s in report.stations}
     assert sorted(stations) == sorted({r.station for r in chosen})
     for station, summary in stations.items():
+        # A station's row: the units whose first run on the line was there (and is
+        # selected), their first and final passes, and every run at the station.
         at = [r for r in chosen if r.station == station]
-        assert _counts_of(summary) == _expected_counts(history, at, unit_at_station)
+        assert _counts_of(summary) == _expected_counts(history, at, unit)
+        assert summary.retests == len(at) - summary.units_tested
+    # So the rows add up to the "all" row, on a filtered page too.
+    for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
+        assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
+    assert sum(s.retests for s in stations.values()) == report.summary.retests
+    _check_trend(report, history, chosen)
     codes = [r.code for r in chosen if r.code is not None]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
     latest = {r.serial: r for r in sorted(history, key=_latest)}
@@ -199,6 +205,88 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         assert chart.mr_bar is None
 
 
+def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned]) -> None:
+    """Each plant day's units (first run on the line that day), yields and Cpk."""
+    zone = ZoneInfo(report.timezone)
+    days = [d.day for d in report.trend]
+    assert days == sorted(days)
+    assert all((b - a).days == 1 for a, b in pairwise(days))
+
+    def day_of(run: Planned) -> date:
+        return run.started_at.astimezone(zone).date()
+
+    assert {day_of(r) for r in chosen} <= set(days)
+    for trend_day in report.trend:
+        that_day = [r for r in chosen if day_of(r) == trend_day.day]
+        runs, passed, units, first, final = _expected_counts(
+            history, that_day, lambda a, b: a.serial == b.serial
+        )
+        assert (trend_day.runs, trend_day.runs_passed, trend_day.units) == (runs, passed, units)
+        assert trend_day.first_pass_yield == (first / units if units else None)
+        assert trend_day.final_yield == (final / units if units else None)
+        xs = [r.offset_x for r in that_day if r.charted]
+        params = {p.name: p for p in report.parameters}
+        lower, upper = params["offset_x"].lower, params["offset_x"].upper
+        assert lower is not None
+        assert upper is not None
+        if len(xs) > 1 and statistics.stdev(xs) > 0:
+            mean, std = statistics.mean(xs), statistics.stdev(xs)
+            expected = min(upper - mean, mean - lower) / (3 * std)
+            assert trend_day.cpk["offset_x"] == pytest.approx(expected, rel=1e-9)
+        elif len(xs) < 2:
+            assert trend_day.cpk["offset_x"] is None
+    assert sum(d.units for d in report.trend) == report.summary.units_tested
+    assert sum(d.runs for d in report.trend) == report.summary.runs
+
+
+def stored_verdicts(session: Session) -> list[tuple[Any, ...]]:
+    """Every run's verdict and failures as stored."""
+    runs = session.execute(select(Run.id, Run.verdict).order_by(Run.id)).all()
+    failures = session.execute(
+        select(RunFailure.run_pk, RunFailure.position, RunFailure.code).order_by(
+            RunFailure.run_pk, RunFailure.position
+        )
+    ).all()
+    return [*map(tuple, runs), *map(tuple, failures)]
+
+
+def _check_what_if(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
+    """Against offsets 1900…2200: a run would fail on its offset outside them, an abort
+    stays an abort, and every other stored reason (offset, sensitivity against the
+    generous defaults) is judged again on the stored values, which pass."""
+
+    def judged(run: Planned) -> Planned:
+        if run.code == "aborted":
+            return run
+        outside = run.charted and not 1900.0 <= run.offset_x <= 2200.0
+        return replace(run, code="offset" if outside else None)
+
+    again = [judged(r) for r in history]
+    chosen = sorted((r for r in again if _selected(r, f)), key=_start)
+    what_if = report.what_if
+    assert what_if is not None
+    assert (
+        what_if.limits.sha256 != report.limits_profiles[0].sha256
+        if report.limits_profiles
+        else True
+    )
+    expected = _expected_counts(again, chosen, lambda a, b: a.serial == b.serial)
+    assert _counts_of(what_if.summary) == expected
+    codes = [r.code for r in chosen if r.code is not None]
+    assert {e.code: e.count for e in what_if.pareto} == {c: codes.count(c) for c in set(codes)}
+    before = sorted((r for r in history if _selected(r, f)), key=_start)
+    pairs = list(zip(before, chosen, strict=True))
+    assert what_if.pass_to_fail == sum(a.passed and not b.passed for a, b in pairs)
+    assert what_if.fail_to_pass == sum(b.passed and not a.passed for a, b in pairs)
+    xs = [r.offset_x for r in chosen if r.charted]
+    x = next(p for p in what_if.parameters if p.name == "offset_x")
+    assert (x.lower, x.upper, x.count) == (1900.0, 2200.0, len(xs))
+    assert x.out_of_limits == sum(not 1900.0 <= v <= 2200.0 for v in xs)
+    h = x.histogram
+    bins = [min(max(math.floor((v - h.start) / h.width), 0), len(h.counts) - 1) for v in xs]
+    assert h.counts == [bins.count(i) for i in range(len(h.counts))]
+
+
 def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     """Every roll-up and fact row, floats rounded to 6 digits (sums in another order)."""
 
@@ -223,6 +311,7 @@ def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     order=st.randoms(use_true_random=False),
     report_filter=filters,
     narrower=st.booleans(),
+    zone=st.sampled_from(["UTC", "America/New_York", "Asia/Kolkata"]),
 )
 def test_late_runs_and_retests_keep_the_report_exact(
     migrated_database: Database,
@@ -230,6 +319,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
     order: Any,
     report_filter: ReportFilter,
     narrower: bool,
+    zone: str,
 ) -> None:
     """``narrower``: capability against offset limits other than the roll-ups' bins."""
     submitted = list(history)
@@ -239,14 +329,20 @@ def test_late_runs_and_retests_keep_the_report_exact(
         for run in submitted:
             repository.submit(_record(run))
         session.flush()
-        profile = None
+        candidate = None
         if narrower:
             offset = Bounds(lower=1900.0, upper=2200.0)
-            profile = load_profile().model_copy(update={"offset_counts": offset})
-        report = eol_report(session, report_filter, profile=profile)
+            candidate = load_profile().model_copy(update={"offset_counts": offset})
+        before = stored_verdicts(session)
+        report = eol_report(session, report_filter, candidate=candidate, zone=zone)
+        assert stored_verdicts(session) == before  # the what-if changes nothing stored
         offset_x = next(p for p in report.parameters if p.name == "offset_x")
-        assert offset_x.lower == (1900.0 if narrower else 1841.0)
+        assert offset_x.lower == 1841.0
         _check(report, history, report_filter)
+        if candidate is not None:
+            _check_what_if(report, history, report_filter)
+        else:
+            assert report.what_if is None
         kept = rollup_rows(session)
         rebuild(session.connection())
         assert rollup_rows(session) == kept

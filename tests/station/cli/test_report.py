@@ -2,6 +2,7 @@
 
 import json
 import os
+from importlib import resources
 from pathlib import Path
 
 import pytest
@@ -95,6 +96,7 @@ def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) ->
         (("--from", "yesterday"), "--from 'yesterday' is not an ISO date"),
         (("--format", "xml"), "--format 'xml' is not one of text, csv, json, html"),
         (("--limits", "/nonexistent/limits.toml"), "cannot read the limits file"),
+        (("--timezone", "Mars/Olympus"), "time zone 'Mars/Olympus' is unknown"),
         (("--from", "9999-12-31T23:00:00-05:00"), "--from '9999-12-31T23:00:00-05:00' is out of"),
         (("--to", "0001-01-01T00:00:00+01:00"), "--to '0001-01-01T00:00:00+01:00' is out of"),
         (
@@ -111,3 +113,54 @@ def test_bad_options_are_one_line_and_exit_2(
     assert result.stderr.startswith("calstation: error: ")
     assert message in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.usefixtures("line")
+def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
+    run_cli: CliRunner, database_url: str
+) -> None:
+    """UTC+14: the history's runs (08:00–09:00 and 13:00 UTC on 11-02) are 22:00–23:00
+    on 11-02 and 03:00 on 11-03 in the plant; its 11-03 holds U9's run only."""
+    result = run_cli(
+        "report",
+        "--from",
+        "2026-11-03",
+        "--format",
+        "json",
+        "--database-url",
+        database_url,
+        env=_env(CALSTATION_PLANT_TIMEZONE="Pacific/Kiritimati"),
+    )
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout)
+    assert report["timezone"] == "Pacific/Kiritimati"
+    assert report["filter"]["since"].startswith("2026-11-02T10:00:00")
+    assert [(d["day"], d["runs"]) for d in report["trend"]] == [("2026-11-03", 1)]
+
+
+@pytest.mark.usefixtures("line")
+def test_limits_re_judge_the_runs_beside_the_current_figures(
+    run_cli: CliRunner, database_url: str, tmp_path: Path
+) -> None:
+    shipped = resources.files("station.profiles").joinpath("limits.toml")
+    candidate = tmp_path / "candidate.toml"
+    candidate.write_text(
+        shipped.read_text(encoding="utf-8").replace(
+            "offset_counts = { lower = 1841.0, upper = 2255.0 }",
+            "offset_counts = { lower = 1841.0, upper = 2047.0 }",
+        ),
+        encoding="utf-8",
+    )
+    result = run_cli(
+        "report", *RANGE, "--limits", str(candidate), "--database-url", database_url, env=_env()
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert any(
+        line.startswith("What-if: the runs re-judged against kxm52-production") for line in lines
+    )
+    # Offsets up to 2047: every run's offset y is 2048, so the 3 passing runs would fail.
+    row = next(line for line in lines if line.startswith("runs passed"))
+    assert row.split()[2:] == ["3", "0"]
+    would_fail = next(line for line in lines if line.startswith("runs that would fail"))
+    assert would_fail.split()[-1] == "3"

@@ -14,6 +14,7 @@ from station.report.period import (
     check_order,
     parse_moment,
     parse_period,
+    plant_zone,
     start_of_day,
 )
 
@@ -110,3 +111,28 @@ def test_the_api_checks_parsed_bounds_the_same_way() -> None:
         check_order(LATEST, EARLIEST, names=("from", "to"))
     with pytest.raises(InputError, match="the period holds nothing"):
         check_order(EARLIEST, EARLIEST)
+
+
+@pytest.mark.parametrize(
+    ("zone", "now", "midnight"),
+    [
+        # Berlin in winter (UTC+1): 00:30 local on 11-02 is 23:30 UTC on 11-01.
+        ("Europe/Berlin", datetime(2026, 11, 1, 23, 30, tzinfo=UTC), "2026-11-01T23:00:00+00:00"),
+        # The day DST ends there lasts 25 hours: its midnight was still at UTC+2.
+        ("Europe/Berlin", datetime(2026, 10, 25, 12, 0, tzinfo=UTC), "2026-10-24T22:00:00+00:00"),
+        ("America/New_York", datetime(2026, 11, 2, 3, 0, tzinfo=UTC), "2026-11-01T04:00:00+00:00"),
+        ("UTC", datetime(2026, 11, 2, 3, 0, tzinfo=UTC), "2026-11-02T00:00:00+00:00"),
+    ],
+)
+def test_today_is_the_plants_day(zone: str, now: datetime, midnight: str) -> None:
+    assert start_of_day(now, zone).isoformat() == midnight
+
+
+def test_dates_without_a_zone_are_the_plants_and_an_unknown_zone_is_refused() -> None:
+    assert parse_moment("2026-11-02", name="--from", zone="Asia/Kolkata").isoformat() == (
+        "2026-11-01T18:30:00+00:00"
+    )
+    assert parse_moment("2026-11-02T14:00Z", name="--from", zone="Asia/Kolkata").hour == 14
+    assert plant_zone("Europe/Berlin") == "Europe/Berlin"
+    with pytest.raises(InputError, match="time zone 'Mars/Olympus' is unknown"):
+        plant_zone("Mars/Olympus")

@@ -1,0 +1,164 @@
+"""What-if limits: the runs of a report re-judged against a candidate limits profile.
+
+Nothing is written: each run's stored values (pose noise, coefficients, verification
+error, gyro bias) and stored failures are read a page at a time and judged again by
+:func:`station.judging.rejudge`, the station's own checks. What the report needs is
+counted on the way: the runs that pass, the units whose first run on the line is in
+range (the report's cohort) with their first and final passes — a unit's latest run may
+lie after the range, so those runs are judged too — the failing runs by their new first
+failure reason, and the verdicts that change.
+"""
+
+from collections import Counter
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from sqlalchemy import ColumnElement, Row, and_, not_, select, true
+from sqlalchemy.orm import Session
+
+from db.models import Pose, Run, RunFacts, RunFailure
+from station.judging import Measured, rejudge
+from station.limits import LimitsProfile
+from station.records import FailureReason
+
+#: Runs judged per page.
+PAGE = 2000
+
+
+@dataclass
+class Rejudged:
+    """The counts of the runs in range under the candidate profile."""
+
+    runs: int = 0
+    runs_passed: int = 0
+    units: int = 0
+    first_pass: int = 0
+    final_pass: int = 0
+    pass_to_fail: int = 0
+    fail_to_pass: int = 0
+    #: Failing runs per (first failure code, station, operator).
+    failures: Counter[tuple[str, str, str]] = field(default_factory=Counter)
+
+
+def _triple(row: Row[Any], prefix: str, source: str = "") -> tuple[float, float, float] | None:
+    values = [getattr(row, f"{source}{prefix}_{a}") for a in "xyz"]
+    if any(v is None for v in values):
+        return None
+    return (float(values[0]), float(values[1]), float(values[2]))
+
+
+def _judged(
+    session: Session, where: Sequence[ColumnElement[bool]], candidate: LimitsProfile
+) -> Iterator[tuple[Row[Any], bool, list[FailureReason]]]:
+    """Each run ``where`` selects, whether it passed as stored, and its failures under
+    ``candidate``; in start order, a page at a time."""
+    columns = (
+        Run.id,
+        Run.started_at,
+        Run.serial,
+        Run.verdict,
+        Run.station_id,
+        Run.operator_id,
+        *(getattr(Run, f"{k}_{a}") for k in ("offset", "sensitivity") for a in "xyz"),
+        Run.verification_error_mg,
+        *(getattr(RunFacts, f"gyro_bias_{a}") for a in "xyz"),
+        RunFacts.line_first,
+        RunFacts.line_latest,
+    )
+    after: tuple[Any, int] | None = None
+    while True:
+        stmt = (
+            select(*columns)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .where(*where)
+            .order_by(Run.started_at, Run.id)
+            .limit(PAGE)
+        )
+        if after is not None:
+            stmt = stmt.where(
+                (Run.started_at > after[0]) | and_(Run.started_at == after[0], Run.id > after[1])
+            )
+        rows = list(session.execute(stmt).all())
+        if not rows:
+            return
+        ids = [row.id for row in rows]
+        poses: dict[int, list[Any]] = {}
+        for pose in session.execute(
+            select(
+                Pose.run_pk,
+                Pose.index.label("position"),
+                Pose.role,
+                Pose.std_x,
+                Pose.std_y,
+                Pose.std_z,
+            )
+            .where(Pose.run_pk.in_(ids))
+            .order_by(Pose.run_pk, Pose.index)
+        ):
+            poses.setdefault(pose.run_pk, []).append(pose)
+        failures: dict[int, list[FailureReason]] = {}
+        for failure in session.scalars(
+            select(RunFailure)
+            .where(RunFailure.run_pk.in_(ids))
+            .order_by(RunFailure.run_pk, RunFailure.position)
+        ):
+            failures.setdefault(failure.run_pk, []).append(
+                FailureReason(
+                    code=failure.code,
+                    message=failure.message,
+                    measured=failure.measured,
+                    lower=failure.lower,
+                    upper=failure.upper,
+                    axis=failure.axis,
+                    pose=failure.pose,
+                )
+            )
+        for row in rows:
+            own = poses.get(row.id, [])
+            verify = next((p.position for p in own if p.role == "verify"), None)
+            error = row.verification_error_mg
+            measured = Measured(
+                pose_noise={p.position: (p.std_x, p.std_y, p.std_z) for p in own},
+                offset=_triple(row, "offset"),
+                sensitivity=_triple(row, "sensitivity"),
+                verification=None if error is None or verify is None else (verify, error),
+                gyro_bias=_triple(row, "gyro_bias"),
+            )
+            yield row, row.verdict == "pass", rejudge(failures.get(row.id, []), candidate, measured)
+        after = (rows[-1].started_at, rows[-1].id)
+
+
+def rejudged(
+    session: Session, where: Sequence[ColumnElement[bool]], candidate: LimitsProfile
+) -> Rejudged:
+    """The runs ``where`` selects (the report's range) re-judged against ``candidate``."""
+    counts = Rejudged()
+    cohort: set[str] = set()
+    final: dict[str, bool] = {}
+    for row, passed_before, reasons in _judged(session, where, candidate):
+        passed = not reasons
+        counts.runs += 1
+        counts.runs_passed += passed
+        counts.pass_to_fail += passed_before and not passed
+        counts.fail_to_pass += passed and not passed_before
+        if reasons:
+            counts.failures[(reasons[0].code, row.station_id, row.operator_id)] += 1
+        if row.line_first:
+            cohort.add(row.serial)
+            counts.units += 1
+            counts.first_pass += passed
+        if row.line_latest:
+            final[row.serial] = passed
+    # The cohort's latest runs after the range.
+    in_range = and_(true(), *where)
+    first_in_range = (
+        select(Run.serial)
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .where(RunFacts.line_first.is_(True), *where)
+    )
+    later = [RunFacts.line_latest.is_(True), Run.serial.in_(first_in_range), not_(in_range)]
+    for row, _, reasons in _judged(session, later, candidate):
+        final[row.serial] = not reasons
+    counts.final_pass = sum(final.get(serial, False) for serial in cohort)
+    return counts
