@@ -146,3 +146,15 @@ def test_a_run_submitted_through_the_api_is_pushed_to_the_event_stream(
         "fail",
     )
     assert (event["failure"], event["unit"]) == ("offset", "/units/PT-EVENT-1")
+
+
+def test_the_dashboard_lists_the_units_on_hold_with_what_they_hold(
+    client: httpx.Client, retested: list[str]
+) -> None:
+    page = client.get("/").text
+    assert "Units on hold (latest 1 of 1, any day)" in page
+    held = page.split('<table class="held">')[1].split("</table>")[0]
+    assert '<a class="serial" href="/units/U2">U2</a>' in held
+    assert "U1" not in held  # passed at its retest
+    assert "no verified coefficients" not in held  # its failed runs wrote it (offset limits)
+    assert "coefficients of a failed run" in held
