@@ -118,7 +118,7 @@ def eol_body(
     return render(eol_report(repository.session, filter, unit_limit=units), format)
 
 
-def _latest_run(
+def certificate_run(
     repository: RunRepository, serial: str
 ) -> tuple[StoredRun, list[RunSummary]] | None:
     """The unit's latest run that counts (an operator's abort does not), as the report's,
@@ -151,7 +151,7 @@ async def get_certificate(
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile and the unit's earlier runs; a failure report
     for a unit whose latest run failed."""
-    found = await repository.run(lambda r: _latest_run(r, serial))
+    found = await repository.run(lambda r: certificate_run(r, serial))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
     run, earlier = found
