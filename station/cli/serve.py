@@ -10,7 +10,6 @@ import uvicorn
 from api.settings import ApiSettings
 from db import open_database
 
-
 #: Seconds a stopping server gives the requests still open before it cancels them: the
 #: line dashboard's event stream never ends by itself (``GET /api/v1/events``), and a
 #: container is killed 10 s after it is asked to stop.
