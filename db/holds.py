@@ -7,7 +7,10 @@ latest of them, any day, with the answer ``GET /api/v1/units/{serial}`` gives
 ``holds``, the coefficients of its last verified write-back), read from ``units``.
 
 The list walks ``ix_runs_verdict_started_at`` backwards over the failing runs and stops at
-``limit`` units; the count adds up the same failing latest runs.
+``limit`` units. The count comes from the report's daily roll-ups, kept up to date at
+every submission: units (each counted once, at its first run) less those whose latest run
+passed, summed over every day; a sum over a few rows a day instead of a walk over every
+failing run.
 """
 
 from dataclasses import dataclass
@@ -15,7 +18,7 @@ from dataclasses import dataclass
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from db.models import Run, RunFacts, Unit
+from db.models import ReportCounts, Run, RunFacts, Unit
 from station.unit_state import UnitCalibration
 
 
@@ -40,10 +43,7 @@ def held_units(session: Session, limit: int) -> HeldUnits:
         .limit(limit)
     ).all()
     total = session.scalar(
-        select(func.count())
-        .select_from(Run)
-        .join(RunFacts, RunFacts.run_pk == Run.id)
-        .where(*on_hold)
+        select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass))
     )
     return HeldUnits(
         units=[UnitCalibration.model_validate_json(answer) for answer in answers],
