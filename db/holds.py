@@ -42,9 +42,7 @@ def held_units(session: Session, limit: int) -> HeldUnits:
         .order_by(Run.started_at.desc(), Run.id.desc())
         .limit(limit)
     ).all()
-    total = session.scalar(
-        select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass))
-    )
+    total = session.scalar(select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass)))
     return HeldUnits(
         units=[UnitCalibration.model_validate_json(answer) for answer in answers],
         total=total or 0,
