@@ -5,6 +5,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import APIRouter, Depends, FastAPI
+from fastapi_offline import FastAPIOffline
 from sqlalchemy.ext.asyncio import async_sessionmaker
 from sqlalchemy.orm import configure_mappers
 
@@ -12,8 +13,8 @@ from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.report_pool import ReportPool
-from api.responses import problems
-from api.routes import gyro, health, reports, runs, units
+from api.responses import json_problems, problems
+from api.routes import events, gyro, health, reports, runs, unit_pages, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
@@ -80,7 +81,9 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             await reader.dispose()
             report_pool.close()
 
-    app = FastAPI(
+    # /docs and /redoc from the Swagger UI and ReDoc files the fastapi-offline package
+    # ships (under /static-offline-docs), not from a CDN: they work in a plant offline.
+    app: FastAPI = FastAPIOffline(
         title="calstation results",
         summary="Calibration runs of the smart putter, per serial number.",
         version=__version__,
@@ -99,7 +102,11 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     v1.include_router(gyro.router, dependencies=reads, responses=keyed)
     v1.include_router(gyro.submissions)
     v1.include_router(reports.router, dependencies=reads, responses=keyed)
+    # The event stream's own answer is not JSON: its errors name their media type.
+    keyed_stream = json_problems(401) if settings.read_requires_key else None
+    v1.include_router(events.router, dependencies=reads, responses=keyed_stream)
     app.include_router(health.router)
     app.include_router(v1)
     app.include_router(reports.dashboard, dependencies=reads)
+    app.include_router(unit_pages.router, dependencies=reads, responses=keyed)
     return app

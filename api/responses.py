@@ -41,6 +41,25 @@ def problems(*codes: int, **descriptions: str) -> dict[int | str, dict[str, Any]
     }
 
 
+def json_problems(*codes: int, **descriptions: str) -> dict[int | str, dict[str, Any]]:
+    """:func:`problems` for a route whose own answer is not JSON (an event stream): the
+    error bodies stay JSON, so their media type is named here, not taken from the route.
+
+    The schemas are referred to by name: :func:`problems` of the other routes define them.
+    """
+    return {
+        code: {
+            "description": entry["description"],
+            "content": {
+                "application/json": {
+                    "schema": {"$ref": f"#/components/schemas/{entry['model'].__name__}"}
+                }
+            },
+        }
+        for code, entry in problems(*codes, **descriptions).items()
+    }
+
+
 def json_response(model: BaseModel, status_code: int = status.HTTP_200_OK) -> Response:
     """``model`` as a JSON response (the route declares ``response_model`` for OpenAPI)."""
     return Response(model.model_dump_json(), status_code=status_code, media_type="application/json")

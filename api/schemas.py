@@ -1,13 +1,22 @@
 """Public shapes of the API's answers (the run record itself is :mod:`station.records`)."""
 
+from datetime import datetime
 from typing import Annotated
+from uuid import UUID
 
 from pydantic import AfterValidator, BaseModel, Field
 
 from station.gyro.fit import GyroFitReport
 from station.gyro.log import GyroDwells
 from station.record_bounds import plain_document
-from station.records import GyroFitRecord, GyroSummary, LogSource, RunSummary
+from station.records import (
+    Disposition,
+    GyroFitRecord,
+    GyroSummary,
+    LogSource,
+    RunSummary,
+    Verdict,
+)
 
 
 class Problem(BaseModel):
@@ -44,6 +53,24 @@ class RunList(BaseModel):
     data: list[RunSummary]
     count: int
     next_cursor: str | None = None
+
+
+class RunEvent(BaseModel):
+    """A stored run, as ``GET /api/v1/events`` pushes it (the ``data`` of a ``run`` event)."""
+
+    run_id: UUID
+    serial: str
+    station_id: str
+    operator_id: str
+    lot: str | None
+    started_at: datetime
+    finished_at: datetime
+    verdict: Verdict
+    disposition: Annotated[
+        Disposition | None, Field(description="where the station sent the unit (None: not said)")
+    ]
+    failure: Annotated[str | None, Field(description="the code of its first failure reason")]
+    unit: Annotated[str, Field(description="the unit's page: every run, links to each record")]
 
 
 class GyroFitSubmission(BaseModel):

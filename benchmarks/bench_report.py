@@ -16,6 +16,11 @@ Each section's query is timed (best of ``--repeat``), then the whole report as t
 builds it (every section, the unit list cut to its latest 1,000 units), over every run,
 over one day, and over two days that start and end at noon (two partial days
 aggregated from their runs, one whole day from the roll-ups).
+
+Then the pages as the server renders them, each timed (query and rendering) and weighed:
+the report's HTML page over every run (every unit listed, as ``format=html`` without
+``units``, once; and with ``units=1000``), a retested unit's page (``/units/{serial}``)
+and its certificate, and the line dashboard (one day, and the units on hold of any day).
 """
 
 import argparse
@@ -28,14 +33,17 @@ from typing import Any
 
 from sqlalchemy import insert, make_url, text
 
-from db import make_engine, open_database
-from db.limits_profiles import profile_row
+from api.routes.reports import certificate_run, dashboard_body
+from db import RunRepository, make_engine, open_database
+from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
 from station.limits import load_profile
 from station.quality.figures import ReportFilter
 from station.quality.parameters import profile_bounds
+from station.report.html import certificate_page, unit_page
+from station.report.render import render
 
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
 CODES = "ARRAY['offset','sensitivity','verification_error','pose_noise','gyro_bias','link_loss']"
@@ -118,6 +126,61 @@ def best(repeat: int, action: Callable[[], object]) -> float:
     return min(times)
 
 
+#: Above this many runs the report page that lists every unit is not built (hundreds of
+#: megabytes of HTML); its size grows with the units, as the smaller runs show.
+EVERY_UNIT_PAGE_RUNS = 100_000
+
+
+def pages(session: Any, repeat: int, runs: int) -> None:
+    """The HTML pages over the generated history: seconds to build, and kB."""
+    repository = RunRepository(session)
+    serial = "PT-00000009"  # failed, then passed at its retest (run 10)
+    at = datetime(2026, 6, 1, 12, tzinfo=UTC)
+
+    def certificate() -> str:
+        found = certificate_run(repository, serial)
+        assert found is not None
+        run, earlier = found
+        profile = stored_profiles(session, [run.limits.sha256]).get(run.limits.sha256)
+        return certificate_page(run, profile, at, repository.latest_gyro_fit(serial), earlier)
+
+    rows: list[tuple[str, Callable[[], str], int]] = [
+        (
+            "report page, every run, units cut to 1,000 (`units=1000`)",
+            lambda: render(eol_report(session, ReportFilter(), unit_limit=1000), "html"),
+            repeat,
+        ),
+        (
+            f"unit page `/units/{serial}` (2 runs)",
+            lambda: unit_page(repository.history(serial), at),
+            repeat,
+        ),
+        (f"certificate of {serial} (earlier run listed)", certificate, repeat),
+        (
+            "dashboard (one day, 50 latest of the units on hold)",
+            lambda: dashboard_body(repository, at),
+            repeat,
+        ),
+    ]
+    if runs <= EVERY_UNIT_PAGE_RUNS:
+        rows.insert(
+            1,
+            (
+                "report page, every run, every unit listed (`format=html`)",
+                lambda: render(eol_report(session, ReportFilter()), "html"),
+                1,
+            ),
+        )
+    print(f"\n| page | best of {repeat} (s) | size (kB) |")
+    print("|---|---|---|")
+    for name, page, times in rows:
+        start = time.perf_counter()
+        html = page()
+        first = time.perf_counter() - start
+        seconds = min(first, best(times - 1, page)) if times > 1 else first
+        print(f"| {name} | {seconds:.3f} | {len(html.encode()) / 1000:,.1f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=1_000_000)
@@ -187,6 +250,7 @@ def main() -> None:
             )
             two_days = best(args.repeat, lambda: eol_report(session, noon))
             print(f"| whole report, noon to noon over two days (4,320 runs) | {two_days:.3f} |")
+            pages(session, args.repeat, runs)
         database.dispose()
     finally:
         if args.keep or args.schema:

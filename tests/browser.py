@@ -125,6 +125,33 @@ class Browser:
         self.evaluate(expression)
         self._wait_for("Page.loadEventFired")
 
+    def wait_for(self, expression: str, timeout: float = 60) -> Any:
+        """The value of ``expression`` once it is truthy (checked every 0.1 s); a safety
+        net of ``timeout`` seconds, not a speed requirement."""
+        deadline = time.monotonic() + timeout
+        while not (value := self.evaluate(expression)):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{expression} still false after {timeout} s")
+            time.sleep(0.1)
+        return value
+
+    def evaluate_async(self, expression: str) -> Any:
+        """The value of a JavaScript expression that gives a promise, once it settles."""
+        answer = self.call(
+            "Runtime.evaluate", expression=expression, returnByValue=True, awaitPromise=True
+        )
+        if "exceptionDetails" in answer:
+            raise AssertionError(f"{expression}: {answer['exceptionDetails']}")
+        return answer["result"].get("value")
+
+    def requested(self) -> list[str]:
+        """The URLs the page asked for since it was loaded."""
+        return [
+            e["params"]["request"]["url"]
+            for e in self.events
+            if e.get("method") == "Network.requestWillBeSent"
+        ]
+
     def screenshot(self, name: str) -> Path:
         """A full-page PNG of the current page under ``artifacts/``."""
         height = int(self.evaluate("document.documentElement.scrollHeight"))
@@ -154,14 +181,20 @@ def _devtools_port(profile: Path, process: subprocess.Popen[bytes]) -> int:
     return int(marker.read_text().splitlines()[0])
 
 
+#: Every host name but the test server's fails to resolve: a plant without internet.
+OFFLINE = ("--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",)
+
+
 @contextmanager
-def chromium(profile: Path) -> Iterator[Browser]:
-    """A headless Chromium with its profile in ``profile``, on a blank page."""
+def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
+    """A headless Chromium with its profile in ``profile``, on a blank page; ``flags`` are
+    added to its command line (:data:`OFFLINE`)."""
     binary = chromium_binary()
     process = subprocess.Popen(
         [
             binary,
             *FLAGS,
+            *flags,
             f"--user-data-dir={profile}",
             f"--window-size={WIDTH},1000",
             "about:blank",

@@ -1,7 +1,8 @@
 """The end-of-line report, a unit's calibration certificate and the line dashboard.
 
 ``GET /api/v1/reports/eol`` (JSON, CSV or HTML), ``GET /api/v1/units/{serial}/certificate``
-(HTML) and ``GET /`` (the dashboard page, reloading itself).
+(HTML: the certificate, or the failure report of a unit on hold) and ``GET /`` (the
+dashboard page, following ``GET /api/v1/events``).
 """
 
 import csv
@@ -32,13 +33,14 @@ from api.errors import invalid
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
+from db.holds import held_units
 from db.limits_profiles import stored_profiles
 from db.reports import eol_report
 from db.run_export import HEADER, run_page
 from station.errors import InputError
 from station.limits import LimitsProfile, parse_profiles, pick_profile
 from station.quality.figures import EolReport, ReportFilter
-from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, StoredRun
+from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.report.html import certificate_page, dashboard_page
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
@@ -47,6 +49,10 @@ from station.unit_state import counts
 #: Units on the dashboard's list, and points on each of its control charts.
 DASHBOARD_UNITS = 20
 DASHBOARD_CHART_POINTS = 60
+#: Units on hold the dashboard lists (the latest).
+DASHBOARD_HELD = 50
+#: Where the dashboard hears of stored runs (:mod:`api.routes.events`).
+EVENTS_PATH = "/api/v1/events"
 
 #: 503: the database is down, a read ran out of time, or the report pool stayed busy.
 UNAVAILABLE: dict[int | str, dict[str, Any]] = {
@@ -292,18 +298,29 @@ def _csv_row(row: Sequence[object]) -> list[object]:
     return [v.isoformat() if isinstance(v, datetime) else v for v in row]
 
 
-def _latest_run(repository: RunRepository, serial: str) -> StoredRun | None:
-    """The unit's latest run that counts (an operator's abort does not), as the report's."""
+def certificate_run(
+    repository: RunRepository, serial: str
+) -> tuple[StoredRun, list[RunSummary]] | None:
+    """The unit's latest run that counts (an operator's abort does not), as the report's,
+    and the unit's runs before it."""
     runs = repository.history(serial)
     counted = [run for run in runs if counts(run)] or runs
-    return repository.get(counted[-1].run_id) if counted else None
+    if not counted:
+        return None
+    run = repository.get(counted[-1].run_id)
+    assert run is not None
+    return run, runs[: runs.index(counted[-1])]
 
 
 @router.get(
     "/units/{serial}/certificate",
     response_class=Response,  # 200 is HTML, the errors JSON: each says its own media type
     responses={
-        200: {"content": {"text/html": {"schema": {"type": "string"}}}, "description": "the page"},
+        200: {
+            "content": {"text/html": {"schema": {"type": "string"}}},
+            "description": "the calibration certificate; a unit whose latest run failed gets "
+            "its failure report instead (what failed, the values and their limits)",
+        },
         **problems(404, _404="no run of this serial number"),
     },
 )
@@ -312,19 +329,22 @@ async def get_certificate(
     repository: ReaderDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
-    and the limits stored with the run's profile."""
-    run = await repository.run(lambda r: _latest_run(r, serial))
-    if run is None:
+    the limits stored with the run's profile and the unit's earlier runs; a failure report
+    for a unit whose latest run failed."""
+    found = await repository.run(lambda r: certificate_run(r, serial))
+    if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
+    run, earlier = found
     stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
     profile = stored.get(run.limits.sha256)
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit))
+    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier))
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
 async def get_dashboard(repository: ReportPoolDep, zone: PlantZoneDep) -> HTMLResponse:
-    """The line dashboard: the plant's today: counts and yields, latest units, Pareto, charts."""
+    """The line dashboard: the plant's today: counts and yields, latest units, units on
+    hold, Pareto, charts; it follows the line's stored runs without a reload."""
     return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC), zone))
 
 
@@ -339,4 +359,5 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
         now=now,
         zone=zone,
     )
-    return dashboard_page(report)
+    held = held_units(repository.session, DASHBOARD_HELD)
+    return dashboard_page(report, held.units, held.total, events=EVENTS_PATH)

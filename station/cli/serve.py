@@ -10,6 +10,11 @@ import uvicorn
 from api.settings import ApiSettings
 from db import open_database
 
+#: Seconds a stopping server gives the requests still open before it cancels them: the
+#: line dashboard's event stream never ends by itself (``GET /api/v1/events``), and a
+#: container is killed 10 s after it is asked to stop.
+GRACEFUL_SHUTDOWN_S = 5
+
 
 def _log_config() -> dict[str, Any]:
     """Uvicorn's logging, plus one line per submitted run from the ``api`` loggers."""
@@ -46,4 +51,5 @@ def serve(
         log_config=_log_config(),
         log_level="info",
         access_log=False,
+        timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S,
     )

@@ -1,9 +1,12 @@
-"""HTML pages: the report, the line dashboard, a unit's calibration certificate.
+"""HTML pages: the report, the line dashboard, a unit's page and its certificate.
 
 Jinja2 templates (``templates/``) with autoescaping; charts are inline SVG from
-:mod:`station.report.svg`, styles inline: a page needs no other file, no network.
+:mod:`station.report.svg`, styles inline: a page needs no other file, no network (the
+dashboard's one inline script asks its own server for updates). Every serial on every
+page links to the unit's page through one macro, ``serial_link`` in ``base.html``.
 """
 
+from collections.abc import Sequence
 from datetime import datetime
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -13,7 +16,7 @@ from station import __version__
 from station.limits import LimitsProfile
 from station.quality.figures import EolReport
 from station.quality.parameters import profile_bounds
-from station.records import GyroFitRecord, StoredRun
+from station.records import GyroFitRecord, RunSummary, StoredRun
 from station.report import formatting, svg
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
@@ -27,11 +30,10 @@ from station.report.tables import (
     summary_cells,
     what_if_cells,
 )
+from station.unit_state import UnitCalibration
 
 #: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
 CPK_TARGET = ("target", 1.33)
-#: Seconds between the dashboard's reloads.
-DASHBOARD_REFRESH_S = 30
 
 _env = Environment(
     loader=PackageLoader("station.report", "templates"),
@@ -64,6 +66,13 @@ _env.globals.update(
     capability_header=CAPABILITY_HEADER,
     capability_cells=capability_cells,
 )
+# The macros of the base template, for every template and every template it includes
+# (Jinja's template modules expose their macros as attributes it does not declare).
+_base = _env.get_template("base.html").module
+_env.globals.update(serial_link=_base.serial_link)  # type: ignore[attr-defined]
+
+#: What the certificate page of a unit is called, by the verdict of its latest run.
+DOCUMENT_TITLES = {"pass": "Calibration certificate", "fail": "Failure report"}
 
 
 def trend_charts(report: EolReport) -> list[str]:
@@ -104,9 +113,33 @@ def report_page(report: EolReport) -> str:
     )
 
 
-def dashboard_page(report: EolReport, *, refresh_s: int = DASHBOARD_REFRESH_S) -> str:
-    """The line dashboard over ``report`` (today's runs); reloads every ``refresh_s``."""
-    return _env.get_template("dashboard.html").render(report=report, refresh_s=refresh_s)
+def dashboard_page(
+    report: EolReport, held: Sequence[UnitCalibration], held_total: int, *, events: str
+) -> str:
+    """The line dashboard over ``report`` (today's runs) and the latest ``held`` units on
+    hold (of ``held_total``); it follows the server-sent events at ``events`` and brings
+    itself up to date after each stored run, without a reload."""
+    return _env.get_template("dashboard.html").render(
+        report=report, held=held, held_total=held_total, events=events
+    )
+
+
+def unit_page(runs: Sequence[RunSummary], generated_at: datetime, zone: str = "UTC") -> str:
+    """A unit's page: its state and every one of its ``runs`` (oldest first, at least one),
+    times in the plant's ``zone``."""
+    unit = UnitCalibration.of_history(runs)
+    return _env.get_template("unit.html").render(
+        unit=unit,
+        runs=runs,
+        generated_at=generated_at,
+        zone=zone,
+        document_title=DOCUMENT_TITLES[unit.verdict],
+    )
+
+
+def not_found_page(message: str) -> str:
+    """The page of a name nothing is stored under: ``message`` says which."""
+    return _env.get_template("not_found.html").render(message=message)
 
 
 def certificate_page(
@@ -114,8 +147,11 @@ def certificate_page(
     profile: LimitsProfile | None,
     issued_at: datetime,
     gyro_fit: GyroFitRecord | None = None,
+    earlier: Sequence[RunSummary] = (),
 ) -> str:
-    """The calibration certificate of the unit whose latest run is ``run``.
+    """The calibration certificate of the unit whose latest run is ``run``, or its failure
+    report when that run failed (what failed, the values and their limits): a unit on hold
+    gets no certificate. ``earlier``: the unit's runs before ``run``, listed too.
 
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
@@ -135,5 +171,7 @@ def certificate_page(
         bounds=None if profile is None else profile_bounds(profile),
         issued_at=issued_at,
         gyro_fit=gyro_fit,
+        earlier=earlier,
+        document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
     )

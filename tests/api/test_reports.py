@@ -100,11 +100,12 @@ def test_certificate_of_a_unit_and_of_an_unknown_one(client: httpx.Client) -> No
     assert missing.json()["detail"] == "no calibration run of serial NOPE-1"
 
 
-def test_dashboard_reloads_itself_and_draws_its_charts(client: httpx.Client) -> None:
+def test_dashboard_follows_the_event_stream_and_draws_its_charts(client: httpx.Client) -> None:
     answer = client.get("/")
     assert answer.status_code == 200
     page = answer.text
-    assert '<meta http-equiv="refresh" content="30">' in page
+    assert 'http-equiv="refresh"' not in page  # no full reload
+    assert 'new EventSource("/api/v1/events")' in page
     assert "Line dashboard" in page
     assert "<svg" in page  # the Pareto, even with no run today
 

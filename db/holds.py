@@ -1,0 +1,49 @@
+"""The units on hold: units whose latest run failed, with what each one holds.
+
+A unit is on hold when its latest run (on the line, aborts aside: ``run_facts.line_latest``,
+the end-of-line report's own rule, :mod:`db.rollups`) failed. The line dashboard lists the
+latest of them, any day, with the answer ``GET /api/v1/units/{serial}`` gives
+(:class:`station.unit_state.UnitCalibration`: its attempts, where the station sent it, and
+``holds``, the coefficients of its last verified write-back), read from ``units``.
+
+The list walks ``ix_runs_verdict_started_at`` backwards over the failing runs and stops at
+``limit`` units. The count comes from the report's daily roll-ups, kept up to date at
+every submission: units (each counted once, at its first run) less those whose latest run
+passed, summed over every day; a sum over a few rows a day instead of a walk over every
+failing run.
+"""
+
+from dataclasses import dataclass
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from db.models import ReportCounts, Run, RunFacts, Unit
+from station.unit_state import UnitCalibration
+
+
+@dataclass(frozen=True)
+class HeldUnits:
+    """The latest ``units`` on hold, newest first, of ``total`` on hold."""
+
+    units: list[UnitCalibration]
+    total: int
+
+
+def held_units(session: Session, limit: int) -> HeldUnits:
+    """The latest ``limit`` units on hold (their latest run failed), and how many there are."""
+    on_hold = (Run.verdict == "fail", RunFacts.line_latest)
+    answers = session.scalars(
+        select(Unit.calibration)
+        .select_from(Run)
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .join(Unit, Unit.serial == Run.serial)
+        .where(*on_hold)
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(limit)
+    ).all()
+    total = session.scalar(select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass)))
+    return HeldUnits(
+        units=[UnitCalibration.model_validate_json(answer) for answer in answers],
+        total=total or 0,
+    )

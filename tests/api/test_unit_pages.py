@@ -1,0 +1,160 @@
+"""A unit's page, its certificate or failure report, and the line's event stream, on a live
+server on both backends."""
+
+import json
+import re
+from collections.abc import Iterator
+from datetime import timedelta
+
+import httpx
+import pytest
+
+from db import Database, RunRepository
+from station.records import RunRecord
+from tests.db.records import T0, make_record
+from tests.servers import STATION
+
+#: A failure with its value and limits, as the station records an offset out of limits.
+OFFSET_X_HIGH = {
+    "code": "offset",
+    "message": "offset x out of limits",
+    "measured": 2301.5,
+    "lower": 1848.0,
+    "upper": 2248.0,
+    "axis": "x",
+}
+
+
+def _store(database: Database, *records: RunRecord) -> None:
+    with database.session() as session:
+        repository = RunRepository(session)
+        for record in records:
+            repository.submit(record)
+        session.commit()
+
+
+@pytest.fixture
+def retested(database: Database) -> list[str]:
+    """U1 failed, then passed at another station; U2 failed twice. Returns the run ids."""
+    runs = [
+        make_record(serial="U1", verdict="fail", failures=[OFFSET_X_HIGH], started_at=T0),
+        make_record(
+            serial="U1",
+            station_id="line1-st2",
+            operator_id="op-b",
+            started_at=T0 + timedelta(minutes=5),
+        ),
+        make_record(serial="U2", verdict="fail", failures=[OFFSET_X_HIGH], started_at=T0),
+        make_record(
+            serial="U2",
+            verdict="fail",
+            failures=[OFFSET_X_HIGH],
+            started_at=T0 + timedelta(minutes=9),
+        ),
+    ]
+    _store(database, *runs)
+    return [str(run.run_id) for run in runs]
+
+
+def test_a_unit_page_lists_every_run_and_links_each_record(
+    client: httpx.Client, retested: list[str]
+) -> None:
+    answer = client.get("/units/U1")
+    assert answer.status_code == 200
+    assert answer.headers["content-type"].startswith("text/html")
+    page = answer.text
+    assert page.count('<tr class="run">') == 2
+    for run_id in retested[:2]:
+        assert f'href="/api/v1/runs/{run_id}"' in page
+    assert retested[2] not in page  # U2's runs are not U1's
+    assert "line1-st2" in page
+    assert "op-b" in page
+    assert "offset: 2302 (1848 … 2248)" in page  # what failed, its value and limits
+    assert '<b id="verdict" class="pass">pass</b>' in page
+    assert 'href="/api/v1/units/U1/certificate">Calibration certificate</a>' in page
+    # the JSON answer at the API's path is unchanged
+    assert client.get("/api/v1/units/U1").json()["attempts"] == 2
+
+
+def test_a_failed_unit_gets_a_failure_report_not_a_certificate(
+    client: httpx.Client, retested: list[str]
+) -> None:
+    unit = client.get("/units/U2").text
+    assert 'href="/api/v1/units/U2/certificate">Failure report</a>' in unit
+    assert "Calibration certificate" not in unit
+    report = client.get("/api/v1/units/U2/certificate").text
+    assert "<h1>Failure report</h1>" in report
+    assert "Calibration certificate" not in report
+    assert re.search(
+        r"<td>offset</td><td>offset x out of limits</td><td>2301.5</td>"
+        r"<td>1848</td><td>2248</td>",
+        report,
+    )
+    # the earlier run is listed on it, with a link to its record
+    earlier = report.split("<h2>Earlier runs</h2>")[1]
+    assert earlier.count(f'href="/api/v1/runs/{retested[2]}"') == 1
+    assert retested[3] not in earlier
+
+
+def test_a_certificate_lists_the_earlier_runs(client: httpx.Client, retested: list[str]) -> None:
+    page = client.get("/api/v1/units/U1/certificate").text
+    assert "<h1>Calibration certificate</h1>" in page
+    earlier = page.split("<h2>Earlier runs</h2>")[1]
+    assert f'href="/api/v1/runs/{retested[0]}"' in earlier
+    assert 'class="fail">fail<' in earlier
+
+
+def test_an_unknown_serial_is_a_404_page_and_a_malformed_one_a_422(
+    client: httpx.Client,
+) -> None:
+    missing = client.get("/units/NOPE-1")
+    assert missing.status_code == 404
+    assert missing.headers["content-type"].startswith("text/html")
+    assert "No calibration run of serial NOPE-1 is stored." in missing.text
+    for bad in ("-leading-dash", "a%20b", "x" * 65, "a%00b"):
+        answer = client.get(f"/units/{bad}")
+        assert answer.status_code == 422, bad
+        assert answer.json()["errors"][0]["loc"] == "path.serial"
+
+
+@pytest.fixture
+def events(client: httpx.Client) -> Iterator[Iterator[str]]:
+    """The lines of the event stream, opened (its headers received) before the test goes on."""
+    with client.stream("GET", "/api/v1/events", timeout=httpx.Timeout(60)) as answer:
+        assert answer.status_code == 200
+        assert answer.headers["content-type"].startswith("text/event-stream")
+        yield answer.iter_lines()
+
+
+@pytest.mark.timeout(90)
+def test_a_run_submitted_through_the_api_is_pushed_to_the_event_stream(
+    client: httpx.Client, events: Iterator[str], station_key: str
+) -> None:
+    record = make_record(serial="PT-EVENT-1", verdict="fail", failures=[OFFSET_X_HIGH])
+    stored = client.post(
+        "/api/v1/runs",
+        json=record.model_dump(mode="json"),
+        headers={"Authorization": f"Bearer {station_key}"},
+    )
+    assert stored.status_code == 201
+    data = next(line for line in events if line.startswith("data: "))
+    event = json.loads(data.removeprefix("data: "))
+    assert event["run_id"] == str(record.run_id)
+    assert (event["serial"], event["station_id"], event["verdict"]) == (
+        "PT-EVENT-1",
+        STATION,
+        "fail",
+    )
+    assert (event["failure"], event["unit"]) == ("offset", "/units/PT-EVENT-1")
+
+
+def test_the_dashboard_lists_the_units_on_hold_with_what_they_hold(
+    client: httpx.Client, retested: list[str]
+) -> None:
+    page = client.get("/").text
+    assert "Units on hold (latest 1 of 1, any day)" in page
+    held = page.split('<table class="held">')[1].split("</table>")[0]
+    assert '<a class="serial" href="/units/U2">U2</a>' in held
+    assert "U1" not in held  # passed at its retest
+    assert "no verified coefficients" not in held  # its failed runs wrote it (offset limits)
+    assert "coefficients of a failed run" in held
