@@ -118,7 +118,7 @@ def test_serials_on_the_report_and_the_dashboard_link_to_their_unit_pages(
     with database.session() as session:
         insert_line_history(session)
     _today(database)
-    report = f"{live_url}/api/v1/reports/eol?format=html&from=2026-11-02&to=2026-11-03"
+    report = f"{live_url}/api/v1/reports/eol?format=html&from=2026-11-02&to=2026-11-03&list=all"
     _links_resolve(browser, report, {"U1", "U2", "U3", "U4", "U5", "U9"})
     today = {f"PT-{100 + i % 18:06d}" for i in range(24)}
     # the dashboard: today's latest 20 units, and the units on hold of any day
