@@ -40,6 +40,7 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "condition_number": quality.condition_number if quality else None,
         "verification_error_mg": quality.verification_error_mg if quality else None,
         "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
+        "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
         "record_sha256": record_sha256,
     }
 
@@ -102,6 +103,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         "verdict": run.verdict,
         "disposition": run.disposition,
         "gyro": run.gyro,
+        "gyro_matrix": run.gyro_matrix,
         "failures": [
             {
                 "code": f.code,

@@ -9,6 +9,7 @@ when the unit lies in the pose asked for, away from every pose taken before; wha
 done with it is :class:`station.session.UnitRun`'s business.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -54,8 +55,16 @@ class Saturated:
 class PoseCapture:
     """The acquisition of the pose asked for, and the live view of the unit meanwhile."""
 
-    def __init__(self, settings: RunSettings, journal: RunJournal, messages: MessageLog) -> None:
+    def __init__(
+        self,
+        settings: RunSettings,
+        journal: RunJournal,
+        messages: MessageLog,
+        on_samples: Callable[[SampleBlock], None] | None = None,
+    ) -> None:
         self.settings = settings
+        #: Called with every block of samples drained (the gyro stream of a whole-unit run).
+        self._on_samples = on_samples
         self._journal = journal
         self._messages = messages
         self._names = journal.poses
@@ -92,7 +101,11 @@ class PoseCapture:
         acquisition = self._acquisition
         assert acquisition is not None
         try:
-            result = acquisition.poll()
+            try:
+                result = acquisition.poll()
+            finally:
+                if self._on_samples is not None:
+                    self._on_samples(acquisition.recent)
         except SaturatedAxisError:
             verdict = acquisition.last_verdict
             assert verdict is not None  # the error comes from a judged window

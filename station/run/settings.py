@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from station.acquisition.stillness import StillnessThresholds
 from station.calibration import Model
 from station.orientation import POSE_TOLERANCE_DEG
-from station.pose_plan import check_plan
+from station.pose_plan import check_gyro_plan, check_plan
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
 
 
@@ -27,8 +27,16 @@ class RunSettings(BaseModel):
     stillness: StillnessThresholds = StillnessThresholds()
     pose_timeout_s: float = Field(30.0, gt=0, description="device time before 'not still'")
     model: Model = "six"
+    gyro: bool = Field(
+        False,
+        description="fit the gyro matrix K from the moves between the poses, write it "
+        "into the unit and check it on the verification move [Tedaldi2014]",
+    )
+    gyro_verification_pose: str = Field(
+        "face_up", description="where the verification move takes the unit (with gyro)"
+    )
 
-    @field_validator("poses", "verification_pose")
+    @field_validator("poses", "verification_pose", "gyro_verification_pose")
     @classmethod
     def _known_poses(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
         names = (value,) if isinstance(value, str) else value
@@ -40,4 +48,11 @@ class RunSettings(BaseModel):
     @model_validator(mode="after")
     def _can_finish(self) -> "RunSettings":
         check_plan(self.poses, self.verification_pose, self.min_pose_separation_deg, self.model)
+        if self.gyro:
+            check_gyro_plan(
+                self.model,
+                self.verification_pose,
+                self.gyro_verification_pose,
+                self.min_pose_separation_deg,
+            )
         return self

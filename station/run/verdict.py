@@ -37,6 +37,16 @@ def writeback_failed(exc: Exception) -> FailureReason:
     return FailureReason(code="writeback", message=f"write-back failed: {exc}")
 
 
+def gyro_matrix_failed(exc: Exception) -> FailureReason:
+    """The moves between the poses could not give the gyro matrix (``exc`` says why)."""
+    return FailureReason(code="gyro_matrix", message=f"gyro matrix: {exc}")
+
+
+def verification_move_failed(problem: str) -> FailureReason:
+    """The verification move gave no angle to check the unit's own gyros with."""
+    return FailureReason(code="gyro_verification", message=f"verification move: {problem}")
+
+
 class Failures:
     """The failures of one run so far."""
 
