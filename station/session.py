@@ -22,6 +22,7 @@ lives in its module under :mod:`station.run`.
 from collections.abc import Callable
 
 from station.acquisition.pose import PoseResult
+from station.arrays import FloatArray
 from station.calibration import CalibrationError, Solution, solve
 from station.device import (
     DeviceDisconnectedError,
@@ -67,6 +68,7 @@ class UnitRun:
         profile: LimitsProfile,
         settings: RunSettings,
         reopen: Callable[[], PutterDriver],
+        g_sensitivity: FloatArray | None = None,
     ) -> None:
         self.driver = driver
         self.journal = journal
@@ -79,7 +81,7 @@ class UnitRun:
         self.messages = MessageLog()
         self.solution: Solution | None = None
         self.record: RunRecord | None = None
-        self._gyro = LiveGyro(driver.rate_hz, settings) if settings.gyro else None
+        self._gyro = LiveGyro(driver.rate_hz, settings, g_sensitivity) if settings.gyro else None
         self._capture = PoseCapture(
             settings, journal, self.messages, self._gyro.recorder.feed if self._gyro else None
         )
