@@ -37,9 +37,17 @@ def writeback_failed(exc: Exception) -> FailureReason:
     return FailureReason(code="writeback", message=f"write-back failed: {exc}")
 
 
+#: Longest failure message kept (the record's limit is 500 characters).
+MESSAGE_MAX = 300
+
+
 def gyro_matrix_failed(exc: Exception) -> FailureReason:
-    """The moves between the poses could not give the gyro matrix (``exc`` says why)."""
-    return FailureReason(code="gyro_matrix", message=f"gyro matrix: {exc}")
+    """The moves between the poses could not give the gyro matrix (``exc`` says why,
+    move by move: cut short past :data:`MESSAGE_MAX` characters)."""
+    message = f"gyro matrix: {exc}"
+    if len(message) > MESSAGE_MAX:
+        message = message[: MESSAGE_MAX - 1] + "…"
+    return FailureReason(code="gyro_matrix", message=message)
 
 
 def verification_move_failed(problem: str) -> FailureReason:

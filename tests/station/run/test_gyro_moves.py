@@ -3,13 +3,18 @@
 import itertools
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from station.acquisition.pose import PoseResult
+from station.calibration import Calibration
 from station.device import LinkStats
-from station.gyro.motion import Move
+from station.gyro.motion import GyroMatrixError, Move
+from station.run.gyro import LiveGyro
 from station.run.gyro_moves import MoveRecorder
+from station.run.settings import RunSettings
+from station.run.verdict import MESSAGE_MAX, gyro_matrix_failed
 from station.samples import SampleBlock
 
 RATE = 500.0
@@ -73,3 +78,21 @@ def test_lost_samples_inside_a_move_are_a_gap_the_fit_names() -> None:
     problem = Move(recorder.times(move), move.gyro_dps, np.eye(3)[0], np.eye(3)[0]).problem()
     assert problem is not None
     assert problem.startswith("gap of 0.006 s")
+
+
+def test_moves_a_lossy_link_cut_up_fail_the_fit_in_one_bounded_reason() -> None:
+    recorder = MoveRecorder(RATE)
+    gyro = LiveGyro(RATE, RunSettings())
+    for pose in range(13):
+        start = pose * 3000
+        recorder.feed(block(start, start + 1000))
+        recorder.feed(block(start + 1003, start + 2999))  # samples lost on the link
+        recorder.captured(pose, still(start + 2000, start + 2999))
+    gyro.recorder = recorder
+    calibration = Calibration.from_sensitivity([2048.0, 2048.0, 1228.8], [819.2] * 3)
+    with pytest.raises(GyroMatrixError, match="needs 5 usable moves, got 0 of 12") as info:
+        gyro.fit_matrix(calibration, np.zeros(3))
+    reason = gyro_matrix_failed(info.value)
+    assert reason.code == "gyro_matrix"
+    assert len(reason.message) <= MESSAGE_MAX
+    assert reason.message.startswith("gyro matrix: gyro matrix needs 5 usable moves")
