@@ -9,7 +9,9 @@ from rich.table import Table
 
 from station.calibration import CalibrationError, Solution, solve
 from station.cli.output import out, print_json
+from station.cli.solve_stream import solve_stream
 from station.errors import InputError
+from station.gyro.motion.stream import STILL_WINDOW_S
 from station.posefile import read_pose_file
 from station.sensor import AXES
 
@@ -23,7 +25,11 @@ class ModelChoice(StrEnum):
 
 def solve_command(
     file: Annotated[
-        Path, typer.Argument(help="CSV with a header holding ax,ay,az; one pose a row.")
+        Path,
+        typer.Argument(
+            help="CSV with a header holding ax,ay,az, one pose a row; with --stream the raw "
+            "samples under t,ax,ay,az,gx,gy,gz."
+        ),
     ],
     model: Annotated[
         ModelChoice,
@@ -34,8 +40,23 @@ def solve_command(
     as_json: Annotated[
         bool, typer.Option("--json", help="Print the result as JSON on stdout.")
     ] = False,
+    stream: Annotated[
+        bool,
+        typer.Option(
+            "--stream",
+            help="FILE is a raw stream: find the still poses, fit the accelerometer, the "
+            "gyro bias and the gyro matrix from the moves (docs/calibration.md).",
+        ),
+    ] = False,
+    still_window: Annotated[
+        float,
+        typer.Option(help="With --stream: seconds a still window lasts.", min=0.01),
+    ] = STILL_WINDOW_S,
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
+    if stream:
+        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window)
+        return
     pose_file = read_pose_file(file)
     try:
         solution = solve(pose_file.poses, model.value)

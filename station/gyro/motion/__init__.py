@@ -10,13 +10,14 @@ Public surface::
 
     Move(t, rates_dps, gravity_before, gravity_after)          moves.py
         .problem() -> str | None          why it cannot be integrated (gaps, ...)
-    fit_gyro_matrix(moves, bias_dps) -> GyroMatrixFit           matrix_fit.py
-        GyroMatrixFit.scale_matrix (3, 3), .standard_errors (3, 3) | None,
+    fit_gyro_matrix(moves, bias_dps, *, gap_factor, min_moves) -> GyroMatrixFit
+                                                                matrix_fit.py
+        GyroMatrixFit.scale_matrix (3, 3), .standard_errors (3, 3),
         .bias_dps (3,), .used, .residual_deg, .residual_identity_deg,
         .unusable (UnusableMove(index, reason)), .condition_number, .to_dict()
     integrate_rates(t, rates_rad_s) -> Rotation                 integrate.py
     RecordedStream(t, accel_counts, gyro_dps)                   stream.py
-    calibrate_stream(stream, model, thresholds=None) -> StreamCalibration
+    calibrate_stream(stream, model, *, thresholds=None, min_moves=6) -> StreamCalibration
         .stills, .accel (calibration.Solution), .gravity, .bias_dps, .moves, .gyro
     stream_thresholds(rate_hz, still_window_s)                  stream.py
     SyntheticImu, StreamPlan, random_imu, pose_orientations, synthetic_stream

@@ -12,7 +12,8 @@ gravity direction into the start pose's::
 
 The nine elements of K minimise Σ|r_j|² (:func:`scipy.optimize.least_squares`, from
 K = I). Each move constrains two degrees of freedom (a turn about gravity is invisible
-to it), so at least five usable moves are needed, about varied axes. Standard errors
+to it), so five moves would just determine it; at least six usable moves are asked
+for (:data:`MIN_MOVES`), about varied axes. Standard errors
 are ``σ·√diag((JᵀJ)⁻¹)`` with σ² = Σ|r|² / (2·moves − 9); a move's residual is the
 angle between ``R·u_after`` and ``u_before``, in degrees.
 """
@@ -32,8 +33,10 @@ from station.gyro.motion.moves import GAP_FACTOR, Move
 K_UNKNOWNS: Final = 9
 #: Constraints one move gives (two: the turn about gravity is invisible).
 CONSTRAINTS_PER_MOVE: Final = 2
-#: The fewest usable moves that determine K: 2 × 5 = 10 ≥ 9.
-MIN_MOVES: Final = 5
+#: The fewest usable moves fitted: 2 × 6 = 12 equations for 9 unknowns. Five moves (one
+#: spare equation) determine K in principle but not in practice: over 200 simulated
+#: six-pose units the worst came out 128 % off (docs/benchmarks.md).
+MIN_MOVES: Final = 6
 #: Above this condition number of the Jacobian the moves do not determine K.
 MAX_CONDITION: Final = 1e6
 
@@ -52,8 +55,8 @@ class GyroMatrixFit:
 
     Attributes:
         scale_matrix: shape (3, 3), K in ``m = b + K·ω``.
-        standard_errors: shape (3, 3), 1-σ of each element of K; None when the moves
-            leave no degree of freedom (exactly five moves' worth).
+        standard_errors: shape (3, 3), 1-σ of each element of K (six moves or more
+            leave at least three degrees of freedom).
         bias_dps: shape (3,), the bias the rates were corrected with, deg/s.
         used: indices of the moves fitted, in order.
         residual_deg: shape (len(used),), each used move's residual with the fitted K.
@@ -63,7 +66,7 @@ class GyroMatrixFit:
     """
 
     scale_matrix: FloatArray
-    standard_errors: FloatArray | None
+    standard_errors: FloatArray
     bias_dps: FloatArray
     used: tuple[int, ...]
     residual_deg: FloatArray
@@ -78,11 +81,10 @@ class GyroMatrixFit:
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready (the ``"gyro"`` object of ``calstation solve --stream --json``)."""
-        se = self.standard_errors
         return {
             "bias_dps": self.bias_dps.tolist(),
             "scale_matrix": self.scale_matrix.tolist(),
-            "scale_matrix_standard_errors": None if se is None else se.tolist(),
+            "scale_matrix_standard_errors": self.standard_errors.tolist(),
             "moves": len(self.used) + len(self.unusable),
             "moves_used": list(self.used),
             "residual_deg": self.residual_deg.tolist(),
@@ -94,24 +96,34 @@ class GyroMatrixFit:
 
 
 class _Moves:
-    """The usable moves' raw steps, bias removed, padded into one (moves, steps, 3) array.
+    """The usable moves' raw steps, bias removed, in arrays of (moves, steps, 3).
 
     The corrected rates are linear in the raw ones, so each step's rotation vector for
-    a trial K is the raw step's ``K⁻¹·φ_raw``: one product per evaluation.
+    a trial K is the raw step's ``K⁻¹·φ_raw``: one product per evaluation. Moves are
+    grouped by their step count rounded up to a power of two and padded with zero
+    steps (identity rotations) to it, so the arrays hold under twice the steps.
     """
 
     def __init__(self, moves: list[Move], bias_dps: FloatArray) -> None:
         raw = [step_rotvecs(m.t, np.radians(m.rates_dps - bias_dps)) for m in moves]
-        self.steps = np.zeros((len(raw), max(len(r) for r in raw), 3))
-        for row, r in zip(self.steps, raw, strict=True):
-            row[: len(r)] = r
+        widths = [1 << max(0, len(r) - 1).bit_length() for r in raw]
+        self.groups: list[tuple[list[int], FloatArray]] = []
+        for width in sorted(set(widths)):
+            members = [i for i, w in enumerate(widths) if w == width]
+            steps = np.zeros((len(members), width, 3))
+            for row, i in zip(steps, members, strict=True):
+                row[: len(raw[i])] = raw[i]
+            self.groups.append((members, steps))
         self.before = np.array([m.gravity_before for m in moves])
         self.after = np.array([m.gravity_after for m in moves])
 
     def carried(self, k: FloatArray) -> FloatArray:
         """Each move's ``R(K)·u_after``, shape (moves, 3)."""
-        rotations = integrate_steps(self.steps @ np.linalg.inv(k).T)
-        return np.asarray(rotations.apply(self.after), dtype=np.float64)
+        k_inv_t = np.linalg.inv(k).T
+        out = np.empty_like(self.after)
+        for members, steps in self.groups:
+            out[members] = integrate_steps(steps @ k_inv_t).apply(self.after[members])
+        return out
 
     def residual(self, theta: FloatArray) -> FloatArray:
         return np.asarray((self.carried(theta.reshape(3, 3)) - self.before).ravel())
@@ -123,17 +135,26 @@ class _Moves:
 
 
 def fit_gyro_matrix(
-    moves: list[Move], bias_dps: FloatArray, *, gap_factor: float = GAP_FACTOR
+    moves: list[Move],
+    bias_dps: FloatArray,
+    *,
+    gap_factor: float = GAP_FACTOR,
+    min_moves: int = MIN_MOVES,
 ) -> GyroMatrixFit:
     """Fit K from ``moves`` with the gyro bias ``bias_dps`` (3,) removed.
 
     Moves with gaps or too few samples are left out and named in ``unusable``.
+    ``min_moves`` below :data:`MIN_MOVES` (down to 5) is for measuring why it is the
+    default.
 
     Raises:
-        GyroMatrixError: fewer than :data:`MIN_MOVES` usable moves, or moves whose axes
+        ValueError: ``min_moves`` below 5 (no degree of freedom left).
+        GyroMatrixError: fewer than ``min_moves`` usable moves, or moves whose axes
             do not determine all nine elements (condition number above
             :data:`MAX_CONDITION`).
     """
+    if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
+        raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
     bias = np.asarray(bias_dps, dtype=np.float64)
     unusable: list[UnusableMove] = []
     used: list[int] = []
@@ -143,10 +164,10 @@ def fit_gyro_matrix(
             used.append(index)
         else:
             unusable.append(UnusableMove(index, problem))
-    if len(used) < MIN_MOVES:
+    if len(used) < min_moves:
         why = "; ".join(f"move {u.index}: {u.reason}" for u in unusable)
         raise GyroMatrixError(
-            f"gyro matrix needs {MIN_MOVES} usable moves, got {len(used)} of {len(moves)}"
+            f"gyro matrix needs {min_moves} usable moves, got {len(used)} of {len(moves)}"
             + (f" ({why})" if why else "")
         )
     data = _Moves([moves[i] for i in used], bias)
@@ -161,10 +182,8 @@ def fit_gyro_matrix(
             f"(condition number {condition:.3g} > {MAX_CONDITION:g})"
         )
     dof = CONSTRAINTS_PER_MOVE * len(used) - K_UNKNOWNS
-    errors = None
-    if dof > 0:
-        sigma2 = float(result.fun @ result.fun) / dof
-        errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
+    sigma2 = float(result.fun @ result.fun) / dof
+    errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
     return GyroMatrixFit(
         scale_matrix=k,
         standard_errors=errors,

@@ -25,9 +25,9 @@ from typing import Final
 import numpy as np
 
 from station.arrays import FloatArray
-from station.calibration import Model, Solution, apply, solve
+from station.calibration import GeometryLimits, Model, Solution, apply, solve
 from station.gyro.motion.errors import StreamError
-from station.gyro.motion.matrix_fit import GyroMatrixFit, fit_gyro_matrix
+from station.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.gyro.motion.moves import Move
 from station.samples import SampleBlock
 from station.stillness import StillnessThresholds, StillSegment, still_segments
@@ -70,7 +70,9 @@ class RecordedStream:
         step = np.diff(self.t)
         if (step <= 0).any():
             k = int(np.argmax(step <= 0)) + 1
-            raise StreamError(f"stream: t does not increase at sample {k} (t = {self.t[k]:.6g})")
+            raise StreamError(
+                f"stream: t does not increase at data row {k + 1} (t = {self.t[k]:.6g})"
+            )
 
     @property
     def rate_hz(self) -> float:
@@ -119,13 +121,27 @@ def stream_thresholds(
     return StillnessThresholds(window_samples=width, hop_samples=max(1, width // HOPS_PER_WINDOW))
 
 
+def _geometry(model: Model, poses: int) -> GeometryLimits:
+    """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
+
+    A recorded procedure often returns to an orientation it held before; least squares
+    is not degenerate for it (each pose is one more equation), eq. 10 with six is.
+    """
+    if model == "six" and poses == MIN_POSES["six"]:
+        return GeometryLimits()
+    return GeometryLimits(min_angle_deg=0.0)
+
+
 def calibrate_stream(
     stream: RecordedStream,
     model: Model = "nine",
     *,
     thresholds: StillnessThresholds | None = None,
+    min_moves: int = MIN_MOVES,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
+
+    ``min_moves`` goes to :func:`~station.gyro.motion.matrix_fit.fit_gyro_matrix`.
 
     Raises:
         StreamError: fewer still poses than ``model`` needs.
@@ -144,7 +160,7 @@ def calibrate_stream(
             f"{needed} (still window {limits.window_samples} samples)"
         )
     means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
-    accel = solve(means, model)
+    accel = solve(means, model, _geometry(model, len(means)))
     g = apply(accel.calibration, means)
     gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
     still_gyro = np.concatenate([stream.gyro_dps[s.start : s.stop] for s in stills])
@@ -164,5 +180,5 @@ def calibrate_stream(
         gravity=gravity,
         bias_dps=bias,
         moves=moves,
-        gyro=fit_gyro_matrix(moves, bias),
+        gyro=fit_gyro_matrix(moves, bias, min_moves=min_moves),
     )

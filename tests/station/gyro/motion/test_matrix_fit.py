@@ -51,7 +51,6 @@ def test_noisy_stream_gives_k_within_its_standard_errors(seed: int) -> None:
     imu, stream = _unit_and_stream(seed, PLAN)
     result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
     se = result.gyro.standard_errors
-    assert se is not None
     error = np.abs(result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine"))
     assert (error <= 5 * se + INTEGRATION_FLOOR).all(), (error, se)
     still_samples = sum(len(s) for s in result.stills)
@@ -119,7 +118,7 @@ def test_too_few_usable_moves_refuse_naming_them() -> None:
         Move(m.t[::-1], m.rates_dps, m.gravity_before, m.gravity_after) if i < 4 else m
         for i, m in enumerate(moves)
     ]
-    with pytest.raises(GyroMatrixError, match=r"needs 5 usable moves, got 4 of 8.*move 0: time"):
+    with pytest.raises(GyroMatrixError, match=r"needs 6 usable moves, got 4 of 8.*move 0: time"):
         fit_gyro_matrix(broken, bias)
 
 
@@ -135,3 +134,12 @@ def test_moves_about_one_axis_do_not_determine_k() -> None:
         moves.append(Move(t, rates, before, after))
     with pytest.raises(GyroMatrixError, match="too few axes"):
         fit_gyro_matrix(moves, np.zeros(3))
+
+
+def test_five_moves_are_refused_unless_asked_for() -> None:
+    moves, bias = _moves_of(0)
+    with pytest.raises(GyroMatrixError, match="needs 6 usable moves, got 5 of 5"):
+        fit_gyro_matrix(moves[:5], bias)
+    assert len(fit_gyro_matrix(moves[:5], bias, min_moves=5).used) == 5
+    with pytest.raises(ValueError, match="no degree of freedom"):
+        fit_gyro_matrix(moves, bias, min_moves=4)

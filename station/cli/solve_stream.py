@@ -1,0 +1,72 @@
+"""``calstation solve LOG.csv --stream``: the whole unit from a recorded raw stream.
+
+Still poses, accelerometer, gyro bias and gyro matrix K ([Tedaldi2014]_) by
+:func:`station.gyro.motion.calibrate_stream`; the file format is in
+:mod:`station.gyro.motion.stream_file`.
+"""
+
+from pathlib import Path
+
+import numpy as np
+from rich.table import Table
+
+from station.calibration import CalibrationError, Model
+from station.cli.output import out, print_json
+from station.errors import InputError
+from station.gyro.motion import (
+    GyroMatrixError,
+    StreamCalibration,
+    StreamError,
+    calibrate_stream,
+    stream_thresholds,
+)
+from station.gyro.motion.stream_file import read_stream_file
+from station.sensor import AXES
+
+
+def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: float) -> None:
+    """Calibrate the unit recorded in ``file`` and print the result."""
+    try:
+        stream = read_stream_file(file)
+        result = calibrate_stream(
+            stream, model, thresholds=stream_thresholds(stream.rate_hz, still_window_s)
+        )
+    except CalibrationError as exc:
+        where = "" if exc.pose is None else f" (still pose {exc.pose} from 0)"
+        raise InputError(f"{file}: accelerometer{where}: {exc}") from None
+    except (StreamError, GyroMatrixError) as exc:
+        raise InputError(f"{file}: {exc}") from None
+    if as_json:
+        print_json(result.to_dict())
+    else:
+        out.print(_table(result, file, stream.rate_hz))
+
+
+def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
+    cal, gyro = result.accel.calibration, result.gyro
+    se = gyro.standard_errors
+    table = Table(
+        title=f"{file}: {len(result.stills)} still poses at {rate_hz:.4g} samples/s, "
+        f"{cal.model}-parameter accelerometer, {len(gyro.used)} moves"
+    )
+    table.add_column("axis")
+    table.add_column("offset (counts)", justify="right")
+    table.add_column("sensitivity (counts/g)", justify="right")
+    table.add_column("gyro bias (deg/s)", justify="right")
+    for i, axis in enumerate(AXES):
+        table.add_row(
+            axis, f"{cal.offset[i]:.3f}", f"{cal.sensitivity[i]:.3f}", f"{result.bias_dps[i]:+.4f}"
+        )
+    lines = [
+        f"gyro K {axis}: "
+        + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
+        for i, axis in enumerate(AXES)
+    ]
+    lines += [
+        f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg",
+        f"moves: residual rms {gyro.residual_rms_deg:.3f}° with K, "
+        f"median {float(np.median(gyro.residual_identity_deg)):.3f}° without (K = I)",
+    ]
+    lines += [f"move {u.index} unusable: {u.reason}" for u in gyro.unusable]
+    table.caption = "\n".join(lines)
+    return table

@@ -1,0 +1,135 @@
+"""``calstation solve LOG.csv --stream``: JSON contract, truth recovered, bad input."""
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.calibration.synthetic import spread_directions
+from station.errors import InputError
+from station.gyro.motion import StreamError
+from station.gyro.motion.stream_file import read_stream_file
+from station.gyro.motion.synthetic import (
+    StreamPlan,
+    SyntheticImu,
+    pose_orientations,
+    random_imu,
+    synthetic_stream,
+)
+from tests.conftest import CliRunner
+
+HEADER = "t,ax,ay,az,gx,gy,gz"
+PLAN = StreamPlan(rate_hz=200.0, still_s=1.5, move_s=1.0)
+
+
+def _write(path: Path, rows: np.ndarray, header: str = HEADER) -> Path:
+    np.savetxt(path, rows, delimiter=",", header=header, comments="", fmt="%.9g")
+    return path
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[SyntheticImu, np.ndarray]:
+    rng = np.random.default_rng(11)
+    imu = random_imu(rng)
+    stream = synthetic_stream(rng, imu, pose_orientations(rng, spread_directions(12)), PLAN)
+    return imu, np.column_stack([stream.t, stream.accel_counts, stream.gyro_dps])
+
+
+def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+) -> None:
+    imu, rows = recorded
+    path = _write(tmp_path / "log.csv", rows)
+    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert {"model", "method", "offset", "sensitivity", "matrix", "residual_rms_mg"} <= set(data)
+    assert data["poses"] == 12
+    gyro = data["gyro"]
+    k = np.array(gyro["scale_matrix"])
+    se = np.array(gyro["scale_matrix_standard_errors"])
+    assert (np.abs(k - imu.k_in_calibrated_frame("nine")) <= 5 * se + 1e-4).all()
+    assert np.allclose(gyro["bias_dps"], imu.bias_dps, atol=0.01)
+    assert len(gyro["residual_deg"]) == 11
+    assert gyro["unusable_moves"] == []
+
+
+def test_lost_samples_make_a_move_unusable_and_say_so(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+) -> None:
+    _, rows = recorded
+    still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)
+    middle_of_third_move = 3 * still_n + 2 * move_n + move_n // 2
+    path = _write(
+        tmp_path / "gap.csv",
+        np.delete(rows, range(middle_of_third_move, middle_of_third_move + 5), axis=0),
+    )
+    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json")
+    assert result.returncode == 0, result.stderr
+    gyro = json.loads(result.stdout)["gyro"]
+    assert [u["move"] for u in gyro["unusable_moves"]] == [2]
+    assert "gap" in gyro["unusable_moves"][0]["reason"]
+    assert 2 not in gyro["moves_used"]
+
+
+def test_text_output_names_k_and_the_residuals(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+) -> None:
+    _, rows = recorded
+    path = _write(tmp_path / "log.csv", rows)
+    result = run_cli("solve", str(path), "--stream", "--model", "nine")
+    assert result.returncode == 0, result.stderr
+    assert "12 still poses at 200 samples/s" in result.stdout
+    assert "gyro K z:" in result.stdout
+
+
+def _refused(run_cli: CliRunner, path: Path, *extra: str) -> str:
+    result = run_cli("solve", str(path), "--stream", *extra)
+    assert result.returncode == 2, result.stdout
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert str(path) in lines[0]
+    return lines[0]
+
+
+def test_missing_column_is_refused(run_cli: CliRunner, tmp_path: Path) -> None:
+    path = _write(tmp_path / "nogz.csv", np.zeros((3, 6)), "t,ax,ay,az,gx,gy")
+    assert "header lacks column(s) gz" in _refused(run_cli, path)
+
+
+def test_time_going_back_is_named(
+    tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+) -> None:
+    _, rows = recorded
+    back = rows.copy()
+    back[100, 0] = back[98, 0]
+    path = _write(tmp_path / "back.csv", back)
+    with pytest.raises(StreamError, match="t does not increase at data row 101"):
+        read_stream_file(path)
+
+
+def test_a_cell_that_is_not_a_number_is_named_with_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "text.csv"
+    path.write_text(f"{HEADER}\n0,2048,2048,2867,0,0,0\n0.01,2048,abc,2867,0,0,0\n")
+    with pytest.raises(InputError, match=re.escape(f"{path}:3: column ay: 'abc' is not a number")):
+        read_stream_file(path)
+
+
+def test_a_short_row_is_named_with_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "short.csv"
+    path.write_text(f"{HEADER}\n0,2048,2048,2867,0,0,0\n0.01,2048,2048\n")
+    with pytest.raises(InputError, match=re.escape(f"{path}:3: 3 cells, the header has 7")):
+        read_stream_file(path)
+
+
+def test_too_few_stills_are_refused(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+) -> None:
+    _, rows = recorded
+    still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)
+    path = _write(tmp_path / "short.csv", rows[: 8 * still_n + 7 * move_n])
+    line = _refused(run_cli, path, "--model", "nine")
+    assert "8 still poses found, the nine-parameter model needs 9" in line
