@@ -73,7 +73,7 @@ def test_the_demo_calibrates_the_whole_unit_with_its_profile(
 ) -> None:
     env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path / "data")}
     env.pop("CALSTATION_DATABASE_URL", None)
-    args = ("demo", "--profile", "whole-unit", "--units", "1", "--json", "--speed", "40")
+    args = ("demo", "--profile", "whole-unit", "--units", "1", "--json", "--speed", "20")
     result = run_cli(*args, env=env, timeout=220)
     assert result.returncode == 0, result.stderr
     (unit,) = json.loads(result.stdout)

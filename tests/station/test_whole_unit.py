@@ -33,7 +33,7 @@ from station.storage import HttpStore
 
 SERIAL = "PT000417"
 #: Virtual seconds per real second: a whole unit (13 poses and a move) in a few seconds.
-SPEED = 40.0
+SPEED = 20.0
 
 
 class WholeUnit:

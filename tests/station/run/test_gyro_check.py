@@ -47,6 +47,7 @@ def test_the_unit_s_own_gyros_carry_gravity_only_once_calibrated(
     uncalibrated = verification_angle(putter, driver)
     driver.stop_stream()
     putter.move_to("verify_tilted", 1.5, wait=True)
+    driver.drain_calibrated()  # what was still on the way when the stream stopped
     k = truth.gyro_matrix
     driver.write_gyro_calibration(DeviceCalibration(truth.gyro_bias_dps, np.linalg.inv(k)))
     calibrated = verification_angle(putter, driver)

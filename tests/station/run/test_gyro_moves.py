@@ -90,9 +90,9 @@ def test_moves_a_lossy_link_cut_up_fail_the_fit_in_one_bounded_reason() -> None:
         recorder.captured(pose, still(start + 2000, start + 2999))
     gyro.recorder = recorder
     calibration = Calibration.from_sensitivity([2048.0, 2048.0, 1228.8], [819.2] * 3)
-    with pytest.raises(GyroMatrixError, match="needs 5 usable moves, got 0 of 12") as info:
+    with pytest.raises(GyroMatrixError, match="needs 6 usable moves, got 0 of 12") as info:
         gyro.fit_matrix(calibration, np.zeros(3))
     reason = gyro_matrix_failed(info.value)
     assert reason.code == "gyro_matrix"
     assert len(reason.message) <= MESSAGE_MAX
-    assert reason.message.startswith("gyro matrix: gyro matrix needs 5 usable moves")
+    assert reason.message.startswith("gyro matrix: gyro matrix needs 6 usable moves")
