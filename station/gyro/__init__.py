@@ -13,12 +13,17 @@ Public surface::
     compensate                                  compensation.py inverse of the model
     summarize_still_poses, GyroStillSummary     still.py        the station's still poses
 
+The gyro matrix K from the moves between still poses ([Tedaldi2014]_) and the
+recorded-stream calibration are the subpackage :mod:`station.gyro.motion`.
+
 The Fig. 10-style plot lives in :mod:`station.report.gyro_plot` (it imports matplotlib).
 
 Errors::
 
     station.errors.CalstationError
-    └── NotIdentifiableError    identifiability.py  the log cannot separate the terms asked for
+    ├── NotIdentifiableError    identifiability.py  the log cannot separate the terms asked for
+    ├── motion.GyroMatrixError  motion/errors.py    the moves cannot determine K
+    └── motion.StreamError      motion/errors.py    a recorded stream that cannot be calibrated
 """
 
 from station.gyro.comparison import AxisComparison
