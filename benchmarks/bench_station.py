@@ -2,6 +2,7 @@
 
     python benchmarks/bench_station.py            # 3 units at 10× and 1 unit in real time
     python benchmarks/bench_station.py --quick    # 2 units at 10× only
+    python benchmarks/bench_station.py --cycle    # one unit per profile at 1×: the cycle
 
 A still window cannot be judged before its last sample has arrived, nor the unit's
 own output before its 256 calibrated samples have. For every pose this measures the
@@ -12,6 +13,11 @@ station adds: window evaluations (every 32 samples), orientation checks, solving
 journal writes, write-back and read-back, the database, screens. Reported against
 the physical acquisition time of the seven windows (7 × 1024 samples at 500/s).
 Target: under 5 %.
+
+``--cycle`` measures the whole cycle of one unit, from the scan to the verdict, for the
+six-pose default and for the whole-unit profile (twelve poses, the verification pose
+and the verification move), with fixed 1024-sample windows and the scripted operator's
+1.5 s moves, at 1× (device time = wall time).
 """
 
 import argparse
@@ -29,7 +35,7 @@ from station.config import StationConfig
 from station.demo import ScriptedOperator
 from station.device import DEFAULT_RATE_HZ, PutterDriver
 from station.limits import load_profile
-from station.session import UNIT_OUTPUT_SAMPLES
+from station.run.unit_output import UNIT_OUTPUT_SAMPLES
 from station.storage import DatabaseStore
 
 WINDOW = 1024
@@ -126,10 +132,66 @@ def measure(units: int, speed: float) -> dict[str, Any]:
     }
 
 
+def cycle(profile: str, speed: float = 1.0) -> dict[str, Any]:
+    """One unit of ``profile`` (and its shipped run plan): seconds from scan to verdict."""
+    marks: list[float] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp)
+        port = data / "putter"
+        config = StationConfig(
+            data_dir=data,
+            port=str(port),
+            database_url=f"sqlite:///{data}/r.sqlite3",
+            limits_profile=profile,
+        )
+        operator = ScriptedOperator(units=1, port=port, seed=7, speed=speed)
+        app = StationApp(
+            config=config,
+            profile=load_profile(None, profile),
+            open_store=lambda: DatabaseStore(config.database_url),
+            keys=operator,
+            console=Console(quiet=True),
+            units=1,
+        )
+        operator.station = app
+        start, finish = app._start_unit, app._finish_unit
+
+        def timed_start(*args: Any, **kwargs: Any) -> None:
+            marks.append(time.perf_counter())
+            start(*args, **kwargs)
+
+        def timed_finish(run: Any) -> None:
+            marks.append(time.perf_counter())
+            finish(run)
+
+        app._start_unit = timed_start  # type: ignore[method-assign]
+        app._finish_unit = timed_finish  # type: ignore[method-assign]
+        try:
+            (record,) = app.serve()
+        finally:
+            operator.close()
+    assert record.verdict == "pass", record.failures
+    poses = len(record.poses)
+    return {
+        "profile": profile,
+        "poses": poses,
+        "windows": poses * WINDOW / DEFAULT_RATE_HZ,
+        "cycle": (marks[1] - marks[0]) * speed,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--cycle", action="store_true")
     args = parser.parse_args()
+    if args.cycle:
+        print("| profile | poses captured | fixed windows | cycle, scan → verdict (1×) |")
+        print("|---|---|---|---|")
+        for profile in ("kxm52-production", "whole-unit"):
+            c = cycle(profile)
+            print(f"| {c['profile']} | {c['poses']} | {c['windows']:.1f} s | {c['cycle']:.1f} s |")
+        return
     runs = [(2, 10.0)] if args.quick else [(3, 10.0), (2, 1.0)]
     print(
         "| units | clock | 7 windows | per pose: last sample → capture | "

@@ -41,6 +41,7 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "condition_number": quality.condition_number if quality else None,
         "verification_error_mg": quality.verification_error_mg if quality else None,
         "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
+        "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
         "record_sha256": record_sha256,
     }
 
@@ -104,6 +105,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         "disposition": run.disposition,
         "purpose": run.purpose,
         "gyro": run.gyro,
+        "gyro_matrix": run.gyro_matrix,
         "failures": [
             {
                 "code": f.code,

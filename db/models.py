@@ -87,6 +87,9 @@ class Run(Base):
     condition_number: Mapped[float | None] = mapped_column(Double())
     verification_error_mg: Mapped[float | None] = mapped_column(Double())
     gyro: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
+    #: The gyro matrix K fitted from the moves (whole-unit runs), as
+    #: :class:`station.records.GyroMatrixRecord`'s JSON; None otherwise.
+    gyro_matrix: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
 

@@ -286,6 +286,7 @@ class StationApp:
             profile=self.profile,
             settings=self.config.run,
             reopen=lambda: self._open_unit(serial),
+            g_sensitivity=self.results.g_sensitivity(serial) if self.config.run.gyro else None,
         )
         self.prompt.state = State.UNIT
         self._say_line(f"{serial}: calibration started (run {journal.run_id})")

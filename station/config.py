@@ -15,6 +15,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from station.errors import InputError, validation_problem
 from station.quality.golden import GoldenUnit
+from station.run.plans import shipped_plan
 from station.run.settings import RunSettings
 from station.storage import DatabaseUrl, DataDir, default_data_dir
 
@@ -42,6 +43,18 @@ class StationConfig(BaseSettings):
     run: RunSettings = RunSettings()
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plan_of_the_profile(cls, data: Any) -> Any:
+        """The shipped run plan of the limits profile, under the configured ``[run]`` keys."""
+        if not isinstance(data, dict):
+            return data
+        plan = shipped_plan(data.get("limits_profile"))
+        run = data.get("run", {})
+        if plan is None or not isinstance(run, dict):
+            return data
+        return {**data, "run": {**plan, **run}}
 
     @field_validator("serial_pattern")
     @classmethod

@@ -24,12 +24,14 @@ class DemoUnit:
     serial: str
     putter: VirtualPutter
 
-    def truth(self) -> dict[str, dict[str, float]]:
-        """The unit's true offsets (counts) and sensitivities (counts/g) at 25 °C."""
+    def truth(self) -> dict[str, Any]:
+        """The unit's true offsets (counts) and sensitivities (counts/g) at 25 °C, and its
+        gyro matrix K in body axes."""
         t = self.putter.truth
         return {
             "offset": dict(zip("xyz", map(float, t.offset_counts), strict=True)),
             "sensitivity": dict(zip("xyz", map(float, t.sensitivity_counts_per_g), strict=True)),
+            "gyro_matrix": t.gyro_matrix.tolist(),
         }
 
 

@@ -78,6 +78,19 @@ class LimitsProfile(BaseModel):
         int | None,
         Field(ge=1, le=100, description="attempts per unit (aborts not counted) before rework"),
     ] = None
+    gyro_scale_error: Annotated[
+        Bounds | None, Field(description="K_ii − 1 of the fitted gyro matrix; absent: unchecked")
+    ] = None
+    gyro_misalignment: Annotated[
+        Bounds | None, Field(description="K_ij (i ≠ j) of the gyro matrix; absent: unchecked")
+    ] = None
+    gyro_verification_deg: Annotated[
+        Bounds | None,
+        Field(
+            description="angle between the gravity change and the rotation the unit's own "
+            "calibrated gyros integrate over the verification move, degrees; absent: unchecked"
+        ),
+    ] = None
     fit_residual_counts: Annotated[
         Bounds | None,
         Field(
@@ -100,12 +113,18 @@ class LimitsProfile(BaseModel):
     def document(self) -> dict[str, JsonValue]:
         """The profile as the JSON document its SHA-256 is taken over (and a run carries).
 
-        A profile without a retest limit or a fit residual limit leaves the field out, so
-        it hashes as before the field existed.
+        An optional setting left out (a retest limit, a fit residual limit, the gyro
+        bounds) is left out of the document too, so a profile without it hashes as before
+        the setting existed.
         """
         unset = {name for name in _OPTIONAL if getattr(self, name) is None}
         document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset or None)
         return document
+
+    @property
+    def checks_gyro_matrix(self) -> bool:
+        """Whether the profile bounds the gyro matrix (so the run must fit it)."""
+        return self.gyro_scale_error is not None or self.gyro_misalignment is not None
 
     @property
     def sha256(self) -> str:
@@ -121,8 +140,15 @@ class LimitsProfile(BaseModel):
         )
 
 
-#: Settings added after profiles were first stored: left out of the document when unset.
-_OPTIONAL = ("retest_limit", "fit_residual_counts")
+#: Settings a profile may leave out (added after profiles were first stored); absent,
+#: they are not part of its hash.
+_OPTIONAL = (
+    "retest_limit",
+    "fit_residual_counts",
+    "gyro_scale_error",
+    "gyro_misalignment",
+    "gyro_verification_deg",
+)
 
 
 def profile_of(ref: LimitsRef) -> LimitsProfile | None:
@@ -154,6 +180,9 @@ CHECKS: dict[str, str] = {
     "link_loss": "link_loss",
     "writeback": "writeback_relative_error",
     "unit_output": "verification_error_mg",
+    "gyro_scale": "gyro_scale_error",
+    "gyro_misalignment": "gyro_misalignment",
+    "gyro_verification": "gyro_verification_deg",
 }
 UNITS = {
     "offset": "counts",
@@ -164,6 +193,9 @@ UNITS = {
     "link_loss": "",
     "writeback": "",
     "unit_output": "mg",
+    "gyro_scale": "",
+    "gyro_misalignment": "",
+    "gyro_verification": "deg",
 }
 
 
@@ -177,10 +209,11 @@ def check(
 ) -> FailureReason | None:
     """Compare ``measured`` with the profile's bounds for ``code``.
 
-    Returns ``None`` when within bounds, else the failure reason.
+    Returns ``None`` when within bounds (or when the profile sets no bounds for an
+    optional check), else the failure reason.
     """
-    bounds: Bounds = getattr(profile, CHECKS[code])
-    if bounds.contains(measured):
+    bounds: Bounds | None = getattr(profile, CHECKS[code])
+    if bounds is None or bounds.contains(measured):
         return None
     where = "".join([f" {axis}" if axis else "", f" (pose {pose + 1})" if pose is not None else ""])
     unit = f" {UNITS[code]}" if UNITS[code] else ""

@@ -85,3 +85,24 @@ def check_plan(
             check()
         except ValueError as exc:
             raise ValueError(f"{key}: {exc}") from None
+
+
+def check_gyro_plan(model: Model, verification: str, last: str, separation_deg: float) -> None:
+    """``ValueError`` when a plan with the gyro matrix could not give a good one.
+
+    The gyro matrix is fitted against gravity directions from the calibrated
+    accelerometer: a six-parameter fit, blind to the KXM52's 2 % cross-axis coupling,
+    skews them enough to make K about 1.5 % wrong ([Tedaldi2014]_ procedure, measured
+    with a reference solver). The verification move must turn the unit visibly.
+    """
+    if model != "nine":
+        raise ValueError(
+            "gyro: the gyro matrix needs model = 'nine': a six-parameter accelerometer "
+            "skews the gravity directions K is fitted to by up to 1.5 %"
+        )
+    apart = angle_deg(pose(verification).gravity_body, pose(last).gravity_body)
+    if apart < separation_deg:
+        raise ValueError(
+            f"gyro_verification_pose: {last!r} is {apart:.0f}° from the verification pose, "
+            f"under {separation_deg:g}°: the verification move would barely turn the unit"
+        )

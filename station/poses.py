@@ -43,6 +43,26 @@ def _pose(name: str, euler_xyz_deg: tuple[float, float, float], instruction: str
     return Pose(name, Rotation.from_euler("xyz", euler_xyz_deg, degrees=True), instruction)
 
 
+def _corner(signs: tuple[int, int, int]) -> Pose:
+    """The putter in a corner cradle: gravity's reaction along the cube diagonal ``signs``.
+
+    Named by the three parts that point up (toe or heel, face or back, grip or head); the
+    rotation is the smallest that lifts that diagonal to world up.
+    """
+    parts = (("toe", "heel"), ("face", "back"), ("grip", "head"))
+    up = [pair[0] if sign > 0 else pair[1] for pair, sign in zip(parts, signs, strict=True)]
+    diagonal = np.array(signs, dtype=np.float64) / np.sqrt(3.0)
+    rotation = Rotation.align_vectors([UP], [diagonal])[0]
+    words = f"{up[0]}, {up[1]} and {up[2]}"
+    return Pose("_".join((*up, "up")), rotation, f"put the putter in the corner cradle, {words} up")
+
+
+#: The corner poses of the whole-unit plan: the cube diagonals at least 60° from the
+#: verification pose (the nine-parameter fit and the gyro moves need directions off the
+#: axes).
+CORNER_SIGNS: Final = ((1, 1, -1), (1, -1, 1), (1, -1, -1), (-1, 1, 1), (-1, 1, -1), (-1, -1, 1))
+
+
 #: Every named pose, by name.
 POSES: Final = MappingProxyType(
     {
@@ -59,6 +79,7 @@ POSES: Final = MappingProxyType(
                 (35.0, -40.0, 0),
                 "put the putter in the tilted verification cradle",
             ),
+            *(_corner(signs) for signs in CORNER_SIGNS),
         )
     }
 )

@@ -14,7 +14,7 @@ import json
 import math
 from collections.abc import Callable, Mapping
 from datetime import UTC, datetime, timedelta
-from typing import Annotated, Literal, Self
+from typing import Annotated, Final, Literal, Self
 from uuid import UUID
 
 from pydantic import (
@@ -59,6 +59,8 @@ __all__ = [
     "Disposition",
     "FailureReason",
     "GyroFitRecord",
+    "GyroMatrixRecord",
+    "GyroMove",
     "GyroSummary",
     "LimitsRef",
     "LinkStats",
@@ -264,6 +266,52 @@ class GyroSummary(_Record):
     still: GyroStillSummary | None = None
 
 
+#: Largest magnitude of a stored gyro-matrix element (K is I within a few %).
+GYRO_MATRIX_MAX: Final = 2.0
+GyroMatrixEntry = Annotated[float, Field(ge=-GYRO_MATRIX_MAX, le=GYRO_MATRIX_MAX)]
+GyroMatrixError = Annotated[float, Field(ge=0, le=GYRO_MATRIX_MAX)]
+AngleDeg = Annotated[float, Field(ge=0, le=180)]
+_Row = tuple[GyroMatrixEntry, GyroMatrixEntry, GyroMatrixEntry]
+_ErrorRow = tuple[GyroMatrixError, GyroMatrixError, GyroMatrixError]
+
+
+class GyroMove(_Record):
+    """One move between two still poses (indexes of the run's poses) and its residual.
+
+    ``residual_deg`` is the angle between gravity's direction in the pose before the
+    move and the one after, carried back by the rotation integrated from the corrected
+    gyros; ``unusable`` says why a move was left out of the fit (samples lost, the
+    stream restarted, a pose taken again), and then there is no residual.
+    """
+
+    before: Count
+    after: Count
+    residual_deg: AngleDeg | None = None
+    unusable: Text | None = None
+
+
+class GyroMatrixRecord(_Record):
+    """The gyro matrix the station fitted from the moves and wrote into the unit.
+
+    Model ([Tedaldi2014]_): the gyros read ``measured = bias + K·ω`` (deg/s), ω the true
+    rate in the calibrated accelerometer's frame. ``matrix`` is K (row = gyro, column =
+    rate axis), ``standard_errors`` the 1-σ of each element (None with no redundancy),
+    ``bias_dps`` the bias over the still poses. The unit holds ``bias_dps`` and K⁻¹
+    (``docs/protocol.md``). ``g_sensitivity_removed`` says whether a stored [Park2014]_
+    fit's 1 g term was taken out of the rates first; ``verification_deg`` is the check
+    of the unit's own calibrated gyros over the verification move.
+    """
+
+    matrix: tuple[_Row, _Row, _Row]
+    standard_errors: tuple[_ErrorRow, _ErrorRow, _ErrorRow] | None = None
+    bias_dps: GyroRate3
+    moves: Annotated[tuple[GyroMove, ...], Field(max_length=128)] = ()
+    residual_rms_deg: AngleDeg
+    condition_number: ConditionNumber
+    g_sensitivity_removed: bool = False
+    verification_deg: AngleDeg | None = None
+
+
 def document_sha256(document: Mapping[str, JsonValue]) -> str:
     """SHA-256 of a JSON document's canonical text (sorted keys, no whitespace, ASCII):
     a limits profile's identity (:attr:`station.limits.LimitsProfile.sha256`)."""
@@ -329,6 +377,8 @@ class _RunHeader(_Record):
     coefficients: Coefficients | None = None
     quality: QualityMetrics | None = None
     gyro: GyroSummary | None = None
+    #: The gyro matrix K fitted from the moves (whole-unit runs); None otherwise.
+    gyro_matrix: GyroMatrixRecord | None = None
 
     @model_validator(mode="after")
     def _consistent_outcome(self) -> Self:

@@ -15,7 +15,9 @@ from pathlib import Path
 from rich.console import RenderableType
 from rich.text import Text
 
+from station.arrays import FloatArray
 from station.disk import DiskWatch
+from station.gyro import NotIdentifiableError
 from station.journal import JournalFile
 from station.outbox import Outbox, waiting
 from station.records import RunRecord
@@ -71,6 +73,26 @@ class ResultsLink:
         if self._store is None:
             self.check_store()
         return UnitHistory.gather(serial, self._store, self.outbox.pending())
+
+    def g_sensitivity(self, serial: str) -> FloatArray | None:
+        """The scale-factor g-sensitivity ``N`` (3×3, 1/g) of the unit's stored
+        [Park2014]_ fit, for the gyro matrix (None: no fit, or the store cannot say)."""
+        if self._store is None:
+            self.check_store()
+        if self._store is None:
+            return None
+        try:
+            fit = self._store.gyro_fit(serial)
+        except StoreError as exc:
+            self._say_line(f"gyro fit of {serial} unavailable ({exc}): K keeps its g-sensitivity")
+            return None
+        if fit is None:
+            return None
+        try:
+            return fit.report.error_model().n_g
+        except NotIdentifiableError:
+            self._say_line(f"gyro fit of {serial} is incomplete: K keeps its g-sensitivity")
+            return None
 
     def sync_if_due(self) -> None:
         """Try the outbox again when runs wait in it and the last try is long enough ago."""

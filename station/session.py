@@ -22,6 +22,7 @@ lives in its module under :mod:`station.run`.
 from collections.abc import Callable
 
 from station.acquisition.pose import PoseResult
+from station.arrays import FloatArray
 from station.calibration import CalibrationError, Solution, solve
 from station.device import (
     DeviceDisconnectedError,
@@ -29,6 +30,7 @@ from station.device import (
     DeviceTimeoutError,
     PutterDriver,
 )
+from station.gyro.motion import GyroMatrixError
 from station.journal import JournalFile, RunJournal
 from station.limits import LimitsProfile, check
 from station.operator_text import pose_words
@@ -36,12 +38,20 @@ from station.poses import Pose, pose
 from station.records import PoseRecord, PoseRole, RunRecord
 from station.run import record
 from station.run.capture import LiveView, PoseCapture, Saturated
+from station.run.conclusion import conclude
+from station.run.gyro import LiveGyro
 from station.run.messages import MessageLog
 from station.run.phases import REDO_ALLOWED, Phase, advance
 from station.run.reconnect import Reconnect
 from station.run.settings import RunSettings
 from station.run.unit_output import UnitOutputCheck
-from station.run.verdict import Failures, calibration_failed, saturated, writeback_failed
+from station.run.verdict import (
+    Failures,
+    calibration_failed,
+    gyro_matrix_failed,
+    saturated,
+    writeback_failed,
+)
 from station.run.view import RunView
 from station.run.writeback import write_and_read_back
 
@@ -58,6 +68,7 @@ class UnitRun:
         profile: LimitsProfile,
         settings: RunSettings,
         reopen: Callable[[], PutterDriver],
+        g_sensitivity: FloatArray | None = None,
     ) -> None:
         self.driver = driver
         self.journal = journal
@@ -70,8 +81,13 @@ class UnitRun:
         self.messages = MessageLog()
         self.solution: Solution | None = None
         self.record: RunRecord | None = None
+        self._gyro = LiveGyro(driver.rate_hz, settings, g_sensitivity) if settings.gyro else None
         self._capture = PoseCapture(
-            settings, journal, self.messages, settings.window_policy(profile)
+            settings,
+            journal,
+            self.messages,
+            settings.window_policy(profile),
+            self._gyro.recorder.feed if self._gyro else None,
         )
         self._reconnect = Reconnect(self.messages, reopen)
         self._unit_output = UnitOutputCheck()
@@ -92,7 +108,9 @@ class UnitRun:
 
     @property
     def requested(self) -> Pose | None:
-        """The pose asked for now (None once all are taken)."""
+        """The pose asked for now (the verification move's end once the poses are taken)."""
+        if self._gyro is not None and self._gyro.verifying:
+            return pose(self.settings.gyro_verification_pose)
         return self.sequence[self.index] if self.index < len(self.sequence) else None
 
     @property
@@ -145,9 +163,8 @@ class UnitRun:
 
     def redo_last(self) -> None:
         """Take the most recently captured pose again."""
-        if self.journal.captures:
-            last = max(self.journal.captures, key=lambda i: self.journal.captures[i].captured_at)
-            self.redo(last)
+        if captures := self.journal.captures:
+            self.redo(max(captures, key=lambda i: captures[i].captured_at))
 
     def abort(self) -> RunRecord | None:
         """Stop this unit. With poses taken, the run is recorded as failed ("aborted")."""
@@ -208,6 +225,8 @@ class UnitRun:
         capture = record.capture_of(result, index, target.name, self._role(index), replaced)
         self.journal.captures[index] = capture
         self.journal_file.save(self.journal)
+        if self._gyro is not None:
+            self._gyro.recorder.captured(index, result)
         self.messages.say("info", f"pose {index + 1} ({pose_words(target.name)}) captured")
         self.index = self.journal.next_pose
         if self.index >= self.fit_count and self.solution is None:
@@ -238,30 +257,41 @@ class UnitRun:
     def _write_back(self) -> None:
         self._go(Phase.WRITE_BACK)
         assert self.solution is not None
+        captures = self.journal.captures
         try:
-            relative = write_and_read_back(self.driver, self.solution.calibration)
-        except DeviceError as exc:
-            self._failures.add(writeback_failed(exc))
+            gyro = self._gyro.coefficients(captures, self.solution) if self._gyro else None
+            relative = write_and_read_back(self.driver, self.solution.calibration, gyro)
+        except (GyroMatrixError, DeviceError) as exc:
+            failed = gyro_matrix_failed if isinstance(exc, GyroMatrixError) else writeback_failed
+            self._failures.add(failed(exc))
             self._finish(store=True)
             return
         self.written = True
         if (reason := check(self.profile, "writeback", relative)) is not None:
             self._failures.add(reason)
         self.driver.start_stream(calibrated=True)
-        self._unit_output = UnitOutputCheck()
+        self._unit_output = UnitOutputCheck(keep_streaming=self._gyro is not None)
         self._go(Phase.UNIT_OUTPUT)
         self.messages.say(
             "info", "coefficients written and read back: checking the unit's own output"
         )
 
     def _step_unit_output(self) -> None:
+        gyro = self._gyro
+        if gyro is not None and gyro.verifying:
+            if gyro.poll_verification(self.driver):
+                self._finish(store=True)
+            return
         error_mg = self._unit_output.poll(self.driver)
         if error_mg is None:
             return
         self.unit_output_error_mg = error_mg
         if (reason := check(self.profile, "unit_output", error_mg)) is not None:
             self._failures.add(reason)
-        self._finish(store=True)
+        if gyro is None:
+            self._finish(store=True)
+        else:
+            self.messages.say("info", gyro.start_verification(self._unit_output))
 
     def _step_reconnect(self) -> None:
         driver = self._reconnect.attempt()
@@ -279,22 +309,17 @@ class UnitRun:
 
     def _finish(self, *, store: bool) -> None:
         self._go(Phase.VERDICT)
-        captures = self.journal.captures
-        gyro = record.gyro_summary(captures, self.fit_count, self.solution)
-        verdict = self._failures.final(self.profile, captures, self.solution, self.fit_count, gyro)
-        self.verification_error_mg = verdict.verification_error_mg
-        self._go(Phase.DONE)
-        self._capture.clear_view()
-        if not store:
-            self.record = None
-            return
-        self.record = record.run_record(
+        outcome = conclude(
             self.journal,
             self.settings,
             self.profile,
             self.solution,
-            failures=verdict.reasons,
-            verification_error_mg=self.verification_error_mg,
-            gyro=gyro,
-            poses=record.pose_records(captures, self._evidence),
+            self._failures,
+            evidence=self._evidence,
+            gyro=self._gyro,
+            store=store,
         )
+        self.verification_error_mg = outcome.verification_error_mg
+        self.record = outcome.record
+        self._go(Phase.DONE)
+        self._capture.clear_view()

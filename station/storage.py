@@ -45,7 +45,7 @@ from db import (
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.closing import Closing
 from station.errors import CalstationError, InputError
-from station.records import RunRecord, RunSummary, StoredRun
+from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun
 
 __all__ = [
     "DataDir",
@@ -103,6 +103,10 @@ class RunStore(Protocol):
         """Every stored run of the unit, oldest first; :class:`StoreUnavailableError`."""
         ...
 
+    def gyro_fit(self, serial: str) -> GyroFitRecord | None:
+        """The unit's latest [Park2014]_ gyro fit, or None; :class:`StoreUnavailableError`."""
+        ...
+
     def close(self) -> None:
         """Release connections."""
         ...
@@ -141,6 +145,14 @@ class DatabaseStore(Closing):
         try:
             with self.database.session() as session:
                 return RunRepository(session).history(serial)
+        except SQLAlchemyError as exc:
+            url = self.database.engine.url
+            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
+
+    def gyro_fit(self, serial: str) -> GyroFitRecord | None:
+        try:
+            with self.database.session() as session:
+                return RunRepository(session).latest_gyro_fit(serial)
         except SQLAlchemyError as exc:
             url = self.database.engine.url
             raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
@@ -209,6 +221,20 @@ class HttpStore(Closing):
                 f"results server {self.client.base_url}: no history of {serial}: {exc}"
             ) from None
 
+    def gyro_fit(self, serial: str) -> GyroFitRecord | None:
+        """``GET /api/v1/units/{serial}/gyro``'s ``fit``; a unit the server does not know
+        has none."""
+        try:
+            response = self.client.get(f"{UNITS_PATH}/{serial}/gyro", timeout=HISTORY_TIMEOUT_S)
+            if response.status_code == 404:
+                return None
+            response.raise_for_status()
+            return UnitGyroFit.model_validate_json(response.content).fit
+        except (httpx.HTTPError, ValueError) as exc:
+            raise StoreUnavailableError(
+                f"results server {self.client.base_url}: no gyro fit of {serial}: {exc}"
+            ) from None
+
     def close(self) -> None:
         self.client.close()
 
@@ -265,6 +291,12 @@ def _http_error(base_url: httpx.URL, record: RunRecord, response: httpx.Response
     return StoreConfigurationError(
         f"results server answered {code} ({message}): check server_url and api_key"
     )
+
+
+class UnitGyroFit(BaseModel):
+    """The part of ``GET /api/v1/units/{serial}/gyro`` the station reads."""
+
+    fit: GyroFitRecord | None
 
 
 class RunHistory(BaseModel):

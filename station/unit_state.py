@@ -30,6 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from station.records import (
     Disposition,
     FailureReason,
+    GyroMatrixRecord,
     GyroSummary,
     LimitsRef,
     Matrix3,
@@ -58,7 +59,7 @@ Run = RunRecord | RunSummary | StoredRun
 #: Failure code of a run the operator aborted.
 ABORTED = "aborted"
 #: Failure codes of runs that ended before a verified write-back.
-UNWRITTEN = frozenset({ABORTED, "calibration", "saturated", "writeback"})
+UNWRITTEN = frozenset({ABORTED, "calibration", "gyro_matrix", "saturated", "writeback"})
 #: Failure codes that say the unit itself is broken: no retest will fix it.
 BROKEN = frozenset({"saturated", "writeback"})
 #: Attempts per unit (aborts not counted) when the limits profile sets none.
@@ -116,6 +117,10 @@ class HeldCalibration(_Part):
     sensitivity: Annotated[Vector3, Field(description="counts/g")]
     matrix: Annotated[Matrix3, Field(description="counts → g, g = M·(raw − offset)")]
     quality: QualityMetrics | None
+    gyro_matrix: Annotated[
+        GyroMatrixRecord | None,
+        Field(description="the gyro matrix K and bias written (whole-unit runs; None: none)"),
+    ] = None
 
 
 class UnitAttempt(_Part):
@@ -212,6 +217,7 @@ def _held(writer: Run) -> HeldCalibration | None:
         sensitivity=cal.sensitivity,
         matrix=cal.matrix,
         quality=writer.quality,
+        gyro_matrix=writer.gyro_matrix,
     )
 
 

@@ -94,6 +94,14 @@ def demo_command(
         float, typer.Option(min=0.1, help="Virtual clock speed (× real time).")
     ] = 10.0,
     seed: Annotated[int, typer.Option(help="Seed of the virtual units.")] = 1,
+    profile: Annotated[
+        str | None,
+        typer.Option(
+            "--profile",
+            help="Limits profile, with its run plan if one is shipped: whole-unit "
+            "calibrates the gyro matrix too (12 poses).",
+        ),
+    ] = None,
     config_file: ConfigOption = None,
     station: StationOption = None,
     operator: OperatorOption = None,
@@ -106,6 +114,7 @@ def demo_command(
             "station_id": station or "demo-station",
             "operator_id": operator or "demo-operator",
             "lot": lot or "demo-lot",
+            "limits_profile": profile,
         },
     )
     prepare_data_dir(config.data_dir)
@@ -137,10 +146,12 @@ def demo_command(
     summary = []
     for record in records:
         unit = by_serial[record.serial]
-        estimate = None
+        estimate: dict[str, Any] | None = None
         if record.coefficients is not None:
             c = record.coefficients
             estimate = {"offset": c.offset.model_dump(), "sensitivity": c.sensitivity.model_dump()}
+            if record.gyro_matrix is not None:
+                estimate["gyro_matrix"] = record.gyro_matrix.matrix
         summary.append(
             {
                 "serial": record.serial,

@@ -236,6 +236,15 @@ class PutterDriver(Closing):
         reply = self._command(FrameType.READ_CAL, b"", FrameType.CALIBRATION)
         return DeviceCalibration.decode_reply(reply.payload)
 
+    def write_gyro_calibration(self, calibration: DeviceCalibration) -> None:
+        """Store the gyro coefficients (bias, K⁻¹) in the unit (the gyro extension)."""
+        self._command(FrameType.WRITE_GYRO_CAL, calibration.encode(), FrameType.ACK)
+
+    def read_gyro_calibration(self) -> DeviceCalibration:
+        """Read back the gyro coefficients the unit holds (the gyro extension)."""
+        reply = self._command(FrameType.READ_GYRO_CAL, b"", FrameType.GYRO_CALIBRATION)
+        return DeviceCalibration.decode_reply(reply.payload)
+
     def _command(self, command: FrameType, payload: bytes, expect: FrameType) -> Frame:
         frame = encode_frame(command, payload)
         replies = self._link.replies

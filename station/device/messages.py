@@ -51,9 +51,11 @@ class DeviceCalibration:
     """Calibration coefficients as the unit stores them (IEEE-754 float32).
 
     The unit turns counts into g with ``g = matrix @ (raw - offset)``: ``offset`` is
-    3 counts, ``matrix`` 3-by-3 in g/count. Values are rounded to float32 on
-    construction, so what is written compares exactly with what is read back.
-    ``written`` is False while the unit still holds its factory defaults.
+    3 counts, ``matrix`` 3-by-3 in g/count. The gyro coefficients have the same form
+    (:meth:`gyro_default`): ``rate = matrix @ (measured - offset)`` with ``offset`` the
+    gyro bias in deg/s and ``matrix`` the inverse of the gyro matrix K. Values are
+    rounded to float32 on construction, so what is written compares exactly with what
+    is read back. ``written`` is False while the unit still holds its factory defaults.
     """
 
     offset: FloatArray
@@ -94,8 +96,14 @@ class DeviceCalibration:
             written=False,
         )
 
+    @classmethod
+    def gyro_default(cls) -> "DeviceCalibration":
+        """The gyro coefficients of a fresh unit: no bias, unit matrix, not written."""
+        return cls(np.zeros(3), np.eye(3), written=False)
+
     def apply(self, raw: FloatArray) -> FloatArray:
-        """N-by-3 counts to N-by-3 g, as the unit does in calibrated mode."""
+        """N-by-3 counts to N-by-3 g (or gyro deg/s to deg/s), as the unit does in
+        calibrated mode."""
         return (np.asarray(raw, dtype=np.float64) - self.offset) @ self.matrix.T
 
     def encode(self) -> bytes:

@@ -1,5 +1,9 @@
 """The putter's serial protocol, version 1: framing, CRC and payload codecs.
 
+Version 1 with the gyro-coefficient extension (WRITE_GYRO_CAL, READ_GYRO_CAL,
+GYRO_CALIBRATION): a unit without it answers UNKNOWN_COMMAND, and a station that does
+not calibrate gyros never sends them, so either side may be older.
+
 Every message in either direction is one frame (all integers little-endian except
 the CRC)::
 
@@ -53,9 +57,12 @@ class FrameType(IntEnum):
     SET_RATE = 0x13
     WRITE_CAL = 0x14
     READ_CAL = 0x15
+    WRITE_GYRO_CAL = 0x16
+    READ_GYRO_CAL = 0x17
     ACK = 0x80
     IDENTITY = 0x81
     CALIBRATION = 0x82
+    GYRO_CALIBRATION = 0x83
     ERROR = 0x8F
 
 
@@ -99,9 +106,12 @@ PAYLOAD_LENGTHS: Final[dict[int, tuple[int, int]]] = {
     FrameType.SET_RATE: (RATE_STRUCT.size, RATE_STRUCT.size),
     FrameType.WRITE_CAL: (CALIBRATION_STRUCT.size, CALIBRATION_STRUCT.size),
     FrameType.READ_CAL: (0, 0),
+    FrameType.WRITE_GYRO_CAL: (CALIBRATION_STRUCT.size, CALIBRATION_STRUCT.size),
+    FrameType.READ_GYRO_CAL: (0, 0),
     FrameType.ACK: (1, 1),
     FrameType.IDENTITY: (IDENTITY_STRUCT.size, IDENTITY_STRUCT.size),
     FrameType.CALIBRATION: (CALIBRATION_REPLY_STRUCT.size, CALIBRATION_REPLY_STRUCT.size),
+    FrameType.GYRO_CALIBRATION: (CALIBRATION_REPLY_STRUCT.size, CALIBRATION_REPLY_STRUCT.size),
     FrameType.ERROR: (2, 2 + MAX_ERROR_TEXT),
 }
 

@@ -9,6 +9,7 @@ when the unit lies in the pose asked for, away from every pose taken before; wha
 done with it is :class:`station.session.UnitRun`'s business.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -61,10 +62,13 @@ class PoseCapture:
         journal: RunJournal,
         messages: MessageLog,
         policy: WindowPolicy,
+        on_samples: Callable[[SampleBlock], None] | None = None,
     ) -> None:
         self.settings = settings
         #: How long a still window is (fixed, or adaptive to the limits' budget).
         self.policy = policy
+        #: Called with every block of samples drained (the gyro stream of a whole-unit run).
+        self._on_samples = on_samples
         self._journal = journal
         self._messages = messages
         self._names = journal.poses
@@ -102,7 +106,11 @@ class PoseCapture:
         acquisition = self._acquisition
         assert acquisition is not None
         try:
-            result = acquisition.poll()
+            try:
+                result = acquisition.poll()
+            finally:
+                if self._on_samples is not None:
+                    self._on_samples(acquisition.recent)
         except SaturatedAxisError:
             verdict = acquisition.last_verdict
             assert verdict is not None  # the error comes from a judged window

@@ -19,6 +19,7 @@ from station.limits import LimitsProfile
 from station.records import (
     Coefficients,
     FailureReason,
+    GyroMatrixRecord,
     GyroSummary,
     LinkStats,
     PoseRecord,
@@ -168,6 +169,7 @@ def run_record(
     verification_error_mg: float | None,
     gyro: GyroSummary | None,
     poses: tuple[PoseRecord, ...],
+    gyro_matrix: GyroMatrixRecord | None = None,
 ) -> RunRecord:
     """The record of the finished run, as it goes to the outbox."""
     coefficients = quality = None
@@ -196,5 +198,6 @@ def run_record(
         coefficients=coefficients,
         quality=quality,
         gyro=gyro,
+        gyro_matrix=gyro_matrix,
         poses=poses,
     )

@@ -13,7 +13,7 @@ from station.calibration import Model
 from station.capture_budget import AdaptiveCapture, WindowPolicy
 from station.limits import LimitsProfile
 from station.orientation import POSE_TOLERANCE_DEG
-from station.pose_plan import check_plan
+from station.pose_plan import check_gyro_plan, check_plan
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
 
 
@@ -37,6 +37,14 @@ class RunSettings(BaseModel):
         "window ends when its mean meets the limits' accuracy budget ([run.adaptive])",
     )
     adaptive: AdaptiveCapture = AdaptiveCapture()
+    gyro: bool = Field(
+        False,
+        description="fit the gyro matrix K from the moves between the poses, write it "
+        "into the unit and check it on the verification move [Tedaldi2014]",
+    )
+    gyro_verification_pose: str = Field(
+        "face_up", description="where the verification move takes the unit (with gyro)"
+    )
 
     def window_policy(self, profile: LimitsProfile) -> WindowPolicy:
         """How long a pose's still window is, under ``profile``'s limits."""
@@ -44,7 +52,7 @@ class RunSettings(BaseModel):
             return WindowPolicy.adaptive(self.adaptive, profile)
         return WindowPolicy.fixed(self.stillness.window_samples)
 
-    @field_validator("poses", "verification_pose")
+    @field_validator("poses", "verification_pose", "gyro_verification_pose")
     @classmethod
     def _known_poses(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
         names = (value,) if isinstance(value, str) else value
@@ -56,4 +64,11 @@ class RunSettings(BaseModel):
     @model_validator(mode="after")
     def _can_finish(self) -> "RunSettings":
         check_plan(self.poses, self.verification_pose, self.min_pose_separation_deg, self.model)
+        if self.gyro:
+            check_gyro_plan(
+                self.model,
+                self.verification_pose,
+                self.gyro_verification_pose,
+                self.min_pose_separation_deg,
+            )
         return self

@@ -2,7 +2,9 @@
 
 After the write-back the unit streams calibrated samples; :class:`UnitOutputCheck`
 gathers :data:`UNIT_OUTPUT_SAMPLES` of them and answers how far their mean |g| lies from
-1 g, in mg. A unit that sends nothing for :data:`STALL_S` counts as gone.
+1 g, in mg. A unit that sends nothing for :data:`STALL_S` counts as gone. A whole-unit
+run keeps the stream going: the window and the samples after it start the verification
+move (:mod:`station.run.gyro_check`).
 """
 
 import time
@@ -21,12 +23,17 @@ STALL_S = 2.0
 class UnitOutputCheck:
     """The calibrated samples received so far, and when the last one came."""
 
-    def __init__(self) -> None:
+    def __init__(self, *, keep_streaming: bool = False) -> None:
         self._blocks: list[SampleBlock] = []
         self._last_arrival = time.monotonic()
+        self._keep_streaming = keep_streaming
+        #: The samples averaged, and those received after them (once answered).
+        self.window = SampleBlock.empty()
+        self.rest = SampleBlock.empty()
 
     def poll(self, driver: PutterDriver) -> float | None:
-        """The unit's |g| error in mg once enough samples came (the stream then stops).
+        """The unit's |g| error in mg once enough samples came (the stream then stops,
+        unless it is kept for the verification move).
 
         Raises :class:`station.device.DeviceTimeoutError` when the unit went quiet.
         """
@@ -40,6 +47,8 @@ class UnitOutputCheck:
         got = SampleBlock.concat(self._blocks)
         if len(got) < UNIT_OUTPUT_SAMPLES:
             return None
-        driver.stop_stream()
-        g = got[:UNIT_OUTPUT_SAMPLES].summary().accel_mean
+        if not self._keep_streaming:
+            driver.stop_stream()
+        self.window, self.rest = got[:UNIT_OUTPUT_SAMPLES], got[UNIT_OUTPUT_SAMPLES:]
+        g = self.window.summary().accel_mean
         return abs(float(np.linalg.norm(g)) - 1.0) * 1000.0

@@ -38,6 +38,24 @@ def writeback_failed(exc: Exception) -> FailureReason:
     return FailureReason(code="writeback", message=f"write-back failed: {exc}")
 
 
+#: Longest failure message kept (the record's limit is 500 characters).
+MESSAGE_MAX = 300
+
+
+def gyro_matrix_failed(exc: Exception) -> FailureReason:
+    """The moves between the poses could not give the gyro matrix (``exc`` says why,
+    move by move: cut short past :data:`MESSAGE_MAX` characters)."""
+    message = f"gyro matrix: {exc}"
+    if len(message) > MESSAGE_MAX:
+        message = message[: MESSAGE_MAX - 1] + "…"
+    return FailureReason(code="gyro_matrix", message=message)
+
+
+def verification_move_failed(problem: str) -> FailureReason:
+    """The verification move gave no angle to check the unit's own gyros with."""
+    return FailureReason(code="gyro_verification", message=f"verification move: {problem}")
+
+
 class Failures:
     """The failures of one run so far."""
 

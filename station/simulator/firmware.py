@@ -26,6 +26,8 @@ _COMMANDS: Final = frozenset(
         FrameType.SET_RATE,
         FrameType.WRITE_CAL,
         FrameType.READ_CAL,
+        FrameType.WRITE_GYRO_CAL,
+        FrameType.READ_GYRO_CAL,
     }
 )
 
@@ -39,17 +41,27 @@ class _RefusedError(Exception):
         self.text = text
 
 
+def _coefficients(payload: bytes) -> DeviceCalibration:
+    """The coefficients of a WRITE_CAL or WRITE_GYRO_CAL payload; non-finite ones refused."""
+    try:
+        return DeviceCalibration.decode(payload)
+    except ValueError:
+        raise _RefusedError(ErrorCode.BAD_VALUE, "coefficients not finite") from None
+
+
 class Firmware:
     """The unit's command interpreter, as ``docs/protocol.md`` specifies it.
 
     ``identity`` says who the unit claims to be at the time of asking (a fault can
-    change its serial number); ``calibration`` is what its flash holds.
+    change its serial number); ``calibration`` and ``gyro_calibration`` (bias and
+    K⁻¹, applied to the gyros of the calibrated stream) are what its flash holds.
     """
 
     def __init__(self, stream: SampleStream, identity: Callable[[], Identity]) -> None:
         self.stream = stream
         self.identity = identity
         self.calibration = DeviceCalibration.factory_default()
+        self.gyro_calibration = DeviceCalibration.gyro_default()
 
     def answer(self, frame: Frame) -> bytes:
         """The reply frame to ``frame``: its result, an ACK or an error reply."""
@@ -70,6 +82,8 @@ class Firmware:
             return encode_frame(FrameType.IDENTITY, self.identity().encode())
         if kind == FrameType.READ_CAL:
             return encode_frame(FrameType.CALIBRATION, self.calibration.encode_reply())
+        if kind == FrameType.READ_GYRO_CAL:
+            return encode_frame(FrameType.GYRO_CALIBRATION, self.gyro_calibration.encode_reply())
         if kind == FrameType.START_STREAM:
             self._start(payload[0])
         elif kind == FrameType.STOP_STREAM:
@@ -77,10 +91,9 @@ class Firmware:
         elif kind == FrameType.SET_RATE:
             self._set_rate(RATE_STRUCT.unpack(payload)[0])
         elif kind == FrameType.WRITE_CAL:
-            try:
-                self.calibration = DeviceCalibration.decode(payload)
-            except ValueError:
-                raise _RefusedError(ErrorCode.BAD_VALUE, "coefficients not finite") from None
+            self.calibration = _coefficients(payload)
+        elif kind == FrameType.WRITE_GYRO_CAL:
+            self.gyro_calibration = _coefficients(payload)
         return encode_frame(FrameType.ACK, bytes((kind,)))
 
     def _start(self, mode: int) -> None:

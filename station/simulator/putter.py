@@ -169,6 +169,11 @@ class VirtualPutter(Closing):
         return self._firmware.calibration
 
     @property
+    def stored_gyro_calibration(self) -> DeviceCalibration:
+        """The gyro coefficients (bias, K⁻¹) the unit's flash holds."""
+        return self._firmware.gyro_calibration
+
+    @property
     def thermal(self) -> Thermal:
         """The unit's temperature over simulated time."""
         return self._stream.thermal
@@ -255,7 +260,8 @@ class VirtualPutter(Closing):
             return
         t = stream.due()
         if len(t):
-            link.send(stream.frames(t, self._firmware.calibration))
+            firmware = self._firmware
+            link.send(stream.frames(t, firmware.calibration, firmware.gyro_calibration))
 
     def trace(self, start_s: float, count: int) -> SampleBlock:
         """``count`` raw samples from simulated time ``start_s``, without the wire.

@@ -72,6 +72,14 @@ class SensorTruth:
             dtype=np.float64,
         )
 
+    @property
+    def gyro_matrix(self) -> FloatArray:
+        """The true gyro matrix K in body axes, ``I + diag(scale error) + misalignment``
+        (``measured = bias + K·ω`` apart from g-sensitivity and noise)."""
+        return np.asarray(
+            np.eye(3) + np.diag(self.gyro_scale_error) + self.gyro_misalignment, dtype=np.float64
+        )
+
     @classmethod
     def draw(cls, rng: np.random.Generator) -> "SensorTruth":
         """A unit as the line meets them: every parameter within its datasheet spread."""
@@ -113,6 +121,7 @@ class SensorTruth:
             "gyro_bias_dps": self.gyro_bias_dps.tolist(),
             "gyro_scale_error": self.gyro_scale_error.tolist(),
             "gyro_misalignment": self.gyro_misalignment.tolist(),
+            "gyro_matrix": self.gyro_matrix.tolist(),
             "gyro_g_sensitivity_per_g": self.gyro_g_sensitivity_per_g.tolist(),
             "gyro_sense_axis": list(GYRO_SENSE_AXIS),
             "gyro_noise_dps": self.gyro_noise_dps,

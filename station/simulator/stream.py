@@ -120,15 +120,25 @@ class SampleStream:
             temperature * TEMP_C_PER_LSB,
         )
 
-    def frames(self, t: FloatArray, calibration: DeviceCalibration) -> bytes:
-        """The SAMPLE (or CAL_SAMPLE) frames of the samples at ``t``, faults applied."""
+    def frames(
+        self, t: FloatArray, calibration: DeviceCalibration, gyro: DeviceCalibration
+    ) -> bytes:
+        """The SAMPLE (or CAL_SAMPLE) frames of the samples at ``t``, faults applied.
+
+        The calibrated stream applies ``calibration`` to the accelerometer and ``gyro``
+        (bias, K⁻¹) to the gyros' readings, then rounds the rates to the wire's 0.02 deg/s.
+        """
         count = len(t)
-        acc, gyro, temperature = self.sense(t)
+        acc, gyro_counts, temperature = self.sense(t)
         calibrated = self.mode == StreamMode.CALIBRATED
         rec = np.empty(count, dtype=CAL_SAMPLE_DTYPE if calibrated else SAMPLE_DTYPE)
         rec["seq"] = (self._seq + np.arange(count)) & 0xFFFF
         rec["acc"] = calibration.apply(acc) if calibrated else acc
-        rec["gyro"] = gyro
+        rec["gyro"] = (
+            _int16(gyro.apply(gyro_counts * GYRO_DPS_PER_LSB), GYRO_DPS_PER_LSB)
+            if calibrated
+            else gyro_counts
+        )
         rec["temp"] = temperature
         self._seq += count
         self.samples_sent += count

@@ -52,3 +52,23 @@ def test_bad_configuration_is_one_line_naming_the_field(
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1
     assert str(path) in result.stderr
+
+
+def test_the_whole_unit_profile_chooses_its_run_plan_and_the_file_still_wins(
+    tmp_path: Path,
+) -> None:
+    default = load_config(None, {})
+    assert (len(default.run.poses), default.run.model, default.run.gyro) == (6, "six", False)
+    whole = load_config(None, {"limits_profile": "whole-unit"})
+    assert (len(whole.run.poses), whole.run.model, whole.run.gyro) == (12, "nine", True)
+    path = tmp_path / "station.toml"
+    path.write_text('limits_profile = "whole-unit"\n[run]\npose_tolerance_deg = 20\n')
+    config = load_config(path, {})
+    assert (config.run.pose_tolerance_deg, config.run.gyro) == (20, True)
+
+
+def test_the_gyro_matrix_with_the_six_parameter_model_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "station.toml"
+    path.write_text('limits_profile = "whole-unit"\n[run]\nmodel = "six"\n')
+    with pytest.raises(InputError, match="gyro: the gyro matrix needs model = 'nine'"):
+        load_config(path, {})

@@ -6,6 +6,7 @@ import sqlite3
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from tests.conftest import CliRunner
 from tests.db.records import make_record
@@ -64,3 +65,22 @@ def test_unreadable_outbox_files_no_longer_stop_the_demo(
     with sqlite3.connect(env_dir / "calstation.sqlite3") as db:
         serials = {serial for (serial,) in db.execute("select serial from runs")}
     assert serials == {"PT000777", json.loads(result.stdout)[0]["serial"]}
+
+
+@pytest.mark.timeout(240)
+def test_the_demo_calibrates_the_whole_unit_with_its_profile(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path / "data")}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("demo", "--profile", "whole-unit", "--units", "1", "--json", "--speed", "20")
+    result = run_cli(*args, env=env, timeout=220)
+    assert result.returncode == 0, result.stderr
+    (unit,) = json.loads(result.stdout)
+    assert unit["verdict"] == "pass", unit["failures"]
+    k = np.array(unit["estimate"]["gyro_matrix"])
+    # K in the calibrated accelerometer's frame: the gyros' own errors plus that frame's
+    # tilt (under 2 %) off the body axes, within the profile's bounds.
+    assert np.abs(np.diag(k) - 1).max() < 0.02
+    assert not np.allclose(k, np.eye(3), atol=1e-3)
+    assert "verification move: turn the putter face up" in result.stderr

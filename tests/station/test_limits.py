@@ -123,3 +123,32 @@ def test_a_fit_residual_limit_is_optional_and_hashes_only_when_set(tmp_path: Pat
     assert with_limit.max_residual_counts == 5.0
     assert with_limit.sha256 != without.sha256
     assert load_profile().max_residual_counts is None  # the shipped profile: the default
+
+
+def test_the_six_pose_profile_hashes_as_before_the_gyro_bounds_existed() -> None:
+    # The SHA-256 the runs before the gyro bounds carry (migration 0007 stores it).
+    shipped = "e905f35844e7fbe48d498e538a70a61ff222e6cc049d0f477fc8f0d958c66800"
+    profile = load_profile()
+    assert profile.sha256 == shipped
+    assert profile.gyro_scale_error is None
+    assert not {"gyro_scale_error", "gyro_misalignment", "gyro_verification_deg"} & set(
+        profile.document
+    )
+    # Absent bounds are not checked, whatever the value.
+    assert check(profile, "gyro_scale", 0.5, axis="x") is None
+    assert check(profile, "gyro_verification", 90.0) is None
+
+
+def test_the_whole_unit_profile_bounds_the_gyro_matrix() -> None:
+    profile = load_profile(None, "whole-unit")
+    assert profile.checks_gyro_matrix
+    assert profile.sha256 != load_profile().sha256
+    assert check(profile, "gyro_scale", 0.012, axis="y") is None
+    reason = check(profile, "gyro_scale", -0.03, axis="y")
+    assert reason is not None
+    assert (reason.code, reason.axis, reason.lower) == ("gyro_scale", "y", -0.02)
+    verification = check(profile, "gyro_verification", 0.6)
+    assert verification is not None
+    assert verification.message == "gyro verification 0.6 deg outside ≤ 0.25"
+    assert profile.verification_error_mg.upper is not None
+    assert profile.verification_error_mg.upper <= 5

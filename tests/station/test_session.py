@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from station.app import open_unit
-from station.device import PutterDriver
+from station.device import DeviceCalibration, PutterDriver
 from station.journal import JournalFile, RunJournal
 from station.limits import load_profile
 from station.run.phases import Phase
@@ -96,6 +96,9 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     assert record.verdict == "pass", record.failures
     assert [p.role for p in record.poses] == ["fit"] * 6 + ["verify"]
     stored = bench.putter.stored_calibration
+    # The six-pose default never touches the gyros' coefficients (protocol extension).
+    assert record.gyro_matrix is None
+    assert bench.putter.stored_gyro_calibration == DeviceCalibration.gyro_default()
     assert record.coefficients is not None
     np.testing.assert_allclose(stored.offset, record.coefficients.offset.as_tuple(), rtol=1e-6)
     truth = bench.putter.truth

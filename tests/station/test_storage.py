@@ -2,13 +2,15 @@
 
 import sqlite3
 from contextlib import closing
+from datetime import UTC, datetime
 from pathlib import Path
 
 import httpx
 import pytest
 
 from db import Database, RunRepository
-from station.records import RunRecord, Vector3
+from station.gyro import fit_log, paper_truth, simulate_log
+from station.records import GyroFitRecord, RunRecord, Vector3
 from station.storage import (
     DatabaseStore,
     HttpStore,
@@ -160,3 +162,22 @@ def test_every_answer_tells_the_outbox_what_to_do(status: int, error: type[Store
         store.submit(make_record())
     assert type(raised.value) is error
     assert str(status) in str(raised.value)
+
+
+def test_both_stores_hand_the_station_a_units_stored_gyro_fit(
+    live_url: str, database: Database, station_key: str
+) -> None:
+    log, _ = simulate_log(paper_truth(), seed=3)
+    fit = GyroFitRecord(
+        serial="PT000031", fitted_at=datetime(2026, 1, 1, tzinfo=UTC), source="c.csv",
+        report=fit_log(log),
+    )  # fmt: skip
+    with database.session() as session, session.begin():
+        RunRepository(session).add_gyro_fit(fit)
+    with HttpStore(live_url, station_key) as http:
+        stores = (DatabaseStore(database=database), http)
+        for store in stores:
+            held = store.gyro_fit("PT000031")
+            assert held is not None
+            assert held.report.g_sensitivity_ppm_per_g == fit.report.g_sensitivity_ppm_per_g
+            assert store.gyro_fit("PT000032") is None

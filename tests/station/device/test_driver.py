@@ -125,6 +125,28 @@ def test_calibration_written_is_read_back_and_applied_in_calibrated_mode(
     assert len(driver.drain()) == 0
 
 
+def test_gyro_coefficients_are_read_back_and_applied_to_the_calibrated_gyros(
+    unit: VirtualPutter, driver: PutterDriver
+) -> None:
+    assert driver.read_gyro_calibration() == DeviceCalibration.gyro_default()
+    bias = unit.truth.gyro_bias_dps + np.array([0.1, -0.2, 0.3])
+    inverse_k = np.array([[2.0, 0.0, 0.0], [0.0, 1.0, 0.5], [0.0, 0.0, 0.5]])
+    written = DeviceCalibration(bias, inverse_k)
+    driver.write_gyro_calibration(written)
+    assert driver.read_gyro_calibration() == written
+    # The accelerometer's coefficients are another set: untouched.
+    assert driver.read_calibration() == DeviceCalibration.factory_default()
+    driver.start_stream(calibrated=True)
+    rows = driver.wait_samples(2000, timeout=5.0, calibrated=True)
+    # Still, the gyros read their true bias: the unit reports K⁻¹·(bias − written bias).
+    expected = inverse_k @ (unit.truth.gyro_bias_dps - bias)
+    np.testing.assert_allclose(rows.gyro.mean(axis=0), expected, atol=0.02)
+    driver.stop_stream()
+    driver.start_stream()
+    raw = driver.wait_samples(2000, timeout=5.0)
+    np.testing.assert_allclose(raw.gyro.mean(axis=0), unit.truth.gyro_bias_dps, atol=0.02)
+
+
 def test_a_mute_unit_gives_no_reply_after_the_retries(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
