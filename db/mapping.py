@@ -40,6 +40,9 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "residual_max_mg": quality.residual_max_mg if quality else None,
         "condition_number": quality.condition_number if quality else None,
         "verification_error_mg": quality.verification_error_mg if quality else None,
+        "excluded_poses": list(quality.excluded_poses)
+        if quality and quality.excluded_poses
+        else None,
         "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
         "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
         "record_sha256": record_sha256,
@@ -134,6 +137,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
             "residual_max_mg": run.residual_max_mg,
             "condition_number": run.condition_number,
             "verification_error_mg": run.verification_error_mg,
+            "excluded_poses": run.excluded_poses,
         }
         if has_quality
         else None,

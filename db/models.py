@@ -86,6 +86,8 @@ class Run(Base):
     residual_max_mg: Mapped[float | None] = mapped_column(Double())
     condition_number: Mapped[float | None] = mapped_column(Double())
     verification_error_mg: Mapped[float | None] = mapped_column(Double())
+    #: The fit poses (0-based) the solve left out as inconsistent; None: none was.
+    excluded_poses: Mapped[list[int] | None] = mapped_column(JsonDocument)
     gyro: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The gyro matrix K fitted from the moves (whole-unit runs), as
     #: :class:`station.records.GyroMatrixRecord`'s JSON; None otherwise.

@@ -105,6 +105,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
             del row["disposition"]  # a column of revision 0006
             del row["purpose"]  # a column of revision 0009
             del row["gyro_matrix"]  # a column of revision 0008
+            del row["excluded_poses"]  # a column of revision 0010
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), failure_rows(pk, record))
@@ -173,6 +174,7 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             del row["disposition"]
             del row["purpose"]  # a column of revision 0009
             del row["gyro_matrix"]
+            del row["excluded_poses"]
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), failure_rows(pk, record))
         upgrade(engine)
@@ -239,6 +241,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
                 row = run_row(record, received_at=T0, record_sha256="0" * 64)
                 del row["purpose"]  # a column of revision 0009
                 del row["gyro_matrix"]  # a column of revision 0008
+                del row["excluded_poses"]  # a column of revision 0010
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

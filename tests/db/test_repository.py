@@ -30,6 +30,24 @@ def test_a_submitted_run_reads_back_field_for_field(session: Session) -> None:
     assert stored.received_at.tzinfo is not None
 
 
+def test_the_poses_a_solve_left_out_read_back(session: Session) -> None:
+    plain = make_record(serial="PT-000002")
+    assert plain.quality is not None
+    record = make_record(quality=plain.quality.model_dump() | {"excluded_poses": (3,)})
+    repo = RunRepository(session)
+    repo.submit(record)
+    repo.submit(plain)
+    session.commit()
+    stored, stored_plain = repo.get(record.run_id), repo.get(plain.run_id)
+    assert stored is not None
+    assert stored.quality is not None
+    assert stored.quality.excluded_poses == (3,)
+    assert stored.model_dump(exclude={"received_at"}) == record.model_dump()
+    assert stored_plain is not None
+    assert stored_plain.quality is not None
+    assert stored_plain.quality.excluded_poses is None
+
+
 def test_every_pose_is_stored_with_its_replaced_captures(session: Session) -> None:
     record = make_record()
     RunRepository(session).submit(record)
