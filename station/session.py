@@ -70,7 +70,9 @@ class UnitRun:
         self.messages = MessageLog()
         self.solution: Solution | None = None
         self.record: RunRecord | None = None
-        self._capture = PoseCapture(settings, journal, self.messages)
+        self._capture = PoseCapture(
+            settings, journal, self.messages, settings.window_policy(profile)
+        )
         self._reconnect = Reconnect(self.messages, reopen)
         self._unit_output = UnitOutputCheck()
         self._failures = Failures()

@@ -7,6 +7,7 @@ from typing import Any
 from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
 from station.acquisition.stillness import StillnessDetector, StillnessThresholds, WindowVerdict
 from station.arrays import FloatArray
+from station.capture_budget import WindowPolicy
 from station.device import DeviceTimeoutError, LinkStats, PutterDriver
 from station.samples import SampleBlock
 
@@ -106,11 +107,12 @@ class PoseAcquisition:
         timeout_s: float = 30.0,
         stall_s: float = 2.0,
         from_seq: int = 0,
+        policy: WindowPolicy | None = None,
     ) -> None:
         self.driver = driver
         self.from_seq = from_seq
         self.pose = pose
-        self.detector = StillnessDetector(limits)
+        self.detector = StillnessDetector(limits, policy)
         self.timeout_s = timeout_s
         self.stall_s = stall_s
         self._rate = driver.rate_hz
@@ -203,10 +205,11 @@ def acquire_pose(
     timeout_s: float = 30.0,
     poll_s: float = 0.02,
     from_seq: int = 0,
+    policy: WindowPolicy | None = None,
 ) -> PoseResult:
     """Blocking form of :class:`PoseAcquisition`, for scripts and tests."""
     acquisition = PoseAcquisition(
-        driver, pose=pose, limits=limits, timeout_s=timeout_s, from_seq=from_seq
+        driver, pose=pose, limits=limits, timeout_s=timeout_s, from_seq=from_seq, policy=policy
     )
     while (result := acquisition.poll()) is None:
         time.sleep(poll_s)

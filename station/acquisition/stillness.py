@@ -14,7 +14,9 @@ window in which the unit demonstrably did not move ([Song2006]_: at rest). A win
 - link: few samples are missing in the window, and no axis sits at an ADC rail.
 
 Windows are evaluated every ``hop_samples`` samples on the trailing window, so a unit
-that is still from the start is accepted after at most ``window + hop`` samples.
+that is still from the start is accepted after at most ``window + hop`` samples. With
+adaptive capture (:mod:`station.capture_budget`) a still window grows, judged whole at
+every hop, until its mean's standard error meets the budget or it reaches the ceiling.
 """
 
 from dataclasses import dataclass
@@ -22,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.arrays import FloatArray
+from station.capture_budget import WindowPolicy
 from station.samples import SampleBlock
 from station.sensor import (
     ADC_MAX,
@@ -100,6 +104,8 @@ class WindowVerdict:
     loss_fraction: float
     motion: bool
     window: SampleBlock
+    #: The window's per-axis accelerometer spread (sample standard deviation, counts).
+    accel_std: FloatArray
 
     @property
     def still(self) -> bool:
@@ -152,7 +158,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
         if s > limits.gyro_std_max_dps:
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
             motion = True
-    return WindowVerdict(tuple(reasons), saturated, loss, motion, block)
+    return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary.accel_std)
 
 
 class StillnessDetector:
@@ -160,34 +166,55 @@ class StillnessDetector:
 
     Blocks are as the driver hands them out (accelerometer in counts). :attr:`last` is
     the latest verdict, for telling the operator what keeps the pose from being taken.
+
+    How long a window is follows ``policy`` (:class:`station.capture_budget.WindowPolicy`;
+    by default every window is ``window_samples`` long). Every ``hop_samples`` the
+    window from its start to the latest sample is judged whole: refused, the next one is
+    the trailing ``floor`` samples; still but not yet enough (its mean's standard error
+    above the budget, below the ceiling), it grows by a hop; still and enough, it is the
+    pose's. With floor = ceiling this is the fixed trailing window.
     """
 
-    def __init__(self, limits: StillnessThresholds | None = None) -> None:
+    def __init__(
+        self, limits: StillnessThresholds | None = None, policy: WindowPolicy | None = None
+    ) -> None:
         self.limits = limits or StillnessThresholds()
+        self.policy = policy or WindowPolicy.fixed(self.limits.window_samples)
         self.last: WindowVerdict | None = None
         self.samples_seen = 0
         self._held = SampleBlock.empty()
-        self._next_eval = self.limits.window_samples
+        #: Sample number (counted from the first fed) of ``_held``'s first row.
+        self._held_from = 0
+        #: Where the window being grown starts (same count).
+        self._start = 0
+        self._next_eval = self.policy.floor
 
     def feed(self, block: SampleBlock) -> WindowVerdict | None:
         """Add samples; return the verdict of the first still window they complete, if any."""
-        width = self.limits.window_samples
+        floor, ceiling = self.policy.floor, self.policy.ceiling
         hop = self.limits.hop_samples
-        start = self.samples_seen
         self._held = SampleBlock.concat((self._held, block)) if len(self._held) else block
         self.samples_seen += len(block)
-        held_from = start - (len(self._held) - len(block))
         while self._next_eval <= self.samples_seen:
-            end = self._next_eval - held_from
-            verdict = judge_window(self._held[end - width : end], self.limits)
+            end = self._next_eval
+            start = max(self._start, end - ceiling)
+            window = self._held[start - self._held_from : end - self._held_from]
+            verdict = judge_window(window, self.limits)
             self.last = verdict
-            if verdict.still:
+            if verdict.still and self.policy.enough(verdict.accel_std, len(window)):
                 # The next window starts where this one ended.
-                self._next_eval += width
-                self._held = self._held[end:]
+                self._start = end
+                self._next_eval = end + floor
+                self._trim(end)
                 return verdict
-            self._next_eval += hop
-        keep = width + hop
-        if len(self._held) > keep:
-            self._held = self._held[-keep:]
+            if not verdict.still:
+                self._start = end + hop - floor
+            self._next_eval = end + hop
+        self._trim(max(self._start, self.samples_seen - ceiling - hop))
         return None
+
+    def _trim(self, keep_from: int) -> None:
+        """Drop the held samples before sample ``keep_from``."""
+        if keep_from > self._held_from:
+            self._held = self._held[keep_from - self._held_from :]
+            self._held_from = keep_from

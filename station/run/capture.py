@@ -17,6 +17,7 @@ from station.acquisition.errors import LinkQualityError, NotStillError, Saturate
 from station.acquisition.pose import PoseAcquisition, PoseResult
 from station.acquisition.stillness import WindowVerdict, judge_window
 from station.arrays import FloatArray as Array
+from station.capture_budget import WindowPolicy
 from station.device import PutterDriver
 from station.journal import RunJournal
 from station.operator_text import MOVED_EARLY, capture_refused, pose_words
@@ -54,8 +55,16 @@ class Saturated:
 class PoseCapture:
     """The acquisition of the pose asked for, and the live view of the unit meanwhile."""
 
-    def __init__(self, settings: RunSettings, journal: RunJournal, messages: MessageLog) -> None:
+    def __init__(
+        self,
+        settings: RunSettings,
+        journal: RunJournal,
+        messages: MessageLog,
+        policy: WindowPolicy,
+    ) -> None:
         self.settings = settings
+        #: How long a still window is (fixed, or adaptive to the limits' budget).
+        self.policy = policy
         self._journal = journal
         self._messages = messages
         self._names = journal.poses
@@ -75,6 +84,7 @@ class PoseCapture:
             pose=target.name if target else None,
             limits=self.settings.stillness,
             timeout_s=self.settings.pose_timeout_s,
+            policy=self.policy,
         )
 
     def forget_window(self) -> None:
@@ -152,7 +162,7 @@ class PoseCapture:
             accel_std=summary.accel_std,
             gyro_rate=summary.gyro_mean,
             moving=verdict.motion,
-            progress=min(1.0, self._still_samples / self.settings.stillness.window_samples),
+            progress=min(1.0, self._still_samples / self.policy.samples_needed(summary.accel_std)),
             refused=refused,
         )
         return None

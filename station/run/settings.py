@@ -4,10 +4,14 @@ Part of the station's configuration (:class:`station.config.StationConfig`); rea
 every step of a unit's run (:class:`station.session.UnitRun`).
 """
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from station.acquisition.stillness import StillnessThresholds
 from station.calibration import Model
+from station.capture_budget import AdaptiveCapture, WindowPolicy
+from station.limits import LimitsProfile
 from station.orientation import POSE_TOLERANCE_DEG
 from station.pose_plan import check_plan
 from station.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
@@ -27,6 +31,18 @@ class RunSettings(BaseModel):
     stillness: StillnessThresholds = StillnessThresholds()
     pose_timeout_s: float = Field(30.0, gt=0, description="device time before 'not still'")
     model: Model = "six"
+    capture: Literal["fixed", "adaptive"] = Field(
+        "fixed",
+        description="fixed: every window stillness.window_samples long; adaptive: a "
+        "window ends when its mean meets the limits' accuracy budget ([run.adaptive])",
+    )
+    adaptive: AdaptiveCapture = AdaptiveCapture()
+
+    def window_policy(self, profile: LimitsProfile) -> WindowPolicy:
+        """How long a pose's still window is, under ``profile``'s limits."""
+        if self.capture == "adaptive":
+            return WindowPolicy.adaptive(self.adaptive, profile)
+        return WindowPolicy.fixed(self.stillness.window_samples)
 
     @field_validator("poses", "verification_pose")
     @classmethod

@@ -10,6 +10,7 @@ import logging
 import select
 import threading
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Final
 
@@ -39,7 +40,9 @@ class VirtualPutter(Closing):
     """A simulated putter: sensor model, motion model, firmware and a serial port.
 
     ``seed`` fixes the unit's parameters and its noise; ``serial`` is the serial
-    number on its label; ``speed`` runs its clock faster than real time.
+    number on its label; ``speed`` runs its clock faster than real time;
+    ``noise_counts`` gives the accelerometer's white noise (counts rms) instead of the
+    typical :data:`~station.simulator.sensor.ACCEL_NOISE_COUNTS`.
     """
 
     def __init__(
@@ -53,11 +56,14 @@ class VirtualPutter(Closing):
         start_pose: str = "face_up",
         handling: Handling | None = None,
         thermal: Thermal | None = None,
+        noise_counts: float | None = None,
     ) -> None:
         encode_text(serial, 16)
         # One generator per stream of draws, each drawn in sample order (see SampleStream).
         truth_rng, motion_rng, *stream_rngs = np.random.default_rng(seed).spawn(7)
         self._truth = SensorTruth.draw(truth_rng)
+        if noise_counts is not None:
+            self._truth = replace(self._truth, noise_counts=noise_counts)
         self._label = serial
         self.clock = VirtualClock(speed)
         self.faults = faults or Faults()

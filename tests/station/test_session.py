@@ -25,11 +25,20 @@ SERIAL = "PT000077"
 class Bench:
     """A virtual putter on a pty, a driver on it, and a run of that unit."""
 
-    def __init__(self, tmp: Path, faults: Faults | None = None, seed: int = 11) -> None:
-        self.putter = VirtualPutter(seed=seed, serial=SERIAL, speed=20.0, faults=faults)
+    def __init__(
+        self,
+        tmp: Path,
+        faults: Faults | None = None,
+        seed: int = 11,
+        settings: RunSettings | None = None,
+        noise_counts: float | None = None,
+    ) -> None:
+        self.putter = VirtualPutter(
+            seed=seed, serial=SERIAL, speed=20.0, faults=faults, noise_counts=noise_counts
+        )
         self.port = tmp / "putter"
         self.putter.serve_pty(self.port)
-        settings = RunSettings()
+        settings = settings or RunSettings()
         self.journal_file = JournalFile(tmp / "journal.json")
         journal = RunJournal(
             run_id=uuid.uuid4(),
@@ -102,6 +111,30 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     for axis in record.gyro.still.axes:
         assert axis.slope_dps_per_g is not None
         assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
+
+
+def test_adaptive_capture_stores_how_many_samples_each_pose_used(tmp_path: Path) -> None:
+    adaptive = RunSettings(capture="adaptive")
+    counts = {}
+    for noise in (1.0, 3.0):
+        where = tmp_path / f"noise{noise:g}"
+        where.mkdir()
+        bench = Bench(where, settings=adaptive, noise_counts=noise)
+        try:
+            bench.drive(done)
+        finally:
+            bench.close()
+        record = bench.run.record
+        assert record is not None
+        assert record.verdict == "pass", record.failures
+        counts[noise] = [p.sample_count for p in record.poses]
+        floor, ceiling = adaptive.adaptive.floor_samples, adaptive.adaptive.ceiling_samples
+        assert all(floor <= n <= ceiling for n in counts[noise])
+    # The simulator's truth: 1 count of noise meets the budget at the floor (a pose
+    # taken while the put-down tremor dies out may need a hop more), 3 counts need
+    # about (3 / 0.124)² = 590 samples.
+    assert sorted(counts[1.0])[3] == floor
+    assert max(counts[1.0]) < 2 * floor < min(counts[3.0])
 
 
 def test_the_journal_holds_every_pose_taken(bench: Bench) -> None:
