@@ -29,7 +29,7 @@ from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 from station.storage import DatabaseStore
 
-SPEED = 20.0
+SPEED = 10.0
 
 
 class Fixture:
