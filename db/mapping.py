@@ -28,6 +28,7 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "limits_sha256": record.limits.sha256,
         "verdict": record.verdict,
         "disposition": record.disposition,
+        "purpose": record.purpose,
         "offset_x": cal.offset.x if cal else None,
         "offset_y": cal.offset.y if cal else None,
         "offset_z": cal.offset.z if cal else None,
@@ -101,6 +102,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         },
         "verdict": run.verdict,
         "disposition": run.disposition,
+        "purpose": run.purpose,
         "gyro": run.gyro,
         "failures": [
             {

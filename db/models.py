@@ -46,6 +46,7 @@ class Run(Base):
         CheckConstraint("verdict IN ('pass', 'fail')", name="verdict"),
         CheckConstraint("model IN ('six', 'nine')", name="model"),
         CheckConstraint("disposition IN ('ship', 'retest', 'rework')", name="disposition"),
+        CheckConstraint("purpose IN ('golden')", name="purpose"),
         Index("ix_runs_serial_started_at", "serial", "started_at", "id"),
         Index("ix_runs_station_id_started_at", "station_id", "started_at", "id"),
         Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
@@ -72,6 +73,8 @@ class Run(Base):
     verdict: Mapped[str] = mapped_column(String(4))
     #: Where the station sent the unit (ship, retest, rework); older runs have none.
     disposition: Mapped[str | None] = mapped_column(String(8))
+    #: ``golden``: the station's golden-unit check, not a production unit (null: production).
+    purpose: Mapped[str | None] = mapped_column(String(8))
     offset_x: Mapped[float | None] = mapped_column(Double())
     offset_y: Mapped[float | None] = mapped_column(Double())
     offset_z: Mapped[float | None] = mapped_column(Double())

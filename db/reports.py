@@ -38,6 +38,7 @@ from db.rollups import (
     HISTOGRAM,
     LIMITS,
     PARAMETER_VALUES,
+    PRODUCTION,
     count_contributions,
     failure_contributions,
     parameter_contributions,
@@ -121,14 +122,14 @@ class ReportQueries:
             where.append(Run.started_at >= f.since)
         if f.until is not None:
             where.append(Run.started_at < f.until)
-        return [*where, *self._dimensions(Run)]
+        return [*where, PRODUCTION, *self._dimensions(Run)]
 
     def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
         """The runs of the partial days at the range's ends; ``None`` when there are none."""
         if not self.edges:
             return None
         spans = [and_(Run.started_at >= a, Run.started_at < b) for a, b in self.edges]
-        return [or_(*spans), *self._dimensions(Run)]
+        return [or_(*spans), PRODUCTION, *self._dimensions(Run)]
 
     def _rolled_conditions(self, table: Any) -> list[ColumnElement[bool]] | None:
         """The roll-up rows of the whole days in range; ``None`` when there are none."""

@@ -99,12 +99,12 @@ class RunPage:
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
-    A record without a lot, a disposition or its limits profile is hashed without the
+    A record without a lot, a disposition, a purpose or its limits profile is hashed without the
     field, as before the field existed, so a retry from an older station matches the run
     it stored.
     """
     unset: dict[str, Any] = {
-        name: True for name in ("lot", "disposition") if getattr(record, name) is None
+        name: True for name in ("lot", "disposition", "purpose") if getattr(record, name) is None
     }
     if record.limits.profile is None:
         unset["limits"] = {"profile"}

@@ -17,7 +17,9 @@ transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
 
 A submission can change facts of runs stored before it: a late run becomes its unit's
 first, a retest makes the previous run no longer the latest, a run slotted in between
-changes the next charted run's moving range. :func:`record_run` takes those runs'
+changes the next charted run's moving range. A station's golden-unit check
+(``runs.purpose`` = ``golden``) is no production unit: it has no facts and is in no
+roll-up, and no moving range reaches over it. :func:`record_run` takes those runs'
 contributions out of the roll-ups, recomputes their facts and adds them back, so the
 roll-ups always equal the aggregate of the facts. Counts and times are integers
 (station time in milliseconds), so taking out and adding back is exact.
@@ -258,6 +260,8 @@ def _inline(value: float | str | None) -> ColumnElement[Any]:
 
 _PASS, _FAIL, _ZERO, _ONE = _inline("pass"), _inline("fail"), _inline(0), _inline(1)
 _ABORTED = _inline(ABORTED)
+#: The runs the report counts: production units, never a station's golden-unit checks.
+PRODUCTION = Run.purpose.is_(None)
 
 
 def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
@@ -303,7 +307,7 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
             (
                 Run.offset_x.is_not(None),
                 select(other.id)
-                .where(other.offset_x.is_not(None), earlier)
+                .where(other.offset_x.is_not(None), other.purpose.is_(None), earlier)
                 .order_by(*newest)
                 .limit(1)
                 .scalar_subquery(),
@@ -594,7 +598,7 @@ def _submission(
     after_this = tuple_(Run.started_at, Run.id) > tuple_(started_at, run_pk)
     following = (
         select(Run.id)
-        .where(Run.offset_x.is_not(None), after_this)
+        .where(Run.offset_x.is_not(None), Run.purpose.is_(None), after_this)
         .order_by(Run.started_at, Run.id)
         .limit(1)
         .subquery("following")
@@ -641,7 +645,8 @@ def record_run(connection: Connection, run_pk: int) -> None:
     line with coefficients, are taken out of ``report_counts``, their facts recomputed,
     and added back with the new run.
     """
-    bounds = _bounds_for_rollup(connection, run_pk)
+    golden = connection.scalar(select(Run.purpose).where(Run.id == run_pk)) is not None
+    bounds = None if golden else _bounds_for_rollup(connection, run_pk)
     if bounds is None:
         return
     do = _submission(connection.dialect.name, tuple(sorted(bounds.items())))
@@ -674,18 +679,21 @@ def rebuild(connection: Connection, bounds: FamilyBounds | None = None) -> None:
         connection.execute(delete(table))
     if bounds is not None:
         _store_bounds(connection, bounds)
-    connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([])))
+    connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([PRODUCTION])))
     connection.execute(
         insert(ReportCounts).from_select(
-            [*BUCKET, *LIMITS, *COUNT_VALUES], count_contributions([*BUCKET, *LIMITS], [])
+            [*BUCKET, *LIMITS, *COUNT_VALUES],
+            count_contributions([*BUCKET, *LIMITS], [PRODUCTION]),
         )
     )
     connection.execute(
         insert(ReportFailures).from_select(
-            [*BUCKET, "code", *FAILURE_VALUES], failure_contributions([*BUCKET, "code"], [])
+            [*BUCKET, "code", *FAILURE_VALUES],
+            failure_contributions([*BUCKET, "code"], [PRODUCTION]),
         )
     )
-    for rows in parameter_contributions(BUCKET, [], bounds) if bounds is not None else []:
+    rolled = parameter_contributions(BUCKET, [PRODUCTION], bounds) if bounds is not None else []
+    for rows in rolled:
         connection.execute(
             insert(ReportParameters).from_select(["parameter", *BUCKET, *PARAMETER_VALUES], rows)
         )

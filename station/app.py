@@ -15,6 +15,7 @@ from collections.abc import Callable
 from datetime import UTC, datetime
 
 from rich.console import Console, Group, RenderableType
+from rich.text import Text
 
 from station import __version__
 from station.config import StationConfig
@@ -31,6 +32,7 @@ from station.run.phases import Phase
 from station.run.record import ALGORITHM
 from station.screens import header
 from station.session import UnitRun
+from station.shift_checks import ShiftChecks
 from station.storage import RunStore
 from station.unit_history import ScanAction, UnitHistory
 
@@ -117,6 +119,8 @@ class StationApp:
             say_line=self._say_line,
         )
         self.prompt = Prompt()
+        #: The golden unit, the lock and the drift warning (docs/station.md).
+        self.checks = ShiftChecks(config.golden, config.data_dir.expanduser(), config.station_id)
         self.run: UnitRun | None = None
         #: The scanned unit's history (asked about in CONFIRM; its verdict's disposition).
         self.history: UnitHistory | None = None
@@ -139,6 +143,8 @@ class StationApp:
         self.results.sync()
         if self.probe_port:
             self._check_port()
+        for line in self.checks.lines():
+            self._say_line(line)
         interrupted = self.journal_file.load()
         if isinstance(interrupted, DiscardedJournal):
             self._tell(interrupted.sentence)
@@ -187,7 +193,10 @@ class StationApp:
             results.set_aside,
         )
         run = self.run.view() if self.run is not None else None
-        return Group(top, *results.status_lines(), self.prompt.screen(run, self.last_record))
+        checks = [Text(line, style="bold red") for line in self.checks.lines()]
+        return Group(
+            top, *results.status_lines(), *checks, self.prompt.screen(run, self.last_record)
+        )
 
     def _say_line(self, text: str) -> None:
         """A line for a console that is not a terminal (logs, the demo's stderr)."""
@@ -226,6 +235,14 @@ class StationApp:
     def _submit_serial(self, serial: str) -> None:
         if serial.lower() == "quit":
             self.done = True
+            return
+        scan = self.checks.at_scan(serial)
+        if scan.said is not None:
+            self._tell(scan.said)
+            return
+        if scan.golden:  # calibrated at every check: no re-scan question, no retest limit
+            self.history = None
+            self._start_unit(serial, None)
             return
         if not re.fullmatch(self.config.serial_pattern, serial):
             self._tell(f"{serial!r} is not a serial number (expected {self.config.serial_pattern})")
@@ -279,7 +296,9 @@ class StationApp:
     def _finish_unit(self, run: UnitRun) -> None:
         run.driver.close()
         record = with_disposition(run.record, self.history, self.profile)
+        said = None
         if record is not None:
+            record, said = self.checks.at_verdict(record)
             self.results.put(record)
         self.journal_file.clear()
         self.run = None
@@ -290,6 +309,8 @@ class StationApp:
             self.records.append(record)
             self.last_record = record
             self._say_line(verdict_line(record))
+            if said:
+                self._tell(said)
             self.results.sync()
         if self.units is not None and len(self.records) >= self.units:
             self.done = True

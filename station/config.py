@@ -14,6 +14,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from station.errors import InputError, validation_problem
+from station.quality.golden import GoldenUnit
 from station.run.settings import RunSettings
 from station.storage import DatabaseUrl, DataDir, default_data_dir
 
@@ -44,6 +45,8 @@ class StationConfig(BaseSettings):
     server_url: str | None = None
     api_key: str | None = None
     run: RunSettings = RunSettings()
+    #: The golden unit checked at each shift's start (``[golden]``; none: no check).
+    golden: GoldenUnit | None = None
 
     @field_validator("serial_pattern")
     @classmethod

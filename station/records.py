@@ -316,6 +316,9 @@ class _RunHeader(_Record):
     verdict: Verdict
     #: Where the unit goes next (:mod:`station.unit_state`); None on records from before.
     disposition: Disposition | None = None
+    #: ``golden``: the station's golden-unit check (``docs/station.md``), not a production
+    #: unit; None for production runs and records from before.
+    purpose: Literal["golden"] | None = None
     failures: tuple[FailureReason, ...] = ()
     coefficients: Coefficients | None = None
     quality: QualityMetrics | None = None

@@ -103,6 +103,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
         for record in (retest, first, other):
             row = run_row(record, received_at=T0, record_sha256="0" * 64)
             del row["disposition"]  # a column of revision 0006
+            del row["purpose"]  # a column of revision 0009
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), failure_rows(pk, record))
@@ -169,6 +170,7 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
         with engine.begin() as connection:  # a run stored before runs had a disposition
             row = run_row(record, received_at=T0, record_sha256="0" * 64)
             del row["disposition"]
+            del row["purpose"]  # a column of revision 0009
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), failure_rows(pk, record))
         upgrade(engine)
@@ -233,6 +235,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
         with engine.begin() as connection:
             for record in (shipped, other):
                 row = run_row(record, received_at=T0, record_sha256="0" * 64)
+                del row["purpose"]  # a column of revision 0009
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

@@ -10,6 +10,7 @@ from sqlalchemy.orm import Session
 
 from db import RunQuery, RunRepository
 from db.reports import eol_report
+from db.rollups import rebuild
 from station.quality.figures import EolReport, ReportFilter
 from station.quality.parameters import default_bounds
 from tests.db.eol_data import IN_RANGE, SINCE, UNTIL, insert_line_history
@@ -206,3 +207,40 @@ def test_filters_by_lot(session: Session) -> None:
     assert l1.filter.lot == "L1"
     listed = repository.list_runs(RunQuery(lot="L2"))
     assert [(r.serial, r.lot) for r in listed.runs] == [("U1", "L2")]
+
+
+def test_golden_unit_checks_are_stored_marked_and_never_counted(session: Session) -> None:
+    without = _report(session)
+    repository = RunRepository(session)
+    golden = [
+        make_record(serial="GU-001", purpose="golden", started_at=SINCE + timedelta(minutes=m))
+        for m in (5, 65)
+    ]
+    golden.append(
+        make_record(
+            serial="GU-001",
+            purpose="golden",
+            verdict="fail",
+            offset=(2300.0, 2041.2, 1960.5),
+            started_at=SINCE + timedelta(minutes=95),
+        )
+    )
+    for record in golden:
+        repository.submit(record)
+    session.commit()
+    stored = repository.get(golden[0].run_id)
+    assert stored is not None
+    assert stored.purpose == "golden"
+    with_golden = eol_report(session, ReportFilter(since=SINCE, until=UNTIL))
+    assert with_golden.summary == without.summary
+    assert with_golden.pareto == without.pareto
+    assert with_golden.parameters == without.parameters
+    assert with_golden.control_charts == without.control_charts
+    assert with_golden.units == without.units
+    rebuild(session.connection())
+    rebuilt = eol_report(session, ReportFilter(since=SINCE, until=UNTIL))
+    assert (rebuilt.summary, rebuilt.pareto, rebuilt.parameters) == (
+        without.summary,
+        without.pareto,
+        without.parameters,
+    )

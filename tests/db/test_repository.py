@@ -156,13 +156,15 @@ def test_a_stored_run_survives_a_json_round_trip(session: Session) -> None:
     assert StoredRun.model_validate_json(outcome.run.model_dump_json()) == outcome.run
 
 
-def test_a_record_without_a_lot_or_disposition_hashes_as_before_those_existed() -> None:
+def test_a_record_without_a_lot_disposition_or_purpose_hashes_as_before_those_existed() -> None:
     reference_only = {key: value for key, value in LIMITS.items() if key != "profile"}
     record = make_record(limits=reference_only)  # an older station's: no profile either
     document = json.loads(record.model_dump_json())
-    del document["lot"], document["disposition"], document["limits"]["profile"]
+    del document["lot"], document["disposition"], document["purpose"]
+    del document["limits"]["profile"]
     before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
     assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
     assert record_sha256(make_record(lot="L1")) != record_sha256(record)
     assert record_sha256(make_record(disposition="ship")) != record_sha256(record)
+    assert record_sha256(make_record(purpose="golden")) != record_sha256(record)
     assert record_sha256(make_record()) != record_sha256(record)  # with its profile
