@@ -11,6 +11,7 @@ import sqlite3
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import given
@@ -24,6 +25,7 @@ from station.fixture.plan import next_fixture_pose
 from station.fixture.slot import SlotState
 from station.limits import load_profile
 from station.poses import pose
+from station.quality.golden import GoldenUnit
 from station.run.phases import Phase
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
@@ -53,13 +55,14 @@ class Fixture:
         putter.move_to(pose("face_up").rotation * self.mounts[slot - 1], 0.3)
         self.putters[slot] = putter
 
-    def station(self, units: int | None = None) -> FixtureApp:
+    def station(self, units: int | None = None, **settings: Any) -> FixtureApp:
         data = self.tmp / "data"
         config = StationConfig(
             station_id="fx",
             data_dir=data,
             slots=tuple(map(str, self.ports)),
             database_url=f"sqlite:///{data}/results.sqlite3",
+            **settings,
         )
         console = Console(file=self.log, width=1000)
         self.app = FixtureApp(
@@ -274,6 +277,32 @@ def test_each_slot_resumes_at_its_own_pose_after_a_restart(
     for record in second.records:
         assert [p.index for p in record.poses] == list(range(7))
     assert stored(fixture) == {"PT000301": ("pass", "ship"), "PT000302": ("pass", "ship")}
+
+
+def test_a_fixture_waiting_for_its_golden_unit_starts_no_slot(
+    make_fixture: Callable[[int], Fixture],
+) -> None:
+    fixture = make_fixture(2)
+    fixture.plug(1, "PT000401", seed=401)
+    golden = GoldenUnit(
+        serial="PT900001",
+        offset_counts=(2048.0, 2048.0, 2048.0),
+        sensitivity_counts_per_g=(819.2, 819.2, 819.2),
+    )
+    app = fixture.station(golden=golden)
+    fixture.keys = [*"PT000401\r", "\x00"]
+
+    def stop_once_typed(app: FixtureApp) -> None:
+        if fixture.keys == ["\x00"]:
+            raise EOFError
+
+    fixture.on_tick = stop_once_typed
+    fixture.serve(app)
+    log = fixture.log.getvalue()
+    assert "GOLDEN UNIT due: scan golden unit PT900001 before the next unit" in log
+    assert app.scanner.current is app.slots[0]  # still asking for slot 1
+    assert not app.running
+    assert "GOLDEN UNIT due" in render(app)
 
 
 @given(
