@@ -10,13 +10,11 @@ start.
 
 import logging
 import re
-import time
 import uuid
 from collections.abc import Callable
 from datetime import UTC, datetime
 
 from rich.console import Console, Group, RenderableType
-from rich.live import Live
 from rich.text import Text
 
 from station import __version__
@@ -25,6 +23,7 @@ from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
 from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
+from station.live_loop import run_live
 from station.operator_text import port_problem
 from station.prompt import Prompt, Recalibrate, Resume, Serial, State
 from station.records import RunRecord
@@ -38,9 +37,6 @@ from station.storage import RunStore
 from station.unit_history import ScanAction, UnitHistory
 
 log = logging.getLogger(__name__)
-
-#: Seconds between screen refreshes.
-DRAW_EVERY_S = 0.1
 
 
 def open_unit(port: str, serial: str) -> PutterDriver:
@@ -66,6 +62,29 @@ def new_journal(config: StationConfig, serial: str) -> RunJournal:
         started_at=datetime.now(UTC),
         poses=(*config.run.poses, config.run.verification_pose),
     )
+
+
+def versions(profile: LimitsProfile) -> str:
+    """Software, algorithm and limits versions, as shown at the top of the screen."""
+    p = profile
+    return f"v{__version__} · {ALGORITHM} · limits {p.name} v{p.version} ({p.sha256[:12]})"
+
+
+def with_disposition(
+    record: RunRecord | None, history: UnitHistory | None, profile: LimitsProfile
+) -> RunRecord | None:
+    """The finished run with where the unit goes next, from its history."""
+    if record is None or history is None:
+        return record
+    where = history.disposition(record, profile.attempts_allowed)
+    return record.model_copy(update={"disposition": where})
+
+
+def verdict_line(record: RunRecord) -> str:
+    """``PT000042: FAIL (offset): retest``: the verdict in the station's log."""
+    failed = ", ".join(f.code for f in record.failures)
+    then = f": {record.disposition}" if record.disposition else ""
+    return f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "") + then
 
 
 class StationApp:
@@ -95,7 +114,7 @@ class StationApp:
         self.results = ResultsLink(
             outbox_dir=config.outbox_dir,
             data_dir=config.data_dir.expanduser(),
-            journal_file=self.journal_file,
+            journal_files=[self.journal_file],
             open_store=open_store,
             say_line=self._say_line,
         )
@@ -115,8 +134,7 @@ class StationApp:
     @property
     def versions(self) -> str:
         """Software, algorithm and limits versions, as shown at the top."""
-        p = self.profile
-        return f"v{__version__} · {ALGORITHM} · limits {p.name} v{p.version} ({p.sha256[:12]})"
+        return versions(self.profile)
 
     def serve(self) -> list[RunRecord]:
         """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
@@ -137,27 +155,12 @@ class StationApp:
                 f"{len(interrupted.poses)}: resume it? (y/n)"
             )
         try:
-            if self.console.is_terminal:
-                with Live(self.screen(), console=self.console, auto_refresh=False) as live:
-                    self._loop(lambda: live.update(self.screen(), refresh=True))
-            else:
-                self._loop(lambda: None)
+            run_live(self.console, self.screen, self.tick, lambda: self.done, self.tick_s)
         finally:
             if self.run is not None:
                 self.run.driver.close()
             self.results.close()
         return self.records
-
-    def _loop(self, draw: Callable[[], None]) -> None:
-        next_draw = 0.0
-        while not self.done:
-            self.tick()
-            now = time.monotonic()
-            if now >= next_draw:
-                draw()
-                next_draw = now + DRAW_EVERY_S
-            time.sleep(self.tick_s)
-        draw()
 
     def tick(self) -> None:
         """One pass: keys, the unit in progress, the outbox."""
@@ -293,10 +296,7 @@ class StationApp:
 
     def _finish_unit(self, run: UnitRun) -> None:
         run.driver.close()
-        record = run.record
-        if record is not None and self.history is not None:
-            where = self.history.disposition(record, self.profile.attempts_allowed)
-            record = record.model_copy(update={"disposition": where})
+        record = with_disposition(run.record, self.history, self.profile)
         said = None
         if record is not None:
             record, said = self.checks.at_verdict(record)
@@ -309,13 +309,7 @@ class StationApp:
         else:
             self.records.append(record)
             self.last_record = record
-            failed = ", ".join(f.code for f in record.failures)
-            then = f": {record.disposition}" if record.disposition else ""
-            self._say_line(
-                f"{record.serial}: {record.verdict.upper()}"
-                + (f" ({failed})" if failed else "")
-                + then
-            )
+            self._say_line(verdict_line(record))
             if said:
                 self._tell(said)
             self.results.sync()

@@ -21,6 +21,8 @@ from station.storage import DatabaseUrl, DataDir, default_data_dir
 
 #: Serial numbers on the putters' labels: PT and six digits.
 SERIAL_PATTERN = r"^PT\d{6}$"
+#: Most slots a fixture holds (one USB serial port each).
+MAX_SLOTS = 8
 
 
 class StationConfig(BaseSettings):
@@ -33,6 +35,9 @@ class StationConfig(BaseSettings):
     #: The production lot of the units being calibrated; recorded on every run.
     lot: str | None = Field(None, pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
     port: str | None = None
+    #: A multi-slot fixture: one putter port per slot (1 to :data:`MAX_SLOTS`); one
+    #: slot is the same as ``port``.
+    slots: tuple[str, ...] = Field((), max_length=MAX_SLOTS)
     limits_file: Path | None = None
     limits_profile: str | None = None
     serial_pattern: str = SERIAL_PATTERN
@@ -74,6 +79,25 @@ class StationConfig(BaseSettings):
             raise ValueError(f"{value!r} is not an http:// or https:// URL")
         return value
 
+    @field_validator("slots")
+    @classmethod
+    def _one_port_per_slot(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        for i, port in enumerate(value):
+            if not port:
+                raise ValueError(f"slot {i + 1} names no port")
+            if port in value[:i]:
+                first = value.index(port) + 1
+                raise ValueError(f"slots {first} and {i + 1} both name the port {port}")
+        return value
+
+    @model_validator(mode="after")
+    def _port_or_slots(self) -> Self:
+        if self.slots and self.port:
+            raise ValueError("give port (one slot) or slots (several ports), not both")
+        if len(self.slots) == 1:  # one slot is the one-port station
+            self.port, self.slots = self.slots[0], ()
+        return self
+
     @model_validator(mode="after")
     def _key_for_the_server(self) -> Self:
         if self.server_url and not self.api_key:
@@ -83,9 +107,18 @@ class StationConfig(BaseSettings):
         return self
 
     @property
+    def ports(self) -> tuple[str, ...]:
+        """The putter port of every slot (one for the one-port station, none if unset)."""
+        return self.slots or ((self.port,) if self.port else ())
+
+    @property
     def journal_path(self) -> Path:
-        """The journal of the run in progress."""
+        """The journal of the run in progress (of the one-port station)."""
         return self.data_dir.expanduser() / f"journal-{self.station_id}.json"
+
+    def slot_journal_path(self, slot: int) -> Path:
+        """The journal of the run in progress in ``slot`` (1-based) of a fixture."""
+        return self.data_dir.expanduser() / f"journal-{self.station_id}-slot{slot}.json"
 
     @property
     def outbox_dir(self) -> Path:
@@ -105,6 +138,9 @@ def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
             ) from None
         except tomllib.TOMLDecodeError as exc:
             raise InputError(f"{path}: not valid TOML: {exc}") from None
+    if overrides.get("slots"):  # ports on the command line replace the file's
+        values.pop("port", None)
+        values.pop("slots", None)
     values.update({k: v for k, v in overrides.items() if v is not None})
     try:
         return StationConfig(**values)

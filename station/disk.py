@@ -1,6 +1,6 @@
 """The data directory refusing writes mid-unit: one plain line, the unit kept in memory.
 
-The journal (:class:`station.journal.JournalFile`) and the outbox
+The journals (:class:`station.journal.JournalFile`, one per slot) and the outbox
 (:class:`station.outbox.Outbox`) keep what the disk refused and write it again when
 asked; :class:`DiskWatch` asks once a second and says, in the operator's words, what
 is wrong and what to do, until every write went through.
@@ -8,7 +8,7 @@ is wrong and what to do, until every write went through.
 
 import errno
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from station.journal import JournalFile
@@ -45,30 +45,35 @@ class DiskWatch:
     def __init__(
         self,
         data_dir: Path,
-        journal_file: JournalFile,
+        journal_files: Sequence[JournalFile],
         outbox: Outbox,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.data_dir = data_dir
-        self.journal_file = journal_file
+        self.journal_files = tuple(journal_files)
         self.outbox = outbox
         self.clock = clock
         self._next_try = 0.0
 
     def check(self) -> str | None:
         """Retry (at most once a second) and return the line to show, None when all is written."""
-        if self.journal_file.write_error is None and self.outbox.write_error is None:
+        if self._journal_error() is None and self.outbox.write_error is None:
             return None
         now = self.clock()
         if now >= self._next_try:
             self._next_try = now + RETRY_EVERY_S
-            self.journal_file.retry()
+            for journal_file in self.journal_files:
+                journal_file.retry()
             self.outbox.flush()
-        error = self.journal_file.write_error or self.outbox.write_error
+        error = self._journal_error() or self.outbox.write_error
         if error is None:
             return None
         runs = len(self.outbox.unwritten)
-        things = ["the unit"] if self.journal_file.write_error is not None else []
+        units = sum(j.write_error is not None for j in self.journal_files)
+        things = ["the unit" if units == 1 else f"{units} units"] if units else []
         things += [f"{runs} finished run{'s' * (runs > 1)}"] if runs else []
-        verb = "is" if len(things) == 1 and runs <= 1 else "are"
+        verb = "is" if len(things) == 1 and runs <= 1 and units <= 1 else "are"
         return cannot_write_line(self.data_dir, error, f"{' and '.join(things)} {verb}")
+
+    def _journal_error(self) -> OSError | None:
+        return next((j.write_error for j in self.journal_files if j.write_error), None)

@@ -59,6 +59,15 @@ class Recalibrate:
 Answer = Serial | Resume | Recalibrate
 
 
+def edit_line(typed: str, key: str) -> tuple[str, str | None]:
+    """The line typed so far after ``key``, and the line entered (stripped) on Enter."""
+    if key in ENTER:
+        return "", typed.strip()
+    if key in BACKSPACE:
+        return typed[:-1], None
+    return (typed + key if key.isprintable() else typed), None
+
+
 class Prompt:
     """The question asked, the serial typed so far, the note under the prompt."""
 
@@ -128,15 +137,8 @@ class Prompt:
         return None
 
     def _serial_key(self, key: str) -> Serial | None:
-        if key in ENTER:
-            text, self.typed = self.typed.strip(), ""
-            if text:
-                return Serial(text)
-        elif key in BACKSPACE:
-            self.typed = self.typed[:-1]
-        elif key.isprintable():
-            self.typed += key
-        return None
+        self.typed, entered = edit_line(self.typed, key)
+        return Serial(entered) if entered else None
 
     def _unit_key(self, run: UnitRun, key: str) -> None:
         if self.confirm_abort:

@@ -9,7 +9,7 @@ operator is told about the store and the disk. The station's loop
 """
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from rich.console import RenderableType
@@ -36,7 +36,7 @@ class ResultsLink:
         *,
         outbox_dir: Path,
         data_dir: Path,
-        journal_file: JournalFile,
+        journal_files: Sequence[JournalFile],
         open_store: Callable[[], RunStore],
         say_line: Callable[[str], None],
     ) -> None:
@@ -50,7 +50,7 @@ class ResultsLink:
         self.backlog = 0
         #: Outbox files set aside: (unreadable, refused), counted at every sync.
         self.set_aside = (0, 0)
-        self.disk = DiskWatch(data_dir, journal_file, self.outbox)
+        self.disk = DiskWatch(data_dir, journal_files, self.outbox)
         #: What the disk refused, in one line (None when every write went through).
         self.disk_note: str | None = None
 

@@ -9,6 +9,7 @@ cannot keep a journal or reach a port would otherwise fail in the middle of a un
 
 import os
 import stat
+from collections.abc import Sequence
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -67,6 +68,26 @@ def check_port(port: str | None) -> None:
         raise InputError(f"port {port}: not a serial device")
     if not os.access(port, os.R_OK | os.W_OK):
         raise InputError(f"port {port}: permission denied (the user needs the dialout group)")
+
+
+def check_slot_ports(ports: Sequence[str]) -> list[str]:
+    """The fixture's ports: one line for each slot whose port is not there now.
+
+    A port that could never be one (a malformed URL) stops the station
+    (:class:`InputError`); a device that is missing or refused is only said (a unit's
+    USB port may appear only once it is plugged in): its unit cannot be reached until it
+    is there, and the other slots go on.
+    """
+    lines = []
+    for number, port in enumerate(ports, start=1):
+        if "://" in port:
+            check_port(port)
+            continue
+        try:
+            check_port(port)
+        except InputError as exc:
+            lines.append(f"slot {number}: {exc}: the other slots go on")
+    return lines
 
 
 def _check_network_address(port: str) -> None:

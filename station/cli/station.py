@@ -7,10 +7,13 @@ import typer
 
 from station.app import StationApp
 from station.cli.output import err, out, print_json
-from station.config import StationConfig, load_config
-from station.demo import ScriptedOperator
-from station.keys import TerminalKeys
-from station.limits import load_profile
+from station.config import MAX_SLOTS, StationConfig, load_config
+from station.demo import DemoUnit, ScriptedOperator
+from station.fixture.app import FixtureApp
+from station.fixture.demo import FixtureOperator
+from station.keys import KeySource, TerminalKeys
+from station.limits import LimitsProfile, load_profile
+from station.records import RunRecord
 from station.startup import check_port, prepare_data_dir
 from station.storage import DatabaseStore, HttpStore, RunStore
 
@@ -41,10 +44,43 @@ def _store_opener(config: StationConfig) -> Any:
     return open_store
 
 
+def _station(
+    config: StationConfig,
+    profile: LimitsProfile,
+    keys: KeySource,
+    console: Any,
+    units: int | None,
+    probe_port: bool = True,
+) -> StationApp | FixtureApp:
+    """The one-port station, or the fixture's when several slots are configured."""
+    if config.slots:
+        return FixtureApp(
+            config=config,
+            profile=profile,
+            open_store=_store_opener(config),
+            keys=keys,
+            console=console,
+            units=units,
+        )
+    return StationApp(
+        config=config,
+        profile=profile,
+        open_store=_store_opener(config),
+        keys=keys,
+        console=console,
+        units=units,
+        probe_port=probe_port,
+    )
+
+
 def run_command(
-    port: Annotated[
-        str | None,
-        typer.Option("--port", help="Putter port: /dev/ttyUSB0, a pty, socket://host:port."),
+    ports: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--port",
+            help="Putter port: /dev/ttyUSB0, a pty, socket://host:port; "
+            f"repeat it for a fixture's slots (at most {MAX_SLOTS}).",
+        ),
     ] = None,
     config_file: ConfigOption = None,
     station: StationOption = None,
@@ -60,7 +96,7 @@ def run_command(
     config = load_config(
         config_file,
         {
-            "port": port,
+            "slots": ports or None,
             "station_id": station,
             "operator_id": operator,
             "lot": lot,
@@ -72,17 +108,10 @@ def run_command(
     )
     limits_profile = load_profile(config.limits_file, config.limits_profile)
     prepare_data_dir(config.data_dir)
-    check_port(config.port)
+    if not config.slots:
+        check_port(config.port)
     with TerminalKeys() as keys:
-        app = StationApp(
-            config=config,
-            profile=limits_profile,
-            open_store=_store_opener(config),
-            keys=keys,
-            console=out,
-            units=units,
-        )
-        app.serve()
+        _station(config, limits_profile, keys, out, units).serve()
 
 
 def demo_command(
@@ -102,6 +131,10 @@ def demo_command(
             "calibrates the gyro matrix too (12 poses).",
         ),
     ] = None,
+    slots: Annotated[
+        int,
+        typer.Option(min=1, max=MAX_SLOTS, help="Slots of the fixture: units calibrated together."),
+    ] = 1,
     config_file: ConfigOption = None,
     station: StationOption = None,
     operator: OperatorOption = None,
@@ -118,23 +151,27 @@ def demo_command(
         },
     )
     prepare_data_dir(config.data_dir)
-    port = config.data_dir.expanduser() / "demo" / "putter"
-    config = config.model_copy(update={"port": str(port)})
-    operator_script = ScriptedOperator(units=units, port=port, seed=seed, speed=speed)
+    demo_dir = config.data_dir.expanduser() / "demo"
+    operator_script: ScriptedOperator | FixtureOperator
+    if slots == 1:
+        port = demo_dir / "putter"
+        config = config.model_copy(update={"port": str(port), "slots": ()})
+        operator_script = ScriptedOperator(units=units, port=port, seed=seed, speed=speed)
+        where = f"each plugged into {port} in turn and moved through the poses"
+    else:
+        ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
+        config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
+        operator_script = FixtureOperator(units=units, ports=ports, seed=seed, speed=speed)
+        where = (
+            f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"
+        )
     console = err if as_json or not out.is_terminal else out
-    app = StationApp(
-        config=config,
-        profile=load_profile(config.limits_file, config.limits_profile),
-        open_store=_store_opener(config),
-        keys=operator_script,
-        console=console,
-        units=units,
-        probe_port=False,
-    )
+    limits = load_profile(config.limits_file, config.limits_profile)
+    app = _station(config, limits, operator_script, console, units, probe_port=False)
     operator_script.station = app
     console.print(
-        f"demo: {units} virtual putter{'s' * (units > 1)}, each plugged into {port} in turn and "
-        f"moved through the poses by a scripted operator, at {speed:g}× real time",
+        f"demo: {units} virtual putter{'s' * (units > 1)}, {where} "
+        f"by a scripted operator, at {speed:g}× real time",
         markup=False,
         highlight=False,
     )
@@ -142,7 +179,20 @@ def demo_command(
         records = app.serve()
     finally:
         operator_script.close()
-    by_serial = {u.serial: u for u in operator_script.done}
+    _demo_summary(records, operator_script.done, as_json)
+    if not as_json:
+        backlog = app.results.outbox.count()
+        out.print(
+            f"{len(records)} units calibrated; outbox {backlog}; "
+            f"database {config.database_url or config.data_dir}"
+        )
+
+
+def _demo_summary(records: list[RunRecord], done: list[DemoUnit], as_json: bool) -> None:
+    """Each unit's verdict, estimate and truth, as one JSON list (with ``--json``)."""
+    if not as_json:
+        return
+    by_serial = {u.serial: u for u in done}
     summary = []
     for record in records:
         unit = by_serial[record.serial]
@@ -162,9 +212,4 @@ def demo_command(
                 "failures": [f.model_dump(mode="json") for f in record.failures],
             }
         )
-    if as_json:
-        print_json(summary)
-    else:
-        backlog = app.results.outbox.count()
-        where = config.database_url or config.data_dir
-        out.print(f"{len(records)} units calibrated; outbox {backlog}; database {where}")
+    print_json(summary)

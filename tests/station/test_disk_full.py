@@ -88,7 +88,7 @@ def test_a_full_disk_keeps_the_unit_in_memory_and_writes_it_when_space_returns(
     journal_file = JournalFile(small_disk.path / "journal.json")
     outbox = Outbox(small_disk.path / "outbox")
     now = [0.0]
-    watch = DiskWatch(small_disk.path, journal_file, outbox, clock=lambda: now[0])
+    watch = DiskWatch(small_disk.path, [journal_file], outbox, clock=lambda: now[0])
     state = journal()
     small_disk.fill()
     journal_file.save(state)  # the pose's save: refused, owed
@@ -131,7 +131,7 @@ def test_a_read_only_data_dir_is_said_and_the_end_of_the_unit_is_done_later(
     journal_file = JournalFile(small_disk.path / "journal.json")
     outbox = Outbox(small_disk.path / "outbox")
     now = [0.0]
-    watch = DiskWatch(small_disk.path, journal_file, outbox, clock=lambda: now[0])
+    watch = DiskWatch(small_disk.path, [journal_file], outbox, clock=lambda: now[0])
     journal_file.save(journal())
     small_disk.read_only(True)
     outbox.put(make_record(serial="PT000001"))
