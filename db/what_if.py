@@ -14,7 +14,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from sqlalchemy import ColumnElement, Row, and_, not_, select, true
+from sqlalchemy import ColumnElement, Row, and_, select
 from sqlalchemy.orm import Session
 
 from db.models import Pose, Run, RunFacts, RunFailure
@@ -150,15 +150,16 @@ def rejudged(
             counts.first_pass += passed
         if row.line_latest:
             final[row.serial] = passed
-    # The cohort's latest runs after the range.
-    in_range = and_(true(), *where)
+    # The cohort's latest runs outside the selection (after the range, or of another
+    # station, operator or lot); those in it are judged already.
     first_in_range = (
         select(Run.serial)
         .join(RunFacts, RunFacts.run_pk == Run.id)
         .where(RunFacts.line_first.is_(True), *where)
+        .correlate(None)  # the runs of the range, not the outer query's run
     )
-    later = [RunFacts.line_latest.is_(True), Run.serial.in_(first_in_range), not_(in_range)]
-    for row, _, reasons in _judged(session, later, candidate):
-        final[row.serial] = not reasons
+    latest = [RunFacts.line_latest.is_(True), Run.serial.in_(first_in_range)]
+    for row, _, reasons in _judged(session, latest, candidate):
+        final.setdefault(row.serial, not reasons)
     counts.final_pass = sum(final.get(serial, False) for serial in cohort)
     return counts

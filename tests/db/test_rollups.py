@@ -300,6 +300,7 @@ def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     }
 
 
+@pytest.mark.timeout(400)  # a safety net: 30 histories, each with its trend and what-if
 @settings(
     max_examples=30,
     deadline=None,
