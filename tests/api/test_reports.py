@@ -238,7 +238,11 @@ def test_what_if_limits_re_judge_the_runs_and_store_nothing(
     assert "2051.0" in CANDIDATE
     before = stored()
     upload = {"limits": ("candidate.toml", CANDIDATE.encode())}
-    answer = client.post("/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload)
+    # The shipped file holds more than one profile: the form names the candidate.
+    which = {"profile": "candidate"}
+    answer = client.post(
+        "/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload, data=which
+    )
     assert answer.status_code == 200, answer.text
     what_if = answer.json()["what_if"]
     assert (what_if["limits"]["name"], what_if["limits"]["version"]) == ("candidate", "2")
@@ -255,7 +259,7 @@ def test_what_if_limits_re_judge_the_runs_and_store_nothing(
     assert what_if["pass_to_fail"] == sum(a and not b for a, b in pairs)
     assert what_if["fail_to_pass"] == sum(b and not a for a, b in pairs) == 1
     assert stored() == before
-    page = client.post("/api/v1/reports/eol", params=RANGE, files=upload)
+    page = client.post("/api/v1/reports/eol", params=RANGE, files=upload, data=which)
     assert page.headers["content-type"].startswith("text/html")
     assert "candidate v2" in page.text
     bad = client.post(

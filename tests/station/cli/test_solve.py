@@ -163,7 +163,8 @@ def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -
     path = _write(tmp_path / "poses.csv", poses)
     limits = tmp_path / "limits.toml"
     shipped = (REPO_ROOT / "station" / "profiles" / "limits.toml").read_text()
-    limits.write_text(shipped + "fit_residual_counts = { upper = 50.0 }\n")
+    header = "[profiles.kxm52-production]\n"  # the default profile (not the file's last)
+    limits.write_text(shipped.replace(header, header + "fit_residual_counts = { upper = 50.0 }\n"))
     loose = json.loads(run_cli("solve", str(path), "--limits", str(limits), "--json").stdout)
     strict = json.loads(run_cli("solve", str(path), "--json").stdout)
     assert (loose["excluded"], loose["residual_limit_counts"]) == ([], 50.0)
