@@ -132,8 +132,9 @@ def measure(units: int, speed: float) -> dict[str, Any]:
     }
 
 
-def cycle(profile: str, speed: float = 1.0) -> dict[str, Any]:
-    """One unit of ``profile`` (and its shipped run plan): seconds from scan to verdict."""
+def cycle(profile: str, capture: str = "fixed", speed: float = 1.0) -> dict[str, Any]:
+    """One unit of ``profile`` (and its shipped run plan) with ``capture`` windows (fixed
+    or adaptive): seconds from scan to verdict, and the seconds of its still windows."""
     marks: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp)
@@ -143,6 +144,7 @@ def cycle(profile: str, speed: float = 1.0) -> dict[str, Any]:
             port=str(port),
             database_url=f"sqlite:///{data}/r.sqlite3",
             limits_profile=profile,
+            run={"capture": capture},
         )
         operator = ScriptedOperator(units=1, port=port, seed=7, speed=speed)
         app = StationApp(
@@ -171,11 +173,11 @@ def cycle(profile: str, speed: float = 1.0) -> dict[str, Any]:
         finally:
             operator.close()
     assert record.verdict == "pass", record.failures
-    poses = len(record.poses)
     return {
         "profile": profile,
-        "poses": poses,
-        "windows": poses * WINDOW / DEFAULT_RATE_HZ,
+        "capture": capture,
+        "poses": len(record.poses),
+        "windows": sum(p.sample_count for p in record.poses) / DEFAULT_RATE_HZ,
         "cycle": (marks[1] - marks[0]) * speed,
     }
 
@@ -186,11 +188,15 @@ def main() -> None:
     parser.add_argument("--cycle", action="store_true")
     args = parser.parse_args()
     if args.cycle:
-        print("| profile | poses captured | fixed windows | cycle, scan → verdict (1×) |")
-        print("|---|---|---|---|")
+        print("| profile | capture | poses captured | windows | cycle, scan → verdict (1×) |")
+        print("|---|---|---|---|---|")
         for profile in ("kxm52-production", "whole-unit"):
-            c = cycle(profile)
-            print(f"| {c['profile']} | {c['poses']} | {c['windows']:.1f} s | {c['cycle']:.1f} s |")
+            for capture in ("fixed", "adaptive"):
+                c = cycle(profile, capture)
+                print(
+                    f"| {c['profile']} | {c['capture']} | {c['poses']} | {c['windows']:.1f} s "
+                    f"| {c['cycle']:.1f} s |"
+                )
         return
     runs = [(2, 10.0)] if args.quick else [(3, 10.0), (2, 1.0)]
     print(
