@@ -5,8 +5,11 @@ and, on a port without ``cancel_read``, raises the read timeout to one second so
 its loop can notice a stop. pyserial's ``socket://`` port has both problems: its
 ``in_waiting`` says only whether *some* byte waits (pyserial issue #759), so the
 thread would read 22-byte frames one byte per call, and it has no ``cancel_read``, so
-closing an idle driver would take a second. :class:`SocketPort` fixes both; every
-other URL (a tty, a pty, ``loop://``) is opened by :func:`serial.serial_for_url` as is.
+closing an idle driver would take a second. :class:`SocketPort` fixes both. A tty's
+``in_waiting`` (an ``ioctl``) raises a bare ``OSError`` (EIO) once the cable is pulled,
+which the thread does not catch (it ends on a ``SerialException``), so the loss would
+never reach the link: :class:`TtyPort` raises it as a ``SerialException``. Every other
+URL (``loop://``, ``rfc2217://``) is opened by :func:`serial.serial_for_url` as is.
 """
 
 import contextlib
@@ -41,6 +44,19 @@ class SocketPort(_PyserialSocket):
                 self._socket.shutdown(socket.SHUT_RD)
 
 
+class TtyPort(serial.Serial):
+    """A tty (or pty) whose ``in_waiting`` fails as a ``SerialException`` when the device
+    is gone, as its ``read`` does."""
+
+    @property
+    def in_waiting(self) -> int:
+        """Bytes waiting in the tty's input queue."""
+        try:
+            return int(super().in_waiting)
+        except OSError as exc:
+            raise serial.SerialException(f"{self.port}: device gone ({exc})") from exc
+
+
 def open_port(url: str, *, baudrate: int, timeout: float) -> serial.SerialBase:
     """Open ``url`` (any :func:`serial.serial_for_url` URL) for a reader thread."""
     if url.startswith("socket://"):
@@ -48,4 +64,6 @@ def open_port(url: str, *, baudrate: int, timeout: float) -> serial.SerialBase:
         port.port = url
         port.open()
         return port
+    if "://" not in url:  # a device path: a tty or pty
+        return TtyPort(url, baudrate=baudrate, timeout=timeout)
     return serial.serial_for_url(url, baudrate=baudrate, timeout=timeout)

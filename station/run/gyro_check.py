@@ -12,15 +12,14 @@ degrees ([Tedaldi2014]_'s residual, on the unit's own output). With K and b righ
 noise (~0.02°); a gyro 1 % off turns it by about 1 % of the move.
 """
 
-import time
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
 
-from station.device import DeviceTimeoutError, PutterDriver
+from station.device import PutterDriver
 from station.gyro.motion import Move, integrate_rates
-from station.run.unit_output import STALL_S
+from station.run.unit_output import CalibratedSamples
 from station.samples import SampleBlock
 from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 from station.stillness import StillnessThresholds, judge_window
@@ -52,24 +51,15 @@ class VerificationMove:
     ) -> None:
         mean = start.summary().accel_mean
         self._u_start = mean / np.linalg.norm(mean)
-        self._blocks = [start[-1:], rest]
+        self._samples = CalibratedSamples(SampleBlock.concat((start[-1:], rest)))
         self._stillness = stillness.model_copy(update={"window_samples": END_WINDOW})
         self._rate_hz = rate_hz
         self._timeout_samples = int(timeout_s * rate_hz)
         self._moved = False
-        self._last_arrival = time.monotonic()
 
     def poll(self, driver: PutterDriver) -> MoveOutcome | None:
         """The outcome once the unit lies still after the move; None until then."""
-        block = driver.drain_calibrated()
-        now = time.monotonic()
-        if len(block):
-            self._blocks.append(block)
-            self._last_arrival = now
-        elif now - self._last_arrival > STALL_S:
-            raise DeviceTimeoutError(f"no calibrated samples from {driver.url} for {STALL_S:g} s")
-        samples = SampleBlock.concat(self._blocks)
-        self._blocks = [samples]
+        samples = self._samples.drain(driver)
         if not self._moved:
             self._moved = bool((np.linalg.norm(samples.gyro, axis=1) > MOVING_DPS).any())
         if self._moved and len(samples) > END_WINDOW and self._still(samples[-END_WINDOW:]):

@@ -20,12 +20,36 @@ UNIT_OUTPUT_SAMPLES = 256
 STALL_S = 2.0
 
 
+class CalibratedSamples:
+    """The unit's calibrated samples received so far, and when the last one came."""
+
+    def __init__(self, first: SampleBlock | None = None) -> None:
+        self._blocks = [first] if first is not None else []
+        self._last_arrival = time.monotonic()
+
+    def drain(self, driver: PutterDriver) -> SampleBlock:
+        """Every calibrated sample so far, with those the driver holds now.
+
+        Raises :class:`station.device.DeviceTimeoutError` when the unit sent nothing
+        for :data:`STALL_S`.
+        """
+        block = driver.drain_calibrated()
+        now = time.monotonic()
+        if len(block):
+            self._blocks.append(block)
+            self._last_arrival = now
+        elif now - self._last_arrival > STALL_S:
+            raise DeviceTimeoutError(f"no calibrated samples from {driver.url} for {STALL_S:g} s")
+        samples = SampleBlock.concat(self._blocks)
+        self._blocks = [samples]
+        return samples
+
+
 class UnitOutputCheck:
-    """The calibrated samples received so far, and when the last one came."""
+    """Gathers the unit's calibrated output and answers its |g| error."""
 
     def __init__(self, *, keep_streaming: bool = False) -> None:
-        self._blocks: list[SampleBlock] = []
-        self._last_arrival = time.monotonic()
+        self._samples = CalibratedSamples()
         self._keep_streaming = keep_streaming
         #: The samples averaged, and those received after them (once answered).
         self.window = SampleBlock.empty()
@@ -37,14 +61,7 @@ class UnitOutputCheck:
 
         Raises :class:`station.device.DeviceTimeoutError` when the unit went quiet.
         """
-        block = driver.drain_calibrated()
-        now = time.monotonic()
-        if len(block):
-            self._blocks.append(block)
-            self._last_arrival = now
-        elif now - self._last_arrival > STALL_S:
-            raise DeviceTimeoutError(f"no calibrated samples from {driver.url} for {STALL_S:g} s")
-        got = SampleBlock.concat(self._blocks)
+        got = self._samples.drain(driver)
         if len(got) < UNIT_OUTPUT_SAMPLES:
             return None
         if not self._keep_streaming:

@@ -43,7 +43,9 @@ class PtyLink:
     """The master side of a new pty; the station opens :attr:`url` (the slave path).
 
     With ``alias``, a symlink of that name points to the slave, so the port keeps its
-    name across :meth:`VirtualPutter.replug`.
+    name across :meth:`VirtualPutter.replug`; closed (the cable pulled), the link is gone,
+    as a USB serial device's node is: the pty's number is free for another process, and
+    a station reopening the name must not reach that process's unit.
     """
 
     def __init__(self, alias: Path | None = None) -> None:
@@ -52,6 +54,8 @@ class PtyLink:
         os.set_blocking(self._master, False)
         self._outbox = _Outbox()
         path = os.ttyname(self._slave)
+        self._alias = alias
+        self._slave_path = path
         if alias is not None:
             alias.unlink(missing_ok=True)
             alias.symlink_to(path)
@@ -81,6 +85,9 @@ class PtyLink:
             del pending[:written]
 
     def close(self) -> None:
+        alias = self._alias
+        if alias is not None and alias.is_symlink() and str(alias.readlink()) == self._slave_path:
+            alias.unlink(missing_ok=True)
         os.close(self._master)
         os.close(self._slave)
 

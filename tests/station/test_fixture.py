@@ -93,7 +93,7 @@ class Fixture:
             raise EOFError  # the cycle ended: stop
         return ""
 
-    def serve(self, app: FixtureApp, timeout: float = 60.0) -> None:
+    def serve(self, app: FixtureApp, timeout: float = 100.0) -> None:
         """Run the station until its keys end, within ``timeout`` wall seconds."""
         deadline = time.monotonic() + timeout
         previous = self.on_tick
@@ -183,7 +183,8 @@ def test_a_pulled_cable_and_a_saturated_unit_never_hold_up_the_unit_that_passes(
 
 
 def render(app: FixtureApp) -> str:
-    console = Console(file=io.StringIO(), width=80, record=True)
+    # Wide enough that no row's state wraps (at 80 columns it may, by the other rows).
+    console = Console(file=io.StringIO(), width=200, record=True)
     console.print(app.screen())
     return console.export_text()
 
