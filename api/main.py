@@ -19,6 +19,7 @@ from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
 from station import __version__
+from station.quality.shifts import parse_shifts
 
 API_PREFIX = "/api/v1"
 
@@ -91,6 +92,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         responses=problems(413, 503),
     )
     app.state.plant_timezone = settings.plant_timezone
+    app.state.plant_shifts = parse_shifts(settings.plant_shifts)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
     reads = [Depends(require_key)] if settings.read_requires_key else []

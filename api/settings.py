@@ -6,7 +6,15 @@ from pydantic import AfterValidator, Field
 
 from db.settings import DatabaseSettings
 from station.errors import InputError
+from station.quality.shifts import parse_shifts, shift_name
 from station.report.period import plant_zone
+
+
+def _shifts(text: str) -> str:
+    try:
+        return ",".join(shift_name(at) for at in parse_shifts(text))
+    except InputError as exc:
+        raise ValueError(str(exc)) from None
 
 
 def _zone(name: str) -> str:
@@ -30,6 +38,8 @@ class ApiSettings(DatabaseSettings):
     report connection. Either exceeded answers 503. ``plant_timezone``
     (``CALSTATION_PLANT_TIMEZONE``, an IANA name): the zone the report and dashboard show
     times and days in, and read dates without a zone in; stored times stay UTC.
+    ``plant_shifts`` (``CALSTATION_PLANT_SHIFTS``, e.g. ``06:00,14:00,22:00``): the
+    shifts' start times in that zone; the report adds a trend per shift.
     """
 
     read_requires_key: bool = False
@@ -40,3 +50,4 @@ class ApiSettings(DatabaseSettings):
     read_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 30.0
     report_wait_s: Annotated[float, Field(gt=0, le=3600)] = 10.0
     plant_timezone: Annotated[str, AfterValidator(_zone)] = "UTC"
+    plant_shifts: Annotated[str, AfterValidator(_shifts)] = ""

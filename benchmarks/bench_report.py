@@ -18,9 +18,11 @@ over one day, and over two days that start and end at noon (two partial days
 aggregated from their runs, one whole day from the roll-ups).
 
 Then the pages as the server renders them, each timed (query and rendering) and weighed:
-the report's HTML page over every run (every unit listed, as ``format=html`` without
-``units``, once; and with ``units=1000``), a retested unit's page (``/units/{serial}``)
-and its certificate, and the line dashboard (one day, and the units on hold of any day).
+the report's HTML page over every run as the server answers ``format=html`` (the held
+units, 50 a page: page 1 in UTC, in a plant zone with three shifts, and page 1,000), and
+with every unit listed (``list=all``: cut to 1,000 units; uncut up to 100,000 runs), a
+retested unit's page (``/units/{serial}``) and its certificate, and the line dashboard
+(one day, and the units on hold of any day).
 """
 
 import argparse
@@ -28,12 +30,13 @@ import os
 import time
 from collections.abc import Callable
 from datetime import UTC, datetime
+from datetime import time as clock
 from functools import partial
 from typing import Any
 
 from sqlalchemy import insert, make_url, text
 
-from api.routes.reports import certificate_run, dashboard_body
+from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body
 from db import RunRepository, make_engine, open_database
 from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
@@ -126,6 +129,9 @@ def best(repeat: int, action: Callable[[], object]) -> float:
     return min(times)
 
 
+#: A plant's three shifts, for the report page with a trend per shift.
+SHIFTS = (clock(6), clock(14), clock(22))
+
 #: Above this many runs the report page that lists every unit is not built (hundreds of
 #: megabytes of HTML); its size grows with the units, as the smaller runs show.
 EVERY_UNIT_PAGE_RUNS = 100_000
@@ -144,9 +150,30 @@ def pages(session: Any, repeat: int, runs: int) -> None:
         profile = stored_profiles(session, [run.limits.sha256]).get(run.limits.sha256)
         return certificate_page(run, profile, at, repository.latest_gyro_fit(serial), earlier)
 
+    def served(zone: str = "UTC", shifts: tuple[clock, ...] = (), page: int = 1) -> str:
+        # As ``GET /api/v1/reports/eol?format=html`` builds it (api.routes.reports.eol_body).
+        report = eol_report(
+            session,
+            ReportFilter(),
+            unit_limit=PAGE_UNITS,
+            unit_offset=(page - 1) * PAGE_UNITS,
+            held_only=True,
+            zone=zone,
+            shifts=shifts,
+        )
+        return render(report, "html")
+
     rows: list[tuple[str, Callable[[], str], int]] = [
+        ("**report page as served (`format=html`: held units, 50 a page)**", served, repeat),
         (
-            "report page, every run, units cut to 1,000 (`units=1000`)",
+            "report page as served, plant zone Europe/Berlin with three shifts "
+            "(the 31 days' trend per day and per shift from the runs)",
+            lambda: served("Europe/Berlin", SHIFTS),
+            repeat,
+        ),
+        ("report page as served, page 1,000 of the held units", lambda: served(page=1000), repeat),
+        (
+            "report page, every run, all units listed, 1,000 of them (`list=all&units=1000`)",
             lambda: render(eol_report(session, ReportFilter(), unit_limit=1000), "html"),
             repeat,
         ),
@@ -164,9 +191,9 @@ def pages(session: Any, repeat: int, runs: int) -> None:
     ]
     if runs <= EVERY_UNIT_PAGE_RUNS:
         rows.insert(
-            1,
+            4,
             (
-                "report page, every run, every unit listed (`format=html`)",
+                "report page, every run, every unit listed (`list=all&units=1000000`)",
                 lambda: render(eol_report(session, ReportFilter()), "html"),
                 1,
             ),

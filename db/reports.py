@@ -13,7 +13,7 @@ profiles: a few dozen) and applies the capability formulas of
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from datetime import UTC, datetime, timedelta
+from datetime import UTC, datetime, time, timedelta
 from typing import Any, NamedTuple
 
 from sqlalchemy import (
@@ -37,6 +37,7 @@ from db.rollups import (
     FAILURE_VALUES,
     HISTOGRAM,
     LIMITS,
+    MOMENT_VALUES,
     PARAMETER_VALUES,
     PRODUCTION,
     count_contributions,
@@ -44,7 +45,7 @@ from db.rollups import (
     parameter_contributions,
     stored_bounds,
 )
-from db.trends import TREND_DAYS, day_key, trend_days
+from db.trends import TREND_DAYS, day_key, shift_key, trend_days, trend_shifts
 from db.what_if import rejudged
 from station.limits import LimitsProfile
 from station.quality.capability import (
@@ -69,6 +70,7 @@ from station.quality.figures import (
     StationSummary,
     Summary,
     TrendDay,
+    TrendShift,
     UnitVerdict,
     WhatIf,
 )
@@ -79,6 +81,7 @@ from station.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
+from station.quality.shifts import plant_shifts, shift_name
 from station.records import LimitsRef
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
@@ -238,17 +241,22 @@ class ReportQueries:
         group: list[str],
         rolled_up: bool,
         columns: Mapping[str, ColumnElement[Any]] | None,
+        values: Mapping[str, str] = PARAMETER_VALUES,
     ) -> list[Row[Any]]:
         """The parameters' sums per ``group``: from the roll-ups and the partial days when
-        ``rolled_up``, else from every run in range (``columns``: other keys)."""
+        ``rolled_up``, else from every run in range (``columns``: other keys); ``values``
+        the sums wanted (all, or :data:`MOMENT_VALUES`)."""
         if rolled_up:
             rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
         else:
             rolled, raw = None, self.conditions()
-        selects = [] if raw is None else parameter_contributions(group, raw, bounds, columns)
-        return self._merged(
-            ReportParameters, PARAMETER_VALUES, ["parameter", *group], rolled, selects
+        moments_only = values == MOMENT_VALUES
+        selects = (
+            []
+            if raw is None
+            else parameter_contributions(group, raw, bounds, columns, moments_only=moments_only)
         )
+        return self._merged(ReportParameters, values, ["parameter", *group], rolled, selects)
 
     # -- trend -------------------------------------------------------------------------
 
@@ -269,7 +277,7 @@ class ReportQueries:
         """The parameters' sums per parameter and day (as :meth:`daily_counts`)."""
         rolled_up = day is None and stored_bounds(self.session.connection()) == bounds
         columns = None if day is None else {"day": day}
-        return self._parameter_rows(bounds, ["day"], rolled_up, columns)
+        return self._parameter_rows(bounds, ["day"], rolled_up, columns, MOMENT_VALUES)
 
     # -- control charts ----------------------------------------------------------------
 
@@ -707,10 +715,12 @@ def _trend(
     counts: Sequence[Row[Any]],
     bounds: FamilyBounds | None,
     zone: str,
-) -> list[TrendDay]:
-    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`)."""
+    shifts: Sequence[time],
+) -> tuple[list[TrendDay], list[TrendShift]]:
+    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
+    over their shifts when the plant has ``shifts`` (start times)."""
     if not counts:
-        return []
+        return [], []
     start = filter.since or min(row.first_start for row in counts)
     end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
     days = plant_days(start, end, zone, TREND_DAYS)
@@ -720,7 +730,17 @@ def _trend(
     )
     key = None if is_utc(zone) else day_key(days, zone)
     parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
-    return trend_days(days, queries.daily_counts(key), parameters, bounds)
+    trend = trend_days(days, queries.daily_counts(key), parameters, bounds)
+    periods = plant_shifts(max(start, since), end, zone, shifts, TREND_DAYS * len(shifts))
+    if not periods:
+        return trend, []
+    queries = ReportQueries(
+        session,
+        filter.model_copy(update={"since": max(periods[0].start, filter.since or since)}),
+    )
+    key = shift_key(periods)
+    parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
+    return trend, trend_shifts(periods, queries.daily_counts(key), parameters, bounds)
 
 
 def eol_report(
@@ -734,6 +754,7 @@ def eol_report(
     zone: str = "UTC",
     held_only: bool = False,
     unit_offset: int = 0,
+    shifts: Sequence[time] = (),
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
@@ -741,7 +762,8 @@ def eol_report(
     the runs in range. A ``candidate`` profile adds the what-if: the runs re-judged
     against it (:mod:`db.what_if`), nothing stored changed. ``unit_limit`` cuts the unit
     list to the latest units. ``zone`` is
-    the plant's time zone: the trend's days are its days. ``held_only`` lists only the
+    the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
+    times, for a trend per shift too. ``held_only`` lists only the
     held units (latest run failed), ``unit_offset`` skips the newest (pages).
     """
     queries = ReportQueries(session, filter)
@@ -778,6 +800,7 @@ def eol_report(
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     line = _counts(counts)
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
+    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
@@ -789,7 +812,9 @@ def eol_report(
             for station, rows_ in sorted(by_station.items())
         ],
         timezone=zone,
-        trend=_trend(session, filter, counts, bounds, zone),
+        trend=trend,
+        shifts=[shift_name(at) for at in shifts],
+        shift_trend=shift_trend,
         pareto=_pareto(queries.first_failures()),
         parameters=parameters,
         control_charts=_charts(limits, queries.chart_points(chart_points)),

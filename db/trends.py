@@ -1,4 +1,4 @@
-"""The report's trend: per plant day, units, first-pass and final yield, and Cpk.
+"""The report's trend: per plant day (and shift), units, first-pass and final yield, Cpk.
 
 The days are the plant's (:mod:`station.quality.days`). In UTC they are the roll-ups'
 days, and :class:`db.reports.ReportQueries` adds up the roll-ups as for the rest of the
@@ -6,11 +6,14 @@ report; in another zone a day starts at a local midnight that cuts the roll-ups'
 so each run is numbered with its plant day (:func:`day_key`, a ``CASE`` over the days'
 starts) and the runs of the trend's days are aggregated instead (at most
 :data:`TREND_DAYS` of them). Units count on the day of their first run on the line, as
-in the summary, so the days' units add up to the summary's over the same runs.
+in the summary, so the days' units add up to the summary's over the same runs. The
+plant's shifts (:mod:`station.quality.shifts`) cut the same days finer: each run is
+numbered with its shift (:func:`shift_key`) and the runs of the trend's shifts are
+aggregated, in any zone.
 """
 
 from collections.abc import Mapping, Sequence
-from datetime import date, timedelta
+from datetime import date, datetime, timedelta
 from typing import Any
 
 from sqlalchemy import ColumnElement, Integer, Row, RowMapping, case, literal
@@ -18,21 +21,34 @@ from sqlalchemy import ColumnElement, Integer, Row, RowMapping, case, literal
 from db.models import Run
 from station.quality.capability import cpk, shifted_moments, tolerance
 from station.quality.days import day_number, midnight
-from station.quality.figures import TrendDay
+from station.quality.figures import TrendDay, TrendShift
 from station.quality.parameters import PARAMETERS, FamilyBounds
+from station.quality.shifts import Shift
 
 #: The most days a trend shows: the latest of the range.
 TREND_DAYS = 31
 
 
+def period_key(ends: Sequence[tuple[datetime, int]], last: int) -> ColumnElement[int]:
+    """Each run's period number: that of the first period whose end (UTC) comes after the
+    run's start, ``last`` past them all (``ends`` in time order)."""
+    tail = literal(last, Integer())
+    if not ends:
+        return tail
+    return case(*((Run.started_at < end, literal(n, Integer())) for end, n in ends), else_=tail)
+
+
 def day_key(days: Sequence[date], zone: str) -> ColumnElement[int]:
     """Each run's plant day number, for runs from the first of ``days`` to the end of
     the last."""
-    starts = [(midnight(day + timedelta(days=1), zone), day_number(day)) for day in days[:-1]]
-    last = literal(day_number(days[-1]), Integer())
-    if not starts:
-        return last
-    return case(*((Run.started_at < end, literal(n, Integer())) for end, n in starts), else_=last)
+    ends = [(midnight(day + timedelta(days=1), zone), day_number(day)) for day in days[:-1]]
+    return period_key(ends, day_number(days[-1]))
+
+
+def shift_key(shifts: Sequence[Shift]) -> ColumnElement[int]:
+    """Each run's shift, its index in ``shifts``, for runs from the start of the first
+    to the end of the last."""
+    return period_key([(s.end, i) for i, s in enumerate(shifts[:-1])], len(shifts) - 1)
 
 
 def _ratio(part: int, whole: int) -> float | None:
@@ -48,22 +64,25 @@ def _cpk(row: RowMapping, bounds: FamilyBounds, family: str) -> float | None:
     return cpk(mean, std, lower, upper)
 
 
-def trend_days(
-    days: Sequence[date],
-    counts: Sequence[Row[Any]],
-    parameters: Sequence[Row[Any]],
-    bounds: FamilyBounds | None,
-) -> list[TrendDay]:
-    """The trend over ``days`` from the per-day rows of ``report_counts`` and
-    ``report_parameters`` sums (days without runs show zeros)."""
-    by_day: Mapping[int, RowMapping] = {int(r.day): r._mapping for r in counts}
-    stats: dict[tuple[int, str], RowMapping] = {
-        (int(r.day), r.parameter): r._mapping for r in parameters
-    }
-    trend = []
-    for day in days:
-        n = day_number(day)
-        row = by_day.get(n)
+class _Sums:
+    """The per-period rows of ``report_counts`` and ``report_parameters`` sums, by the
+    period's number."""
+
+    def __init__(
+        self,
+        counts: Sequence[Row[Any]],
+        parameters: Sequence[Row[Any]],
+        bounds: FamilyBounds | None,
+    ) -> None:
+        self.counts: Mapping[int, RowMapping] = {int(r.day): r._mapping for r in counts}
+        self.stats: Mapping[tuple[int, str], RowMapping] = {
+            (int(r.day), r.parameter): r._mapping for r in parameters
+        }
+        self.bounds = bounds
+
+    def figures(self, n: int) -> dict[str, Any]:
+        """The :class:`TrendFigures` fields of period ``n`` (zeros without runs)."""
+        row = self.counts.get(n)
         runs, passed, units, first, final = (
             (0, 0, 0, 0, 0)
             if row is None
@@ -75,23 +94,46 @@ def trend_days(
                 int(row["line_final_pass"]),
             )
         )
-        trend.append(
-            TrendDay(
-                day=day,
-                runs=runs,
-                runs_passed=passed,
-                units=units,
-                first_pass_yield=_ratio(first, units),
-                final_yield=_ratio(final, units),
-                run_yield=_ratio(passed, runs),
-                cpk={
-                    spec.name: (
-                        _cpk(stats[(n, spec.name)], bounds, spec.family)
-                        if bounds is not None and (n, spec.name) in stats
-                        else None
-                    )
-                    for spec in PARAMETERS
-                },
-            )
-        )
-    return trend
+        bounds = self.bounds
+        return {
+            "runs": runs,
+            "runs_passed": passed,
+            "units": units,
+            "first_pass_yield": _ratio(first, units),
+            "final_yield": _ratio(final, units),
+            "run_yield": _ratio(passed, runs),
+            "cpk": {
+                spec.name: (
+                    _cpk(self.stats[(n, spec.name)], bounds, spec.family)
+                    if bounds is not None and (n, spec.name) in self.stats
+                    else None
+                )
+                for spec in PARAMETERS
+            },
+        }
+
+
+def trend_days(
+    days: Sequence[date],
+    counts: Sequence[Row[Any]],
+    parameters: Sequence[Row[Any]],
+    bounds: FamilyBounds | None,
+) -> list[TrendDay]:
+    """The trend over ``days`` from the per-day rows of ``report_counts`` and
+    ``report_parameters`` sums (days without runs show zeros)."""
+    sums = _Sums(counts, parameters, bounds)
+    return [TrendDay(day=day, **sums.figures(day_number(day))) for day in days]
+
+
+def trend_shifts(
+    shifts: Sequence[Shift],
+    counts: Sequence[Row[Any]],
+    parameters: Sequence[Row[Any]],
+    bounds: FamilyBounds | None,
+) -> list[TrendShift]:
+    """The trend over ``shifts`` from the rows that :func:`shift_key` numbers."""
+    sums = _Sums(counts, parameters, bounds)
+    return [
+        TrendShift(day=s.day, shift=s.name, start=s.start, end=s.end, **sums.figures(i))
+        for i, s in enumerate(shifts)
+    ]

@@ -9,7 +9,7 @@ import csv
 import io
 from collections.abc import AsyncIterator, Sequence
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, time
 from typing import Annotated, Any, Literal
 
 from fastapi import (
@@ -93,6 +93,15 @@ async def get_plant_zone(request: Request) -> str:
 PlantZoneDep = Annotated[str, Depends(get_plant_zone)]
 
 
+async def get_plant_shifts(request: Request) -> tuple[time, ...]:
+    """The plant's shift start times (``CALSTATION_PLANT_SHIFTS``), none by default."""
+    shifts: tuple[time, ...] = request.app.state.plant_shifts
+    return shifts
+
+
+PlantShiftsDep = Annotated[tuple[time, ...], Depends(get_plant_shifts)]
+
+
 @dataclass(frozen=True)
 class Period:
     """The report's filter as the query gives it: ``from``/``to`` without a zone are the
@@ -162,6 +171,7 @@ async def get_eol_report(
     repository: ReportPoolDep,
     period: PeriodDep,
     zone: PlantZoneDep,
+    shifts: PlantShiftsDep,
     format: Format = "json",
     listed: Listed = "held",
     units: PageSize = PAGE_UNITS,
@@ -170,7 +180,8 @@ async def get_eol_report(
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
     (or all) units of a period."""
     pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
-    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, None)
+    plant = _Plant(zone, shifts)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, plant, None)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -184,6 +195,7 @@ async def post_eol_what_if(
     repository: ReportPoolDep,
     period: PeriodDep,
     zone: PlantZoneDep,
+    shifts: PlantShiftsDep,
     limits: Annotated[
         UploadFile, File(description="the candidate limits file (TOML, as the station's)")
     ],
@@ -205,7 +217,8 @@ async def post_eol_what_if(
     Nothing is stored: not the profile, not a verdict."""
     candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
     pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
-    body = await repository.run(eol_body, period.filter(zone), pages, format, zone, candidate)
+    plant = _Plant(zone, shifts)
+    body = await repository.run(eol_body, period.filter(zone), pages, format, plant, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -228,12 +241,20 @@ class _Pages:
     offset: int
 
 
+@dataclass(frozen=True)
+class _Plant:
+    """The plant's time zone and shift start times, as the report shows its times."""
+
+    zone: str
+    shifts: tuple[time, ...]
+
+
 def eol_body(
     repository: RunRepository,
     filter: ReportFilter,
     pages: _Pages,
     format: str,
-    zone: str,
+    plant: _Plant,
     candidate: LimitsProfile | None,
 ) -> str:
     """The report rendered (in a report process: :mod:`api.report_pool`)."""
@@ -244,7 +265,8 @@ def eol_body(
         unit_limit=pages.size,
         unit_offset=pages.offset,
         held_only=pages.held,
-        zone=zone,
+        zone=plant.zone,
+        shifts=plant.shifts,
     )
     return render(report, format)
 

@@ -158,6 +158,10 @@ def solve_least_squares(
     jac = param.jacobian(fit.x, v)
     condition = float(condition_number(jac))
     if not condition <= max_condition:
+        # Sound poses whose fit lands on a degenerate solution: a pose no sensor could
+        # read is the likelier cause, as for a non-positive scale.
+        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_beyond_datasheet(p)
         raise _degenerate(condition, model, max_condition)
 
     calibration = Calibration(

@@ -13,6 +13,7 @@ from station.cli.output import err, out
 from station.errors import CalstationError
 from station.limits import load_profile
 from station.quality.figures import ReportFilter
+from station.quality.shifts import parse_shifts
 from station.report.period import parse_period, plant_zone
 from station.report.render import FORMATS, render
 
@@ -51,6 +52,15 @@ def report(
             "--from/--to without a zone read in it.",
         ),
     ] = "UTC",
+    shifts: Annotated[
+        str,
+        typer.Option(
+            "--shifts",
+            envvar="CALSTATION_PLANT_SHIFTS",
+            help="The plant's shift start times in its zone (e.g. 06:00,14:00,22:00): "
+            "a trend per shift too.",
+        ),
+    ] = "",
     output: Annotated[
         Path | None,
         typer.Option("--out", help="Write to this file instead of standard output."),
@@ -61,6 +71,7 @@ def report(
     if format not in FORMATS:
         raise CalstationError(f"--format {format!r} is not one of {', '.join(FORMATS)}")
     zone = plant_zone(timezone)
+    starts = parse_shifts(shifts)
     start, end = parse_period(since, until, zone=zone)
     report_filter = ReportFilter(
         since=start,
@@ -75,7 +86,12 @@ def report(
     try:
         with database.session() as session:
             report_ = eol_report(
-                session, report_filter, candidate=profile, unit_limit=units, zone=zone
+                session,
+                report_filter,
+                candidate=profile,
+                unit_limit=units,
+                zone=zone,
+                shifts=starts,
             )
     except OperationalError as exc:
         raise DatabaseUnavailableError.of(url, exc) from None

@@ -141,19 +141,32 @@ class ControlChart(_Part):
     )
 
 
-class TrendDay(_Part):
-    """One of the plant's days (in its time zone) of the range: the units whose first run
-    on the line was that day, with their first-pass and final yield, its runs, and the
-    Cpk of its values."""
+class TrendFigures(_Part):
+    """The figures of one period of the trend: the units whose first run on the line was
+    in it, with their first-pass and final yield, its runs, and the Cpk of its values."""
 
-    day: date
     runs: int
     runs_passed: int
-    units: int = Field(description="units whose first run on the line was that day")
+    units: int = Field(description="units whose first run on the line was in the period")
     first_pass_yield: float | None
-    final_yield: float | None = Field(description="of that day's units, latest run passed")
-    run_yield: float | None = Field(description="passing runs / runs of that day")
-    cpk: dict[str, float | None] = Field(description="Cpk per parameter of that day's values")
+    final_yield: float | None = Field(description="of the period's units, latest run passed")
+    run_yield: float | None = Field(description="passing runs / runs of the period")
+    cpk: dict[str, float | None] = Field(description="Cpk per parameter of the period's values")
+
+
+class TrendDay(TrendFigures):
+    """One of the plant's days (in its time zone) of the range."""
+
+    day: date
+
+
+class TrendShift(TrendFigures):
+    """One of the plant's shifts of the range (:mod:`station.quality.shifts`)."""
+
+    day: date = Field(description="the plant day the shift started on")
+    shift: str = Field(description="the shift's start time in the plant's zone, HH:MM")
+    start: AwareDatetime = Field(description="the shift's start (UTC)")
+    end: AwareDatetime = Field(description="the next shift's start (UTC)")
 
 
 class UnitVerdict(_Part):
@@ -194,6 +207,13 @@ class EolReport(_Part):
     timezone: str = Field("UTC", description="the plant's time zone the pages show times in")
     trend: list[TrendDay] = Field(
         default_factory=list, description="per plant day of the range, the latest days"
+    )
+    shifts: list[str] = Field(
+        default_factory=list, description="the plant's shift start times (HH:MM), if configured"
+    )
+    shift_trend: list[TrendShift] = Field(
+        default_factory=list,
+        description="per shift of the trend's days, when the plant's shifts are configured",
     )
     pareto: list[ParetoEntry]
     parameters: list[ParameterStats]

@@ -14,7 +14,7 @@ from markupsafe import Markup
 
 from station import __version__
 from station.limits import LimitsProfile
-from station.quality.figures import EolReport
+from station.quality.figures import EolReport, TrendFigures
 from station.quality.parameters import profile_bounds
 from station.records import GyroFitRecord, RunSummary, StoredRun
 from station.report import formatting, svg
@@ -75,33 +75,57 @@ _env.globals.update(serial_link=_base.serial_link)  # type: ignore[attr-defined]
 DOCUMENT_TITLES = {"pass": "Calibration certificate", "fail": "Failure report"}
 
 
-def trend_charts(report: EolReport) -> list[str]:
-    """The trend as charts: units per day, first-pass and final yield per day, and the
-    Cpk per day of each parameter that has one."""
-    days = [d.day for d in report.trend]
+def trend_charts(
+    report: EolReport,
+    trend: Sequence[TrendFigures],
+    periods: Sequence[tuple[str, str]],
+    per: str,
+    *,
+    cpk: bool = True,
+) -> list[str]:
+    """A trend as charts (``per`` "day" or "shift", ``periods`` its axis labels and
+    names): units, first-pass and final yield, and (``cpk``) the Cpk of each parameter
+    that has one."""
     charts = [
         svg.trend_chart(
-            "units per day (first run on the line)", days, [], bars=[d.units for d in report.trend]
+            f"units per {per} (first run on the line)", periods, [], bars=[d.units for d in trend]
         ),
         svg.trend_chart(
-            "yield per day",
-            days,
+            f"yield per {per}",
+            periods,
             [
-                ("first-pass", [d.first_pass_yield for d in report.trend]),
-                ("final", [d.final_yield for d in report.trend]),
+                ("first-pass", [d.first_pass_yield for d in trend]),
+                ("final", [d.final_yield for d in trend]),
             ],
             percent_axis=True,
         ),
     ]
-    for p in report.parameters:
-        values = [d.cpk.get(p.name) for d in report.trend]
+    for p in report.parameters if cpk else []:
+        values = [d.cpk.get(p.name) for d in trend]
         if any(v is not None for v in values):
             charts.append(
                 svg.trend_chart(
-                    f"Cpk of {p.name} per day", days, [("Cpk", values)], reference=CPK_TARGET
+                    f"Cpk of {p.name} per {per}", periods, [("Cpk", values)], reference=CPK_TARGET
                 )
             )
     return charts
+
+
+def day_charts(report: EolReport) -> list[str]:
+    """The trend per plant day as charts."""
+    days = [(d.day.strftime("%m-%d"), d.day.isoformat()) for d in report.trend]
+    return trend_charts(report, report.trend, days, "day")
+
+
+def shift_charts(report: EolReport) -> list[str]:
+    """The trend per shift as charts (shifts named by their day and start time): units
+    and yields; the Cpk per shift is in the JSON and CSV (sixteen charts of up to 93
+    shifts would outweigh the rest of the page)."""
+    shifts = [
+        (f"{s.day.strftime('%m-%d')} {s.shift}", f"{s.day.isoformat()} {s.shift}")
+        for s in report.shift_trend
+    ]
+    return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
 
 
 def report_page(report: EolReport) -> str:
@@ -109,7 +133,10 @@ def report_page(report: EolReport) -> str:
     return _env.get_template("report.html").render(
         report=report,
         parameter_rows=parameter_cells(report),
-        trend_charts=[Markup(chart) for chart in trend_charts(report)] if report.trend else [],
+        trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
+        shift_charts=(
+            [Markup(chart) for chart in shift_charts(report)] if report.shift_trend else []
+        ),
     )
 
 

@@ -8,10 +8,10 @@ the JSON holds. Text and HTML format numbers through :mod:`station.report.format
 import csv
 import io
 import json
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any, Literal, get_args
 
-from station.quality.figures import EolReport
+from station.quality.figures import EolReport, TrendFigures
 from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
@@ -43,6 +43,36 @@ def as_json(report: EolReport) -> str:
     return json.dumps(report.model_dump(mode="json"), indent=2, allow_nan=False) + "\n"
 
 
+def _trend_rows(
+    section: str, item: str, period: Mapping[str, Any], named: set[str]
+) -> Iterator[tuple[str, str, str, Cell]]:
+    """One period of a trend as rows: its figures and each parameter's Cpk."""
+    for key, value in period.items():
+        if key == "cpk":
+            for name, cpk in value.items():
+                yield (section, item, f"cpk:{name}", cpk)
+        elif key not in named:
+            yield (section, item, key, value)
+
+
+def _trend_table(per: str, names: Sequence[str], trend: Sequence[TrendFigures]) -> list[str]:
+    """A trend as a text table, a line per period."""
+    return _table(
+        [per, "units", "first-pass yield", "final yield", "runs", "run yield"],
+        [
+            [
+                name,
+                number(d.units),
+                percent(d.first_pass_yield),
+                percent(d.final_yield),
+                number(d.runs),
+                percent(d.run_yield),
+            ]
+            for name, d in zip(names, trend, strict=True)
+        ],
+    )
+
+
 def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     """The report as ``(section, item, metric, value)`` rows."""
     doc = report.model_dump(mode="json")
@@ -59,12 +89,10 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
             yield ("station", station["station_id"], key, value)
     yield ("trend", "", "timezone", doc["timezone"])
     for day in doc["trend"]:
-        for key, value in day.items():
-            if key == "cpk":
-                for name, cpk in value.items():
-                    yield ("trend", day["day"], f"cpk:{name}", cpk)
-            elif key != "day":
-                yield ("trend", day["day"], key, value)
+        yield from _trend_rows("trend", day["day"], day, {"day"})
+    for shift in doc["shift_trend"]:
+        item = f"{shift['day']} {shift['shift']}"
+        yield from _trend_rows("shift_trend", item, shift, {"day", "shift"})
     for entry in doc["pareto"]:
         for key in ("count", "share", "cumulative_share"):
             yield ("pareto", entry["code"], key, entry[key])
@@ -163,19 +191,20 @@ def as_text(report: EolReport) -> str:
         ),
         "",
         f"Trend per day ({report.timezone}; units counted on the day of their first run)",
-        *_table(
-            ["day", "units", "first-pass yield", "final yield", "runs", "run yield"],
+        *_trend_table("day", [d.day.isoformat() for d in report.trend], report.trend),
+        *(
             [
-                [
-                    d.day.isoformat(),
-                    number(d.units),
-                    percent(d.first_pass_yield),
-                    percent(d.final_yield),
-                    number(d.runs),
-                    percent(d.run_yield),
-                ]
-                for d in report.trend
-            ],
+                "",
+                f"Trend per shift ({report.timezone}; shifts start at "
+                f"{', '.join(report.shifts)} and belong to the day they start on)",
+                *_trend_table(
+                    "shift",
+                    [f"{s.day.isoformat()} {s.shift}" for s in report.shift_trend],
+                    report.shift_trend,
+                ),
+            ]
+            if report.shift_trend
+            else []
         ),
         "",
         "Failure Pareto (first failure reason of each failing run)",

@@ -3,7 +3,6 @@ Pareto, individuals and moving-range (I-MR) control charts. No script, no extern
 """
 
 from collections.abc import Callable, Sequence
-from datetime import date
 from xml.sax.saxutils import escape
 
 from station.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
@@ -136,7 +135,8 @@ def _panel(
 ) -> list[str]:
     """One panel of an I-MR chart: the y axis, the centre and limit lines labelled with
     their values, the points joined in run order, points completing a Western Electric
-    rule in red with the rules' numbers; ``what`` is the points' CSS class."""
+    rule in red with the rules' numbers and a tooltip of value and rules; ``what`` is the
+    points' CSS class."""
     shown = [v for v in values if v is not None]
     levels = [v for _, v, _ in lines if v is not None]
     low, high = min([*shown, *levels], default=0.0), max([*shown, *levels], default=1.0)
@@ -162,17 +162,24 @@ def _panel(
     if drawn:
         path = " ".join(f"{x_of(i):.1f},{y_of(v):.1f}" for i, v in drawn)
         body.append(f'<polyline points="{path}" fill="none" stroke="{BAR_COLOUR}"/>')
+    # Size (the report page's 300 kB target, docs/benchmarks.md "report"): the points in
+    # control share their group's fill and carry no tooltip; a signal has both.
+    quiet = [
+        f'<circle class="{what}" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2"/>'
+        for i, v in drawn
+        if not signals[i]
+    ]
+    body.append(f'<g fill="{BAR_COLOUR}">{"".join(quiet)}</g>')
     for i, v in drawn:
-        rules = signals[i]
-        colour = ALARM_COLOUR if rules else BAR_COLOUR
-        flag = f" rule {', '.join(map(str, rules))}" if rules else ""
-        css = f"{what} signal" if rules else what
-        body.append(
-            f'<circle class="{css}" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" '
-            f'r="{3 if rules else 2}" fill="{colour}"><title>{number(v)}{flag}</title></circle>'
-        )
-        if rules:
-            body.append(_text(x_of(i), y_of(v) - 5, ",".join(map(str, rules)), "middle", colour))
+        if rules := signals[i]:
+            flag = f"rule {', '.join(map(str, rules))}"
+            body.append(
+                f'<circle class="{what} signal" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="3" '
+                f'fill="{ALARM_COLOUR}"><title>{number(v)} {flag}</title></circle>'
+            )
+            body.append(
+                _text(x_of(i), y_of(v) - 5, ",".join(map(str, rules)), "middle", ALARM_COLOUR)
+            )
     return body
 
 
@@ -222,15 +229,16 @@ SERIES_COLOURS = ("#3b6ea5", "#2c7a2c", "#b06a00", "#7a3b8f")
 
 def trend_chart(
     title: str,
-    days: Sequence[date],
+    periods: Sequence[tuple[str, str]],
     series: Sequence[tuple[str, Sequence[float | None]]],
     *,
     bars: Sequence[int] | None = None,
     percent_axis: bool = False,
     reference: tuple[str, float] | None = None,
 ) -> str:
-    """Values per day: ``bars`` (counts) and/or ``series`` of lines (a gap where a day has
-    no value), a date axis below, a value axis on the left from 0 with its range
+    """Values per period (day or shift; ``periods``: its axis label and its full name):
+    ``bars`` (counts) and/or ``series`` of lines (a gap where a period has no value), a
+    time axis below, a value axis on the left from 0 with its range
     labelled, and a ``reference`` line (a target such as Cpk 1.33)."""
     left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
     levels = [v for _, values in series for v in values if v is not None]
@@ -243,7 +251,7 @@ def trend_chart(
         high = low + (abs(low) or 1.0)
 
     def x_of(i: int) -> float:
-        return left + (right - left) * (i + 0.5) / max(len(days), 1)
+        return left + (right - left) * (i + 0.5) / max(len(periods), 1)
 
     def y_of(value: float) -> float:
         return bottom - (bottom - top) * (value - low) / (high - low)
@@ -262,19 +270,19 @@ def trend_chart(
         body.append(
             _text(left + 3, y_of(level) - 3, f"{name} {number(level)}", colour=LIMIT_COLOUR)
         )
-    ticks = sorted({round(k * (len(days) - 1) / 3) for k in range(4)}) if days else []
+    ticks = sorted({round(k * (len(periods) - 1) / 3) for k in range(4)}) if periods else []
     for i in ticks:
         body.append(
             f'<g class="tick">{_line(x_of(i), bottom, x_of(i), bottom + 3, AXIS_COLOUR)}</g>'
         )
-        body.append(_text(x_of(i), bottom + 13, days[i].strftime("%m-%d"), "middle"))
+        body.append(_text(x_of(i), bottom + 13, periods[i][0], "middle"))
     if bars is not None:
-        bar_w = max((right - left) / max(len(days), 1) - 2, 1)
+        bar_w = max((right - left) / max(len(periods), 1) - 2, 1)
         for i, count in enumerate(bars):
             body.append(
                 f'<rect class="bar" x="{x_of(i) - bar_w / 2:.1f}" y="{y_of(count):.1f}" '
                 f'width="{bar_w:.1f}" height="{bottom - y_of(count):.1f}" fill="{BAR_COLOUR}">'
-                f"<title>{days[i].isoformat()}: {count}</title></rect>"
+                f"<title>{periods[i][1]}: {count}</title></rect>"
             )
     for k, (name, values) in enumerate(series):
         colour = SERIES_COLOURS[k % len(SERIES_COLOURS)]
@@ -288,7 +296,7 @@ def trend_chart(
             runs[-1].append(f"{x_of(i):.1f},{y_of(v):.1f}")
             body.append(
                 f'<circle class="trend-point" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2" '
-                f'fill="{colour}"><title>{days[i].isoformat()}: {label(v)}</title></circle>'
+                f'fill="{colour}"><title>{periods[i][1]}: {label(v)}</title></circle>'
             )
         body += [
             f'<polyline points="{" ".join(run)}" fill="none" stroke="{colour}"/>'

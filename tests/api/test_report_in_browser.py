@@ -8,6 +8,7 @@ import pytest
 from db import Database
 from tests.browser import Browser, chromium, chromium_binary
 from tests.db.eol_data import RUNS, insert_line_history
+from tests.servers import serving
 
 #: Text of every chart that reaches past its own drawing area (cut labels).
 CUT_LABELS = """
@@ -62,6 +63,29 @@ def test_trend_and_control_charts_have_their_axes_and_no_label_is_cut(
     assert any(label.startswith("UCL ") for label in labels)
     assert any(label.startswith("x̄ ") for label in labels)
     assert any(label.startswith("MR̄ ") for label in labels)
+    assert browser.evaluate(CUT_LABELS) == []
+
+
+def test_the_shift_trend_is_drawn_per_shift_where_the_plant_has_shifts(
+    browser: Browser, database: Database, database_url: str
+) -> None:
+    with database.session() as session:
+        insert_line_history(session)
+    with serving(database_url, plant_shifts="06:00,14:00,22:00") as base:
+        load = browser.load(f"{base}/api/v1/reports/eol?format=html")
+    assert load.errors == []
+    shifts = "document.querySelectorAll('.shift-trend svg.chart')"
+    assert browser.evaluate(f"{shifts}.length") == 2  # units, and the yields
+    # The history's runs (08:00–13:00 UTC on 11-02) are in its 06:00 shift.
+    assert browser.evaluate(
+        f"Array.from({shifts}).every(s => s.querySelectorAll('g.tick').length >= 1"
+        " && s.textContent.includes('11-02 06:00'))"
+    )
+    heading = browser.evaluate(
+        "Array.from(document.querySelectorAll('h2')).map(h => h.textContent)"
+        ".find(t => t.startsWith('Trend per shift'))"
+    )
+    assert heading == "Trend per shift (UTC)"
     assert browser.evaluate(CUT_LABELS) == []
 
 

@@ -14,6 +14,7 @@ from db import Database, RunRepository
 from db.models import Run, RunFailure
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
+from tests.servers import serving
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
 
@@ -154,6 +155,39 @@ def test_the_trend_in_json_and_csv_counts_each_days_units(client: httpx.Client) 
     for key in ("units", "runs", "first_pass_yield", "final_yield", "run_yield"):
         assert cells[day, key] == str(only[key])
     assert cells[day, "cpk:offset_x"] == str(only["cpk"]["offset_x"])
+
+
+@pytest.mark.usefixtures("line")
+def test_the_plants_shifts_add_a_trend_per_shift_in_json_and_csv(database_url: str) -> None:
+    # Shifts at 08:25 and 12:00 UTC: the history's runs at 08:00–08:20 belong to the
+    # night shift of 11-01 (12:00), 08:30–09:00 to 08:25, 13:00 to 12:00 of 11-02.
+    with (
+        serving(database_url, plant_shifts="12:00,08:25") as base,
+        httpx.Client(base_url=base, timeout=60) as client,
+    ):
+        report = client.get("/api/v1/reports/eol").json()
+        text = client.get("/api/v1/reports/eol", params={"format": "csv"}).text
+    assert report["shifts"] == ["08:25", "12:00"]
+    found = {(s["day"], s["shift"]): s["runs"] for s in report["shift_trend"]}
+    expected = {("2026-11-01", "12:00"): 0, ("2026-11-02", "08:25"): 0, ("2026-11-02", "12:00"): 0}
+    for minute, *_ in RUNS:
+        at = T0 + timedelta(minutes=minute)
+        day, start = (
+            ("2026-11-01", "12:00")
+            if at.strftime("%H:%M") < "08:25"
+            else ("2026-11-02", "08:25" if at.strftime("%H:%M") < "12:00" else "12:00")
+        )
+        expected[day, start] += 1
+    assert found == expected
+    cells = {
+        (r["item"], r["metric"]): r["value"]
+        for r in csv.DictReader(io.StringIO(text))
+        if r["section"] == "shift_trend"
+    }
+    for shift in report["shift_trend"]:
+        item = f"{shift['day']} {shift['shift']}"
+        assert cells[item, "runs"] == str(shift["runs"])
+        assert cells[item, "units"] == str(shift["units"])
 
 
 @pytest.mark.usefixtures("line")

@@ -3,7 +3,7 @@
 import itertools
 import math
 import statistics
-from datetime import date, timedelta
+from datetime import date, datetime, time, timedelta
 from zoneinfo import ZoneInfo
 
 import pytest
@@ -300,3 +300,49 @@ def test_the_trend_counts_the_plants_days(session: Session, zone: str) -> None:
         }
         assert trend_day.units == len(firsts)
     assert report.timezone == zone
+
+
+@pytest.mark.parametrize(
+    ("zone", "shifts"),
+    [
+        ("UTC", (time(8, 25), time(12), time(22))),
+        ("Europe/Berlin", (time(6), time(9, 35), time(14))),
+    ],
+)
+def test_the_shift_trend_counts_each_shifts_runs_and_units(
+    session: Session, zone: str, shifts: tuple[time, ...]
+) -> None:
+    """Each run's shift recomputed from its local start time: the latest start at or
+    before it, on its day or (before the day's first) the day before."""
+    insert_line_history(session)
+    report = eol_report(session, ReportFilter(), zone=zone, shifts=shifts)
+    local = ZoneInfo(zone)
+
+    def shift_of(minute: int) -> tuple[str, str]:
+        at = (T0 + timedelta(minutes=minute)).astimezone(local)
+        starts = [
+            datetime.combine(at.date() + timedelta(days=d), s, tzinfo=local)
+            for d in (-1, 0)
+            for s in shifts
+        ]
+        begun = max(s for s in starts if s <= at)
+        return (begun.date().isoformat(), begun.strftime("%H:%M"))
+
+    runs: dict[tuple[str, str], int] = {}
+    units: dict[tuple[str, str], int] = {}
+    seen: set[str] = set()
+    for minute, serial, *_ in RUNS:
+        key = shift_of(minute)
+        runs[key] = runs.get(key, 0) + 1
+        if serial not in seen:
+            seen.add(serial)
+            units[key] = units.get(key, 0) + 1
+    found = {(s.day.isoformat(), s.shift): s for s in report.shift_trend}
+    assert len(runs) >= 3  # the history spans three shifts at least
+    assert {k: s.runs for k, s in found.items() if s.runs} == runs
+    assert {k: s.units for k, s in found.items() if s.units} == units
+    assert sum(s.units for s in report.shift_trend) == sum(d.units for d in report.trend)
+    assert report.shifts == [s.strftime("%H:%M") for s in shifts]
+    starts = [s.start for s in report.shift_trend]
+    assert starts == sorted(starts)
+    assert eol_report(session, ReportFilter(), zone=zone).shift_trend == []

@@ -11,7 +11,7 @@ tables must give the rows the submissions left.
 import math
 import statistics
 from dataclasses import dataclass, replace
-from datetime import date, datetime, timedelta
+from datetime import date, datetime, time, timedelta
 from itertools import pairwise
 from typing import Any
 from zoneinfo import ZoneInfo
@@ -237,6 +237,17 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
             assert trend_day.cpk["offset_x"] is None
     assert sum(d.units for d in report.trend) == report.summary.units_tested
     assert sum(d.runs for d in report.trend) == report.summary.runs
+    for shift in report.shift_trend:
+        in_shift = [r for r in chosen if shift.start <= r.started_at < shift.end]
+        runs, passed, units, first, final = _expected_counts(
+            history, in_shift, lambda a, b: a.serial == b.serial
+        )
+        assert (shift.runs, shift.runs_passed, shift.units) == (runs, passed, units)
+        assert shift.first_pass_yield == (first / units if units else None)
+        assert shift.final_yield == (final / units if units else None)
+    if report.shift_trend:
+        assert sum(s.units for s in report.shift_trend) == report.summary.units_tested
+        assert sum(s.runs for s in report.shift_trend) == report.summary.runs
 
 
 def stored_verdicts(session: Session) -> list[tuple[Any, ...]]:
@@ -313,6 +324,7 @@ def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
     report_filter=filters,
     narrower=st.booleans(),
     zone=st.sampled_from(["UTC", "America/New_York", "Asia/Kolkata"]),
+    shifts=st.sampled_from([(), (time(6), time(14), time(22)), (time(7, 30), time(19, 30))]),
 )
 def test_late_runs_and_retests_keep_the_report_exact(
     migrated_database: Database,
@@ -321,6 +333,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
     report_filter: ReportFilter,
     narrower: bool,
     zone: str,
+    shifts: tuple[time, ...],
 ) -> None:
     """``narrower``: capability against offset limits other than the roll-ups' bins."""
     submitted = list(history)
@@ -335,7 +348,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
             offset = Bounds(lower=1900.0, upper=2200.0)
             candidate = load_profile().model_copy(update={"offset_counts": offset})
         before = stored_verdicts(session)
-        report = eol_report(session, report_filter, candidate=candidate, zone=zone)
+        report = eol_report(session, report_filter, candidate=candidate, zone=zone, shifts=shifts)
         assert stored_verdicts(session) == before  # the what-if changes nothing stored
         offset_x = next(p for p in report.parameters if p.name == "offset_x")
         assert offset_x.lower == 1841.0

@@ -97,6 +97,7 @@ def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) ->
         (("--format", "xml"), "--format 'xml' is not one of text, csv, json, html"),
         (("--limits", "/nonexistent/limits.toml"), "cannot read the limits file"),
         (("--timezone", "Mars/Olympus"), "time zone 'Mars/Olympus' is unknown"),
+        (("--shifts", "06:00,6pm"), "shift start '6pm' is not a time of day"),
         (("--from", "9999-12-31T23:00:00-05:00"), "--from '9999-12-31T23:00:00-05:00' is out of"),
         (("--to", "0001-01-01T00:00:00+01:00"), "--to '0001-01-01T00:00:00+01:00' is out of"),
         (
@@ -136,6 +137,26 @@ def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
     assert report["timezone"] == "Pacific/Kiritimati"
     assert report["filter"]["since"].startswith("2026-11-02T10:00:00")
     assert [(d["day"], d["runs"]) for d in report["trend"]] == [("2026-11-03", 1)]
+
+
+@pytest.mark.usefixtures("line")
+def test_the_plants_shifts_give_a_trend_per_shift(run_cli: CliRunner, database_url: str) -> None:
+    result = run_cli(
+        "report",
+        *RANGE,
+        "--database-url",
+        database_url,
+        env=_env(CALSTATION_PLANT_SHIFTS="06:00,08:30,22:00"),
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    head = lines.index(
+        "Trend per shift (UTC; shifts start at 06:00, 08:30, 22:00 and belong to the day "
+        "they start on)"
+    )
+    # 08:00–08:20 in the 06:00 shift (U1, U2, U3), 08:30–09:00 in the 08:30 one (U4, U5).
+    rows = {line.split()[1]: line.split()[2] for line in lines[head + 3 : head + 5]}
+    assert rows == {"06:00": "3", "08:30": "2"}
 
 
 @pytest.mark.usefixtures("line")
