@@ -166,8 +166,17 @@ def pages(session: Any, repeat: int, runs: int) -> None:
     rows: list[tuple[str, Callable[[], str], int]] = [
         ("**report page as served (`format=html`: held units, 50 a page)**", served, repeat),
         (
-            "report page as served, plant zone Europe/Berlin with three shifts "
-            "(the 31 days' trend per day and per shift from the runs)",
+            "report page as served, plant zone Europe/Berlin (the 31 days' trend from the runs)",
+            lambda: served("Europe/Berlin"),
+            repeat,
+        ),
+        (
+            "report page as served, UTC with three shifts (the trend per shift from the runs)",
+            lambda: served(shifts=SHIFTS),
+            repeat,
+        ),
+        (
+            "report page as served, Europe/Berlin with three shifts (one scan for both trends)",
             lambda: served("Europe/Berlin", SHIFTS),
             repeat,
         ),
@@ -191,7 +200,7 @@ def pages(session: Any, repeat: int, runs: int) -> None:
     ]
     if runs <= EVERY_UNIT_PAGE_RUNS:
         rows.insert(
-            4,
+            6,
             (
                 "report page, every run, every unit listed (`list=all&units=1000000`)",
                 lambda: render(eol_report(session, ReportFilter()), "html"),

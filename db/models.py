@@ -220,7 +220,8 @@ class RunFacts(Base):
     """What the report derives from one run and the runs around it (:mod:`db.rollups`).
 
     Order is ``(started_at, id)``. ``line_first``: no earlier run of the unit;
-    ``line_latest``: no later one; ``line_final_pass``: ``line_first`` and the unit's
+    ``line_latest``: no later one; ``noise_*``: the run's pose noise summed over its
+    poses; ``line_final_pass``: ``line_first`` and the unit's
     latest run passed; ``unit_runs``: how many runs the unit has. ``station_*``: the
     same among the unit's runs at the run's station. ``chart_previous``, for a run with
     coefficients: the latest earlier run of the line with coefficients (the other end of
@@ -237,6 +238,13 @@ class RunFacts(Base):
     gyro_bias_x: Mapped[float | None] = mapped_column(Double())
     gyro_bias_y: Mapped[float | None] = mapped_column(Double())
     gyro_bias_z: Mapped[float | None] = mapped_column(Double())
+    #: Σ std and Σ std² over the run's poses, per axis (None: no poses).
+    noise_sum_x: Mapped[float | None] = mapped_column(Double())
+    noise_sum_y: Mapped[float | None] = mapped_column(Double())
+    noise_sum_z: Mapped[float | None] = mapped_column(Double())
+    noise_squares_x: Mapped[float | None] = mapped_column(Double())
+    noise_squares_y: Mapped[float | None] = mapped_column(Double())
+    noise_squares_z: Mapped[float | None] = mapped_column(Double())
     line_first: Mapped[bool] = mapped_column(Boolean())
     line_latest: Mapped[bool] = mapped_column(Boolean())
     line_final_pass: Mapped[bool] = mapped_column(Boolean())

@@ -40,12 +40,13 @@ from db.rollups import (
     MOMENT_VALUES,
     PARAMETER_VALUES,
     PRODUCTION,
+    TREND_COUNT_VALUES,
     count_contributions,
     failure_contributions,
     parameter_contributions,
     stored_bounds,
 )
-from db.trends import TREND_DAYS, day_key, shift_key, trend_days, trend_shifts
+from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
 from db.what_if import rejudged
 from station.limits import LimitsProfile
 from station.quality.capability import (
@@ -58,7 +59,7 @@ from station.quality.capability import (
     tolerance,
 )
 from station.quality.control import moving_range_sigma, western_electric
-from station.quality.days import is_utc, midnight, plant_days
+from station.quality.days import day_number, is_utc, midnight, plant_days
 from station.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -263,13 +264,14 @@ class ReportQueries:
     def daily_counts(self, day: ColumnElement[int] | None) -> list[Row[Any]]:
         """The sums of ``report_counts`` per day: the roll-ups' UTC days (``day`` ``None``)
         or the plant's days ``day`` numbers the runs with (from the runs)."""
+        values = TREND_COUNT_VALUES
         if day is None:
             edges = self._edge_conditions()
-            raw = [] if edges is None else [count_contributions(["day"], edges)]
+            raw = [] if edges is None else [count_contributions(["day"], edges, values=values)]
             rolled = self._rolled_conditions(ReportCounts)
-            return self._merged(ReportCounts, COUNT_VALUES, ["day"], rolled, raw)
-        raw = [count_contributions(["day"], self.conditions(), columns={"day": day})]
-        return self._merged(ReportCounts, COUNT_VALUES, ["day"], None, raw)
+            return self._merged(ReportCounts, values, ["day"], rolled, raw)
+        raw = [count_contributions(["day"], self.conditions(), columns={"day": day}, values=values)]
+        return self._merged(ReportCounts, values, ["day"], None, raw)
 
     def daily_parameters(
         self, bounds: FamilyBounds, day: ColumnElement[int] | None
@@ -718,29 +720,43 @@ def _trend(
     shifts: Sequence[time],
 ) -> tuple[list[TrendDay], list[TrendShift]]:
     """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times)."""
+    over their shifts when the plant has ``shifts`` (start times).
+
+    In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
+    another zone one scan numbers each run with its day and its shift together.
+    """
     if not counts:
         return [], []
     start = filter.since or min(row.first_start for row in counts)
     end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
     days = plant_days(start, end, zone, TREND_DAYS)
     since = midnight(days[0], zone)
-    queries = ReportQueries(
-        session, filter.model_copy(update={"since": max(since, filter.since or since)})
-    )
-    key = None if is_utc(zone) else day_key(days, zone)
-    parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
-    trend = trend_days(days, queries.daily_counts(key), parameters, bounds)
     periods = plant_shifts(max(start, since), end, zone, shifts, TREND_DAYS * len(shifts))
+
+    def sums(first: datetime, key: ColumnElement[int] | None) -> tuple[Any, Any]:
+        queries = ReportQueries(
+            session, filter.model_copy(update={"since": max(first, filter.since or first)})
+        )
+        parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
+        return queries.daily_counts(key), parameters
+
+    if is_utc(zone):
+        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
+        if not periods:
+            return trend_days(days, by_day), []
+        by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
+        return trend_days(days, by_day), trend_shifts(periods, by_shift)
     if not periods:
-        return trend, []
-    queries = ReportQueries(
-        session,
-        filter.model_copy(update={"since": max(periods[0].start, filter.since or since)}),
-    )
-    key = shift_key(periods)
-    parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
-    return trend, trend_shifts(periods, queries.daily_counts(key), parameters, bounds)
+        return trend_days(days, PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)), []
+    # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
+    # runs of the first shift before its midnight, which no listed day shows.
+    before = days[0] - timedelta(days=1)
+    base, width = day_number(before), len(periods)
+    key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
+    rows = sums(min(since, periods[0].start), key)
+    by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
+    by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
+    return trend_days(days, by_day), trend_shifts(periods, by_shift)
 
 
 def eol_report(

@@ -110,6 +110,13 @@ PER_POSE: dict[str, InstrumentedAttribute[float | None]] = {
     f"pose_noise_{a}": getattr(Pose, f"std_{a}") for a in "xyz"
 }
 
+#: The pose noise of a run summed over its poses (``run_facts``), by fact column: a
+#: trend's moments of the per-pose parameters read these, one row per run.
+NOISE_TOTALS: dict[str, ColumnElement[float]] = {
+    **{f"noise_sum_{a}": getattr(Pose, f"std_{a}") for a in "xyz"},
+    **{f"noise_squares_{a}": getattr(Pose, f"std_{a}") * getattr(Pose, f"std_{a}") for a in "xyz"},
+}
+
 #: How each value column merges across rows: ``sum``, ``min`` or ``max``.
 COUNT_VALUES: dict[str, str] = {
     "runs": "sum",
@@ -127,6 +134,11 @@ COUNT_VALUES: dict[str, str] = {
     "final_pass": "sum",
     "charted": "sum",
     **{f"mr_{name}": "sum" for name in COEFFICIENTS},
+}
+#: The columns a trend reads (:mod:`db.trends`): no moving ranges, so no earlier run.
+TREND_COUNT_VALUES: dict[str, str] = {
+    name: COUNT_VALUES[name]
+    for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")
 }
 FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
 #: The columns a mean and spread (and Cpk) need, all added up.
@@ -304,6 +316,10 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
         bias["x"],
         bias["y"],
         bias["z"],
+        *(
+            select(func.sum(total)).where(Pose.run_pk == Run.id).scalar_subquery()
+            for total in NOISE_TOTALS.values()
+        ),
         line_first,
         Run.id == latest(other.id, unit),
         and_(line_first, latest_passed(unit)),
@@ -330,6 +346,7 @@ _FACT_COLUMNS = (
     "gyro_bias_x",
     "gyro_bias_y",
     "gyro_bias_z",
+    *NOISE_TOTALS,
     "line_first",
     "line_latest",
     "line_final_pass",
@@ -364,10 +381,12 @@ def count_contributions(
     where: Sequence[ColumnElement[bool]],
     sign: int = 1,
     columns: Mapping[str, ColumnElement[Any]] | None = None,
+    values: Mapping[str, str] = COUNT_VALUES,
 ) -> Select[Any]:
     """Per ``keys`` (of :data:`BUCKET` and :data:`LIMITS`, or of ``columns``: another
-    ``day``): the columns of ``report_counts`` over the runs ``where`` selects, sums
-    times ``sign``."""
+    ``day``): the columns of ``report_counts`` (``values`` of them) over the runs
+    ``where`` selects, sums times ``sign``. The earlier run of each moving range is
+    joined only when ``values`` asks for moving ranges."""
     previous = aliased(Run, name="previous")
     passed = Run.verdict == _PASS
     facts = RunFacts
@@ -391,20 +410,20 @@ def count_contributions(
             for name in COEFFICIENTS
         },
     }
-    values = {
+    totals = {
         **{name: (value * _inline(sign) if sign != 1 else value) for name, value in sums.items()},
         "first_start": func.min(Run.started_at),
         "last_finish": func.max(Run.finished_at),
     }
     picked = _keys(keys, dict(columns or {}))
-    return (
-        select(*picked, *(values[name].label(name) for name in COUNT_VALUES))
+    stmt = (
+        select(*picked, *(totals[name].label(name) for name in values))
         .select_from(Run)
         .join(facts, facts.run_pk == Run.id)
-        .outerjoin(previous, previous.id == facts.chart_previous)
-        .where(*where)
-        .group_by(*picked)
     )
+    if any(name.startswith("mr_") for name in values):
+        stmt = stmt.outerjoin(previous, previous.id == facts.chart_previous)
+    return stmt.where(*where).group_by(*picked)
 
 
 def failure_contributions(keys: Sequence[str], where: Sequence[ColumnElement[bool]]) -> Select[Any]:
@@ -456,8 +475,8 @@ def parameter_contributions(
 ) -> list[Select[Any]]:
     """Per parameter and ``keys`` (of :data:`BUCKET`, or of ``columns``: another
     ``day``): the columns of ``report_parameters`` over the runs ``where`` selects,
-    against ``bounds`` (``moments_only``: only :data:`MOMENT_VALUES`, for a trend's Cpk:
-    a third of the time without the bins and limit counts).
+    against ``bounds`` (``moments_only``: only :data:`MOMENT_VALUES`, for a trend's Cpk,
+    by :func:`_moments`).
 
     ``c`` is the centre of the tolerance, bins those of
     :func:`station.quality.capability.histogram_bins`, marginal and out-of-limits as
@@ -465,6 +484,8 @@ def parameter_contributions(
     their facts) for the per-run parameters, one of their poses for pose noise, each
     paired with the parameters' limits.
     """
+    if moments_only:
+        return [_moments(keys, where, bounds, columns)]
     selects = []
     runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
     poses = Pose.__table__.join(Run.__table__, Pose.run_pk == Run.id)
@@ -504,9 +525,6 @@ def parameter_contributions(
         )
         deviation = x - c.centre
         grouped = [c.parameter, *(c[name] for name in keys)]
-        if moments_only:
-            selects.append(_moments(rows, stored, specs, keys, where, bounds, columns))
-            continue
         selects.append(
             select(
                 *grouped,
@@ -524,52 +542,69 @@ def parameter_contributions(
 
 
 def _moments(
-    rows: FromClause,
-    stored: Mapping[str, InstrumentedAttribute[float | None]],
-    specs: Sequence[ParameterSpec],
     keys: Sequence[str],
     where: Sequence[ColumnElement[bool]],
     bounds: FamilyBounds,
     columns: Mapping[str, ColumnElement[Any]] | None,
 ) -> Select[Any]:
-    """n, Σ(x − c) and Σ(x − c)² of the ``stored`` parameters per ``keys``, as rows of
+    """n, Σ(x − c) and Σ(x − c)² of every parameter per ``keys``, as rows of
     ``parameter``, keys, ``n``, ``sum``, ``squares``.
 
-    Performance (the report page's trend per shift, docs/benchmarks.md "report"): the
-    runs are aggregated once into one wide row per group, a column triple per parameter,
-    instead of pairing every run with every parameter as the full contributions do; the
-    few wide rows are then turned into one row per parameter.
+    Performance (the report page in a plant time zone or with shifts, where the trend
+    reads the runs of up to 31 days; docs/benchmarks.md "report"): one scan of the runs
+    and their facts, aggregated into one wide row per group with a column triple per
+    parameter, instead of pairing every run with every parameter as the full
+    contributions do; the per-pose parameters come from the run's sums over its poses
+    (``run_facts.noise_*``, Σx and Σx²: Σ(x − c) = Σx − cn, Σ(x − c)² = Σx² − 2cΣx + c²n),
+    not from its every pose. The few wide rows are then turned into one row per parameter.
     """
     picked = _keys(keys, dict(columns or {}))
     sums: list[ColumnElement[Any]] = []
-    for spec in specs:
+    for spec in PARAMETERS:
         low, high = tolerance(*bounds[spec.family])
-        deviation = stored[spec.name] - _inline((low + high) / 2)
+        c = _inline((low + high) / 2)
+        moments: tuple[ColumnElement[Any], ColumnElement[Any], ColumnElement[Any]]
+        if spec.name in PER_RUN:
+            deviation = PER_RUN[spec.name] - c
+            moments = (
+                func.count(PER_RUN[spec.name]),
+                func.sum(deviation),
+                func.sum(deviation * deviation),
+            )
+        else:
+            axis = spec.name.removeprefix("pose_noise_")
+            x = func.sum(getattr(RunFacts, f"noise_sum_{axis}"))
+            x2 = func.sum(getattr(RunFacts, f"noise_squares_{axis}"))
+            count = func.sum(RunFacts.poses)
+            moments = (count, x - c * count, x2 - _inline(2.0) * c * x + c * c * count)
         sums += [
-            func.count(stored[spec.name]).label(f"n_{spec.name}"),
-            func.sum(deviation).label(f"s_{spec.name}"),
-            func.sum(deviation * deviation).label(f"q_{spec.name}"),
+            moment.label(f"{prefix}_{spec.name}")
+            for prefix, moment in zip("nsq", moments, strict=True)
         ]
-    wide = select(*picked, *sums).select_from(rows).where(*where).group_by(*picked).subquery("wide")
-    names = union_all(*(select(_inline(spec.name).label("parameter")) for spec in specs))
+    runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
+    wide = select(*picked, *sums).select_from(runs).where(*where).group_by(*picked).subquery("wide")
+    names = union_all(*(select(_inline(spec.name).label("parameter")) for spec in PARAMETERS))
     parameter = names.subquery("names").c.parameter
 
     def pick(prefix: str) -> ColumnElement[Any]:
         return case(
-            *((parameter == _inline(spec.name), wide.c[f"{prefix}_{spec.name}"]) for spec in specs)
+            *(
+                (parameter == _inline(spec.name), wide.c[f"{prefix}_{spec.name}"])
+                for spec in PARAMETERS
+            )
         )
 
-    n = pick("n")
+    counted = pick("n")
     return (
         select(
             parameter.label("parameter"),
             *(wide.c[name] for name in keys),
-            n.label("n"),
+            counted.label("n"),
             pick("s").label("sum"),
             pick("q").label("squares"),
         )
         .select_from(wide.join(parameter.table, true()))
-        .where(n > _ZERO)
+        .where(counted > _ZERO)
     )
 
 

@@ -12,13 +12,15 @@ numbered with its shift (:func:`shift_key`) and the runs of the trend's shifts a
 aggregated, in any zone.
 """
 
-from collections.abc import Mapping, Sequence
+from collections import defaultdict
+from collections.abc import Callable, Mapping, Sequence
 from datetime import date, datetime, timedelta
 from typing import Any
 
-from sqlalchemy import ColumnElement, Integer, Row, RowMapping, case, literal
+from sqlalchemy import ColumnElement, Integer, Row, case, literal
 
 from db.models import Run
+from db.rollups import MOMENT_VALUES, TREND_COUNT_VALUES
 from station.quality.capability import cpk, shifted_moments, tolerance
 from station.quality.days import day_number, midnight
 from station.quality.figures import TrendDay, TrendShift
@@ -55,7 +57,7 @@ def _ratio(part: int, whole: int) -> float | None:
     return part / whole if whole else None
 
 
-def _cpk(row: RowMapping, bounds: FamilyBounds, family: str) -> float | None:
+def _cpk(row: Mapping[str, Any], bounds: FamilyBounds, family: str) -> float | None:
     lower, upper = bounds[family]
     low, high = tolerance(lower, upper)
     mean, std = shifted_moments(
@@ -64,21 +66,54 @@ def _cpk(row: RowMapping, bounds: FamilyBounds, family: str) -> float | None:
     return cpk(mean, std, lower, upper)
 
 
-class _Sums:
-    """The per-period rows of ``report_counts`` and ``report_parameters`` sums, by the
-    period's number."""
+class PeriodSums:
+    """The sums of ``report_counts`` and ``report_parameters`` columns per period (a day
+    or a shift, by its number) and the figures of a period from them."""
 
     def __init__(
         self,
+        counts: Mapping[int, Mapping[Any, Any]],
+        stats: Mapping[tuple[int, str], Mapping[Any, Any]],
+        bounds: FamilyBounds | None,
+    ) -> None:
+        self.counts = counts
+        self.stats = stats
+        self.bounds = bounds
+
+    @classmethod
+    def of_rows(
+        cls, counts: Sequence[Row[Any]], parameters: Sequence[Row[Any]], bounds: FamilyBounds | None
+    ) -> "PeriodSums":
+        """From rows numbered by their period (``day``)."""
+        return cls(
+            {int(r.day): r._mapping for r in counts},
+            {(int(r.day), r.parameter): r._mapping for r in parameters},
+            bounds,
+        )
+
+    @classmethod
+    def regrouped(
+        cls,
         counts: Sequence[Row[Any]],
         parameters: Sequence[Row[Any]],
         bounds: FamilyBounds | None,
-    ) -> None:
-        self.counts: Mapping[int, RowMapping] = {int(r.day): r._mapping for r in counts}
-        self.stats: Mapping[tuple[int, str], RowMapping] = {
-            (int(r.day), r.parameter): r._mapping for r in parameters
-        }
-        self.bounds = bounds
+        period: Callable[[int], int],
+    ) -> "PeriodSums":
+        """From finer rows (``day`` a finer key), added up per ``period(key)``: every
+        column a trend reads is a sum."""
+        added: dict[int, dict[str, Any]] = defaultdict(lambda: dict.fromkeys(TREND_COUNT_VALUES, 0))
+        for r in counts:
+            into = added[period(int(r.day))]
+            for name in TREND_COUNT_VALUES:
+                into[name] += r._mapping[name]
+        stats: dict[tuple[int, str], dict[str, Any]] = defaultdict(
+            lambda: dict.fromkeys(MOMENT_VALUES, 0)
+        )
+        for r in parameters:
+            into = stats[(period(int(r.day)), r.parameter)]
+            for name in MOMENT_VALUES:
+                into[name] += r._mapping[name]
+        return cls(added, stats, bounds)
 
     def figures(self, n: int) -> dict[str, Any]:
         """The :class:`TrendFigures` fields of period ``n`` (zeros without runs)."""
@@ -113,26 +148,14 @@ class _Sums:
         }
 
 
-def trend_days(
-    days: Sequence[date],
-    counts: Sequence[Row[Any]],
-    parameters: Sequence[Row[Any]],
-    bounds: FamilyBounds | None,
-) -> list[TrendDay]:
-    """The trend over ``days`` from the per-day rows of ``report_counts`` and
-    ``report_parameters`` sums (days without runs show zeros)."""
-    sums = _Sums(counts, parameters, bounds)
+def trend_days(days: Sequence[date], sums: PeriodSums) -> list[TrendDay]:
+    """The trend over ``days`` from their sums by day number (days without runs show
+    zeros)."""
     return [TrendDay(day=day, **sums.figures(day_number(day))) for day in days]
 
 
-def trend_shifts(
-    shifts: Sequence[Shift],
-    counts: Sequence[Row[Any]],
-    parameters: Sequence[Row[Any]],
-    bounds: FamilyBounds | None,
-) -> list[TrendShift]:
-    """The trend over ``shifts`` from the rows that :func:`shift_key` numbers."""
-    sums = _Sums(counts, parameters, bounds)
+def trend_shifts(shifts: Sequence[Shift], sums: PeriodSums) -> list[TrendShift]:
+    """The trend over ``shifts`` from their sums by index in ``shifts``."""
     return [
         TrendShift(day=s.day, shift=s.name, start=s.start, end=s.end, **sums.figures(i))
         for i, s in enumerate(shifts)

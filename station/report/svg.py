@@ -163,13 +163,12 @@ def _panel(
         path = " ".join(f"{x_of(i):.1f},{y_of(v):.1f}" for i, v in drawn)
         body.append(f'<polyline points="{path}" fill="none" stroke="{BAR_COLOUR}"/>')
     # Size (the report page's 300 kB target, docs/benchmarks.md "report"): the points in
-    # control share their group's fill and carry no tooltip; a signal has both.
+    # control share their group's class and fill, sit on whole pixels and carry no
+    # tooltip; a signal has all of its own.
     quiet = [
-        f'<circle class="{what}" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2"/>'
-        for i, v in drawn
-        if not signals[i]
+        f'<circle cx="{x_of(i):.0f}" cy="{y_of(v):.0f}" r="2"/>' for i, v in drawn if not signals[i]
     ]
-    body.append(f'<g fill="{BAR_COLOUR}">{"".join(quiet)}</g>')
+    body.append(f'<g class="{what}" fill="{BAR_COLOUR}">{"".join(quiet)}</g>')
     for i, v in drawn:
         if rules := signals[i]:
             flag = f"rule {', '.join(map(str, rules))}"
@@ -289,15 +288,17 @@ def trend_chart(
         legend_x = right - 96 * (len(series) - 1 - k)
         body.append(_text(legend_x, 12, f"— {name}", "end", colour))
         runs: list[list[str]] = [[]]
+        points = []
         for i, v in enumerate(values):
             if v is None:
                 runs.append([])
                 continue
             runs[-1].append(f"{x_of(i):.1f},{y_of(v):.1f}")
-            body.append(
-                f'<circle class="trend-point" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2" '
-                f'fill="{colour}"><title>{periods[i][1]}: {label(v)}</title></circle>'
+            points.append(
+                f'<circle cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="2">'
+                f"<title>{periods[i][1]}: {label(v)}</title></circle>"
             )
+        body.append(f'<g class="trend-points" fill="{colour}">{"".join(points)}</g>')
         body += [
             f'<polyline points="{" ".join(run)}" fill="none" stroke="{colour}"/>'
             for run in runs

@@ -27,7 +27,7 @@ from db import (
 from db.base import Base
 from db.mapping import failure_rows, run_row
 from db.migrate import alembic_config, current_revision, head_revision, upgrade
-from db.models import ReportCounts, Run, RunFailure, StoredLimitsProfile, Unit
+from db.models import ReportCounts, Run, RunFacts, RunFailure, StoredLimitsProfile, Unit
 from db.reports import eol_report
 from db.repository import KeyHolder, key_sha256
 from db.units import answer_json
@@ -254,5 +254,43 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
             assert eol_report(session, ReportFilter()).bounds_source.startswith(
                 "limits profile kxm52-production v1"
             )
+    finally:
+        engine.dispose()
+
+
+def test_the_pose_noise_migration_sums_each_runs_poses(empty_url: str) -> None:
+    engine = make_engine(empty_url)
+    noise = [RunFacts.noise_sum_x, RunFacts.noise_squares_y, RunFacts.noise_sum_z]
+    try:
+        upgrade(engine)
+        with Session(engine) as session:
+            records = [
+                make_record(serial=serial, started_at=T0 + timedelta(hours=hour))
+                for hour, serial in enumerate(["U1", "U2", "U1"])
+            ]
+            for record in records:
+                RunRepository(session).submit(record)
+            session.commit()
+            submitted = session.execute(select(*noise).order_by(RunFacts.run_pk)).all()
+        expected = [
+            (
+                sum(p.std.x for p in r.poses),
+                sum(p.std.y**2 for p in r.poses),
+                sum(p.std.z for p in r.poses),
+            )
+            for r in records
+        ]
+        assert [v for row in submitted for v in row] == pytest.approx(
+            [v for row in expected for v in row], rel=1e-12
+        )
+        with engine.begin() as connection:
+            command.downgrade(alembic_config(connection), "0010")
+        assert "noise_sum_x" not in {c["name"] for c in inspect(engine).get_columns("run_facts")}
+        upgrade(engine)
+        with Session(engine) as session:
+            filled = session.execute(select(*noise).order_by(RunFacts.run_pk)).all()
+        assert [v for row in filled for v in row] == pytest.approx(
+            [v for row in expected for v in row], rel=1e-12
+        )
     finally:
         engine.dispose()

@@ -346,3 +346,35 @@ def test_the_shift_trend_counts_each_shifts_runs_and_units(
     starts = [s.start for s in report.shift_trend]
     assert starts == sorted(starts)
     assert eol_report(session, ReportFilter(), zone=zone).shift_trend == []
+
+
+@pytest.mark.parametrize("zone", ["UTC", "Europe/Berlin"])
+def test_the_trends_pose_noise_capability_is_that_of_every_pose(
+    session: Session, zone: str
+) -> None:
+    """The trend reads the pose noise from each run's sums over its poses; over a range
+    of one day and one shift it equals the capability of every pose's value."""
+    repository = RunRepository(session)
+    for k in range(5):
+        record = make_record(serial=f"N{k}", started_at=T0 + timedelta(minutes=10 * k))
+        poses = [
+            pose.model_copy(
+                update={"std": pose.std.model_copy(update={"x": 0.7 + 0.37 * k + 0.11 * i})}
+            )
+            for i, pose in enumerate(record.poses)
+        ]
+        repository.submit(record.model_copy(update={"poses": tuple(poses)}))
+    session.commit()
+    report = eol_report(
+        session,
+        ReportFilter(since=T0, until=T0 + timedelta(hours=1)),
+        zone=zone,
+        shifts=(time(6),),
+    )
+    noise = next(p for p in report.parameters if p.name == "pose_noise_x")
+    assert noise.count == 5 * POSES_PER_RUN
+    assert noise.cpk is not None
+    [day] = report.trend
+    [shift] = report.shift_trend
+    assert day.cpk["pose_noise_x"] == pytest.approx(noise.cpk, rel=1e-9)
+    assert shift.cpk["pose_noise_x"] == pytest.approx(noise.cpk, rel=1e-9)
