@@ -38,6 +38,7 @@ from sqlalchemy import insert, make_url, text
 
 from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body
 from db import RunRepository, make_engine, open_database
+from db.chart_queries import first_moving_ranges, latest_chart_points
 from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
@@ -260,8 +261,14 @@ def main() -> None:
                 ("counts, yields, limits profiles (per station and line)", q.station_counts),
                 ("failure Pareto", q.first_failures),
                 ("parameters: all 16 (statistics, histograms)", partial(q.parameters, bounds)),
-                ("control-chart limits (first run's moving ranges)", q.first_moving_ranges),
-                ("control-chart points (200)", lambda: q.chart_points(200)),
+                (
+                    "control-chart limits (first run's moving ranges)",
+                    lambda: first_moving_ranges(session, q.conditions()),
+                ),
+                (
+                    "control-chart points (200)",
+                    lambda: latest_chart_points(session, q.conditions(), 200),
+                ),
                 ("latest 1,000 units", lambda: q.latest_runs(1000)),
                 ("every unit (ship/hold list)", lambda: q.latest_runs(None)),
             ]

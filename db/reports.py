@@ -28,8 +28,9 @@ from sqlalchemy import (
     text,
     union_all,
 )
-from sqlalchemy.orm import Session, aliased
+from sqlalchemy.orm import Session
 
+from db.chart_queries import chart_limits, first_moving_ranges, latest_chart_points
 from db.limits_profiles import stored_profiles
 from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts
 from db.rollups import (
@@ -281,77 +282,6 @@ class ReportQueries:
         columns = None if day is None else {"day": day}
         return self._parameter_rows(bounds, ["day"], rolled_up, columns, MOMENT_VALUES)
 
-    # -- control charts ----------------------------------------------------------------
-
-    def first_moving_ranges(self) -> Row[Any] | None:
-        """The moving ranges of the first run in range with coefficients (to the run
-        before the range)."""
-        previous = aliased(Run, name="previous")
-        stmt = (
-            select(
-                *(
-                    func.abs(getattr(Run, name) - getattr(previous, name)).label(name)
-                    for name in COEFFICIENTS
-                )
-            )
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .outerjoin(previous, previous.id == RunFacts.chart_previous)
-            .where(Run.offset_x.is_not(None), *self.conditions())
-            .order_by(Run.started_at, Run.id)
-            .limit(1)
-        )
-        return self.session.execute(stmt).one_or_none()
-
-    def chart_limits(self) -> Row[Any]:
-        """Count, mean and mean moving range of every coefficient, in time order, over
-        the runs in range (for a range narrowed by station, operator or lot)."""
-        order = (Run.started_at, Run.id)
-        columns = [getattr(Run, name) for name in COEFFICIENTS]
-        lagged = (
-            select(
-                *columns,
-                *(
-                    func.abs(c - func.lag(c).over(order_by=order)).label(f"mr_{c.key}")
-                    for c in columns
-                ),
-            )
-            .where(Run.offset_x.is_not(None), *self.conditions())
-            .subquery("lagged")
-        )
-        return self.session.execute(
-            select(
-                func.count().label("n"),
-                *(func.avg(lagged.c[name]).label(name) for name in COEFFICIENTS),
-                *(func.avg(lagged.c[f"mr_{name}"]).label(f"mr_{name}") for name in COEFFICIENTS),
-            )
-        ).one()
-
-    def chart_points(self, limit: int) -> list[Row[Any]]:
-        """The latest ``limit`` runs with coefficients, oldest first, with moving ranges."""
-        latest = (
-            select(Run.id, Run.started_at, Run.serial, *(getattr(Run, n) for n in COEFFICIENTS))
-            .where(Run.offset_x.is_not(None), *self.conditions())
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(limit + 1)
-            .subquery("latest")
-        )
-        order = (latest.c.started_at, latest.c.id)
-        inner = select(
-            latest,
-            func.row_number().over(order_by=order).label("nth"),
-            *(
-                func.abs(latest.c[n] - func.lag(latest.c[n]).over(order_by=order)).label(f"mr_{n}")
-                for n in COEFFICIENTS
-            ),
-        ).subquery("charted")
-        count = select(func.count()).select_from(latest).scalar_subquery()
-        stmt = (
-            select(inner)
-            .where((inner.c.nth > 1) | (count <= limit))
-            .order_by(inner.c.started_at, inner.c.id)
-        )
-        return list(self.session.execute(stmt).all())
-
     # -- units -------------------------------------------------------------------------
 
     def _latest(self, held: bool) -> list[ColumnElement[bool]]:
@@ -576,14 +506,14 @@ def _chart_limits(
     f = queries.filter
     narrowed = f.station_id is not None or f.operator_id is not None or f.lot is not None
     if narrowed or not all(name in stats for name in COEFFICIENTS):
-        row = queries.chart_limits()._mapping
+        row = chart_limits(queries.session, queries.conditions())._mapping
         return _ChartLimits(
             count=int(row["n"]),
             means={name: row[name] for name in COEFFICIENTS},
             mr_bars={name: row[f"mr_{name}"] for name in COEFFICIENTS},
         )
     n = _total(counts, "charted")
-    first = queries.first_moving_ranges() if n > 1 else None
+    first = first_moving_ranges(queries.session, queries.conditions()) if n > 1 else None
     mr_bars: dict[str, float | None] = {}
     for name in COEFFICIENTS:
         total = sum(float(row._mapping[f"mr_{name}"]) for row in counts)
@@ -814,6 +744,7 @@ def eol_report(
         for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
+    points = latest_chart_points(session, queries.conditions(), chart_points)
     line = _counts(counts)
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
     trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
@@ -833,7 +764,7 @@ def eol_report(
         shift_trend=shift_trend,
         pareto=_pareto(queries.first_failures()),
         parameters=parameters,
-        control_charts=_charts(limits, queries.chart_points(chart_points)),
+        control_charts=_charts(limits, points),
         units=units,
         units_total=_total(counts, "listed"),
         units_held=queries.held_units() if held_only else None,

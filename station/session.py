@@ -37,12 +37,13 @@ from station.operator_text import pose_words
 from station.poses import Pose, pose
 from station.records import PoseRecord, PoseRole, RunRecord
 from station.run import record
-from station.run.capture import LiveView, PoseCapture, Saturated
+from station.run.capture import PoseCapture, Saturated
 from station.run.conclusion import conclude
 from station.run.gyro import LiveGyro
 from station.run.messages import MessageLog
-from station.run.phases import REDO_ALLOWED, Phase, advance
+from station.run.phases import Phase, advance
 from station.run.reconnect import Reconnect
+from station.run.redo import latest_capture, redo_refusal, set_aside
 from station.run.settings import RunSettings
 from station.run.unit_output import UnitOutputCheck
 from station.run.verdict import (
@@ -113,16 +114,6 @@ class UnitRun:
             return pose(self.settings.gyro_verification_pose)
         return self.sequence[self.index] if self.index < len(self.sequence) else None
 
-    @property
-    def live(self) -> LiveView:
-        """The unit while the pose asked for is taken."""
-        return self._capture.live
-
-    @property
-    def wrong_unit(self) -> str | None:
-        """The serial of another unit plugged in while this one was awaited."""
-        return self._reconnect.wrong_unit
-
     def view(self) -> RunView:
         """This moment of the run, for the unit screen."""
         return RunView(
@@ -131,10 +122,10 @@ class UnitRun:
             poses=self.sequence,
             index=self.index,
             taken=frozenset(self.journal.captures),
-            live=self.live,
+            live=self._capture.live,
             stillness=self.settings.stillness,
             messages=tuple(self.messages),
-            wrong_unit=self.wrong_unit,
+            wrong_unit=self._reconnect.wrong_unit,
         )
 
     # -- operator commands -----------------------------------------------------------
@@ -143,28 +134,21 @@ class UnitRun:
         """Take pose ``index`` again; its current capture is kept for audit."""
         if not 0 <= index < len(self.sequence):
             return
-        name = pose_words(self.sequence[index].name)
-        if index not in self.journal.captures:
-            self.messages.say(
-                "warn", f"pose {index + 1} ({name}) is not taken yet: nothing to redo"
-            )
+        if (refusal := redo_refusal(self.journal, self.sequence, index, self.phase)) is not None:
+            self.messages.say("warn", refusal)
             return
-        if self.phase not in REDO_ALLOWED:
-            self.messages.say("warn", "too late to redo a pose: the coefficients are being written")
-            return
-        capture = self.journal.captures.pop(index)
-        replaced = record.replaced_capture(capture, "redone by the operator")
-        self.journal.replaced.setdefault(index, []).append(replaced)
+        set_aside(self.journal, index)
         self.journal_file.save(self.journal)
         self.solution = None
         self.index = self.journal.next_pose
         self._restart_capture()
+        name = pose_words(self.sequence[index].name)
         self.messages.say("info", f"pose {index + 1} ({name}) will be taken again")
 
     def redo_last(self) -> None:
         """Take the most recently captured pose again."""
-        if captures := self.journal.captures:
-            self.redo(max(captures, key=lambda i: captures[i].captured_at))
+        if (index := latest_capture(self.journal)) is not None:
+            self.redo(index)
 
     def abort(self) -> RunRecord | None:
         """Stop this unit. With poses taken, the run is recorded as failed ("aborted")."""

@@ -206,7 +206,7 @@ def test_another_unit_plugged_back_in_is_named_until_the_right_one_returns(
     other = VirtualPutter(seed=3, serial="PT000002", speed=20.0)
     other.serve_pty(bench.port)  # the operator plugs the wrong unit in
     try:
-        bench.drive(lambda run: run.wrong_unit is not None, timeout=20)
+        bench.drive(lambda run: run.view().wrong_unit is not None, timeout=20)
         said = [m.text for m in bench.run.messages]
         assert said[-1] == (
             f"PT000002 plugged in, {SERIAL} expected: plug {SERIAL} back in, or abort"
@@ -215,7 +215,7 @@ def test_another_unit_plugged_back_in_is_named_until_the_right_one_returns(
         other.close()
     bench.putter.replug()
     bench.drive(lambda run: run.phase is Phase.POSE, timeout=20)
-    assert bench.run.wrong_unit is None
+    assert bench.run.view().wrong_unit is None
     texts = [m.text for m in bench.run.messages]
     assert texts[-1] == "the unit is back: carry on"
     assert not any("PT000002" in t or "lost the unit" in t for t in texts)  # no longer true
@@ -245,8 +245,8 @@ def test_an_abort_after_the_write_back_is_not_recorded_as_leaving_the_unit_alone
 def test_a_capture_refused_for_link_loss_says_why_at_once(tmp_path: Path) -> None:
     bench = Bench(tmp_path, faults=Faults(drop_rate=0.05))
     try:
-        bench.drive(lambda run: "cable" in (run.live.refused or ""), timeout=20)
-        refused = bench.run.live.refused
+        bench.drive(lambda run: "cable" in (run.view().live.refused or ""), timeout=20)
+        refused = bench.run.view().live.refused
         assert refused is not None
         assert refused.startswith("capture refused: the cable loses")
         assert not bench.run.journal.captures

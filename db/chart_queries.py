@@ -1,0 +1,84 @@
+"""The control charts' statements: over the runs ``where`` selects (a report's range,
+:func:`db.reports.conditions`), in time order, the coefficients' individuals and moving
+ranges ([Song2006] offsets and sensitivities; Montgomery's I-MR chart).
+"""
+
+from collections.abc import Sequence
+from typing import Any
+
+from sqlalchemy import ColumnElement, Row, func, select
+from sqlalchemy.orm import Session, aliased
+
+from db.models import Run, RunFacts
+from station.quality.parameters import COEFFICIENTS
+
+
+def first_moving_ranges(session: Session, where: Sequence[ColumnElement[bool]]) -> Row[Any] | None:
+    """The moving ranges of the first run in range with coefficients (to the run
+    before the range)."""
+    previous = aliased(Run, name="previous")
+    stmt = (
+        select(
+            *(
+                func.abs(getattr(Run, name) - getattr(previous, name)).label(name)
+                for name in COEFFICIENTS
+            )
+        )
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .outerjoin(previous, previous.id == RunFacts.chart_previous)
+        .where(Run.offset_x.is_not(None), *where)
+        .order_by(Run.started_at, Run.id)
+        .limit(1)
+    )
+    return session.execute(stmt).one_or_none()
+
+
+def chart_limits(session: Session, where: Sequence[ColumnElement[bool]]) -> Row[Any]:
+    """Count, mean and mean moving range of every coefficient, in time order, over
+    the runs in range (for a range narrowed by station, operator or lot)."""
+    order = (Run.started_at, Run.id)
+    columns = [getattr(Run, name) for name in COEFFICIENTS]
+    lagged = (
+        select(
+            *columns,
+            *(func.abs(c - func.lag(c).over(order_by=order)).label(f"mr_{c.key}") for c in columns),
+        )
+        .where(Run.offset_x.is_not(None), *where)
+        .subquery("lagged")
+    )
+    return session.execute(
+        select(
+            func.count().label("n"),
+            *(func.avg(lagged.c[name]).label(name) for name in COEFFICIENTS),
+            *(func.avg(lagged.c[f"mr_{name}"]).label(f"mr_{name}") for name in COEFFICIENTS),
+        )
+    ).one()
+
+
+def latest_chart_points(
+    session: Session, where: Sequence[ColumnElement[bool]], limit: int
+) -> list[Row[Any]]:
+    """The latest ``limit`` runs with coefficients, oldest first, with moving ranges."""
+    latest = (
+        select(Run.id, Run.started_at, Run.serial, *(getattr(Run, n) for n in COEFFICIENTS))
+        .where(Run.offset_x.is_not(None), *where)
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(limit + 1)
+        .subquery("latest")
+    )
+    order = (latest.c.started_at, latest.c.id)
+    inner = select(
+        latest,
+        func.row_number().over(order_by=order).label("nth"),
+        *(
+            func.abs(latest.c[n] - func.lag(latest.c[n]).over(order_by=order)).label(f"mr_{n}")
+            for n in COEFFICIENTS
+        ),
+    ).subquery("charted")
+    count = select(func.count()).select_from(latest).scalar_subquery()
+    stmt = (
+        select(inner)
+        .where((inner.c.nth > 1) | (count <= limit))
+        .order_by(inner.c.started_at, inner.c.id)
+    )
+    return list(session.execute(stmt).all())
