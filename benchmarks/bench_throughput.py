@@ -19,12 +19,20 @@ unit checks its own output (256 calibrated samples, 0.51 s, in parallel).
 
 **Operator time** is added as stated below (``OPERATOR``), not simulated: loading,
 scanning and unloading each unit, and the moves between the seven poses (six moves).
+**Scanning ahead** (:class:`station.fixture.ahead.ScanAhead`), the operator scans one
+label of the next cycle's units in each pose while the fixture captures, and presses
+Enter once each such unit is in its slot: a pose then lasts as long as its slowest slot
+or its scan, whichever is longer, and those units cost a confirm instead of a scan. The
+station is run that way (the fixture's demo operator scans ahead, and the next cycle's
+units are taken from the queue); the figures are for a cycle in steady state, where
+``min(K, 7)`` of its K units were scanned ahead during the cycle before.
 
 **Station time**: the station's CPU per unit (process CPU minus the virtual putters'
 threads), counted once per unit in the cycle as if nothing of it overlapped.
 
-    cycle = K × (load + scan + unload) + 6 × move(K) + Σ_pose max_slot(device) + 0.51 s
-            + K × station CPU per unit
+    cycle = K × (load + unload) + (K − A) × scan + A × confirm + 6 × move(K)
+            + Σ_pose max(max_slot(device), scan if a label is scanned in it) + 0.51 s
+            + K × station CPU per unit          (A = min(K, 7) scanning ahead, else 0)
     units per operator-hour = 3600 × K / cycle
 """
 
@@ -45,6 +53,7 @@ from station.app import StationApp
 from station.config import StationConfig
 from station.demo import MOVE_S, ScriptedOperator
 from station.device import DEFAULT_RATE_HZ
+from station.fixture.ahead import ScanAhead
 from station.fixture.app import FixtureApp
 from station.fixture.demo import FixtureOperator
 from station.limits import load_profile
@@ -59,7 +68,17 @@ OPERATOR = {
     "load": 2.0,  # take the unit from the tray, seat it, plug its cable
     "scan": 1.5,  # aim the hand scanner at the label, beep
     "unload": 1.5,  # unplug, put it where the screen says
+    "confirm": 0.3,  # press Enter once the unit scanned ahead is in its slot
 }
+#: Per unit handled in the cycle: load and unload (and its scan, or a confirm).
+HANDLING = OPERATOR["load"] + OPERATOR["unload"]
+
+
+def handling(ahead: bool) -> float:
+    """The operator's seconds per unit in the cycle, poses aside."""
+    return HANDLING + OPERATOR["confirm" if ahead else "scan"]
+
+
 #: Seconds to move into the next pose: one putter in the hand (the demo's scripted
 #: operator), or the fixture box turned onto its next face, whatever it holds.
 MOVE_ONE_S = MOVE_S
@@ -89,6 +108,8 @@ class Events:
 
     units: dict[str, list[Unit]] = field(default_factory=lambda: defaultdict(list))
     putter_cpu_s: float = 0.0
+    #: Units the next cycle's scan took from the labels scanned ahead.
+    taken_ahead: int = 0
 
 
 def instrument(events: Events) -> Callable[[], None]:
@@ -97,6 +118,7 @@ def instrument(events: Events) -> Callable[[], None]:
     move_to = VirtualPutter.move_to
     close = VirtualPutter.close
     accept = UnitRun._accept
+    take = ScanAhead.take
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
         url = serve_pty(self, alias)
@@ -119,22 +141,34 @@ def instrument(events: Events) -> Callable[[], None]:
         events.units[self.driver.url][-1].captures.append(result.last_seq)
         accept(self, result, target)
 
+    def taken(self: ScanAhead, slot: Any) -> str | None:
+        serial = take(self, slot)
+        events.taken_ahead += serial is not None
+        return serial
+
     VirtualPutter.serve_pty = serve  # type: ignore[method-assign]
     VirtualPutter.move_to = move  # type: ignore[method-assign]
     VirtualPutter.close = closed  # type: ignore[method-assign]
     UnitRun._accept = accepted  # type: ignore[method-assign]
+    ScanAhead.take = taken  # type: ignore[method-assign]
 
     def undo() -> None:
         VirtualPutter.serve_pty = serve_pty  # type: ignore[method-assign]
         VirtualPutter.move_to = move_to  # type: ignore[method-assign]
         VirtualPutter.close = close  # type: ignore[method-assign]
         UnitRun._accept = accept  # type: ignore[method-assign]
+        ScanAhead.take = take  # type: ignore[method-assign]
 
     return undo
 
 
-def run_station(data: Path, slots: int, cycles: int, capture: str, speed: float) -> list[Any]:
-    """The station on ``slots × cycles`` virtual units; their records."""
+def run_station(
+    data: Path, slots: int, cycles: int, capture: str, speed: float, ahead: bool
+) -> list[Any]:
+    """The station on ``slots × cycles`` virtual units; their records.
+
+    One slot scanning at load is today's one-port station; anything else the fixture.
+    """
     units = slots * cycles
     database = f"sqlite:///{data}/results.sqlite3"
     run = RunSettings(capture=capture)  # type: ignore[arg-type]
@@ -145,7 +179,7 @@ def run_station(data: Path, slots: int, cycles: int, capture: str, speed: float)
     }
     operator: ScriptedOperator | FixtureOperator
     app: StationApp | FixtureApp
-    if slots == 1:
+    if slots == 1 and not ahead:
         port = data / "putter"
         config = StationConfig(data_dir=data, port=str(port), database_url=database, run=run)
         operator = ScriptedOperator(units=units, port=port, seed=11, speed=speed)
@@ -161,7 +195,7 @@ def run_station(data: Path, slots: int, cycles: int, capture: str, speed: float)
         config = StationConfig(
             data_dir=data, slots=tuple(map(str, ports)), database_url=database, run=run
         )
-        operator = FixtureOperator(units=units, ports=ports, seed=11, speed=speed)
+        operator = FixtureOperator(units=units, ports=ports, seed=11, speed=speed, scan_ahead=ahead)
         app = FixtureApp(
             config=config, open_store=lambda: DatabaseStore(database), keys=operator, **common
         )
@@ -172,33 +206,44 @@ def run_station(data: Path, slots: int, cycles: int, capture: str, speed: float)
         operator.close()
 
 
-def measure(slots: int, cycles: int, capture: str, speed: float) -> dict[str, float]:
+def measure(slots: int, cycles: int, capture: str, speed: float, ahead: bool) -> dict[str, float]:
     """One row: device, operator and station time of a cycle; units per operator-hour."""
     events = Events()
     undo = instrument(events)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             cpu = time.process_time()
-            records = run_station(Path(tmp), slots, cycles, capture, speed)
+            records = run_station(Path(tmp), slots, cycles, capture, speed, ahead)
             cpu = time.process_time() - cpu - events.putter_cpu_s
     finally:
         undo()
     assert len(records) == slots * cycles
     assert all(r.verdict == "pass" for r in records), [r.failures for r in records]
+    scanned_ahead = min(slots, POSES) if ahead else 0
+    # The station really took the next cycle's units from the labels scanned ahead.
+    assert events.taken_ahead == scanned_ahead * (cycles - 1), events.taken_ahead
     rate = float(DEFAULT_RATE_HZ)
-    device = []
+    device, poses_s = [], []
     for cycle in range(cycles):
         in_cycle = [units[cycle].pose_device_s(rate) for units in events.units.values()]
         poses = [max(unit[k] for unit in in_cycle) for k in range(POSES)]
         device.append(sum(poses) + UNIT_OUTPUT_SAMPLES / rate)
+        scans = [OPERATOR["scan"] if k < scanned_ahead else 0.0 for k in range(POSES)]
+        poses_s.append(sum(map(max, poses, scans)) + UNIT_OUTPUT_SAMPLES / rate)
     station_cpu = cpu / len(records)
     move = MOVE_ONE_S if slots == 1 else MOVE_FIXTURE_S
-    operator = slots * sum(OPERATOR.values()) + (POSES - 1) * move
-    cycle_s = operator + statistics.mean(device) + slots * station_cpu
+    operator = (
+        slots * HANDLING
+        + (slots - scanned_ahead) * OPERATOR["scan"]
+        + scanned_ahead * OPERATOR["confirm"]
+        + (POSES - 1) * move
+    )
+    cycle_s = operator + statistics.mean(poses_s) + slots * station_cpu
     samples = statistics.mean(p.sample_count for r in records for p in r.poses)
     return {
         "slots": slots,
-        "fixed_part": cycle_s - slots * sum(OPERATOR.values()),
+        "fixed_part": cycle_s - slots * handling(ahead),
+        "handling": handling(ahead),
         "device": statistics.mean(device),
         "operator": operator,
         "cpu": station_cpu,
@@ -215,56 +260,67 @@ def main() -> None:
     parser.add_argument("--speed", type=float, default=5.0, help="virtual clock (× real time)")
     parser.add_argument("--slots", type=int, nargs="+", default=[1, 2, 4, 8])
     parser.add_argument("--capture", nargs="+", default=["fixed", "adaptive"])
+    parser.add_argument(
+        "--scanning", nargs="+", default=["at load", "ahead"], choices=["at load", "ahead"]
+    )
     args = parser.parse_args()
+    times = ", ".join(f"{name} {seconds:g} s" for name, seconds in OPERATOR.items())
     print(
-        f"operator: load {OPERATOR['load']:g} s, scan {OPERATOR['scan']:g} s, unload "
-        f"{OPERATOR['unload']:g} s per unit; move {MOVE_ONE_S:g} s (one putter), "
+        f"operator: {times} per unit; move {MOVE_ONE_S:g} s (one putter), "
         f"{MOVE_FIXTURE_S:g} s (fixture); {args.cycles} cycles per row at {args.speed:g}×"
     )
     print(
-        "| capture | slots | samples/pose | device per cycle | operator per cycle "
-        "| station CPU per unit | cycle | units per operator-hour | × one slot "
-        "| 8 units | × one slot |"
+        "| capture | scanning | slots | samples/pose | device per cycle | operator per cycle "
+        "| station CPU per unit | cycle | units per operator-hour | × one slot | × today "
+        "| 8 units | × one slot | × today |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for capture in args.capture:
-        one: dict[str, float] | None = None
-        rows: dict[int, dict[str, float]] = {}
-        for slots in args.slots:
-            m = rows[slots] = measure(slots, args.cycles, capture, args.speed)
-            one = one or (m if slots == 1 else None)
-            gain = f"{m['per_hour'] / one['per_hour']:.2f}" if one else "—"
-            eight = f"{m['eight'] / one['eight']:.2f}" if one else "—"
-            print(
-                f"| {capture} | {slots} | {m['samples']:.0f} | {m['device']:.1f} s "
-                f"| {m['operator']:.1f} s | {m['cpu'] * 1e3:.0f} ms | {m['cycle']:.1f} s "
-                f"| {m['per_hour']:.0f} | {gain} | {m['eight']:.0f} s | {eight} |",
-                flush=True,
-            )
-        if one is not None:
-            break_even(capture, one, rows)
+        today: dict[str, float] | None = None
+        for scanning in args.scanning:
+            ahead = scanning == "ahead"
+            one: dict[str, float] | None = None
+            rows: dict[int, dict[str, float]] = {}
+            for slots in args.slots:
+                m = rows[slots] = measure(slots, args.cycles, capture, args.speed, ahead)
+                one = one or (m if slots == 1 else None)
+                today = today or (m if slots == 1 and not ahead else None)
+                print(
+                    f"| {capture} | {scanning} | {slots} | {m['samples']:.0f} "
+                    f"| {m['device']:.1f} s | {m['operator']:.1f} s | {m['cpu'] * 1e3:.0f} ms "
+                    f"| {m['cycle']:.1f} s | {m['per_hour']:.0f} "
+                    f"| {ratio(m, one, 'per_hour')} | {ratio(m, today, 'per_hour')} "
+                    f"| {m['eight']:.0f} s | {ratio(m, one, 'eight')} "
+                    f"| {ratio(m, today, 'eight')} |",
+                    flush=True,
+                )
+            if one is not None:
+                break_even(f"{capture}, scanning {scanning}", one, rows)
 
 
-def break_even(capture: str, one: dict[str, float], rows: dict[int, dict[str, float]]) -> None:
-    """The handling per unit (load + scan + unload) at which each target is just met.
+def ratio(row: dict[str, float], base: dict[str, float] | None, key: str) -> str:
+    """``row[key]`` over the same figure of ``base`` (— without one)."""
+    return f"{row[key] / base[key]:.2f}" if base is not None else "—"
 
-    A cycle of K slots is ``K·h + a_K`` (``a_K``: moves, device and station time); the
-    targets are ``8·(h + a_1) ≥ 4·(8h + a_8)`` and ``2·(4h + a_4) ≤ 0.45·8·(h + a_1)``.
+
+def break_even(label: str, one: dict[str, float], rows: dict[int, dict[str, float]]) -> None:
+    """The handling per unit at which each target is just met.
+
+    A cycle of K slots is ``K·h + a_K`` (``h``: the operator's seconds per unit in the
+    cycle, poses aside; ``a_K``: the rest); the targets are ``8·(h + a_1) ≥ 4·(8h + a_8)``
+    and ``2·(4h + a_4) ≤ 0.45·8·(h + a_1)``.
     """
-    a1 = one["fixed_part"]
-    handling = sum(OPERATOR.values())
+    a1, assumed = one["fixed_part"], one["handling"]
+    targets: list[tuple[str, float]] = []
     if 8 in rows:
         h = (8 * a1 - 4 * rows[8]["fixed_part"]) / 24
-        print(
-            f"{capture}: 8 slots give 4× one slot while handling per unit ≤ {h:.1f} s "
-            f"(assumed {handling:g} s)"
-        )
+        targets.append(("8 slots give 4× one slot", h))
     if 4 in rows:
         h = (3.6 * a1 - 2 * rows[4]["fixed_part"]) / 4.4
-        print(
-            f"{capture}: 4 slots do 8 units in ≤ 0.45× one slot's time while handling per "
-            f"unit ≤ {h:.1f} s (assumed {handling:g} s)"
-        )
+        targets.append(("4 slots do 8 units in ≤ 0.45× one slot's time", h))
+    for target, h in targets:
+        reach = f"while handling per unit ≤ {h:.1f} s" if h > 0 else "not even with no handling"
+        print(f"{label}: {target} {reach} (assumed {assumed:g} s)")
 
 
 if __name__ == "__main__":

@@ -61,6 +61,7 @@ def _station(
             keys=keys,
             console=console,
             units=units,
+            probe_ports=probe_port,
         )
     return StationApp(
         config=config,

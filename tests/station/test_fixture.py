@@ -324,3 +324,71 @@ def test_the_fixture_goes_forward_and_turns_back_only_when_nothing_is_ahead(
         assert not any(start <= n < target for n in needs)
     else:  # nothing ahead: back to the earliest pose still needed
         assert target == min(needs)
+
+
+@pytest.mark.timeout(90)
+def test_labels_scanned_during_a_cycle_fill_the_next_and_a_unit_in_the_wrong_slot_is_caught(
+    make_fixture: Callable[[int], Fixture],
+) -> None:
+    fixture = make_fixture(2)
+    fixture.plug(1, "PT000501", seed=501)
+    fixture.plug(2, "PT000502", seed=502)
+    app = fixture.station()
+    fixture.keys = list("PT000501\rPT000502\r")
+    ahead = ["PT000601", "PT000501", "nope", "PT000601", "PT000602", "PT000603"]
+    seen: dict[str, Any] = {}
+
+    def swap(slot: int, serial: str, seed: int) -> None:
+        fixture.putters.pop(slot).close()
+        fixture.plug(slot, serial, seed)
+
+    def operator(app: FixtureApp) -> None:
+        step = seen.setdefault("step", 0)
+        if step == 0 and app.stage is Stage.CYCLE:
+            # While the fixture captures: the next cycle's labels, one refused each way,
+            # and the last one queued taken off again and scanned again.
+            fixture.keys = [*"".join(f"{label}\r" for label in ahead), "\x7f", *"PT000602\r"]
+            seen["step"] = 1
+        elif step == 1 and app.stage is Stage.CYCLE and not fixture.keys:
+            assert not any(s.run is None for s in app.slots)  # the runs went on
+            seen["cycle screen"], seen["step"] = render(app), 2
+        elif step == 2 and app.stage is Stage.SCAN:
+            seen["scan screen"] = render(app)
+            swap(1, "PT000602", seed=602)  # slot 2's unit put in slot 1
+            fixture.putters.pop(2).close()
+            fixture.keys, seen["step"] = ["\r"], 3
+        elif step == 3:
+            assert app.scanner.current is app.slots[0]  # slot 1 asked again
+            assert app.scanner.offered == "PT000601"
+            swap(1, "PT000601", seed=601)
+            fixture.keys, seen["step"] = ["\r", "-", "\r"], 4  # and slot 2 left empty
+        elif step == 4 and app.stage is Stage.CYCLE:
+            seen["second"] = {s.number: s.serial for s in app.running}
+            for slot in app.running:
+                assert slot.run is not None
+                slot.run.abort()  # the second cycle's start is what is tested here
+            seen["step"] = 5
+
+    fixture.on_tick = operator
+    fixture.serve(app)
+
+    assert seen["second"] == {1: "PT000601"}
+    assert stored(fixture) == {"PT000501": ("pass", "ship"), "PT000502": ("pass", "ship")}
+    lines = fixture.log.getvalue().splitlines()
+    for said in (
+        "next cycle: slot 1 ← PT000601",
+        "PT000501 is in slot 1 now: scan it again once it is out",
+        "'nope' is not a serial number (expected ^PT\\d{6}$)",
+        "PT000601 is queued for slot 1 already",
+        "every slot has its next unit: PT000603 not queued",
+        "PT000602 taken off the next cycle (slot 2 is free again)",
+        "next cycle: slot 2 ← PT000602",
+        "slot 2 left empty: skipped this cycle",
+        "PT000602 was not loaded in slot 2: scan it again",
+    ):
+        assert said in lines
+    assert lines.count("next cycle: slot 2 ← PT000602") == 2
+    assert any(line.startswith("wrong unit in slot 1: it reports PT000602") for line in lines)
+    assert "next cycle: slot 1 ← PT000601, slot 2 ← PT000602" in seen["cycle screen"]
+    assert "Put PT000601 in slot 1, then Enter" in seen["scan screen"]
+    assert "Traceback" not in fixture.log.getvalue()
