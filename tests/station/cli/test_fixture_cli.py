@@ -64,6 +64,10 @@ def test_the_demo_turns_two_misaligned_putters_together_and_each_lands_on_its_tr
             assert abs(ratio - 1) < 3e-3
     assert "slot 2 left empty: skipped this cycle" in result.stderr  # 3 units, 2 slots
     assert result.stderr.count("fixture: pose 1 of 7") == 2  # two cycles
+    # The second cycle's unit was scanned ahead during the first; no port is called
+    # missing before the demo's first putter is plugged in.
+    assert "next cycle: slot 1 ← PT001003" in result.stderr
+    assert "no such device" not in result.stderr
     assert "Traceback" not in result.stderr
     with sqlite3.connect(tmp_path / "data" / "calstation.sqlite3") as db:
         assert db.execute("select count(*) from runs where verdict = 'pass'").fetchone() == (3,)
