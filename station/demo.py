@@ -35,12 +35,18 @@ class DemoUnit:
         }
 
 
+#: The demo operator's answers to the station's questions (see :class:`ScriptedOperator`).
+ANSWERS = {"confirm": "y", "resume": "n"}
+
+
 @dataclass
 class ScriptedOperator:
     """Plays the operator: plugs units in, scans them, moves them as asked.
 
     ``station`` is the :class:`station.app.StationApp` it serves (set before its
-    first :meth:`read`); ``port`` the pty name the station opens.
+    first :meth:`read`); ``port`` the pty name the station opens. A unit that passed in
+    an earlier demo on the same data is calibrated again (y); a unit an earlier demo
+    left interrupted is discarded (n): its virtual putter went with that process.
     """
 
     units: int
@@ -55,6 +61,8 @@ class ScriptedOperator:
     def read(self) -> str:
         """The keys the operator types now; also moves the unit in the operator's hands."""
         app = self.station
+        if app.prompt.state in ANSWERS:
+            return ANSWERS[app.prompt.state]
         if app.prompt.state == "serial":
             if self._current is not None:
                 self._current.putter.close()

@@ -38,6 +38,14 @@ def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Pat
     ]
     assert np.isfinite([u["estimate"]["offset"]["x"] for u in units]).all()
 
+    # Run again on the same data, the demo's units have passed already: its operator
+    # answers "calibrate again?" and it goes on (it used to wait there for ever).
+    again = run_cli("demo", "--units", "1", "--json", "--speed", "20", env=env, timeout=180)
+    assert again.returncode == 0, again.stderr
+    assert "PT001001 passed at" in again.stderr
+    assert "calibrate again? y/n" in again.stderr
+    assert [u["verdict"] for u in json.loads(again.stdout)] == ["pass"]
+
 
 def test_unreadable_outbox_files_no_longer_stop_the_demo(
     run_cli: CliRunner, tmp_path: Path
