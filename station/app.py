@@ -9,7 +9,6 @@ start.
 """
 
 import logging
-import re
 import uuid
 from collections.abc import Callable
 from datetime import UTC, datetime
@@ -24,7 +23,7 @@ from station.journal import DiscardedJournal, JournalFile, RunJournal
 from station.keys import KeySource
 from station.limits import LimitsProfile
 from station.live_loop import run_live
-from station.operator_text import port_problem
+from station.operator_text import not_a_serial, port_problem
 from station.prompt import Prompt, Recalibrate, Resume, Serial, State
 from station.records import RunRecord
 from station.results_link import ResultsLink
@@ -244,8 +243,9 @@ class StationApp:
             self.history = None
             self._start_unit(serial, None)
             return
-        if not re.fullmatch(self.config.serial_pattern, serial):
-            self._tell(f"{serial!r} is not a serial number (expected {self.config.serial_pattern})")
+        refused = not_a_serial(serial, self.config.serial_pattern)
+        if refused is not None:
+            self._tell(refused)
             return
         self.history = history = self.results.history(serial)
         decision = history.at_scan(self.profile.attempts_allowed)

@@ -8,6 +8,7 @@ place, so every screen says the same thing the same way.
 """
 
 import errno
+import re
 
 from station.acquisition.stillness import StillnessThresholds, WindowVerdict
 from station.device import DeviceTimeoutError, NoReplyError
@@ -30,6 +31,13 @@ _PULLED = ("readiness to read but returned no data", "disconnected", "Input/outp
 def pose_words(name: str) -> str:
     """A pose as the operator says it: ``toe_up`` → ``toe up``."""
     return name.replace("_", " ")
+
+
+def not_a_serial(text: str, pattern: str) -> str | None:
+    """Why ``text`` scanned at a prompt is refused as a serial number (None: it is one)."""
+    if re.fullmatch(pattern, text):
+        return None
+    return f"{text!r} is not a serial number (expected {pattern})"
 
 
 def wrong_unit(reported: str, expected: str) -> str:
