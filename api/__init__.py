@@ -2,7 +2,7 @@
 
 Errors of its own (:mod:`api.errors` maps them, and those of :mod:`db`, to answers)::
 
-    station.errors.CalstationError
+    station.domain.errors.CalstationError
     ├── CalibrationMismatchError   verification.py  the poses do not give the submitted
     │                                               coefficients (422)
     ├── ReportsBusyError           report_pool.py   every report process stayed busy (503)

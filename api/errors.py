@@ -19,7 +19,7 @@ from api.report_pool import ReadTimeoutError, ReportsBusyError
 from api.verification import CalibrationMismatchError
 from db import DatabaseUnavailableError, RunConflictError, SchemaOutOfDateError
 from db.timeouts import is_statement_timeout
-from station.errors import InputError
+from station.domain.errors import InputError
 
 log = logging.getLogger(__name__)
 

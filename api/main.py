@@ -19,7 +19,7 @@ from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
 from station import __version__
-from station.quality.shifts import parse_shifts
+from station.domain.quality.shifts import parse_shifts
 
 API_PREFIX = "/api/v1"
 

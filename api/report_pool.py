@@ -28,7 +28,7 @@ from sqlalchemy.orm import Session
 
 from db import DatabaseUnavailableError, RunRepository, make_engine
 from db.timeouts import is_statement_timeout
-from station.errors import CalstationError
+from station.domain.errors import CalstationError
 
 P = ParamSpec("P")
 T = TypeVar("T")

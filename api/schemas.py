@@ -1,4 +1,4 @@
-"""Public shapes of the API's answers (the run record itself is :mod:`station.records`)."""
+"""Public shapes of the API's answers (the run record itself is :mod:`station.domain.records`)."""
 
 from datetime import datetime
 from typing import Annotated
@@ -6,10 +6,10 @@ from uuid import UUID
 
 from pydantic import AfterValidator, BaseModel, Field
 
-from station.gyro.fit import GyroFitReport
-from station.gyro.log import GyroDwells
-from station.record_bounds import plain_document
-from station.records import (
+from station.domain.gyro.fit import GyroFitReport
+from station.domain.gyro.log import GyroDwells
+from station.domain.record_bounds import plain_document
+from station.domain.records import (
     Disposition,
     GyroFitRecord,
     GyroSummary,

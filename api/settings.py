@@ -5,8 +5,8 @@ from typing import Annotated
 from pydantic import AfterValidator, Field
 
 from db.settings import DatabaseSettings
-from station.errors import InputError
-from station.quality.shifts import parse_shifts, shift_name
+from station.domain.errors import InputError
+from station.domain.quality.shifts import parse_shifts, shift_name
 from station.report.period import plant_zone
 
 

@@ -1,7 +1,7 @@
 """The server's own check of a submitted calibration: solve the poses again, compare.
 
 A station sends the mean counts of every pose and the coefficients it wrote into the
-unit; the server recomputes them with :func:`station.calibration.solve` from the ``fit``
+unit; the server recomputes them with :func:`station.domain.calibration.solve` from the ``fit``
 poses (with the residual limit of the run's own limits profile, so a pose the station
 left out as inconsistent is left out again) and refuses the run when they disagree beyond
 the tolerances below, or when the poses left out differ.
@@ -9,10 +9,10 @@ the tolerances below, or when the poses left out differ.
 
 import numpy as np
 
-from station.calibration import CalibrationError, solve
-from station.errors import CalstationError
-from station.limits import profile_of
-from station.records import RunRecord
+from station.domain.calibration import CalibrationError, solve
+from station.domain.errors import CalstationError
+from station.domain.limits import profile_of
+from station.domain.records import RunRecord
 
 #: Offsets may differ by this much, counts (floating-point noise is ~1e-9).
 OFFSET_TOLERANCE_COUNTS = 1e-3

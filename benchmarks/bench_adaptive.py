@@ -5,7 +5,7 @@
     python benchmarks/bench_adaptive.py --speed 5  # device clock 5× real time (default 20)
 
 Each unit is a virtual putter (its own seed) with a given accelerometer noise, run by
-the station's own :class:`station.session.UnitRun` over a real pty at ``--speed`` times
+the station's own :class:`station.run.unit_run.UnitRun` over a real pty at ``--speed`` times
 real time (default 20);
 a scripted operator turns it into each pose the run asks for (1.5 s moves, with the
 handling motion and put-down tremor of a person). Reported from the stored record and
@@ -26,13 +26,13 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from station.app import open_unit
 from station.device import DEFAULT_RATE_HZ
-from station.journal import JournalFile, RunJournal
-from station.limits import load_profile
+from station.domain.limits import load_profile
+from station.domain.run_settings import RunSettings
+from station.loop.app import open_unit
+from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
-from station.run.settings import RunSettings
-from station.session import UnitRun
+from station.run.unit_run import UnitRun
 from station.simulator.putter import VirtualPutter
 
 MOVE_S = 1.5

@@ -49,10 +49,10 @@ from db import RunRepository, make_engine, open_database
 from db.limits_profiles import profile_row
 from db.models import StoredLimitsProfile
 from db.rollups import rebuild
-from station.calibration import solve
-from station.calibration.synthetic import pose_means, random_unit, six_directions
-from station.limits import load_profile
-from station.records import RunRecord
+from station.domain.calibration import solve
+from station.domain.calibration.synthetic import pose_means, random_unit, six_directions
+from station.domain.limits import load_profile
+from station.domain.records import RunRecord
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"

@@ -21,8 +21,8 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from station.calibration import solve, solve_classic, solve_paper, solve_paper_batch
-from station.calibration.synthetic import (
+from station.domain.calibration import solve, solve_classic, solve_paper, solve_paper_batch
+from station.domain.calibration.synthetic import (
     TrueUnit,
     pose_means,
     random_directions,

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from station.gyro.compensation import compensate
-from station.gyro.fit import fit_log
-from station.gyro.log import read_log, write_log
-from station.gyro.simulate import paper_truth, simulate_log
+from station.domain.gyro.compensation import compensate
+from station.domain.gyro.fit import fit_log
+from station.domain.gyro.log import read_log, write_log
+from station.domain.gyro.simulate import paper_truth, simulate_log
 
 REPEATS = 5
 

@@ -1,12 +1,12 @@
 """Gyro matrix K from the moves ([Tedaldi2014]): accuracy against truth, and time per unit.
 
-Hundreds of simulated units (:mod:`station.gyro.motion.synthetic`): K with ±1 % scale
+Hundreds of simulated units (:mod:`station.domain.gyro.motion.synthetic`): K with ±1 % scale
 and ±0.5 % misalignment, bias ±0.3 deg/s, accelerometers with 2 % cross-axis coupling,
 500 samples/s, gyro noise 0.08 deg/s, accelerometer noise 1 count, 2 s stills, 1.5 s
 minimum-jerk turns with a 5° wobble. Profiles: the six ±1 g poses (alone, or followed
 by a return to the first, which gives a sixth move) and twelve poses spread over the
 sphere, each pose with a random turn about the vertical. Each unit goes
-through :func:`station.gyro.motion.calibrate_stream` (stills, accelerometer, bias, K);
+through :func:`station.domain.gyro.motion.calibrate_stream` (stills, accelerometer, bias, K);
 K is compared with the truth in the calibrated accelerometer's frame. A plain scipy
 reference solver (rotation matrices multiplied one sample at a time, rate held from
 each sample, ``least_squares`` with its default trust-region method) fits K on the same
@@ -24,10 +24,10 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from station.calibration import Model
-from station.calibration.synthetic import six_directions, spread_directions
-from station.gyro.motion import Move, calibrate_stream
-from station.gyro.motion.synthetic import pose_orientations, random_imu, synthetic_stream
+from station.domain.calibration import Model
+from station.domain.calibration.synthetic import six_directions, spread_directions
+from station.domain.gyro.motion import Move, calibrate_stream
+from station.domain.gyro.motion.synthetic import pose_orientations, random_imu, synthetic_stream
 
 SIX = six_directions()
 #: The six ±1 g poses, then back to the first: six moves.

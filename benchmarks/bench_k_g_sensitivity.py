@@ -9,7 +9,7 @@ orientation-dependent scale error that no constant K can hold. This measures wha
 does to K when it is not removed: for each simulated unit (random signs, magnitudes
 600 ppm/g ± 5 %) the moves of the shipped whole-unit plan (the simulator's minimum-jerk
 1.5 s turns, 500 samples/s) are generated with a perfect gyro triad (K = I, no bias, no
-noise) apart from that term, and K is fitted (:func:`station.gyro.motion.fit_gyro_matrix`)
+noise) apart from that term, and K is fitted (:func:`station.domain.gyro.motion.fit_gyro_matrix`)
 against the exact gravity directions. Every ppm of K − I is the term's doing. With the
 term removed first (as the station does when a fit is stored) K comes out I to the
 integration's precision.
@@ -21,10 +21,10 @@ import itertools
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from station.config import load_config
-from station.gyro import GyroErrorModel, compensate
-from station.gyro.motion import Move, fit_gyro_matrix, integrate_rates
-from station.poses import pose
+from station.domain.gyro import GyroErrorModel, compensate
+from station.domain.gyro.motion import Move, fit_gyro_matrix, integrate_rates
+from station.domain.poses import pose
+from station.loop.config import load_config
 from station.simulator.motion import Handling, MotionModel
 from station.simulator.sensor import GYRO_G_SENSITIVITY_PER_G, GYRO_SENSE_AXIS
 

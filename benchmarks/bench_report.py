@@ -43,9 +43,9 @@ from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
-from station.limits import load_profile
-from station.quality.figures import ReportFilter
-from station.quality.parameters import profile_bounds
+from station.domain.limits import load_profile
+from station.domain.quality.figures import ReportFilter
+from station.domain.quality.parameters import profile_bounds
 from station.report.html import certificate_page, unit_page
 from station.report.render import render
 

@@ -29,14 +29,14 @@ from typing import Any
 
 from rich.console import Console
 
-from station.acquisition.pose import PoseAcquisition, PoseResult
-from station.app import StationApp
-from station.config import StationConfig
-from station.demo import ScriptedOperator
 from station.device import DEFAULT_RATE_HZ, PutterDriver
-from station.limits import load_profile
+from station.domain.limits import load_profile
+from station.loop.app import StationApp
+from station.loop.config import StationConfig
+from station.loop.demo import ScriptedOperator
+from station.results.storage import DatabaseStore
+from station.run.acquisition.pose import PoseAcquisition, PoseResult
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
-from station.storage import DatabaseStore
 
 WINDOW = 1024
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from station.calibration.synthetic import spread_directions
-from station.gyro.motion.synthetic import (
+from station.domain.calibration.synthetic import spread_directions
+from station.domain.gyro.motion.synthetic import (
     StreamPlan,
     pose_orientations,
     random_imu,

@@ -5,10 +5,11 @@
     python benchmarks/bench_throughput.py --speed 1 --slots 8 --capture fixed --cycles 1
 
 A plant buys a station on units per operator-hour. Each row runs the real station on
-virtual putters over real ptys: the one-port station (:class:`station.app.StationApp`
+virtual putters over real ptys: the one-port station (:class:`station.loop.app.StationApp`
 with the demo's scripted operator) for one slot, the fixture
-(:class:`station.fixture.app.FixtureApp` with :class:`station.fixture.demo.FixtureOperator`,
-each unit with its own mounting misalignment) for several, storing into SQLite.
+(:class:`station.loop.fixture.app.FixtureApp` with
+:class:`station.loop.fixture.demo.FixtureOperator`, each unit with its own mounting
+misalignment) for several, storing into SQLite.
 
 **Device time** is read from the units' own sequence numbers, so it does not depend on
 the virtual speed or on this machine: for each pose and unit, from the end of the move
@@ -19,7 +20,7 @@ unit checks its own output (256 calibrated samples, 0.51 s, in parallel).
 
 **Operator time** is added as stated below (``OPERATOR``), not simulated: loading,
 scanning and unloading each unit, and the moves between the seven poses (six moves).
-**Scanning ahead** (:class:`station.fixture.ahead.ScanAhead`), the operator scans one
+**Scanning ahead** (:class:`station.loop.fixture.ahead.ScanAhead`), the operator scans one
 label of the next cycle's units in each pose while the fixture captures, and presses
 Enter once each such unit is in its slot: a pose then lasts as long as its slowest slot
 or its scan, whichever is longer, and those units cost a confirm instead of a scan. The
@@ -48,20 +49,20 @@ from typing import Any
 
 from rich.console import Console
 
-from station.acquisition.pose import PoseResult
-from station.app import StationApp
-from station.config import StationConfig
-from station.demo import MOVE_S, ScriptedOperator
 from station.device import DEFAULT_RATE_HZ
-from station.fixture.ahead import ScanAhead
-from station.fixture.app import FixtureApp
-from station.fixture.demo import FixtureOperator
-from station.limits import load_profile
-from station.run.settings import RunSettings
+from station.domain.limits import load_profile
+from station.domain.run_settings import RunSettings
+from station.loop.app import StationApp
+from station.loop.config import StationConfig
+from station.loop.demo import MOVE_S, ScriptedOperator
+from station.loop.fixture.ahead import ScanAhead
+from station.loop.fixture.app import FixtureApp
+from station.loop.fixture.demo import FixtureOperator
+from station.results.storage import DatabaseStore
+from station.run.acquisition.pose import PoseResult
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
-from station.session import UnitRun
+from station.run.unit_run import UnitRun
 from station.simulator.putter import VirtualPutter
-from station.storage import DatabaseStore
 
 #: Stated operator times, seconds (see docs/benchmarks.md, "throughput", for where from).
 OPERATOR = {

@@ -30,10 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from station.calibration import Model
-from station.gyro.motion import Move, calibrate_stream, fit_gyro_matrix, integrate_rates
-from station.gyro.motion.matrix_fit import GyroMatrixFit
-from station.gyro.motion.stream_file import read_stream_file
+from station.domain.calibration import Model
+from station.domain.gyro.motion import Move, calibrate_stream, fit_gyro_matrix, integrate_rates
+from station.domain.gyro.motion.matrix_fit import GyroMatrixFit
+from station.domain.gyro.motion.stream_file import read_stream_file
 
 MIRROR = Path("/work/.mirror/Kyle-ak+imu_tk/repo")
 ACC_ZERO = 32768.0

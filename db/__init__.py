@@ -8,7 +8,7 @@ Public surface::
 
 Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
 
-    station.errors.CalstationError
+    station.domain.errors.CalstationError
     ├── DatabaseUnavailableError    engine.py      the database does not answer
     ├── SchemaOutOfDateError        migrate.py     the schema is not the one this software
     │                                              needs (behind, or from a newer calstation)

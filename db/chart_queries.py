@@ -10,7 +10,7 @@ from sqlalchemy import ColumnElement, Row, func, select
 from sqlalchemy.orm import Session, aliased
 
 from db.models import Run, RunFacts
-from station.quality.parameters import COEFFICIENTS
+from station.domain.quality.parameters import COEFFICIENTS
 
 
 def first_moving_ranges(session: Session, where: Sequence[ColumnElement[bool]]) -> Row[Any] | None:

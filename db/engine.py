@@ -12,7 +12,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from db import migrate
 from db.settings import DatabaseSettings, check_database_url
 from db.timeouts import sqlite_statement_timeout, with_statement_timeout
-from station.errors import CalstationError, InputError
+from station.domain.errors import CalstationError, InputError
 
 
 def _sqlite_connect(dbapi_connection: Any, _record: Any) -> None:

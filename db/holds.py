@@ -3,7 +3,7 @@
 A unit is on hold when its latest run (on the line, aborts aside: ``run_facts.line_latest``,
 the end-of-line report's own rule, :mod:`db.rollups`) failed. The line dashboard lists the
 latest of them, any day, with the answer ``GET /api/v1/units/{serial}`` gives
-(:class:`station.unit_state.UnitCalibration`: its attempts, where the station sent it, and
+(:class:`station.domain.unit_state.UnitCalibration`: its attempts, where the station sent it, and
 ``holds``, the coefficients of its last verified write-back), read from ``units``.
 
 The list walks ``ix_runs_verdict_started_at`` backwards over the failing runs and stops at
@@ -19,7 +19,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from db.models import ReportCounts, Run, RunFacts, Unit
-from station.unit_state import UnitCalibration
+from station.domain.unit_state import UnitCalibration
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Limits profiles in the results database: stored once per SHA-256, read by the report.
 
-A run's submission carries its profile (:attr:`station.records.LimitsRef.profile`);
+A run's submission carries its profile (:attr:`station.domain.records.LimitsRef.profile`);
 :func:`store_profile` keeps its canonical JSON the first time a run uses it (one
 ``INSERT … ON CONFLICT DO NOTHING`` on the primary key). The report, the certificate
 and the dashboard read profiles from here (:func:`stored_profiles`), never from a
@@ -15,8 +15,8 @@ from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
 from db.models import StoredLimitsProfile
-from station.limits import LimitsProfile, profile_of
-from station.records import LimitsRef, canonical_json, document_sha256
+from station.domain.limits import LimitsProfile, profile_of
+from station.domain.records import LimitsRef, canonical_json, document_sha256
 
 _INSERT = {
     name: dialect.insert(StoredLimitsProfile).on_conflict_do_nothing(index_elements=["sha256"])
@@ -27,8 +27,8 @@ _INSERT = {
 def store_profile(session: Session, ref: LimitsRef) -> None:
     """Store the profile ``ref`` carries unless its SHA-256 is stored already.
 
-    :class:`station.errors.InputError` when the document is not a limits profile
-    (:func:`station.limits.profile_of`); the reference itself checked that it hashes to
+    :class:`station.domain.errors.InputError` when the document is not a limits profile
+    (:func:`station.domain.limits.profile_of`); the reference itself checked that it hashes to
     ``ref.sha256``, and the stored text is the text that hash was taken over.
     """
     profile = profile_of(ref)
@@ -39,7 +39,7 @@ def store_profile(session: Session, ref: LimitsRef) -> None:
 def profile_row(profile: LimitsProfile) -> dict[str, str]:
     """The ``limits_profiles`` row of ``profile``: its canonical document, keyed by its hash.
 
-    :func:`station.limits.profile_of` checked that a submitted document is this one.
+    :func:`station.domain.limits.profile_of` checked that a submitted document is this one.
     """
     document = profile.document
     return {

@@ -7,7 +7,7 @@ from alembic.script import ScriptDirectory
 from alembic.util.exc import CommandError
 from sqlalchemy import Connection, Engine
 
-from station.errors import CalstationError
+from station.domain.errors import CalstationError
 
 SCRIPT_LOCATION = "db:migrations"
 

@@ -30,7 +30,7 @@ from sqlalchemy import (
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from db.base import Base, JsonDocument, UtcDateTime
-from station.quality.capability import HISTOGRAM_BINS
+from station.domain.quality.capability import HISTOGRAM_BINS
 
 #: Primary keys: BIGINT on PostgreSQL; SQLite's rowid alias must be spelled INTEGER.
 BigId = BigInteger().with_variant(Integer(), "sqlite")
@@ -90,7 +90,7 @@ class Run(Base):
     excluded_poses: Mapped[list[int] | None] = mapped_column(JsonDocument)
     gyro: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The gyro matrix K fitted from the moves (whole-unit runs), as
-    #: :class:`station.records.GyroMatrixRecord`'s JSON; None otherwise.
+    #: :class:`station.domain.records.GyroMatrixRecord`'s JSON; None otherwise.
     gyro_matrix: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
@@ -164,7 +164,7 @@ class RunFailure(Base):
 class Unit(Base):
     """A unit's current state: which run is its latest, and that run's answer, serialised.
 
-    ``calibration`` is the JSON of :class:`station.records.UnitCalibration` for the run
+    ``calibration`` is the JSON of :class:`station.domain.records.UnitCalibration` for the run
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
     the run (:mod:`db.units`), so a unit lookup reads one row by primary key. Answers
@@ -182,7 +182,7 @@ class Unit(Base):
 class GyroFit(Base):
     """A fit of the gyro error model to a unit's rate-table / centrifuge log.
 
-    ``document`` holds the whole :class:`station.gyro.fit.GyroFitReport` (the JSON of
+    ``document`` holds the whole :class:`station.domain.gyro.fit.GyroFitReport` (the JSON of
     ``calstation gyro fit --json``) and the log's dwells; a unit's current fit is its
     latest.
     """

@@ -7,7 +7,7 @@ ends, in one statement per section (``UNION ALL``, then grouped). The control-ch
 limits add up the stored moving ranges; the control-chart points and the unit list
 walk ``ix_runs_started_at`` backwards. Python only merges the grouped rows (stations,
 profiles: a few dozen) and applies the capability formulas of
-:mod:`station.quality.capability`.
+:mod:`station.domain.quality.capability`.
 """
 
 from collections import defaultdict
@@ -49,8 +49,8 @@ from db.rollups import (
 )
 from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
 from db.what_if import rejudged
-from station.limits import LimitsProfile
-from station.quality.capability import (
+from station.domain.limits import LimitsProfile
+from station.domain.quality.capability import (
     D2,
     cp,
     cpk,
@@ -59,9 +59,9 @@ from station.quality.capability import (
     shifted_moments,
     tolerance,
 )
-from station.quality.control import moving_range_sigma, western_electric
-from station.quality.days import day_number, is_utc, midnight, plant_days
-from station.quality.figures import (
+from station.domain.quality.control import moving_range_sigma, western_electric
+from station.domain.quality.days import day_number, is_utc, midnight, plant_days
+from station.domain.quality.figures import (
     ChartPoint,
     ControlChart,
     EolReport,
@@ -76,15 +76,15 @@ from station.quality.figures import (
     UnitVerdict,
     WhatIf,
 )
-from station.quality.parameters import (
+from station.domain.quality.parameters import (
     COEFFICIENTS,
     PARAMETERS,
     FamilyBounds,
     ParameterSpec,
     profile_bounds,
 )
-from station.quality.shifts import plant_shifts, shift_name
-from station.records import LimitsRef
+from station.domain.quality.shifts import plant_shifts, shift_name
+from station.domain.records import LimitsRef
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200

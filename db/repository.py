@@ -29,8 +29,8 @@ from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_o
 from db.models import GyroFit, Pose, Run, RunFailure, StationKey, StoredLimitsProfile
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
-from station.errors import CalstationError, InputError
-from station.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
+from station.domain.errors import CalstationError, InputError
+from station.domain.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
 _POSES = Base.metadata.tables[Pose.__tablename__]
@@ -253,7 +253,7 @@ class RunRepository:
         """Write every unit's answer from ``runs``; return the number of units.
 
         A bulk load of runs uses it; answers missing or of an older shape
-        (:class:`station.unit_state.UnitCalibration`) are written with it when the
+        (:class:`station.domain.unit_state.UnitCalibration`) are written with it when the
         database is upgraded (:mod:`db.derived`).
         """
         return refresh_answers(self.session)

@@ -79,16 +79,21 @@ from db.models import (
     RunFailure,
     StoredLimitsProfile,
 )
-from station.limits import LimitsProfile
-from station.quality.capability import HISTOGRAM_BINS, histogram_bins, marginal_zones, tolerance
-from station.quality.parameters import (
+from station.domain.limits import LimitsProfile
+from station.domain.quality.capability import (
+    HISTOGRAM_BINS,
+    histogram_bins,
+    marginal_zones,
+    tolerance,
+)
+from station.domain.quality.parameters import (
     COEFFICIENTS,
     PARAMETERS,
     FamilyBounds,
     ParameterSpec,
     profile_bounds,
 )
-from station.unit_state import ABORTED
+from station.domain.unit_state import ABORTED
 
 #: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
 #: adds the limits profile.
@@ -98,7 +103,7 @@ LIMITS = ("limits_name", "limits_version", "limits_sha256")
 #: Histogram bin columns of ``report_parameters``.
 HISTOGRAM = tuple(f"h{i:02d}" for i in range(HISTOGRAM_BINS))
 
-#: Where each report parameter (:data:`station.quality.parameters.PARAMETERS`) is stored:
+#: Where each report parameter (:data:`station.domain.quality.parameters.PARAMETERS`) is stored:
 #: one value per run (a column of ``runs`` or ``run_facts``) or one per pose (``poses``).
 PER_RUN: dict[str, InstrumentedAttribute[float | None]] = {
     **{f"offset_{a}": getattr(Run, f"offset_{a}") for a in "xyz"},
@@ -291,7 +296,7 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
     at_station = and_(unit, other.station_id == Run.station_id)
     newest = (other.started_at.desc(), other.id.desc())
     # A unit's latest run is its latest that counts: an operator's abort wrote nothing
-    # and says nothing about the unit (station.unit_state), unless all its runs are aborts.
+    # and says nothing about the unit (station.domain.unit_state), unless all its runs are aborts.
     aborted = exists().where(RunFailure.run_pk == other.id, RunFailure.code == _ABORTED)
     counted_newest = (case((aborted, _ONE), else_=_ZERO), *newest)
 
@@ -479,8 +484,8 @@ def parameter_contributions(
     by :func:`_moments`).
 
     ``c`` is the centre of the tolerance, bins those of
-    :func:`station.quality.capability.histogram_bins`, marginal and out-of-limits as
-    :func:`station.quality.capability.marginal_zones` says. One scan of the runs (with
+    :func:`station.domain.quality.capability.histogram_bins`, marginal and out-of-limits as
+    :func:`station.domain.quality.capability.marginal_zones` says. One scan of the runs (with
     their facts) for the per-run parameters, one of their poses for pose noise, each
     paired with the parameters' limits.
     """

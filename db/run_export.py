@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts
 from db.reports import conditions
-from station.quality.figures import ReportFilter
+from station.domain.quality.figures import ReportFilter
 
 #: The export's columns, in order: the run's identity, its verdict and first failure
 #: reason, its limits profile, its coefficients, verification error and gyro biases.

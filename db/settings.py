@@ -20,7 +20,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 from sqlalchemy import URL, make_url
 from sqlalchemy.exc import ArgumentError, NoSuchModuleError
 
-from station.errors import InputError, validation_problem
+from station.domain.errors import InputError, validation_problem
 
 SQLITE_FILE_NAME = "calstation.sqlite3"
 #: The databases the results' schema and statements are written for.

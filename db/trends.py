@@ -1,13 +1,13 @@
 """The report's trend: per plant day (and shift), units, first-pass and final yield, Cpk.
 
-The days are the plant's (:mod:`station.quality.days`). In UTC they are the roll-ups'
+The days are the plant's (:mod:`station.domain.quality.days`). In UTC they are the roll-ups'
 days, and :class:`db.reports.ReportQueries` adds up the roll-ups as for the rest of the
 report; in another zone a day starts at a local midnight that cuts the roll-ups' days,
 so each run is numbered with its plant day (:func:`day_key`, a ``CASE`` over the days'
 starts) and the runs of the trend's days are aggregated instead (at most
 :data:`TREND_DAYS` of them). Units count on the day of their first run on the line, as
 in the summary, so the days' units add up to the summary's over the same runs. The
-plant's shifts (:mod:`station.quality.shifts`) cut the same days finer: each run is
+plant's shifts (:mod:`station.domain.quality.shifts`) cut the same days finer: each run is
 numbered with its shift (:func:`shift_key`) and the runs of the trend's shifts are
 aggregated, in any zone.
 """
@@ -21,11 +21,11 @@ from sqlalchemy import ColumnElement, Integer, Row, case, literal
 
 from db.models import Run
 from db.rollups import MOMENT_VALUES, TREND_COUNT_VALUES
-from station.quality.capability import cpk, shifted_moments, tolerance
-from station.quality.days import day_number, midnight
-from station.quality.figures import TrendDay, TrendShift
-from station.quality.parameters import PARAMETERS, FamilyBounds
-from station.quality.shifts import Shift
+from station.domain.quality.capability import cpk, shifted_moments, tolerance
+from station.domain.quality.days import day_number, midnight
+from station.domain.quality.figures import TrendDay, TrendShift
+from station.domain.quality.parameters import PARAMETERS, FamilyBounds
+from station.domain.quality.shifts import Shift
 
 #: The most days a trend shows: the latest of the range.
 TREND_DAYS = 31

@@ -2,7 +2,7 @@
 
 Nothing is written: each run's stored values (pose noise, coefficients, verification
 error, gyro bias) and stored failures are read a page at a time and judged again by
-:func:`station.judging.rejudge`, the station's own checks. What the report needs is
+:func:`station.domain.judging.rejudge`, the station's own checks. What the report needs is
 counted on the way: the runs that pass, the units whose first run on the line is in
 range (the report's cohort) with their first and final passes — a unit's latest run may
 lie after the range, so those runs are judged too — the failing runs by their new first
@@ -18,9 +18,9 @@ from sqlalchemy import ColumnElement, Row, and_, select
 from sqlalchemy.orm import Session
 
 from db.models import Pose, Run, RunFacts, RunFailure
-from station.judging import Measured, rejudge
-from station.limits import LimitsProfile
-from station.records import FailureReason
+from station.domain.judging import Measured, rejudge
+from station.domain.limits import LimitsProfile
+from station.domain.records import FailureReason
 
 #: Runs judged per page.
 PAGE = 2000

@@ -37,14 +37,14 @@ from db.holds import held_units
 from db.limits_profiles import stored_profiles
 from db.reports import eol_report
 from db.run_export import HEADER, run_page
-from station.errors import InputError
-from station.limits import LimitsProfile, parse_profiles, pick_profile
-from station.quality.figures import EolReport, ReportFilter
-from station.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
+from station.domain.errors import InputError
+from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
+from station.domain.quality.figures import EolReport, ReportFilter
+from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
+from station.domain.unit_state import counts
 from station.report.html import certificate_page, dashboard_page
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
-from station.unit_state import counts
 
 #: Units on the dashboard's list, and points on each of its control charts.
 DASHBOARD_UNITS = 20

@@ -13,9 +13,9 @@ from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
-from station.errors import InputError
-from station.limits import profile_of
-from station.records import (
+from station.domain.errors import InputError
+from station.domain.limits import profile_of
+from station.domain.records import (
     IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
     RunRecord,

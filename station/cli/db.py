@@ -13,9 +13,9 @@ from db.models import Run
 from db.repository import KeyScope
 from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
-from station.limits import load_profile
-from station.quality.parameters import profile_bounds
-from station.records import Identifier
+from station.domain.limits import load_profile
+from station.domain.quality.parameters import profile_bounds
+from station.domain.records import Identifier
 
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True

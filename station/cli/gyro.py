@@ -15,11 +15,11 @@ from rich.table import Table
 
 from db import repository_transaction
 from station.cli.output import err, out, print_json
-from station.errors import InputError
-from station.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
-from station.gyro.identifiability import check_identifiability
-from station.gyro.log import GyroDwells, GyroLog, read_log, write_log
-from station.gyro.simulate import (
+from station.domain.errors import InputError
+from station.domain.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
+from station.domain.gyro.identifiability import check_identifiability
+from station.domain.gyro.log import GyroDwells, GyroLog, read_log, write_log
+from station.domain.gyro.simulate import (
     DEFAULT_SENSE_AXES,
     PAPER_PPM_PER_G,
     CentrifugePlan,
@@ -28,8 +28,8 @@ from station.gyro.simulate import (
     paper_truth,
     simulate_log,
 )
-from station.records import GyroFitRecord
-from station.sensor import AXES
+from station.domain.records import GyroFitRecord
+from station.domain.sensor import AXES
 
 app = typer.Typer(
     help="Gyros: fit the g-sensitivity error model, simulate the centrifuge test.",

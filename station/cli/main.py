@@ -3,7 +3,7 @@
 Each command lives in its own module, and only the module of the command being run is
 imported (the modules pull in scipy, SQLAlchemy, FastAPI and more): ``calstation
 solve`` starts without loading the web server; ``calstation --help`` loads them all.
-Errors meant for a person (:class:`station.errors.CalstationError`) end as one line on
+Errors meant for a person (:class:`station.domain.errors.CalstationError`) end as one line on
 standard error and exit status 2; nothing else is caught, so a genuine bug still shows
 its traceback.
 """
@@ -15,7 +15,7 @@ import typer
 
 from station import __version__
 from station.cli.output import fail, out
-from station.errors import CalstationError
+from station.domain.errors import CalstationError
 
 EXIT_USER_ERROR = 2
 

@@ -8,10 +8,10 @@ from typing import Annotated
 import typer
 
 from station.cli.output import out
-from station.config import load_config
-from station.errors import InputError
-from station.outbox import Outbox
-from station.outbox_admin import Entry, entries, find, resend
+from station.domain.errors import InputError
+from station.loop.config import load_config
+from station.results.outbox import Outbox
+from station.results.outbox_admin import Entry, entries, find, resend
 
 outbox_app = typer.Typer(
     help="The station's outbox: list, show and resend the runs waiting or set aside.",

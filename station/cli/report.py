@@ -10,10 +10,10 @@ from db import DatabaseSettings, DatabaseUnavailableError, open_database
 from db.reports import eol_report
 from station.cli.db import DatabaseUrlOption
 from station.cli.output import err, out
-from station.errors import CalstationError
-from station.limits import load_profile
-from station.quality.figures import ReportFilter
-from station.quality.shifts import parse_shifts
+from station.domain.errors import CalstationError
+from station.domain.limits import load_profile
+from station.domain.quality.figures import ReportFilter
+from station.domain.quality.shifts import parse_shifts
 from station.report.period import parse_period, plant_zone
 from station.report.render import FORMATS, render
 

@@ -17,8 +17,8 @@ from pydantic import ValidationError
 
 from station.cli.output import out
 from station.device import DEFAULT_RATE_HZ, MAX_RATE_HZ
-from station.errors import InputError
-from station.poses import POSES
+from station.domain.errors import InputError
+from station.domain.poses import POSES
 from station.simulator.control import ControlChannel
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter

@@ -7,20 +7,20 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from station.calibration import (
+from station.cli.output import out, print_json
+from station.cli.solve_stream import solve_stream
+from station.domain.calibration import (
     MIN_DOF_SHOWN,
     SENSITIVITY_CONVENTION,
     CalibrationError,
     Solution,
     solve,
 )
-from station.cli.output import out, print_json
-from station.cli.solve_stream import solve_stream
-from station.errors import InputError
-from station.gyro.motion.stream import STILL_WINDOW_S
-from station.limits import load_profile
-from station.posefile import PoseFile, read_pose_file
-from station.sensor import AXES
+from station.domain.errors import InputError
+from station.domain.gyro.motion.stream import STILL_WINDOW_S
+from station.domain.limits import load_profile
+from station.domain.posefile import PoseFile, read_pose_file
+from station.domain.sensor import AXES
 
 
 class ModelChoice(StrEnum):

@@ -1,8 +1,8 @@
 """``calstation solve LOG.csv --stream``: the whole unit from a recorded raw stream.
 
 Still poses, accelerometer, gyro bias and gyro matrix K ([Tedaldi2014]_) by
-:func:`station.gyro.motion.calibrate_stream`; the file format is in
-:mod:`station.gyro.motion.stream_file`.
+:func:`station.domain.gyro.motion.calibrate_stream`; the file format is in
+:mod:`station.domain.gyro.motion.stream_file`.
 """
 
 from pathlib import Path
@@ -10,18 +10,18 @@ from pathlib import Path
 import numpy as np
 from rich.table import Table
 
-from station.calibration import CalibrationError, Model
 from station.cli.output import out, print_json
-from station.errors import InputError
-from station.gyro.motion import (
+from station.domain.calibration import CalibrationError, Model
+from station.domain.errors import InputError
+from station.domain.gyro.motion import (
     GyroMatrixError,
     StreamCalibration,
     StreamError,
     calibrate_stream,
     stream_thresholds,
 )
-from station.gyro.motion.stream_file import read_stream_file
-from station.sensor import AXES
+from station.domain.gyro.motion.stream_file import read_stream_file
+from station.domain.sensor import AXES
 
 
 def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: float) -> None:

@@ -5,17 +5,17 @@ from typing import Annotated, Any
 
 import typer
 
-from station.app import StationApp
 from station.cli.output import err, out, print_json
-from station.config import MAX_SLOTS, StationConfig, load_config
-from station.demo import DemoUnit, ScriptedOperator
-from station.fixture.app import FixtureApp
-from station.fixture.demo import FixtureOperator
-from station.keys import KeySource, TerminalKeys
-from station.limits import LimitsProfile, load_profile
-from station.records import RunRecord
-from station.startup import check_port, prepare_data_dir
-from station.storage import DatabaseStore, HttpStore, RunStore
+from station.domain.limits import LimitsProfile, load_profile
+from station.domain.records import RunRecord
+from station.loop.app import StationApp
+from station.loop.config import MAX_SLOTS, StationConfig, load_config
+from station.loop.demo import DemoUnit, ScriptedOperator
+from station.loop.fixture.app import FixtureApp
+from station.loop.fixture.demo import FixtureOperator
+from station.loop.keyboard import KeySource, TerminalKeys
+from station.loop.startup import check_port, prepare_data_dir
+from station.results.storage import DatabaseStore, HttpStore, RunStore
 
 ConfigOption = Annotated[
     Path | None, typer.Option("--config", help="Station configuration (TOML).")

@@ -23,7 +23,7 @@ from station.device.errors import (
 from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, MAX_RATE_HZ, PROTOCOL_VERSION
 from station.device.stats import LinkStats
-from station.samples import SAMPLE_COLUMNS
+from station.domain.samples import SAMPLE_COLUMNS
 
 __all__ = [
     "DEFAULT_BAUD",

@@ -19,7 +19,6 @@ from typing import cast
 import serial
 from serial.threaded import ReaderThread
 
-from station.closing import Closing
 from station.device.buffer import SampleBuffer
 from station.device.errors import (
     DeviceDisconnectedError,
@@ -46,7 +45,8 @@ from station.device.protocol import (
     encode_frame,
 )
 from station.device.stats import LinkStats
-from station.samples import SampleBlock
+from station.domain.closing import Closing
+from station.domain.samples import SampleBlock
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +60,7 @@ class PutterDriver(Closing):
     """A putter on a serial link.
 
     Open it with :meth:`open`; use it as a context manager or call :meth:`close`.
-    Samples come out as :class:`~station.samples.SampleBlock`: ``seq`` is the
+    Samples come out as :class:`~station.domain.samples.SampleBlock`: ``seq`` is the
     unwrapped sequence number (counting from 0 at each :meth:`start_stream`, gaps
     preserved), ``accel`` in ADC counts (in g from :meth:`drain_calibrated`), ``gyro``
     in deg/s and ``temperature`` in °C.

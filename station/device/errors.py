@@ -1,6 +1,6 @@
 """Errors of the link to the putter.
 
-Every one of them is a :class:`station.errors.CalstationError`, so the command line
+Every one of them is a :class:`station.domain.errors.CalstationError`, so the command line
 prints its message as one line::
 
     CalstationError
@@ -16,7 +16,7 @@ None of them discards samples already received: :meth:`PutterDriver.drain` hands
 them out first and raises only once the buffer is empty.
 """
 
-from station.errors import CalstationError
+from station.domain.errors import CalstationError
 
 
 class DeviceError(CalstationError):

@@ -21,8 +21,8 @@ from station.device.errors import DeviceDisconnectedError, DeviceError, Protocol
 from station.device.protocol import Frame, FrameParser, FrameType, decode_samples
 from station.device.sequence import SequenceTracker
 from station.device.stats import LinkStats
-from station.samples import SampleBlock
-from station.sensor import ADC_MAX
+from station.domain.samples import SampleBlock
+from station.domain.sensor import ADC_MAX
 
 log = logging.getLogger(__name__)
 

@@ -4,7 +4,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from station.arrays import FloatArray
 from station.device.protocol import (
     CALIBRATION_REPLY_STRUCT,
     CALIBRATION_STRUCT,
@@ -14,7 +13,8 @@ from station.device.protocol import (
     decode_text,
     encode_text,
 )
-from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.arrays import FloatArray
+from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 
 @dataclass(frozen=True, slots=True)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from station.arrays import FloatArray
+from station.domain.arrays import FloatArray
 
 SEQ_MODULUS = 1 << 16
 

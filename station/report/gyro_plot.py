@@ -15,12 +15,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from station.errors import InputError
-from station.gyro.compensation import compensate
-from station.gyro.fit import GyroFitReport
-from station.gyro.log import GyroLog
-from station.gyro.model import PPM, GyroErrorModel
-from station.sensor import AXES
+from station.domain.errors import InputError
+from station.domain.gyro.compensation import compensate
+from station.domain.gyro.fit import GyroFitReport
+from station.domain.gyro.log import GyroLog
+from station.domain.gyro.model import PPM, GyroErrorModel
+from station.domain.sensor import AXES
 
 MIN_RATE_DPS: Final = 10.0
 FORMATS: Final = (".png", ".svg")

@@ -13,10 +13,11 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
-from station.limits import LimitsProfile
-from station.quality.figures import EolReport, TrendFigures
-from station.quality.parameters import profile_bounds
-from station.records import GyroFitRecord, RunSummary, StoredRun
+from station.domain.limits import LimitsProfile
+from station.domain.quality.figures import EolReport, TrendFigures
+from station.domain.quality.parameters import profile_bounds
+from station.domain.records import GyroFitRecord, RunSummary, StoredRun
+from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
@@ -30,7 +31,6 @@ from station.report.tables import (
     summary_cells,
     what_if_cells,
 )
-from station.unit_state import UnitCalibration
 
 #: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
 CPK_TARGET = ("target", 1.33)

@@ -10,7 +10,7 @@ come before ``to``.
 from datetime import UTC, date, datetime, time
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from station.errors import InputError
+from station.domain.errors import InputError
 
 #: The range a bound may take: a day inside what a date can hold at either end, for the
 #: report splits its period at midnights (the day after ``from``, the day of ``to``).

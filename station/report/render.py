@@ -11,7 +11,7 @@ import json
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any, Literal, get_args
 
-from station.quality.figures import EolReport, TrendFigures
+from station.domain.quality.figures import EolReport, TrendFigures
 from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (

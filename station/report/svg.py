@@ -5,7 +5,7 @@ Pareto, individuals and moving-range (I-MR) control charts. No script, no extern
 from collections.abc import Callable, Sequence
 from xml.sax.saxutils import escape
 
-from station.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
+from station.domain.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
 from station.report.formatting import clock, number, percent
 
 WIDTH, HEIGHT, PAD = 360, 150, 28

@@ -1,6 +1,6 @@
 """The summary and parameter tables' cells, shared by the text and HTML renderings."""
 
-from station.quality.figures import EolReport, Summary
+from station.domain.quality.figures import EolReport, Summary
 from station.report.formatting import number, percent, seconds
 
 SUMMARY_HEADER = [

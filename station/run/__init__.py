@@ -1,6 +1,6 @@
 """The parts of one unit's calibration run, one concern per module.
 
-:class:`station.session.UnitRun` drives a run through its phases (:mod:`.phases`) and
+:class:`station.run.unit_run.UnitRun` drives a run through its phases (:mod:`.phases`) and
 hands each step to the module that holds it:
 
 - :mod:`.settings`: how a station runs its units (poses, tolerances, stillness, model);

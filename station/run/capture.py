@@ -4,9 +4,9 @@
 samples of the last quarter second (the live view the operator watches), how many of
 them lay still in the pose asked for (the capture's share), whether the unit moved since
 the last capture, and which wrong place was named already. It polls
-:class:`station.acquisition.pose.PoseAcquisition` and hands over a captured window only
+:class:`station.run.acquisition.pose.PoseAcquisition` and hands over a captured window only
 when the unit lies in the pose asked for, away from every pose taken before; what is
-done with it is :class:`station.session.UnitRun`'s business.
+done with it is :class:`station.run.unit_run.UnitRun`'s business.
 """
 
 from collections.abc import Callable
@@ -14,19 +14,19 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from station.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
-from station.acquisition.pose import PoseAcquisition, PoseResult
-from station.acquisition.stillness import WindowVerdict, judge_window
-from station.arrays import FloatArray as Array
-from station.capture_budget import WindowPolicy
 from station.device import PutterDriver
-from station.journal import RunJournal
-from station.operator_text import MOVED_EARLY, capture_refused, pose_words
-from station.orientation import Sensed, angle_deg, gravity_direction, sense
-from station.poses import Pose
+from station.domain.arrays import FloatArray as Array
+from station.domain.capture_budget import WindowPolicy
+from station.domain.orientation import Sensed, angle_deg, gravity_direction, sense
+from station.domain.poses import Pose
+from station.domain.run_settings import RunSettings
+from station.domain.samples import SampleBlock
+from station.results.journal import RunJournal
+from station.run.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
+from station.run.acquisition.pose import PoseAcquisition, PoseResult
+from station.run.acquisition.stillness import WindowVerdict, judge_window
 from station.run.messages import MessageLog
-from station.run.settings import RunSettings
-from station.samples import SampleBlock
+from station.run.operator_text import MOVED_EARLY, capture_refused, pose_words
 
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128

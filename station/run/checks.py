@@ -2,8 +2,8 @@
 
 Every pose's noise and link loss, the solved offsets and sensitivities, the verification
 pose's calibrated |g| and the gyro biases, each against the limits profile
-(:func:`station.judging.limit_checks`, which the report's re-judging uses too). Kept
-apart from :class:`station.session.UnitRun`, which drives the run, so the checks read as
+(:func:`station.domain.judging.limit_checks`, which the report's re-judging uses too). Kept
+apart from :class:`station.run.unit_run.UnitRun`, which drives the run, so the checks read as
 one list; :mod:`station.run.verdict` adds them to the failures found on the way.
 """
 
@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from station.calibration import Calibration, apply
-from station.journal import Capture
-from station.judging import Measured, Triple, limit_checks
-from station.limits import LimitsProfile
-from station.records import FailureReason, GyroSummary
+from station.domain.calibration import Calibration, apply
+from station.domain.judging import Measured, Triple, limit_checks
+from station.domain.limits import LimitsProfile
+from station.domain.records import FailureReason, GyroSummary
+from station.results.journal import Capture
 
 
 @dataclass(frozen=True)
@@ -36,7 +36,7 @@ def run_checks(
     gyro: GyroSummary | None,
 ) -> CheckResult:
     """Check the poses taken, the solved ``calibration`` and the ``gyro`` summary
-    (:func:`station.judging.limit_checks` on what they measured)."""
+    (:func:`station.domain.judging.limit_checks` on what they measured)."""
     error = None
     if calibration is not None and fit_count in captures:
         raw = np.array(captures[fit_count].record.mean.as_tuple())

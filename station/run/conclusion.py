@@ -1,18 +1,18 @@
 """The end of a run: its verdict (the failures found, then the limit checks) and record.
 
-A pure function of what the run holds, so that :class:`station.session.UnitRun` only
+A pure function of what the run holds, so that :class:`station.run.unit_run.UnitRun` only
 decides *when* the run ends.
 """
 
 from dataclasses import dataclass
 
-from station.calibration import Solution
-from station.journal import RunJournal
-from station.limits import LimitsProfile
-from station.records import PoseRecord, RunRecord
+from station.domain.calibration import Solution
+from station.domain.limits import LimitsProfile
+from station.domain.records import PoseRecord, RunRecord
+from station.domain.run_settings import RunSettings
+from station.results.journal import RunJournal
 from station.run import record
 from station.run.gyro import LiveGyro
-from station.run.settings import RunSettings
 from station.run.verdict import Failures
 
 

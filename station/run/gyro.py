@@ -2,13 +2,13 @@
 
 Model ([Tedaldi2014]_, ``docs/calibration.md``): the gyros read ``m = b + K·ω``, ω the
 true rate in the calibrated accelerometer's frame. The bias b is the gyros' mean over
-every still pose captured; K comes from :func:`station.gyro.motion.fit_gyro_matrix` over the
+every still pose captured; K comes from :func:`station.domain.gyro.motion.fit_gyro_matrix` over the
 moves :class:`~station.run.gyro_moves.MoveRecorder` kept between the captures, each
 with the gravity directions the solved accelerometer calibration gives its two poses.
 
 When a [Park2014]_ g-sensitivity fit is known for the unit, its scale-factor term at
 the specific force of each sample (about ±600 ppm at 1 g) is taken out of the rates
-first (:func:`station.gyro.compensate`, with that term alone), so that K holds only
+first (:func:`station.domain.gyro.compensate`, with that term alone), so that K holds only
 what does not depend on the orientation.
 
 The unit then holds b and K⁻¹ (``docs/protocol.md``) and turns its gyro readings into
@@ -20,19 +20,19 @@ from typing import get_args
 
 import numpy as np
 
-from station.arrays import FloatArray
-from station.calibration import Calibration, Solution, apply
 from station.device import DeviceCalibration, PutterDriver
-from station.gyro import GyroErrorModel, compensate
-from station.gyro.motion import GyroMatrixFit, Move, fit_gyro_matrix
-from station.journal import Capture
-from station.limits import LimitsProfile, check
-from station.operator_text import pose_words
-from station.record_bounds import CONDITION_MAX
-from station.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
+from station.domain.arrays import FloatArray
+from station.domain.calibration import Calibration, Solution, apply
+from station.domain.gyro import GyroErrorModel, compensate
+from station.domain.gyro.motion import GyroMatrixFit, Move, fit_gyro_matrix
+from station.domain.limits import LimitsProfile, check
+from station.domain.record_bounds import CONDITION_MAX
+from station.domain.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
+from station.domain.run_settings import RunSettings
+from station.results.journal import Capture
 from station.run.gyro_check import VerificationMove
 from station.run.gyro_moves import MoveRecorder, RecordedMove
-from station.run.settings import RunSettings
+from station.run.operator_text import pose_words
 from station.run.unit_output import UnitOutputCheck
 from station.run.verdict import verification_move_failed
 
@@ -70,7 +70,7 @@ class LiveGyro:
         """What the unit is to hold: the bias over the still poses and K⁻¹.
 
         K is fitted once (a rewrite after a reconnection keeps it);
-        :class:`station.gyro.motion.GyroMatrixError` when the moves cannot determine it.
+        :class:`station.domain.gyro.motion.GyroMatrixError` when the moves cannot determine it.
         """
         if self.fit is None:
             means = [c.record.gyro_mean for c in captures.values()]
@@ -114,7 +114,7 @@ class LiveGyro:
         return True
 
     def fit_matrix(self, calibration: Calibration, bias_dps: FloatArray) -> GyroMatrixFit:
-        """Fit K to the recorded moves; :class:`station.gyro.motion.GyroMatrixError` when
+        """Fit K to the recorded moves; :class:`station.domain.gyro.motion.GyroMatrixError` when
         they cannot determine it."""
         usable = [m for m in self.recorder.moves if m.unusable is None]
         moves = [self._move(m, calibration, bias_dps) for m in usable]

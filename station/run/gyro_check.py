@@ -6,7 +6,7 @@ Once a whole-unit run has written its coefficients, the unit streams calibrated 
 there, ``u_start``. The operator then turns it into the run's
 ``gyro_verification_pose``; :class:`VerificationMove` waits for a still window at the
 end (``u_end``), integrates the unit's rates over the move on SO(3)
-(:func:`station.gyro.motion.integrate_rates`) into R, from the body at the end to the
+(:func:`station.domain.gyro.motion.integrate_rates`) into R, from the body at the end to the
 body at the start, and answers the angle between ``R·u_end`` and ``u_start`` in
 degrees ([Tedaldi2014]_'s residual, on the unit's own output). With K and b right it is
 noise (~0.02°); a gyro 1 % off turns it by about 1 % of the move.
@@ -18,11 +18,11 @@ from typing import Final
 import numpy as np
 
 from station.device import PutterDriver
-from station.gyro.motion import Move, integrate_rates
+from station.domain.gyro.motion import Move, integrate_rates
+from station.domain.samples import SampleBlock
+from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.stillness import StillnessThresholds, judge_window
 from station.run.unit_output import CalibratedSamples
-from station.samples import SampleBlock
-from station.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
-from station.stillness import StillnessThresholds, judge_window
 
 #: Samples of the still window that ends the move (half a second at 500 samples/s).
 END_WINDOW: Final = 256

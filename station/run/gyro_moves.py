@@ -17,9 +17,9 @@ from typing import Final
 
 import numpy as np
 
-from station.acquisition.pose import PoseResult
-from station.arrays import FloatArray
-from station.samples import SampleBlock
+from station.domain.arrays import FloatArray
+from station.domain.samples import SampleBlock
+from station.run.acquisition.pose import PoseResult
 
 #: Longest move kept, in device seconds (a unit left lying is no move).
 MAX_MOVE_S: Final = 120.0

@@ -9,8 +9,8 @@ import time
 from collections.abc import Callable
 
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
-from station.operator_text import port_problem, wrong_unit
 from station.run.messages import MessageLog
+from station.run.operator_text import port_problem, wrong_unit
 
 #: Wall-clock seconds between attempts to reach a unit whose cable was pulled.
 RECONNECT_EVERY_S = 0.5

@@ -1,7 +1,7 @@
 """The records a run builds from what it took: each pose, the gyros, the whole run.
 
 Pure functions of the run's journal, solution and verdict, so that
-:class:`station.session.UnitRun` only decides *when* a record is made.
+:class:`station.run.unit_run.UnitRun` only decides *when* a record is made.
 """
 
 from collections.abc import Mapping
@@ -10,13 +10,11 @@ from datetime import UTC, datetime
 import numpy as np
 
 from station import __version__
-from station.acquisition.pose import PoseResult
-from station.arrays import FloatArray as Array
-from station.calibration import Solution, apply
-from station.gyro import summarize_still_poses
-from station.journal import Capture, RunJournal
-from station.limits import LimitsProfile
-from station.records import (
+from station.domain.arrays import FloatArray as Array
+from station.domain.calibration import Solution, apply
+from station.domain.gyro import summarize_still_poses
+from station.domain.limits import LimitsProfile
+from station.domain.records import (
     Coefficients,
     FailureReason,
     GyroMatrixRecord,
@@ -29,8 +27,10 @@ from station.records import (
     RunRecord,
     Vector3,
 )
-from station.run.settings import RunSettings
-from station.samples import SampleBlock
+from station.domain.run_settings import RunSettings
+from station.domain.samples import SampleBlock
+from station.results.journal import Capture, RunJournal
+from station.run.acquisition.pose import PoseResult
 
 ALGORITHM = "autocal-eq10"
 

@@ -1,9 +1,9 @@
 """Taking a pose again at the operator's word: when it may be, and the capture it
 replaces kept in the journal for audit."""
 
-from station.journal import RunJournal
-from station.operator_text import pose_words
-from station.poses import Pose
+from station.domain.poses import Pose
+from station.results.journal import RunJournal
+from station.run.operator_text import pose_words
 from station.run.phases import REDO_ALLOWED, Phase
 from station.run.record import replaced_capture
 

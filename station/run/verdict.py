@@ -9,11 +9,11 @@ holds the coefficients, and its own output was not checked.
 
 from collections.abc import Mapping
 
-from station.calibration import CalibrationError, Solution
-from station.journal import Capture
-from station.judging import verdict_failures
-from station.limits import LimitsProfile
-from station.records import FailureReason, GyroSummary
+from station.domain.calibration import CalibrationError, Solution
+from station.domain.judging import verdict_failures
+from station.domain.limits import LimitsProfile
+from station.domain.records import FailureReason, GyroSummary
+from station.results.journal import Capture
 from station.run.checks import CheckResult, run_checks
 
 

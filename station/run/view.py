@@ -1,14 +1,14 @@
 """The view model of a unit's run: what the unit screen shows, read at one instant.
 
-:func:`station.screens.unit_screen` draws a :class:`RunView` and nothing else, so the
+:func:`station.loop.screens.unit_screen` draws a :class:`RunView` and nothing else, so the
 screen does not depend on how the run or its journal keep their state, and a test can
 draw any moment of a run without a unit.
 """
 
 from dataclasses import dataclass
 
-from station.acquisition.stillness import StillnessThresholds
-from station.poses import Pose
+from station.domain.poses import Pose
+from station.run.acquisition.stillness import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message
 from station.run.phases import Phase

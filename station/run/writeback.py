@@ -9,8 +9,8 @@ propagates: the caller fails the unit.
 
 import numpy as np
 
-from station.calibration import Calibration
 from station.device import DeviceCalibration, PutterDriver
+from station.domain.calibration import Calibration
 
 
 def readback_difference(written: DeviceCalibration, back: DeviceCalibration) -> float:

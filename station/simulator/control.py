@@ -21,7 +21,7 @@ from typing import Final
 
 from pydantic import ValidationError
 
-from station.poses import POSES
+from station.domain.poses import POSES
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 

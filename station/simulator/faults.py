@@ -2,7 +2,7 @@
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from station.sensor import Axis
+from station.domain.sensor import Axis
 
 
 class Faults(BaseModel):

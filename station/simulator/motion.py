@@ -20,7 +20,7 @@ from typing import Final
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from station.arrays import FloatArray
+from station.domain.arrays import FloatArray
 
 STANDARD_GRAVITY: Final = 9.80665  # m/s²
 UP: Final = np.array([0.0, 0.0, 1.0])

@@ -17,11 +17,11 @@ from typing import Final
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from station.closing import Closing
 from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import DEFAULT_RATE_HZ, FrameParser, encode_text
-from station.poses import Pose, pose
-from station.samples import SampleBlock
+from station.domain.closing import Closing
+from station.domain.poses import Pose, pose
+from station.domain.samples import SampleBlock
 from station.simulator.clock import VirtualClock
 from station.simulator.faults import Faults
 from station.simulator.firmware import Firmware

@@ -24,8 +24,8 @@ from typing import Any, Final
 
 import numpy as np
 
-from station.arrays import FloatArray
-from station.sensor import (
+from station.domain.arrays import FloatArray
+from station.domain.sensor import (
     ADC_MAX,
     ADC_MIN,
     CROSS_AXIS_TYPICAL,

@@ -11,7 +11,6 @@ from typing import Final
 
 import numpy as np
 
-from station.arrays import FloatArray
 from station.device.messages import DeviceCalibration
 from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
@@ -21,8 +20,9 @@ from station.device.protocol import (
     StreamMode,
     encode_frame,
 )
-from station.samples import SampleBlock
-from station.sensor import ADC_MAX, AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.arrays import FloatArray
+from station.domain.samples import SampleBlock
+from station.domain.sensor import ADC_MAX, AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.simulator.clock import VirtualClock
 from station.simulator.faults import Faults
 from station.simulator.motion import MotionModel

@@ -11,8 +11,8 @@ from sqlalchemy import func, select
 
 from db import Database
 from db.models import Pose, Run
-from station.records import RunRecord
-from station.storage import DatabaseStore, HttpStore, RunStore, StoreUnavailableError
+from station.domain.records import RunRecord
+from station.results.storage import DatabaseStore, HttpStore, RunStore, StoreUnavailableError
 from tests.db.records import T0, make_record
 from tests.servers import STATION
 

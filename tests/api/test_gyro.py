@@ -9,9 +9,9 @@ import httpx
 import pytest
 
 from db import Database, RunRepository, open_database
-from station.gyro import fit_log, paper_truth, read_log, simulate_log
-from station.gyro.log import GyroDwells, write_log
-from station.records import GyroFitRecord
+from station.domain.gyro import fit_log, paper_truth, read_log, simulate_log
+from station.domain.gyro.log import GyroDwells, write_log
+from station.domain.records import GyroFitRecord
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 

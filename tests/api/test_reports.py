@@ -243,7 +243,7 @@ def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Data
 
 #: The shipped limits file with the offsets' upper limit at 2051 counts, not 2255.
 CANDIDATE = (
-    resources.files("station.profiles")
+    resources.files("station.domain.profiles")
     .joinpath("limits.toml")
     .read_text(encoding="utf-8")
     .replace("[profiles.kxm52-production]", "[profiles.candidate]")

@@ -10,7 +10,7 @@ import httpx
 import pytest
 
 from db import Database, RunRepository
-from station.records import RunRecord
+from station.domain.records import RunRecord
 from tests.db.records import T0, make_record
 from tests.servers import STATION
 

@@ -31,7 +31,7 @@ from db.models import ReportCounts, Run, RunFacts, RunFailure, StoredLimitsProfi
 from db.reports import eol_report
 from db.repository import KeyHolder, key_sha256
 from db.units import answer_json
-from station.quality.figures import ReportFilter
+from station.domain.quality.figures import ReportFilter
 from tests.db.records import LIMITS, T0, make_record
 from tests.db.test_rollups import rollup_rows
 

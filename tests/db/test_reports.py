@@ -12,8 +12,8 @@ from sqlalchemy.orm import Session
 from db import RunQuery, RunRepository
 from db.reports import eol_report
 from db.rollups import rebuild
-from station.quality.figures import EolReport, ReportFilter
-from station.quality.parameters import default_bounds
+from station.domain.quality.figures import EolReport, ReportFilter
+from station.domain.quality.parameters import default_bounds
 from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 

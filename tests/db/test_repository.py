@@ -12,8 +12,8 @@ from sqlalchemy.orm import Session
 from db import RunConflictError, RunQuery, RunRepository
 from db.models import Pose, StationKey
 from db.repository import KeyHolder, encode_cursor, record_sha256
-from station.errors import InputError
-from station.records import StoredRun
+from station.domain.errors import InputError
+from station.domain.records import StoredRun
 from tests.db.records import LIMITS, T0, make_record
 
 

@@ -26,9 +26,9 @@ from db import Database, RunRepository
 from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
-from station.limits import Bounds, load_profile
-from station.quality.figures import EolReport, ReportFilter
-from station.quality.parameters import PARAMETERS
+from station.domain.limits import Bounds, load_profile
+from station.domain.quality.figures import EolReport, ReportFilter
+from station.domain.quality.parameters import PARAMETERS
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 

@@ -16,9 +16,9 @@ from db.derived import rewrite_if_stale
 from db.models import Unit
 from db.reports import eol_report
 from db.units import answers_are_stale
-from station.quality.figures import ReportFilter
-from station.records import RunRecord
-from station.unit_state import UnitCalibration
+from station.domain.quality.figures import ReportFilter
+from station.domain.records import RunRecord
+from station.domain.unit_state import UnitCalibration
 from tests.db.records import T0, make_record
 
 ABORT: dict[str, Any] = {

@@ -1,6 +1,6 @@
 """The poses a run's solve left out (``runs.excluded_poses``): the 0-based indexes of the
 fit poses found inconsistent with the others and excluded ([Song2006] least squares with
-eight or more poses; ``station.calibration.consistency``), as a JSON list; null when the
+eight or more poses; ``station.domain.calibration.consistency``), as a JSON list; null when the
 solve left none out.
 
 Runs stored before this revision left none out. SQLite adds the column in place (a batch

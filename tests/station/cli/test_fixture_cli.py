@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from station.config import load_config
-from station.errors import InputError
+from station.domain.errors import InputError
+from station.loop.config import load_config
 from tests.conftest import CliRunner
 
 

@@ -6,8 +6,8 @@ from uuid import uuid4
 
 import pytest
 
-from station.outbox import Outbox
-from station.storage import DatabaseStore
+from station.results.outbox import Outbox
+from station.results.storage import DatabaseStore
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 

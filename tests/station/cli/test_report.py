@@ -163,7 +163,7 @@ def test_the_plants_shifts_give_a_trend_per_shift(run_cli: CliRunner, database_u
 def test_limits_re_judge_the_runs_beside_the_current_figures(
     run_cli: CliRunner, database_url: str, tmp_path: Path
 ) -> None:
-    shipped = resources.files("station.profiles").joinpath("limits.toml")
+    shipped = resources.files("station.domain.profiles").joinpath("limits.toml")
     candidate = tmp_path / "candidate.toml"
     candidate.write_text(
         shipped.read_text(encoding="utf-8").replace(

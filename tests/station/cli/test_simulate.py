@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.acquisition import acquire_pose
 from station.device import DeviceDisconnectedError, PutterDriver, SerialNumberMismatchError
-from station.poses import pose
+from station.domain.poses import pose
+from station.run.acquisition import acquire_pose
 from tests.conftest import REPO_ROOT, CliRunner
 
 

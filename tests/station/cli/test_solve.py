@@ -8,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from station.calibration.synthetic import (
+from station.domain.calibration.synthetic import (
     pose_means,
     random_directions,
     random_unit,
     spread_directions,
 )
-from station.errors import InputError
-from station.posefile import read_pose_file
+from station.domain.errors import InputError
+from station.domain.posefile import read_pose_file
 from tests.conftest import REPO_ROOT, CliRunner
 
 PAPER_CSV = REPO_ROOT / "examples" / "paper_table2.csv"
@@ -162,7 +162,7 @@ def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -
     poses[5] += 30.0 * directions[5]
     path = _write(tmp_path / "poses.csv", poses)
     limits = tmp_path / "limits.toml"
-    shipped = (REPO_ROOT / "station" / "profiles" / "limits.toml").read_text()
+    shipped = (REPO_ROOT / "station" / "domain" / "profiles" / "limits.toml").read_text()
     header = "[profiles.kxm52-production]\n"  # the default profile (not the file's last)
     limits.write_text(shipped.replace(header, header + "fit_residual_counts = { upper = 50.0 }\n"))
     loose = json.loads(run_cli("solve", str(path), "--limits", str(limits), "--json").stdout)

@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.calibration.synthetic import spread_directions
-from station.errors import InputError
-from station.gyro.motion import StreamError
-from station.gyro.motion.stream_file import read_stream_file
-from station.gyro.motion.synthetic import (
+from station.domain.calibration.synthetic import spread_directions
+from station.domain.errors import InputError
+from station.domain.gyro.motion import StreamError
+from station.domain.gyro.motion.stream_file import read_stream_file
+from station.domain.gyro.motion.synthetic import (
     StreamPlan,
     SyntheticImu,
     pose_orientations,

@@ -1,7 +1,7 @@
 """The public surfaces the operator station builds on stay what they are."""
 
-import station.acquisition
 import station.device
+import station.run.acquisition
 import station.simulator
 
 
@@ -39,7 +39,7 @@ def test_simulator_surface() -> None:
 
 
 def test_acquisition_surface() -> None:
-    assert set(station.acquisition.__all__) == {
+    assert set(station.run.acquisition.__all__) == {
         "AcquisitionError",
         "LinkQualityError",
         "NotStillError",
@@ -55,9 +55,9 @@ def test_acquisition_surface() -> None:
 
 
 def test_every_error_is_one_the_command_line_prints_as_one_line() -> None:
-    from station.errors import CalstationError
+    from station.domain.errors import CalstationError
 
-    for module in (station.device, station.acquisition):
+    for module in (station.device, station.run.acquisition):
         for name in module.__all__:
             obj = getattr(module, name)
             if isinstance(obj, type) and name.endswith("Error"):

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from db.reports import split_days
-from station.errors import InputError
+from station.domain.errors import InputError
 from station.report.period import (
     EARLIEST,
     LATEST,

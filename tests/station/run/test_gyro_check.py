@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from station.device import DeviceCalibration, PutterDriver
+from station.domain.stillness import StillnessThresholds
 from station.run.gyro_check import MoveOutcome, VerificationMove
 from station.run.unit_output import UnitOutputCheck
 from station.simulator.putter import VirtualPutter
-from station.stillness import StillnessThresholds
 
 SEED = 12
 

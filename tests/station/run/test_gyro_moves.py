@@ -7,15 +7,15 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from station.acquisition.pose import PoseResult
-from station.calibration import Calibration
 from station.device import LinkStats
-from station.gyro.motion import GyroMatrixError, Move
+from station.domain.calibration import Calibration
+from station.domain.gyro.motion import GyroMatrixError, Move
+from station.domain.run_settings import RunSettings
+from station.domain.samples import SampleBlock
+from station.run.acquisition.pose import PoseResult
 from station.run.gyro import LiveGyro
 from station.run.gyro_moves import MoveRecorder
-from station.run.settings import RunSettings
 from station.run.verdict import MESSAGE_MAX, gyro_matrix_failed
-from station.samples import SampleBlock
 
 RATE = 500.0
 

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from station.calibration import solve
-from station.calibration.synthetic import pose_means, random_unit, spread_directions
+from station.domain.calibration import solve
+from station.domain.calibration.synthetic import pose_means, random_unit, spread_directions
 from station.run.record import quality_metrics
 
 

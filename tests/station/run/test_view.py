@@ -3,13 +3,13 @@
 import numpy as np
 from rich.console import Console
 
-from station.acquisition.stillness import StillnessThresholds
-from station.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.loop.screens import unit_screen
+from station.run.acquisition.stillness import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message, MessageLog
 from station.run.phases import Phase
 from station.run.view import RunView
-from station.screens import unit_screen
 
 POSES = tuple(pose(n) for n in (*CALIBRATION_POSES, VERIFICATION_POSE))
 

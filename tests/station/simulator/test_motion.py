@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from station.poses import POSES, pose
+from station.domain.poses import POSES, pose
 from station.simulator.motion import MotionModel
 
 

@@ -1,0 +1,85 @@
+"""Accelerometer calibration from still poses, after [Song2006]_.
+
+Public surface::
+
+    solve(poses, model)        the right method for the model and pose count
+    solve_paper(poses)         the paper's six-position eq. 10
+    solve_paper_batch(poses)   eq. 10 for K units at once, (K, 6, 3)
+    solve_least_squares(...)   6- or 9-parameter maximum-likelihood fit, N ≥ 6 / 9
+    solve_consistent(...)      least squares that leaves out one inconsistent pose
+    solve_classic(plus, minus) the ±1 g baseline, eqs. 2 and 3
+    apply(calibration, raw)    counts → g
+
+.. [Song2006] C.-M. Song, "Autocalibration Method of Three-axis Micromachined
+   Accelerometers", 2006.
+"""
+
+from station.domain.calibration.classic import solve_classic
+from station.domain.calibration.consistency import (
+    DEFAULT_RESIDUAL_LIMIT_COUNTS,
+    residual_limit,
+    solve_consistent,
+)
+from station.domain.calibration.errors import (
+    BeyondDatasheetError,
+    CalibrationError,
+    CoplanarPosesError,
+    DuplicatePoseError,
+    IllConditionedError,
+    InconsistentPosesError,
+    InvalidValueError,
+    NonPositiveScaleError,
+    NotCountsError,
+    RailValueError,
+    TooFewPosesError,
+)
+from station.domain.calibration.geometry import GeometryLimits, coverage, pair_angles_deg
+from station.domain.calibration.least_squares import UNKNOWNS, solve_least_squares
+from station.domain.calibration.model import Calibration, Model, apply
+from station.domain.calibration.paper import Outcome, PaperBatch, solve_paper, solve_paper_batch
+from station.domain.calibration.residual import MAX_CONDITION
+from station.domain.calibration.solution import (
+    MIN_DOF_SHOWN,
+    SENSITIVITY_CONVENTION,
+    Quality,
+    Solution,
+    StandardErrors,
+)
+from station.domain.calibration.solve import solve
+
+__all__ = [
+    "DEFAULT_RESIDUAL_LIMIT_COUNTS",
+    "MAX_CONDITION",
+    "MIN_DOF_SHOWN",
+    "SENSITIVITY_CONVENTION",
+    "UNKNOWNS",
+    "BeyondDatasheetError",
+    "Calibration",
+    "CalibrationError",
+    "CoplanarPosesError",
+    "DuplicatePoseError",
+    "GeometryLimits",
+    "IllConditionedError",
+    "InconsistentPosesError",
+    "InvalidValueError",
+    "Model",
+    "NonPositiveScaleError",
+    "NotCountsError",
+    "Outcome",
+    "PaperBatch",
+    "Quality",
+    "RailValueError",
+    "Solution",
+    "StandardErrors",
+    "TooFewPosesError",
+    "apply",
+    "coverage",
+    "pair_angles_deg",
+    "residual_limit",
+    "solve",
+    "solve_classic",
+    "solve_consistent",
+    "solve_least_squares",
+    "solve_paper",
+    "solve_paper_batch",
+]

@@ -1,0 +1,160 @@
+"""A fit that cannot be fooled: the residual limit, and one bad pose found and left out.
+
+With N poses and p unknowns (6 or 9) a least-squares fit has N − p spare equations, and
+only they can show a bad pose ([Song2006]_: six poses fit exactly and show nothing).
+Every fitted pose's **studentised residual** t_i = r_i/√(1 − h_i) (counts along gravity,
+h_i the pose's leverage; :mod:`station.domain.calibration.solution`) is compared with a limit L:
+
+* max |t_i| ≤ L: the poses are consistent; nothing is left out.
+* N − p ≥ 2 (eight poses for the six-parameter model, eleven for nine): the poses with
+  the largest |t_i| are the candidates (for one bad pose k its |t_k| is the largest of
+  all, by Cauchy–Schwarz on the columns of I − H). Each of the first three above L is
+  left out in turn and the fit redone; when exactly one such refit is consistent, that
+  pose is excluded and named. When two are (the spare equations cannot tell them apart),
+  or none is (more than one bad pose), the set is refused, naming what the evidence allows.
+* N − p = 1 (seven poses, six-parameter model): the residuals all lie along one vector,
+  every pose's |t_i| is the same, and leaving out any one pose fits the other six exactly.
+  The evidence cannot name the pose, so the set is refused without blaming one (the largest
+  raw residual would often blame the wrong pose).
+
+The limit L comes from the limits profile (``fit_residual_counts``) or, by default, from
+the noise (:data:`DEFAULT_RESIDUAL_LIMIT_COUNTS`): a pose mean's noise σ is at most the
+sample spread the stillness check lets through, 8 counts, over the 1024 samples of a pose,
+σ = 0.25 counts; L = 8σ = 2 counts gives a false alarm on a clean pose with probability
+2·(1 − Φ(8)) ≈ 1e-15 at that worst noise (fewer at the sensor's real ~1 count). The
+six-parameter model cannot represent the KXM52's ~2 % cross-axis coupling, which alone
+leaves up to 2·0.02·860 ≈ 34 counts (largest of 300 simulated units with 8–18 poses:
+35), so its default is 40 counts: it catches gross errors only, the nine-parameter model
+catches 2-count ones.
+"""
+
+from contextlib import suppress
+from dataclasses import replace
+
+import numpy as np
+
+from station.domain.arrays import FloatArray
+from station.domain.calibration.errors import CalibrationError, InconsistentPosesError
+from station.domain.calibration.geometry import GeometryLimits, refuse_beyond_datasheet
+from station.domain.calibration.least_squares import UNKNOWNS, solve_least_squares
+from station.domain.calibration.model import Model, apply
+from station.domain.calibration.residual import MAX_CONDITION
+from station.domain.calibration.solution import Solution
+from station.domain.sensor import SAMPLES_PER_POSE
+
+#: A pose mean's noise at the largest sample spread a still pose may have (8 counts).
+POSE_MEAN_NOISE_COUNTS = 8.0 / np.sqrt(SAMPLES_PER_POSE)
+#: The noise limit in σ of a pose mean: 2·(1 − Φ(8)) ≈ 1.2e-15 false alarms per pose.
+NOISE_SIGMAS = 8.0
+#: Default limit on |studentised residual|, counts: 8σ of a pose mean, 2 counts.
+DEFAULT_RESIDUAL_LIMIT_COUNTS = NOISE_SIGMAS * POSE_MEAN_NOISE_COUNTS
+#: Spare equations needed to find and leave out one pose (N ≥ p + 2).
+EXCLUSION_MIN_SPARE = 2
+#: Candidates tried, largest |studentised residual| first.
+CANDIDATES = 3
+
+
+def residual_limit(configured: float | None) -> float:
+    """The limit on |studentised residual| in counts: ``configured`` or the default."""
+    return DEFAULT_RESIDUAL_LIMIT_COUNTS if configured is None else configured
+
+
+def check_model(model: Model, poses: int) -> Model:
+    """The model the poses are judged with: the nine-parameter one whenever there are
+    poses enough for it to find a bad pose, as it leaves only noise on a coupled unit."""
+    return "nine" if poses >= UNKNOWNS["nine"] + EXCLUSION_MIN_SPARE else model
+
+
+def solve_consistent(
+    poses: FloatArray,
+    model: Model,
+    limits: GeometryLimits = GeometryLimits(),
+    max_condition: float = MAX_CONDITION,
+    max_residual_counts: float | None = None,
+) -> Solution:
+    """Least squares over N poses (N, 3) that leaves out one inconsistent pose or refuses.
+
+    Raises:
+        InconsistentPosesError: the residuals exceed the limit and leaving out one pose
+            does not explain it, or too few poses to say which.
+        CalibrationError: any refusal of :func:`solve_least_squares`.
+    """
+    limit = residual_limit(max_residual_counts)
+    fit = solve_least_squares(poses, model, limits, max_condition)
+    judge, judged = model, fit
+    if (wider := check_model(model, len(poses))) != model:
+        # Poses on the axes only, say, have no cross-axis terms to fit: judge with six.
+        with suppress(CalibrationError):
+            judge, judged = wider, solve_least_squares(poses, wider, limits, max_condition)
+    worst = judged.quality.studentised_max_counts
+    if worst is None or worst <= limit:
+        return _judged(fit, judged, judge, limit)
+    t = np.abs(judged.quality.studentised_counts)  # type: ignore[arg-type]
+    n = len(poses)
+    spare = n - UNKNOWNS[judge]
+    head = (
+        f"poses inconsistent: studentised residual {worst:.3g} counts > limit {limit:g} "
+        f"({judge}-parameter model)"
+    )
+    hint = " (or cross-axis coupling: try the nine-parameter model)" if judge == "six" else ""
+    if spare < EXCLUSION_MIN_SPARE:
+        refuse_beyond_datasheet(poses)  # the likelier cause, where one pose shows it
+        raise InconsistentPosesError(
+            f"{head}; with {n} poses ({spare} spare) one bad pose cannot be told from the "
+            f"others{hint}: take the poses again, or add {EXCLUSION_MIN_SPARE - spare} or more"
+        )
+    order = np.argsort(-t, kind="stable")[:CANDIDATES]
+    explained: list[tuple[int, Solution]] = []
+    for candidate in (int(c) for c in order if t[c] > limit):
+        keep = np.arange(n) != candidate
+        try:
+            refit = solve_least_squares(poses[keep], judge, limits, max_condition)
+        except CalibrationError:
+            continue
+        if (refit.quality.studentised_max_counts or 0.0) <= limit:
+            explained.append((candidate, refit))
+    if len(explained) == 1:
+        pose, refit = explained[0]
+        keep = np.arange(n) != pose
+        final = (
+            refit
+            if judge == model
+            else solve_least_squares(poses[keep], model, limits, max_condition)
+        )
+        return _judged(_excluding(final, pose, poses), _excluding(refit, pose, poses), judge, limit)
+    refuse_beyond_datasheet(poses)
+    if explained:
+        named = " or ".join(f"pose {c + 1}" for c, _ in explained)
+        raise InconsistentPosesError(
+            f"{head}: {named} is off, and the poses cannot tell which: take them again",
+            candidates=tuple(c for c, _ in explained),
+        )
+    raise InconsistentPosesError(
+        f"{head} at pose {int(order[0]) + 1}, and leaving out any one pose does not explain "
+        f"it: more than one pose is off (moved or mislabelled){hint}; take them again"
+    )
+
+
+def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solution:
+    """``fit`` carrying the studentised residuals of the model that judged the poses."""
+    quality = replace(fit.quality, studentised_counts=judged.quality.studentised_counts)
+    return replace(fit, quality=quality, residual_limit_counts=limit, checked_with=judge)
+
+
+def _excluding(refit: Solution, pose: int, poses: FloatArray) -> Solution:
+    """``refit`` (over all poses but ``pose``) reported against all N poses."""
+    q = refit.quality
+
+    def original(index: int) -> int:
+        return index + (index >= pose)
+
+    studentised = None
+    if q.studentised_counts is not None:
+        studentised = np.insert(q.studentised_counts, pose, np.nan)
+    quality = replace(
+        q,
+        pose_g=np.linalg.norm(apply(refit.calibration, poses), axis=1),
+        closest_pair=(original(q.closest_pair[0]), original(q.closest_pair[1])),
+        studentised_counts=studentised,
+    )
+    return replace(refit, quality=quality, excluded=(pose,))

@@ -1,0 +1,196 @@
+"""The gyro matrix K from the moves between still poses ([Tedaldi2014]_).
+
+Model: a gyro triad reads ``m = b + K·ω + n`` (deg/s), with ω the true body rate in
+the calibrated accelerometer's frame, b the bias (from the still poses) and K the
+3×3 scale-and-misalignment matrix (identity for a perfect triad). For a trial K each
+move's corrected rates ``ω̂ = K⁻¹(m − b)`` are integrated on SO(3)
+(:func:`~station.domain.gyro.motion.integrate.integrate_rates`) into the rotation R from the
+body at the move's end to the body at its start, which must carry the end pose's
+gravity direction into the start pose's::
+
+    r_j(K) = R_j(K) · u_after,j − u_before,j  ≈  0.
+
+The nine elements of K minimise Σ|r_j|² (:func:`scipy.optimize.least_squares`, from
+K = I). Each move constrains two degrees of freedom (a turn about gravity is invisible
+to it), so five moves would just determine it; at least six usable moves are asked
+for (:data:`MIN_MOVES`), about varied axes. Standard errors
+are ``σ·√diag((JᵀJ)⁻¹)`` with σ² = Σ|r|² / (2·moves − 9); a move's residual is the
+angle between ``R·u_after`` and ``u_before``, in degrees.
+"""
+
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from station.domain.arrays import FloatArray
+from station.domain.gyro.motion.errors import GyroMatrixError
+from station.domain.gyro.motion.integrate import integrate_steps, step_rotvecs
+from station.domain.gyro.motion.moves import GAP_FACTOR, Move
+
+#: Unknowns of K.
+K_UNKNOWNS: Final = 9
+#: Constraints one move gives (two: the turn about gravity is invisible).
+CONSTRAINTS_PER_MOVE: Final = 2
+#: The fewest usable moves fitted: 2 × 6 = 12 equations for 9 unknowns. Five moves (one
+#: spare equation) determine K in principle but not in practice: over 200 simulated
+#: six-pose units the worst came out 128 % off (docs/benchmarks.md).
+MIN_MOVES: Final = 6
+#: Above this condition number of the Jacobian the moves do not determine K.
+MAX_CONDITION: Final = 1e6
+
+
+@dataclass(frozen=True)
+class UnusableMove:
+    """A move left out of the fit, and why."""
+
+    index: int
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
+class GyroMatrixFit:
+    """The fitted gyro matrix and how well it explains the moves.
+
+    Attributes:
+        scale_matrix: shape (3, 3), K in ``m = b + K·ω``.
+        standard_errors: shape (3, 3), 1-σ of each element of K (six moves or more
+            leave at least three degrees of freedom).
+        bias_dps: shape (3,), the bias the rates were corrected with, deg/s.
+        used: indices of the moves fitted, in order.
+        residual_deg: shape (len(used),), each used move's residual with the fitted K.
+        residual_identity_deg: the same with K = I (no gyro calibration), for contrast.
+        unusable: the moves left out and why.
+        condition_number: cond(J) of the fit's Jacobian at the solution.
+    """
+
+    scale_matrix: FloatArray
+    standard_errors: FloatArray
+    bias_dps: FloatArray
+    used: tuple[int, ...]
+    residual_deg: FloatArray
+    residual_identity_deg: FloatArray
+    unusable: tuple[UnusableMove, ...]
+    condition_number: float
+
+    @property
+    def residual_rms_deg(self) -> float:
+        """RMS of the used moves' residuals, degrees."""
+        return float(np.sqrt(np.mean(self.residual_deg**2)))
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready (the ``"gyro"`` object of ``calstation solve --stream --json``)."""
+        return {
+            "bias_dps": self.bias_dps.tolist(),
+            "scale_matrix": self.scale_matrix.tolist(),
+            "scale_matrix_standard_errors": self.standard_errors.tolist(),
+            "moves": len(self.used) + len(self.unusable),
+            "moves_used": list(self.used),
+            "residual_deg": self.residual_deg.tolist(),
+            "residual_rms_deg": self.residual_rms_deg,
+            "residual_identity_deg": self.residual_identity_deg.tolist(),
+            "unusable_moves": [{"move": u.index, "reason": u.reason} for u in self.unusable],
+            "condition_number": self.condition_number,
+        }
+
+
+class _Moves:
+    """The usable moves' raw steps, bias removed, in arrays of (moves, steps, 3).
+
+    The corrected rates are linear in the raw ones, so each step's rotation vector for
+    a trial K is the raw step's ``K⁻¹·φ_raw``: one product per evaluation. Moves are
+    grouped by their step count rounded up to a power of two and padded with zero
+    steps (identity rotations) to it, so the arrays hold under twice the steps.
+    """
+
+    def __init__(self, moves: list[Move], bias_dps: FloatArray) -> None:
+        raw = [step_rotvecs(m.t, np.radians(m.rates_dps - bias_dps)) for m in moves]
+        widths = [1 << max(0, len(r) - 1).bit_length() for r in raw]
+        self.groups: list[tuple[list[int], FloatArray]] = []
+        for width in sorted(set(widths)):
+            members = [i for i, w in enumerate(widths) if w == width]
+            steps = np.zeros((len(members), width, 3))
+            for row, i in zip(steps, members, strict=True):
+                row[: len(raw[i])] = raw[i]
+            self.groups.append((members, steps))
+        self.before = np.array([m.gravity_before for m in moves])
+        self.after = np.array([m.gravity_after for m in moves])
+
+    def carried(self, k: FloatArray) -> FloatArray:
+        """Each move's ``R(K)·u_after``, shape (moves, 3)."""
+        k_inv_t = np.linalg.inv(k).T
+        out = np.empty_like(self.after)
+        for members, steps in self.groups:
+            out[members] = integrate_steps(steps @ k_inv_t).apply(self.after[members])
+        return out
+
+    def residual(self, theta: FloatArray) -> FloatArray:
+        return np.asarray((self.carried(theta.reshape(3, 3)) - self.before).ravel())
+
+    def angles_deg(self, k: FloatArray) -> FloatArray:
+        carried = self.carried(k)
+        cos = np.clip(np.sum(carried * self.before, axis=1), -1.0, 1.0)
+        return np.asarray(np.degrees(np.arccos(cos)), dtype=np.float64)
+
+
+def fit_gyro_matrix(
+    moves: list[Move],
+    bias_dps: FloatArray,
+    *,
+    gap_factor: float = GAP_FACTOR,
+    min_moves: int = MIN_MOVES,
+) -> GyroMatrixFit:
+    """Fit K from ``moves`` with the gyro bias ``bias_dps`` (3,) removed.
+
+    Moves with gaps or too few samples are left out and named in ``unusable``.
+    ``min_moves`` below :data:`MIN_MOVES` (down to 5) is for measuring why it is the
+    default.
+
+    Raises:
+        ValueError: ``min_moves`` below 5 (no degree of freedom left).
+        GyroMatrixError: fewer than ``min_moves`` usable moves, or moves whose axes
+            do not determine all nine elements (condition number above
+            :data:`MAX_CONDITION`).
+    """
+    if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
+        raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
+    bias = np.asarray(bias_dps, dtype=np.float64)
+    unusable: list[UnusableMove] = []
+    used: list[int] = []
+    for index, move in enumerate(moves):
+        problem = move.problem(gap_factor)
+        if problem is None:
+            used.append(index)
+        else:
+            unusable.append(UnusableMove(index, problem))
+    if len(used) < min_moves:
+        why = "; ".join(f"move {u.index}: {u.reason}" for u in unusable)
+        raise GyroMatrixError(
+            f"gyro matrix needs {min_moves} usable moves, got {len(used)} of {len(moves)}"
+            + (f" ({why})" if why else "")
+        )
+    data = _Moves([moves[i] for i in used], bias)
+    result = least_squares(data.residual, np.eye(3).ravel(), method="lm", x_scale=1.0)
+    k = result.x.reshape(3, 3)
+    jac = np.asarray(result.jac)
+    singular = np.linalg.svd(jac, compute_uv=False)
+    condition = float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+    if not np.isfinite(condition) or condition > MAX_CONDITION:
+        raise GyroMatrixError(
+            f"gyro matrix not determined: the {len(used)} moves turn about too few axes "
+            f"(condition number {condition:.3g} > {MAX_CONDITION:g})"
+        )
+    dof = CONSTRAINTS_PER_MOVE * len(used) - K_UNKNOWNS
+    sigma2 = float(result.fun @ result.fun) / dof
+    errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
+    return GyroMatrixFit(
+        scale_matrix=k,
+        standard_errors=errors,
+        bias_dps=bias,
+        used=tuple(used),
+        residual_deg=data.angles_deg(k),
+        residual_identity_deg=data.angles_deg(np.eye(3)),
+        unusable=tuple(unusable),
+        condition_number=condition,
+    )

@@ -1,0 +1,184 @@
+"""A whole recorded calibration stream: still poses, accelerometer, gyro bias and K.
+
+The stream is the unit's raw output over the procedure of [Tedaldi2014]_: still poses
+in varied orientations, with a hand move between each two. From it:
+
+1. the still poses, by the station's own stillness judge
+   (:func:`station.domain.stillness.still_segments`, windows of ``still_window_s``), each
+   trimmed by a quarter window at both ends;
+2. the accelerometer calibration from the poses' mean counts
+   (:func:`station.domain.calibration.solve`, [Song2006]_);
+3. the gyro bias, the mean rate over every still sample;
+4. the moves between consecutive poses, with each pose's gravity direction
+   ``u = C·(ā − o) / |C·(ā − o)|`` in the calibrated accelerometer's frame;
+5. K from the moves (:func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`).
+
+Sample times come from ``t``; the sample rate is the inverse of the median step, and
+each sample's sequence number is its time in median steps, so a gap counts against a
+window's link loss as it does live.
+"""
+
+from dataclasses import dataclass
+from itertools import pairwise
+from typing import Final
+
+import numpy as np
+
+from station.domain.arrays import FloatArray
+from station.domain.calibration import GeometryLimits, Model, Solution, apply, solve
+from station.domain.gyro.motion.errors import StreamError
+from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
+from station.domain.gyro.motion.moves import Move
+from station.domain.samples import SampleBlock
+from station.domain.stillness import StillnessThresholds, StillSegment, still_segments
+
+#: Still window of a recorded stream, s: a hand-held pose is held one to a few seconds.
+STILL_WINDOW_S: Final = 1.0
+#: Windows judged per still window (the hop is the window over this).
+HOPS_PER_WINDOW: Final = 16
+#: Each still segment loses this fraction of a window at both ends: a window that reaches
+#: a little into a move can still pass (the start of a minimum-jerk turn is slow), and
+#: the first tenth of a degree of the turn must be integrated, not averaged into the pose.
+EDGE_TRIM: Final = 4
+#: Fewest still poses for each accelerometer model (its unknowns).
+MIN_POSES: Final[dict[Model, int]] = {"six": 6, "nine": 9}
+
+
+@dataclass(frozen=True, eq=False)
+class RecordedStream:
+    """Raw samples of a unit: times (s), accelerometer (ADC counts), gyros (deg/s)."""
+
+    t: FloatArray
+    accel_counts: FloatArray
+    gyro_dps: FloatArray
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        if self.t.shape != (n,) or self.accel_counts.shape != (n, 3):
+            raise StreamError(f"stream: t must be (n,) and accel (n, 3), got {self.t.shape}")
+        if self.gyro_dps.shape != (n, 3):
+            raise StreamError(f"stream: gyro must be ({n}, 3), got {self.gyro_dps.shape}")
+        finite = (
+            np.isfinite(self.t).all()
+            and np.isfinite(self.accel_counts).all()
+            and np.isfinite(self.gyro_dps).all()
+        )
+        if not finite:
+            raise StreamError("stream: a value is not a finite number")
+        if n < 2:
+            raise StreamError(f"stream: {n} samples, too few to calibrate from")
+        step = np.diff(self.t)
+        if (step <= 0).any():
+            k = int(np.argmax(step <= 0)) + 1
+            raise StreamError(
+                f"stream: t does not increase at data row {k + 1} (t = {self.t[k]:.6g})"
+            )
+
+    @property
+    def rate_hz(self) -> float:
+        """Samples per second: the inverse of the median time step."""
+        return float(1.0 / np.median(np.diff(self.t)))
+
+    def block(self) -> SampleBlock:
+        """The samples as the station's blocks: sequence numbers from ``t``, no temperature."""
+        seq = np.rint((self.t - self.t[0]) * self.rate_hz)
+        return SampleBlock.from_columns(seq, self.accel_counts, self.gyro_dps, np.zeros(len(seq)))
+
+
+@dataclass(frozen=True, eq=False)
+class StreamCalibration:
+    """Everything fitted from one stream.
+
+    Attributes:
+        stills: the still segments (rows of the stream), in order.
+        accel: the accelerometer calibration from the stills' mean counts.
+        gravity: shape (stills, 3), each still's gravity direction, calibrated frame.
+        bias_dps: shape (3,), mean gyro rate over all still samples, deg/s.
+        moves: the moves between consecutive stills.
+        gyro: K fitted from the moves.
+    """
+
+    stills: list[StillSegment]
+    accel: Solution
+    gravity: FloatArray
+    bias_dps: FloatArray
+    moves: list[Move]
+    gyro: GyroMatrixFit
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro``."""
+        payload = self.accel.to_dict()
+        payload["poses"] = len(self.stills)
+        payload["gyro"] = self.gyro.to_dict()
+        return payload
+
+
+def stream_thresholds(
+    rate_hz: float, still_window_s: float = STILL_WINDOW_S
+) -> StillnessThresholds:
+    """The live stillness limits with the window set to ``still_window_s`` at ``rate_hz``."""
+    width = max(16, round(still_window_s * rate_hz))
+    return StillnessThresholds(window_samples=width, hop_samples=max(1, width // HOPS_PER_WINDOW))
+
+
+def _geometry(model: Model, poses: int) -> GeometryLimits:
+    """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
+
+    A recorded procedure often returns to an orientation it held before; least squares
+    is not degenerate for it (each pose is one more equation), eq. 10 with six is.
+    """
+    if model == "six" and poses == MIN_POSES["six"]:
+        return GeometryLimits()
+    return GeometryLimits(min_angle_deg=0.0)
+
+
+def calibrate_stream(
+    stream: RecordedStream,
+    model: Model = "nine",
+    *,
+    thresholds: StillnessThresholds | None = None,
+    min_moves: int = MIN_MOVES,
+) -> StreamCalibration:
+    """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
+
+    ``min_moves`` goes to :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
+
+    Raises:
+        StreamError: fewer still poses than ``model`` needs.
+        station.domain.calibration.CalibrationError: the poses cannot calibrate the accelerometer.
+        GyroMatrixError: the moves cannot determine K.
+    """
+    limits = thresholds or stream_thresholds(stream.rate_hz)
+    trim = limits.window_samples // EDGE_TRIM
+    stills = [
+        StillSegment(s.start + trim, s.stop - trim) for s in still_segments(stream.block(), limits)
+    ]
+    needed = MIN_POSES[model]
+    if len(stills) < needed:
+        raise StreamError(
+            f"stream: {len(stills)} still poses found, the {model}-parameter model needs "
+            f"{needed} (still window {limits.window_samples} samples)"
+        )
+    means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
+    accel = solve(means, model, _geometry(model, len(means)))
+    g = apply(accel.calibration, means)
+    gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
+    still_gyro = np.concatenate([stream.gyro_dps[s.start : s.stop] for s in stills])
+    bias = still_gyro.mean(axis=0)
+    moves = [
+        Move(
+            t=stream.t[a.stop - 1 : b.start + 1],
+            rates_dps=stream.gyro_dps[a.stop - 1 : b.start + 1],
+            gravity_before=gravity[i],
+            gravity_after=gravity[i + 1],
+        )
+        for i, (a, b) in enumerate(pairwise(stills))
+    ]
+    return StreamCalibration(
+        stills=stills,
+        accel=accel,
+        gravity=gravity,
+        bias_dps=bias,
+        moves=moves,
+        gyro=fit_gyro_matrix(moves, bias, min_moves=min_moves),
+    )

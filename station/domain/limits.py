@@ -1,0 +1,280 @@
+"""Limits profiles: named, versioned pass/fail bounds, read from TOML.
+
+A profile file holds one table per profile (``[profiles.NAME]``, see the shipped
+``station/domain/profiles/limits.toml``). Each stored run carries its profile's name,
+version and SHA-256; the hash covers the profile's canonical JSON, so a change of any
+bound changes it while comments and layout do not.
+
+A check compares one measured value with one pair of bounds and, when it is outside,
+returns a typed :class:`station.domain.records.FailureReason` (code, measured value, bounds,
+axis or pose) rather than free text.
+"""
+
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Self
+
+from pydantic import BaseModel, ConfigDict, Field, JsonValue, ValidationError, model_validator
+
+from station.domain.errors import InputError
+from station.domain.records import Axis, FailureReason, LimitsRef, document_sha256
+from station.domain.unit_state import DEFAULT_RETEST_LIMIT
+
+DEFAULT_PROFILE = "kxm52-production"
+
+
+class Bounds(BaseModel):
+    """Closed interval [lower, upper]; a missing side is unbounded."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    lower: float | None = None
+    upper: float | None = None
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Self:
+        if self.lower is None and self.upper is None:
+            raise ValueError("give lower, upper or both")
+        if self.lower is not None and self.upper is not None and self.lower > self.upper:
+            raise ValueError(f"lower {self.lower} is above upper {self.upper}")
+        return self
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` lies within the bounds (NaN never does)."""
+        low = self.lower if self.lower is not None else -float("inf")
+        high = self.upper if self.upper is not None else float("inf")
+        return low <= value <= high
+
+    def describe(self) -> str:
+        """``[a, b]``, ``≤ b`` or ``≥ a``."""
+        if self.lower is None:
+            return f"≤ {self.upper:g}"
+        if self.upper is None:
+            return f"≥ {self.lower:g}"
+        return f"[{self.lower:g}, {self.upper:g}]"
+
+
+Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")]
+
+
+class LimitsProfile(BaseModel):
+    """The bounds one run is judged against."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: Name
+    version: Name
+    description: str = ""
+    offset_counts: Bounds
+    sensitivity_counts_per_g: Bounds
+    verification_error_mg: Bounds
+    pose_noise_counts: Bounds
+    gyro_bias_dps: Bounds
+    link_loss: Bounds
+    writeback_relative_error: Bounds
+    retest_limit: Annotated[
+        int | None,
+        Field(ge=1, le=100, description="attempts per unit (aborts not counted) before rework"),
+    ] = None
+    gyro_scale_error: Annotated[
+        Bounds | None, Field(description="K_ii − 1 of the fitted gyro matrix; absent: unchecked")
+    ] = None
+    gyro_misalignment: Annotated[
+        Bounds | None, Field(description="K_ij (i ≠ j) of the gyro matrix; absent: unchecked")
+    ] = None
+    gyro_verification_deg: Annotated[
+        Bounds | None,
+        Field(
+            description="angle between the gravity change and the rotation the unit's own "
+            "calibrated gyros integrate over the verification move, degrees; absent: unchecked"
+        ),
+    ] = None
+    fit_residual_counts: Annotated[
+        Bounds | None,
+        Field(
+            description="largest |studentised residual| of a least-squares fit's poses, counts; "
+            "left out, the model's default (station.domain.calibration.consistency)"
+        ),
+    ] = None
+
+    @property
+    def max_residual_counts(self) -> float | None:
+        """The fit's residual limit, counts (``None``: the calibration's default)."""
+        return None if self.fit_residual_counts is None else self.fit_residual_counts.upper
+
+    @property
+    def attempts_allowed(self) -> int:
+        """The retest limit, or the default one (:mod:`station.domain.unit_state`)."""
+        return self.retest_limit if self.retest_limit is not None else DEFAULT_RETEST_LIMIT
+
+    @property
+    def document(self) -> dict[str, JsonValue]:
+        """The profile as the JSON document its SHA-256 is taken over (and a run carries).
+
+        An optional setting left out (a retest limit, a fit residual limit, the gyro
+        bounds) is left out of the document too, so a profile without it hashes as before
+        the setting existed.
+        """
+        unset = {name for name in _OPTIONAL if getattr(self, name) is None}
+        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset or None)
+        return document
+
+    @property
+    def checks_gyro_matrix(self) -> bool:
+        """Whether the profile bounds the gyro matrix (so the run must fit it)."""
+        return self.gyro_scale_error is not None or self.gyro_misalignment is not None
+
+    @property
+    def sha256(self) -> str:
+        """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace)."""
+        return document_sha256(self.document)
+
+    @property
+    def ref(self) -> LimitsRef:
+        """What a stored run records of its profile: the reference and the profile itself."""
+        document = self.document
+        return LimitsRef(
+            name=self.name, version=self.version, sha256=document_sha256(document), profile=document
+        )
+
+
+#: Settings a profile may leave out (added after profiles were first stored); absent,
+#: they are not part of its hash.
+_OPTIONAL = (
+    "retest_limit",
+    "fit_residual_counts",
+    "gyro_scale_error",
+    "gyro_misalignment",
+    "gyro_verification_deg",
+)
+
+
+def profile_of(ref: LimitsRef) -> LimitsProfile | None:
+    """The profile a run's reference carries (``None`` when it carries only the reference).
+
+    :class:`InputError` when the document, though it hashes to the reference, is not a
+    limits profile as this software writes it (one that would hash otherwise).
+    """
+    if ref.profile is None:
+        return None
+    try:
+        profile = LimitsProfile.model_validate(ref.profile)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"])
+        raise InputError(f"limits.profile: {field}: {first['msg']}") from None
+    if profile.sha256 != ref.sha256:
+        raise InputError("limits.profile is not a profile's canonical document")
+    return profile
+
+
+#: Check codes: one per kind of bound, each with the profile field it reads.
+CHECKS: dict[str, str] = {
+    "offset": "offset_counts",
+    "sensitivity": "sensitivity_counts_per_g",
+    "verification_error": "verification_error_mg",
+    "pose_noise": "pose_noise_counts",
+    "gyro_bias": "gyro_bias_dps",
+    "link_loss": "link_loss",
+    "writeback": "writeback_relative_error",
+    "unit_output": "verification_error_mg",
+    "gyro_scale": "gyro_scale_error",
+    "gyro_misalignment": "gyro_misalignment",
+    "gyro_verification": "gyro_verification_deg",
+}
+UNITS = {
+    "offset": "counts",
+    "sensitivity": "counts/g",
+    "verification_error": "mg",
+    "pose_noise": "counts",
+    "gyro_bias": "deg/s",
+    "link_loss": "",
+    "writeback": "",
+    "unit_output": "mg",
+    "gyro_scale": "",
+    "gyro_misalignment": "",
+    "gyro_verification": "deg",
+}
+
+
+def check(
+    profile: LimitsProfile,
+    code: str,
+    measured: float,
+    *,
+    axis: Axis | None = None,
+    pose: int | None = None,
+) -> FailureReason | None:
+    """Compare ``measured`` with the profile's bounds for ``code``.
+
+    Returns ``None`` when within bounds (or when the profile sets no bounds for an
+    optional check), else the failure reason.
+    """
+    bounds: Bounds | None = getattr(profile, CHECKS[code])
+    if bounds is None or bounds.contains(measured):
+        return None
+    where = "".join([f" {axis}" if axis else "", f" (pose {pose + 1})" if pose is not None else ""])
+    unit = f" {UNITS[code]}" if UNITS[code] else ""
+    return FailureReason(
+        code=code,
+        message=f"{code.replace('_', ' ')}{where} {measured:.6g}{unit} outside {bounds.describe()}",
+        measured=measured if math.isfinite(measured) else None,
+        lower=bounds.lower,
+        upper=bounds.upper,
+        axis=axis,
+        pose=pose,
+    )
+
+
+def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
+    """All profiles of a TOML file (the shipped file when ``path`` is None)."""
+    if path is None:
+        source = resources.files("station.domain.profiles").joinpath("limits.toml")
+        text, shown = source.read_text(encoding="utf-8"), "station/domain/profiles/limits.toml"
+    else:
+        shown = str(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise InputError(
+                f"{shown}: cannot read the limits file: {exc.strerror or exc}"
+            ) from None
+    return parse_profiles(text, shown)
+
+
+def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:
+    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{shown}: not valid TOML: {exc}") from None
+    tables = data.get("profiles")
+    if not isinstance(tables, dict) or not tables:
+        raise InputError(f"{shown}: no [profiles.NAME] tables")
+    profiles = {}
+    for name, table in tables.items():
+        try:
+            profiles[name] = LimitsProfile.model_validate({"name": name, **table})
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            field = ".".join(str(p) for p in first["loc"])
+            raise InputError(f"{shown}: profile {name}: {field}: {first['msg']}") from None
+    return profiles
+
+
+def load_profile(path: Path | None = None, name: str | None = None) -> LimitsProfile:
+    """One profile by name (default: the only one, or ``kxm52-production``)."""
+    return pick_profile(load_profiles(path), name)
+
+
+def pick_profile(profiles: dict[str, LimitsProfile], name: str | None = None) -> LimitsProfile:
+    """One of ``profiles`` by name (default: the only one, or ``kxm52-production``)."""
+    if name is None:
+        name = next(iter(profiles)) if len(profiles) == 1 else DEFAULT_PROFILE
+    try:
+        return profiles[name]
+    except KeyError:
+        known = ", ".join(sorted(profiles))
+        raise InputError(f"limits profile {name!r} not found (known: {known})") from None

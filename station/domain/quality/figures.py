@@ -1,0 +1,235 @@
+"""The shape of the end-of-line report: one model, rendered as text, CSV, JSON or HTML.
+
+Yields and rates are fractions (0…1), times are seconds, parameter values are in their
+``unit``. ``None`` means "not defined for this range" (no runs, no spread, no limit).
+"""
+
+from datetime import date, datetime
+from typing import Literal
+
+from pydantic import AwareDatetime, BaseModel, ConfigDict, Field
+
+from station.domain.records import LimitsRef, Verdict
+
+#: What the end-of-line tester does with a unit: its latest run passed, or not.
+Disposition = Literal["ship", "hold"]
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class ReportFilter(_Part):
+    """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time),
+    and only this station, operator or production lot when given."""
+
+    since: AwareDatetime | None = None
+    until: AwareDatetime | None = None
+    station_id: str | None = None
+    operator_id: str | None = None
+    lot: str | None = None
+
+
+class Summary(_Part):
+    """Counts and yields of the runs in range.
+
+    A unit's first and latest run are its first and latest run *ever* on the line, by
+    start time. The units are those whose first run is in range (the cohort of
+    first-pass and final yield); retests are the runs in range that are not a unit's
+    first. A station's summary counts the units whose first run (their first attempt)
+    was at the station and the station's runs, so the stations' summaries add up to
+    the line's.
+    """
+
+    runs: int
+    runs_passed: int
+    units_tested: int = Field(description="units whose first run is in range")
+    units_passed: int = Field(description="units whose latest run passed")
+    units_failed: int
+    first_pass_units: int = Field(description="units whose first run passed")
+    report_yield: float | None = Field(description="run yield: passing runs / runs")
+    first_pass_yield: float | None = Field(description="units whose first run passed / units")
+    final_yield: float | None = Field(description="units whose latest run passed / units")
+    retests: int = Field(description="runs that are not a unit's first")
+    retest_rate: float | None = Field(description="retests / units")
+    hours: float | None = Field(description="length of the range, hours")
+    units_per_hour: float | None
+    cycle_time_per_run_s: float | None
+    cycle_time_per_unit_s: float | None = Field(description="station time / units")
+    cycle_time_per_pose_s: float | None = Field(description="station time / poses")
+    poses: int
+
+
+class StationSummary(_Part):
+    """The summary of one station."""
+
+    station_id: str
+    summary: Summary
+
+
+class ParetoEntry(_Part):
+    """Failing runs whose first failure reason is ``code``."""
+
+    code: str
+    count: int
+    share: float = Field(description="of all failing runs")
+    cumulative_share: float
+    by_station: dict[str, int]
+    by_operator: dict[str, int]
+
+
+class Histogram(_Part):
+    """Counts of ``bins`` equal bins from ``start``; outliers land in the end bins."""
+
+    start: float
+    width: float
+    counts: list[int]
+
+
+class ParameterStats(_Part):
+    """Distribution and capability of one parameter against its limits."""
+
+    name: str
+    family: str
+    unit: str
+    lower: float | None
+    upper: float | None
+    count: int
+    mean: float | None
+    std: float | None
+    min: float | None
+    max: float | None
+    cp: float | None
+    cpk: float | None
+    out_of_limits: int
+    marginal: int = Field(description="within the limits, within 10 % of the width of one")
+    histogram: Histogram
+
+
+class ChartPoint(_Part):
+    """One run on a control chart."""
+
+    started_at: datetime
+    serial: str
+    value: float
+    moving_range: float | None
+    signals: list[int] = Field(
+        description="Western Electric rules (1–4) the value completes on the individuals chart"
+    )
+    mr_signals: list[int] = Field(
+        description="Western Electric rules (1–4) the moving range completes on its chart"
+    )
+
+
+class ControlChart(_Part):
+    """Individuals and moving-range chart of one coefficient: ``count`` runs in range set
+    its limits, the latest of them are ``points``, each with the Western Electric rules
+    it completes (:mod:`station.domain.quality.control`) among the points plotted."""
+
+    name: str
+    unit: str
+    count: int
+    mean: float
+    mr_bar: float | None
+    lcl: float | None
+    ucl: float | None
+    mr_ucl: float | None
+    sigma: float | None = Field(description="short-term σ of the values, MR̄/d₂")
+    mr_sigma: float | None = Field(description="σ of the moving ranges, d₃·MR̄/d₂")
+    points: list[ChartPoint] = Field(
+        description="the latest runs, oldest first (their count is the plotted count)"
+    )
+
+
+class TrendFigures(_Part):
+    """The figures of one period of the trend: the units whose first run on the line was
+    in it, with their first-pass and final yield, its runs, and the Cpk of its values."""
+
+    runs: int
+    runs_passed: int
+    units: int = Field(description="units whose first run on the line was in the period")
+    first_pass_yield: float | None
+    final_yield: float | None = Field(description="of the period's units, latest run passed")
+    run_yield: float | None = Field(description="passing runs / runs of the period")
+    cpk: dict[str, float | None] = Field(description="Cpk per parameter of the period's values")
+
+
+class TrendDay(TrendFigures):
+    """One of the plant's days (in its time zone) of the range."""
+
+    day: date
+
+
+class TrendShift(TrendFigures):
+    """One of the plant's shifts of the range (:mod:`station.domain.quality.shifts`)."""
+
+    day: date = Field(description="the plant day the shift started on")
+    shift: str = Field(description="the shift's start time in the plant's zone, HH:MM")
+    start: AwareDatetime = Field(description="the shift's start (UTC)")
+    end: AwareDatetime = Field(description="the next shift's start (UTC)")
+
+
+class UnitVerdict(_Part):
+    """A unit's final state for the ship/hold decision: its latest run (``runs``: every
+    run of the unit)."""
+
+    serial: str
+    disposition: Disposition
+    verdict: Verdict
+    runs: int
+    last_started_at: datetime
+    station_id: str
+    operator_id: str
+    failure: str | None = Field(description="first failure reason of the latest run")
+
+
+class WhatIf(_Part):
+    """The report's runs re-judged against a candidate limits profile, nothing stored
+    changed: yields, Pareto and capability as they would have been."""
+
+    limits: LimitsRef = Field(description="the candidate profile")
+    summary: Summary
+    pareto: list[ParetoEntry]
+    parameters: list[ParameterStats] = Field(description="capability against the candidate")
+    pass_to_fail: int = Field(description="runs that passed and would fail")
+    fail_to_pass: int = Field(description="runs that failed and would pass")
+
+
+class EolReport(_Part):
+    """The end-of-line report over ``filter``."""
+
+    generated_at: datetime
+    filter: ReportFilter
+    bounds_source: str = Field(description="where the capability limits come from")
+    limits_profiles: list[LimitsRef] = Field(description="profiles the runs were judged by")
+    summary: Summary
+    stations: list[StationSummary]
+    timezone: str = Field("UTC", description="the plant's time zone the pages show times in")
+    trend: list[TrendDay] = Field(
+        default_factory=list, description="per plant day of the range, the latest days"
+    )
+    shifts: list[str] = Field(
+        default_factory=list, description="the plant's shift start times (HH:MM), if configured"
+    )
+    shift_trend: list[TrendShift] = Field(
+        default_factory=list,
+        description="per shift of the trend's days, when the plant's shifts are configured",
+    )
+    pareto: list[ParetoEntry]
+    parameters: list[ParameterStats]
+    control_charts: list[ControlChart]
+    units: list[UnitVerdict]
+    units_total: int = Field(
+        description="units whose latest run is in range (the list may be cut to the latest)"
+    )
+    units_listed: Literal["all", "held"] = Field(
+        "all", description="which units the list holds: all, or the held ones (latest run failed)"
+    )
+    units_held: int | None = Field(
+        None, description="held units (latest run in range failed), when the list holds them"
+    )
+    units_offset: int = Field(0, description="units before this page of the list, newest first")
+    units_limit: int | None = Field(None, description="the most units a page of the list holds")
+    what_if: WhatIf | None = Field(
+        None, description="the runs re-judged against a candidate limits profile, when given"
+    )

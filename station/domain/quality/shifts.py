@@ -1,0 +1,84 @@
+"""The plant's shifts: its days cut at the shifts' start times, in its time zone.
+
+A plant names its shifts by their start times of day in its zone (``06:00,14:00,22:00``,
+``CALSTATION_PLANT_SHIFTS``). A shift lasts until the next one starts; the last of a day
+runs past midnight to the first of the next day and belongs to the day it started on,
+as a night shift does on a line's board. Start times are local wall-clock times, so with
+daylight saving time the shift across the change lasts an hour more or less (a start
+that falls in the skipped hour begins an hour later, :mod:`zoneinfo`'s ``fold=0``).
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import UTC, date, datetime, time, timedelta
+from itertools import pairwise
+from zoneinfo import ZoneInfo
+
+from station.domain.errors import InputError
+
+#: The most shifts a day may be cut into (a start every hour).
+MAX_SHIFTS = 24
+
+
+@dataclass(frozen=True)
+class Shift:
+    """One shift: the plant ``day`` it started on, its ``name`` (start time, ``HH:MM``),
+    and its span ``[start, end)`` in UTC."""
+
+    day: date
+    name: str
+    start: datetime
+    end: datetime
+
+
+def parse_shifts(text: str) -> tuple[time, ...]:
+    """``"06:00,14:00,22:00"`` as start times, earliest first; ``""`` for none.
+
+    Raises :class:`InputError` naming the entry that is not an ``HH:MM`` time, a start
+    given twice, or more than :data:`MAX_SHIFTS`.
+    """
+    entries = [entry.strip() for entry in text.split(",") if entry.strip()]
+    starts: list[time] = []
+    for entry in entries:
+        try:
+            start = time.fromisoformat(entry)
+        except ValueError:
+            raise InputError(
+                f"shift start {entry!r} is not a time of day (HH:MM, e.g. 06:00,14:00,22:00)"
+            ) from None
+        if start.tzinfo is not None or start.second or start.microsecond:
+            raise InputError(f"shift start {entry!r}: give hours and minutes only (HH:MM)")
+        if start in starts:
+            raise InputError(f"shift start {entry!r} is given twice")
+        starts.append(start)
+    if len(starts) > MAX_SHIFTS:
+        raise InputError(f"{len(starts)} shift starts: at most {MAX_SHIFTS} a day")
+    return tuple(sorted(starts))
+
+
+def shift_name(start: time) -> str:
+    """A shift's name: its start time, ``HH:MM``."""
+    return start.strftime("%H:%M")
+
+
+def plant_shifts(
+    start: datetime, end: datetime, zone: str, starts: Sequence[time], latest: int
+) -> list[Shift]:
+    """The shifts that ``[start, end]`` touches (the latest ``latest`` of them), oldest
+    first; none without ``starts``."""
+    if not starts:
+        return []
+    local = ZoneInfo(zone)
+    first = start.astimezone(local).date() - timedelta(days=1)  # its night shift
+    last = end.astimezone(local).date()
+    moments = [
+        (day, at, datetime.combine(day, at, tzinfo=local).astimezone(UTC))
+        for day in (first + timedelta(days=i) for i in range((last - first).days + 2))
+        for at in starts
+    ]
+    shifts = [
+        Shift(day=day, name=shift_name(at), start=begin, end=following)
+        for (day, at, begin), (_, _, following) in pairwise(moments)
+        if following > start and begin <= end
+    ]
+    return shifts[-latest:]

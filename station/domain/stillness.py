@@ -1,0 +1,193 @@
+"""Judging still windows, live or recorded: one judge for both.
+
+The accelerometer cannot tell motion from gravity, so a pose is recorded only from a
+window in which the unit demonstrably did not move ([Song2006]_: at rest). A window of
+``window_samples`` consecutive samples is accepted when all of these hold:
+
+- spread: every accelerometer axis' standard deviation is small (handling, tremor);
+- drift: the mean of the window's last quarter is close to that of its first quarter
+  on every axis (slow tilting that the spread alone would let through);
+- gravity: ``|a|``, with nominal offset and sensitivity, is near 1 g (free fall, a
+  steady push, a dead axis);
+- rotation: the gyros' mean rates and their spread are small (turning about the
+  vertical changes no accelerometer reading at all: only the gyro sees it);
+- link: few samples are missing in the window, and no axis sits at an ADC rail.
+
+Live, :class:`station.run.acquisition.stillness.StillnessDetector` evaluates the trailing
+window every ``hop_samples`` samples, so a unit that is still from the start is accepted
+after at most ``window + hop`` samples. Recorded, :func:`still_segments` judges the
+windows starting every ``hop_samples`` rows of a whole stream and merges the still ones
+that overlap into still segments (the poses of a recorded calibration).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from station.domain.arrays import FloatArray
+from station.domain.samples import SampleBlock
+from station.domain.sensor import (
+    ADC_MAX,
+    ADC_MIN,
+    AXES,
+    NOMINAL_OFFSET_COUNTS,
+    NOMINAL_SENSITIVITY_COUNTS_PER_G,
+    SAMPLES_PER_POSE,
+)
+
+
+class StillnessThresholds(BaseModel):
+    """Limits a window must meet to count as still; defaults with their reasons."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    window_samples: int = Field(
+        SAMPLES_PER_POSE,
+        ge=16,
+        description="samples per still window: 1024, as the paper averages per pose",
+    )
+    hop_samples: int = Field(
+        32,
+        ge=1,
+        description="samples between evaluations: 3 % of a window, well inside the "
+        "10 % acceptance-latency budget, and 32 times less work than every sample",
+    )
+    accel_std_max_counts: float = Field(
+        4.0,
+        gt=0,
+        description="per-axis spread: the sensor's noise is ~1 count (1.2 mg) rms; a hand "
+        "moving or a tremor of 5 mg and more shows as 4 counts (4.9 mg)",
+    )
+    accel_drift_max_counts: float = Field(
+        2.0,
+        gt=0,
+        description="first-to-last-quarter change of an axis' mean: 2 counts is 0.14 degree "
+        "of tilt and moves the window's mean by under 0.1 % of the sensitivity; noise "
+        "contributes 0.1 count",
+    )
+    gravity_tolerance_g: float = Field(
+        0.5,
+        gt=0,
+        description="|a| with nominal scaling may differ from 1 g by offset and "
+        "sensitivity errors before calibration: up to 207 counts (0.25 g) on each axis, "
+        "0.44 g when all three sit at the same extreme, plus 5 % of sensitivity; beyond "
+        "0.5 g the unit is accelerating, falling or an axis is dead",
+    )
+    gyro_rate_max_dps: float = Field(
+        1.0,
+        gt=0,
+        description="mean rate per gyro: above the uncalibrated bias (0.3 deg/s) with "
+        "margin, while a turn of 1 deg/s (2 degrees over a window) is refused",
+    )
+    gyro_std_max_dps: float = Field(
+        0.5,
+        gt=0,
+        description="per-gyro spread: white noise is under 0.1 deg/s rms; handling and "
+        "tremor rates are several deg/s",
+    )
+    max_loss_fraction: float = Field(
+        0.01,
+        ge=0,
+        le=1,
+        description="samples missing from the window: above 1 % the link is too bad to "
+        "trust the window's statistics",
+    )
+
+
+@dataclass(frozen=True)
+class WindowVerdict:
+    """How one window fared: the reasons it was refused (empty when still)."""
+
+    reasons: tuple[str, ...]
+    saturated_axes: tuple[str, ...]
+    loss_fraction: float
+    motion: bool
+    window: SampleBlock
+    #: The window's per-axis accelerometer spread (sample standard deviation, counts).
+    accel_std: FloatArray
+
+    @property
+    def still(self) -> bool:
+        """True when nothing refused the window."""
+        return not self.reasons
+
+
+def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdict:
+    """Judge one window of samples.
+
+    Spreads are the window's sample standard deviations (:meth:`SampleBlock.summary`).
+    """
+    acc = block.accel
+    summary = block.summary()
+    reasons: list[str] = []
+    motion = False
+    span = block.span
+    loss = 1.0 - len(block) / span if span > 0 else 0.0
+    if loss > limits.max_loss_fraction:
+        reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
+    saturated = tuple(
+        axis
+        for axis, column in zip(AXES, acc.T, strict=True)
+        if ((column <= ADC_MIN) | (column >= ADC_MAX)).any()
+    )
+    if saturated:
+        reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
+    quarter = max(1, len(block) // 4)
+    drift = np.abs(acc[-quarter:].mean(axis=0) - acc[:quarter].mean(axis=0))
+    for axis, s, d in zip(AXES, summary.accel_std, drift, strict=True):
+        if axis in saturated:
+            continue
+        if s > limits.accel_std_max_counts:
+            reasons.append(f"accel {axis} spread {s:.1f} counts > {limits.accel_std_max_counts:g}")
+            motion = True
+        if d > limits.accel_drift_max_counts:
+            reasons.append(
+                f"accel {axis} drifted {d:.1f} counts > {limits.accel_drift_max_counts:g}"
+            )
+            motion = True
+    nominal_g = (summary.accel_mean - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    magnitude = float(np.linalg.norm(nominal_g))
+    if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
+        reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
+        motion = True
+    for axis, rate, s in zip(AXES, summary.gyro_mean, summary.gyro_std, strict=True):
+        if abs(rate) > limits.gyro_rate_max_dps:
+            reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
+            motion = True
+        if s > limits.gyro_std_max_dps:
+            reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
+            motion = True
+    return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary.accel_std)
+
+
+@dataclass(frozen=True)
+class StillSegment:
+    """Rows ``start`` (included) to ``stop`` (excluded) of a recorded stream, all still."""
+
+    start: int
+    stop: int
+
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+
+def still_segments(block: SampleBlock, limits: StillnessThresholds) -> list[StillSegment]:
+    """The still segments of a recorded stream, in order.
+
+    Every window of ``window_samples`` rows starting at a multiple of ``hop_samples``
+    is judged by :func:`judge_window` (the live judge); still windows that overlap
+    merge into one segment (two that only touch stay apart: a refused window lies
+    between them). A gap in the sequence numbers counts against a
+    window's link loss just as live. Work and memory grow linearly with the rows.
+    """
+    width, hop = limits.window_samples, limits.hop_samples
+    segments: list[StillSegment] = []
+    for start in range(0, len(block) - width + 1, hop):
+        if not judge_window(block[start : start + width], limits).still:
+            continue
+        if segments and start < segments[-1].stop:
+            segments[-1] = StillSegment(segments[-1].start, start + width)
+        else:
+            segments.append(StillSegment(start, start + width))
+    return segments

@@ -1,0 +1,159 @@
+"""The station's configuration: who and where it is, and how it runs units.
+
+Values come, last one winning, from the defaults here, a TOML file (``--config``),
+``CALSTATION_*`` environment variables, and the command line's flags.
+"""
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Self
+from urllib.parse import urlsplit
+
+from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
+
+from station.domain.errors import InputError, validation_problem
+from station.domain.plans import shipped_plan
+from station.domain.quality.golden import GoldenUnit
+from station.domain.run_settings import RunSettings
+from station.results.storage import DatabaseUrl, DataDir, default_data_dir
+
+#: Serial numbers on the putters' labels: PT and six digits.
+SERIAL_PATTERN = r"^PT\d{6}$"
+#: Most slots a fixture holds (one USB serial port each).
+MAX_SLOTS = 8
+
+
+class StationConfig(BaseSettings):
+    """One calibration station."""
+
+    model_config = SettingsConfigDict(env_prefix="CALSTATION_", extra="forbid")
+
+    station_id: str = Field("station-1", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    operator_id: str = Field("operator", pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    #: The production lot of the units being calibrated; recorded on every run.
+    lot: str | None = Field(None, pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")
+    port: str | None = None
+    #: A multi-slot fixture: one putter port per slot (1 to :data:`MAX_SLOTS`); one
+    #: slot is the same as ``port``.
+    slots: tuple[str, ...] = Field((), max_length=MAX_SLOTS)
+    limits_file: Path | None = None
+    limits_profile: str | None = None
+    serial_pattern: str = SERIAL_PATTERN
+    data_dir: DataDir = default_data_dir()
+    database_url: DatabaseUrl | None = None
+    server_url: str | None = None
+    api_key: str | None = None
+    run: RunSettings = RunSettings()
+    #: The golden unit checked at each shift's start (``[golden]``; none: no check).
+    golden: GoldenUnit | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plan_of_the_profile(cls, data: Any) -> Any:
+        """The shipped run plan of the limits profile, under the configured ``[run]`` keys."""
+        if not isinstance(data, dict):
+            return data
+        plan = shipped_plan(data.get("limits_profile"))
+        run = data.get("run", {})
+        if plan is None or not isinstance(run, dict):
+            return data
+        return {**data, "run": {**plan, **run}}
+
+    @field_validator("serial_pattern")
+    @classmethod
+    def _compiles(cls, value: str) -> str:
+        try:
+            re.compile(value)
+        except re.error as exc:
+            raise ValueError(f"not a regular expression: {exc}") from None
+        return value
+
+    @field_validator("server_url")
+    @classmethod
+    def _http(cls, value: str | None) -> str | None:
+        if value is not None and not (
+            urlsplit(value).scheme in ("http", "https") and urlsplit(value).netloc
+        ):
+            raise ValueError(f"{value!r} is not an http:// or https:// URL")
+        return value
+
+    @field_validator("slots")
+    @classmethod
+    def _one_port_per_slot(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        for i, port in enumerate(value):
+            if not port:
+                raise ValueError(f"slot {i + 1} names no port")
+            if port in value[:i]:
+                first = value.index(port) + 1
+                raise ValueError(f"slots {first} and {i + 1} both name the port {port}")
+        return value
+
+    @model_validator(mode="after")
+    def _port_or_slots(self) -> Self:
+        if self.slots and self.port:
+            raise ValueError("give port (one slot) or slots (several ports), not both")
+        if len(self.slots) == 1:  # one slot is the one-port station
+            self.port, self.slots = self.slots[0], ()
+        return self
+
+    @model_validator(mode="after")
+    def _key_for_the_server(self) -> Self:
+        if self.server_url and not self.api_key:
+            raise ValueError(
+                "server_url needs the station's api_key (--api-key, CALSTATION_API_KEY)"
+            )
+        return self
+
+    @property
+    def ports(self) -> tuple[str, ...]:
+        """The putter port of every slot (one for the one-port station, none if unset)."""
+        return self.slots or ((self.port,) if self.port else ())
+
+    @property
+    def journal_path(self) -> Path:
+        """The journal of the run in progress (of the one-port station)."""
+        return self.data_dir.expanduser() / f"journal-{self.station_id}.json"
+
+    def slot_journal_path(self, slot: int) -> Path:
+        """The journal of the run in progress in ``slot`` (1-based) of a fixture."""
+        return self.data_dir.expanduser() / f"journal-{self.station_id}-slot{slot}.json"
+
+    @property
+    def outbox_dir(self) -> Path:
+        """Where finished runs wait to be stored."""
+        return self.data_dir.expanduser() / "outbox"
+
+
+def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
+    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top."""
+    values: dict[str, Any] = {}
+    if path is not None:
+        try:
+            values = tomllib.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(
+                f"{path}: cannot read the station configuration: {exc.strerror}"
+            ) from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"{path}: not valid TOML: {exc}") from None
+    if overrides.get("slots"):  # ports on the command line replace the file's
+        values.pop("port", None)
+        values.pop("slots", None)
+    values.update({k: v for k, v in overrides.items() if v is not None})
+    try:
+        return StationConfig(**values)
+    except ValidationError as exc:
+        where = f"{path}: " if path is not None else ""
+        raise InputError(f"{where}station configuration: {validation_problem(exc)}") from None
+    except SettingsError as exc:  # an environment variable that is not valid JSON
+        raise InputError(f"station configuration: {_env_problem(exc)}") from None
+
+
+def _env_problem(exc: SettingsError) -> str:
+    """``CALSTATION_RUN: not valid JSON (…)`` from pydantic-settings' error."""
+    field = re.search(r'field "([^"]+)"', str(exc))
+    name = f"CALSTATION_{field.group(1).upper()}" if field else "a CALSTATION_ variable"
+    cause = exc.__cause__
+    return f"{name}: not valid JSON ({cause})" if cause is not None else f"{name}: {exc}"

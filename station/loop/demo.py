@@ -1,0 +1,99 @@
+"""The demo's scripted operator and its virtual putters.
+
+For each unit the operator takes a new virtual putter (its own seed, so its own true
+offsets and sensitivities), plugs it into the station's port (a pty under a fixed
+name), scans its serial number, and moves it into every pose the station asks for,
+with the handling motion and settling tremor of a person. The station runs exactly
+as on the line; only its keys come from here instead of a keyboard.
+"""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from station.simulator.putter import VirtualPutter
+
+#: Simulated seconds an operator takes to turn the putter into the next pose.
+MOVE_S = 1.5
+
+
+@dataclass
+class DemoUnit:
+    """One unit of the demo and the truth to compare the station's estimate with."""
+
+    serial: str
+    putter: VirtualPutter
+
+    def truth(self) -> dict[str, Any]:
+        """The unit's true offsets (counts) and sensitivities (counts/g) at 25 °C, and its
+        gyro matrix K in body axes."""
+        t = self.putter.truth
+        return {
+            "offset": dict(zip("xyz", map(float, t.offset_counts), strict=True)),
+            "sensitivity": dict(zip("xyz", map(float, t.sensitivity_counts_per_g), strict=True)),
+            "gyro_matrix": t.gyro_matrix.tolist(),
+        }
+
+
+#: The demo operator's answers to the station's questions (see :class:`ScriptedOperator`).
+ANSWERS = {"confirm": "y", "resume": "n"}
+
+
+@dataclass
+class ScriptedOperator:
+    """Plays the operator: plugs units in, scans them, moves them as asked.
+
+    ``station`` is the :class:`station.loop.app.StationApp` it serves (set before its
+    first :meth:`read`); ``port`` the pty name the station opens. A unit that passed in
+    an earlier demo on the same data is calibrated again (y); a unit an earlier demo
+    left interrupted is discarded (n): its virtual putter went with that process.
+    """
+
+    units: int
+    port: Path
+    seed: int = 0
+    speed: float = 10.0
+    station: Any = None
+    done: list[DemoUnit] = field(default_factory=list)
+    _current: DemoUnit | None = None
+    _moved_to: str | None = None
+
+    def read(self) -> str:
+        """The keys the operator types now; also moves the unit in the operator's hands."""
+        app = self.station
+        if app.prompt.state in ANSWERS:
+            return ANSWERS[app.prompt.state]
+        if app.prompt.state == "serial":
+            if self._current is not None:
+                self._current.putter.close()
+                self.done.append(self._current)
+                self._current = None
+            if len(self.done) >= self.units:
+                raise EOFError
+            return self._next_unit() + "\n"
+        run = app.run
+        if run is not None and self._current is not None:
+            target = run.requested
+            if target is not None and target.name != self._moved_to:
+                self._moved_to = target.name
+                putter = self._current.putter
+                if (putter.orientation.inv() * target.rotation).magnitude() > 1e-9:
+                    putter.move_to(target.name, MOVE_S)
+        return ""
+
+    def _next_unit(self) -> str:
+        number = len(self.done) + 1
+        serial = f"PT{self.seed % 1000:03d}{number:03d}"
+        putter = VirtualPutter(seed=self.seed * 1000 + number, serial=serial, speed=self.speed)
+        self.port.parent.mkdir(parents=True, exist_ok=True)
+        putter.serve_pty(self.port)
+        self._current = DemoUnit(serial, putter)
+        self._moved_to = None
+        return serial
+
+    def close(self) -> None:
+        """Unplug whatever unit is still connected."""
+        if self._current is not None:
+            self._current.putter.close()
+            self.done.append(self._current)
+            self._current = None

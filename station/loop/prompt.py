@@ -1,0 +1,156 @@
+"""What the station waits for from the operator, and what the keys typed mean.
+
+:class:`Prompt` holds the questions the station has asked (resume an interrupted unit?
+calibrate a passed unit again? abort this unit?), the serial number typed so far and
+the note shown under the prompt. It turns keys into answers (:data:`Answer`) for the
+station's loop (:class:`station.loop.app.StationApp`), which acts on them; keys during a
+unit go to the run (redo, abort) or toggle the help. It draws its part of the screen
+(:meth:`Prompt.screen`): the question asked, the unit in progress, or the last verdict
+and the serial prompt.
+"""
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+from rich.console import Group, RenderableType
+from rich.text import Text
+
+from station.domain.records import RunRecord
+from station.loop.screens import serial_prompt, unit_screen, verdict_screen
+from station.results.journal import RunJournal
+from station.run.unit_run import UnitRun
+from station.run.view import RunView
+
+ENTER = ("\r", "\n")
+BACKSPACE = ("\x7f", "\b")
+
+
+class State(StrEnum):
+    """What the station waits for."""
+
+    RESUME = "resume"
+    SERIAL = "serial"
+    CONFIRM = "confirm"
+    UNIT = "unit"
+
+
+@dataclass(frozen=True)
+class Serial:
+    """A serial number typed (or scanned) and entered."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Resume:
+    """The answer to "resume the interrupted unit?": ``yes`` (resume) or not (discard)."""
+
+    journal: RunJournal
+    yes: bool
+
+
+@dataclass(frozen=True)
+class Recalibrate:
+    """The answer to "passed already: calibrate again?"."""
+
+    yes: bool
+
+
+Answer = Serial | Resume | Recalibrate
+
+
+def edit_line(typed: str, key: str) -> tuple[str, str | None]:
+    """The line typed so far after ``key``, and the line entered (stripped) on Enter."""
+    if key in ENTER:
+        return "", typed.strip()
+    if key in BACKSPACE:
+        return typed[:-1], None
+    return (typed + key if key.isprintable() else typed), None
+
+
+class Prompt:
+    """The question asked, the serial typed so far, the note under the prompt."""
+
+    def __init__(self) -> None:
+        self.state = State.SERIAL
+        self.typed = ""
+        self.note: str | None = None
+        #: The journal of an interrupted unit, while RESUME asks about it.
+        self.pending_resume: RunJournal | None = None
+        self.show_help = False
+        self.confirm_abort = False
+
+    def ask_resume(self, journal: RunJournal) -> None:
+        """Ask whether to resume the unit ``journal`` left at a crash."""
+        self.pending_resume = journal
+        self.state = State.RESUME
+
+    def unit_done(self) -> None:
+        """The unit ended: back to the serial prompt, questions and help closed."""
+        self.state = State.SERIAL
+        self.confirm_abort = False
+        self.show_help = False
+
+    def screen(self, run: RunView | None, last_record: RunRecord | None) -> RenderableType:
+        """The part of the screen under the header: the question asked, or the unit."""
+        parts: list[RenderableType] = []
+        if self.state is State.RESUME and self.pending_resume is not None:
+            j = self.pending_resume
+            parts.append(
+                Text(
+                    f"Unit {j.serial} was interrupted at pose {j.next_pose + 1} of {len(j.poses)}. "
+                    "Resume it? press y (resume) or n (discard)",
+                    style="bold yellow",
+                )
+            )
+        elif self.state is State.CONFIRM and self.note:
+            parts.append(Text(self.note, style="bold yellow"))
+        elif self.state is State.UNIT and run is not None:
+            parts.append(unit_screen(run, self.show_help))
+            if self.confirm_abort:
+                parts.append(
+                    Text(
+                        "abort this unit? press y to confirm, any other key to go on",
+                        style="bold red",
+                    )
+                )
+        else:
+            if last_record is not None:
+                parts.append(verdict_screen(last_record))
+            parts.append(serial_prompt(self.typed, self.note))
+        return Group(*parts)
+
+    def key(self, key: str, run: UnitRun | None) -> Answer | None:
+        """What ``key`` answers (None: nothing to act on, or acted on ``run`` already)."""
+        if self.state is State.RESUME:
+            journal = self.pending_resume
+            self.pending_resume = None
+            self.state = State.SERIAL
+            return None if journal is None else Resume(journal, key.lower() == "y")
+        if self.state is State.SERIAL:
+            return self._serial_key(key)
+        if self.state is State.CONFIRM:
+            self.state = State.SERIAL
+            return Recalibrate(key.lower() == "y")
+        if run is not None:
+            self._unit_key(run, key)
+        return None
+
+    def _serial_key(self, key: str) -> Serial | None:
+        self.typed, entered = edit_line(self.typed, key)
+        return Serial(entered) if entered else None
+
+    def _unit_key(self, run: UnitRun, key: str) -> None:
+        if self.confirm_abort:
+            self.confirm_abort = False
+            if key.lower() == "y":
+                run.abort()
+            return
+        if key in ("h", "?"):
+            self.show_help = not self.show_help
+        elif key == "r":
+            run.redo_last()
+        elif key.isdigit() and key != "0":
+            run.redo(int(key) - 1)
+        elif key == "a":
+            self.confirm_abort = True

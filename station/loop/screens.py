@@ -1,0 +1,199 @@
+"""What the operator sees: rich renderables built from the station's state.
+
+Pure functions of their arguments (no I/O), so the same screens serve the live
+terminal, the demo's scripted operator and the tests.
+"""
+
+from rich.align import Align
+from rich.console import Group, RenderableType
+from rich.panel import Panel
+from rich.table import Table
+from rich.text import Text
+
+from station.domain.poses import Pose
+from station.domain.records import RunRecord
+from station.run.operator_text import pose_words, wrong_unit
+from station.run.phases import Phase
+from station.run.view import RunView
+
+#: Small drawings of the putter in each named pose (head ▣, shaft ║ or ═, grip ▓).
+DRAWINGS: dict[str, str] = {
+    "face_up": "   face ↑\n ▣═════════▓\n (lying on its back)",
+    "face_down": " ▣═════════▓\n   face ↓\n (lying face down)",
+    "toe_up": "  toe ↑\n  ▣═════════▓\n  heel on the table",
+    "toe_down": "  heel ↑\n  ▣═════════▓\n  toe on the table",
+    "shaft_up": "  ▓\n  ║\n  ║\n  ▣  head down, shaft up",
+    "shaft_down": "  ▣  head up, grip down\n  ║\n  ║\n  ▓",
+    "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   tilted cradle",
+}
+
+BANNER = {
+    "pass": (
+        " ████   ███   ████  ████ ",
+        " █   █ █   █ █     █     ",
+        " ████  █████  ███   ███  ",
+        " █     █   █     █     █ ",
+        " █     █   █ ████  ████  ",
+    ),
+    "fail": (
+        " █████  ███  ███ █     ",
+        " █     █   █  █  █     ",
+        " ████  █████  █  █     ",
+        " █     █   █  █  █     ",
+        " █     █   █ ███ █████ ",
+    ),
+}
+
+#: What each disposition tells the operator, under the verdict.
+NEXT_STEP: dict[str, tuple[str, str]] = {
+    "ship": ("SHIP: the unit holds verified coefficients; put it with the good units", "green"),
+    "retest": ("RETEST: calibrate this unit again", "yellow"),
+    "rework": ("REWORK: take the unit to the repair bench; do not calibrate it again", "red"),
+}
+
+KEYS_HELP = "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help"
+HELP = """\
+The station asks for one pose at a time. Put the putter in the pose shown, let go,
+and keep hands off: the capture starts by itself once it lies still in that pose.
+
+  r      redo the last pose taken
+  1…9    redo pose number N, once taken (its old capture is kept for audit)
+  a      abort this unit (press a, then y to confirm)
+  h, ?   show or hide this help
+
+At the serial prompt: scan the label (or type it and press Enter); type quit to stop."""
+
+
+def header(
+    station_id: str,
+    operator_id: str,
+    versions: str,
+    backlog: int,
+    set_aside: tuple[int, int] = (0, 0),
+) -> RenderableType:
+    """The top lines: who, how many runs wait in the outbox (and were set aside), versions."""
+    backlog_text = f"outbox {backlog}" if backlog else "outbox empty"
+    style = "bold yellow" if backlog else "green"
+    unreadable, refused = set_aside
+    aside = [f"{unreadable} unreadable"] if unreadable else []
+    aside += [f"{refused} refused"] if refused else []
+    who = Text.assemble(
+        ("calstation", "bold"),
+        f" · station {station_id} · operator {operator_id} · ",
+        (backlog_text, style),
+        (f" · {' · '.join(aside)} (calstation outbox list)" if aside else "", "bold red"),
+    )
+    return Group(who, Text(versions, style="dim"))
+
+
+def _meter(value: float, limit: float, label: str, unit: str) -> Text:
+    ratio = min(value / limit, 2.0) if limit > 0 else 0.0
+    filled = round(ratio * 10)
+    style = "green" if ratio <= 1 else "red"
+    bar = "▇" * min(filled, 20) + "·" * max(0, 10 - filled)
+    return Text.assemble(f"{label:<6}", (bar, style), f" {value:5.2f} / {limit:g} {unit}")
+
+
+def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
+    """The screen while a unit is calibrated, drawn from the run's view model."""
+    total = len(view.poses)
+    target: Pose | None = view.requested
+    parts: list[RenderableType] = []
+    title = f"unit {view.serial}"
+    if view.phase is Phase.RECONNECT and view.wrong_unit is not None:
+        parts.append(Text(wrong_unit(view.wrong_unit, view.serial).upper(), style="bold red"))
+    elif view.phase is Phase.RECONNECT:
+        parts.append(
+            Text("CABLE PULLED — plug the unit back in; the poses taken are kept", style="bold red")
+        )
+    elif view.phase is Phase.UNIT_OUTPUT:
+        parts.append(
+            Text("checking the unit's own calibrated output — keep it still", style="bold")
+        )
+    elif target is not None:
+        step = Text.assemble(
+            (f"pose {view.index + 1} of {total}: {pose_words(target.name)}", "bold cyan"),
+            f" — {target.instruction}",
+        )
+        parts.append(step)
+        parts.append(Text(DRAWINGS.get(target.name, ""), style="cyan"))
+        live = view.live
+        if live.sensed is not None:
+            ok = "✓ matches" if live.matches else "✗ not the pose asked for"
+            parts.append(
+                Text.assemble(
+                    "station sees: ",
+                    (pose_words(live.sensed.nearest.name), "bold"),
+                    f" ({live.sensed.nearest_deg:.0f}° off)  ",
+                    (ok, "green" if live.matches else "red"),
+                )
+            )
+        limits = view.stillness
+        parts.append(
+            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, "accel", "counts")
+        )
+        parts.append(
+            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, "gyro", "deg/s")
+        )
+        state = "moving" if live.moving else "still"
+        filled = round(live.progress * 30)
+        refused = live.refused is not None and live.progress >= 1.0
+        parts.append(
+            Text.assemble(
+                f"capture ({state}) ",
+                ("█" * filled, "red" if refused else "green"),
+                ("░" * (30 - filled), "dim"),
+                " refused" if refused else f" {live.progress:4.0%}",
+            )
+        )
+        if live.refused is not None:
+            parts.append(Text(live.refused, style="bold yellow"))
+    poses = Text()
+    for i, p in enumerate(view.poses):
+        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
+        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
+        poses.append(f" {mark}{i + 1} {pose_words(p.name)}", style=style)
+    parts.append(poses)
+    for message in view.messages:
+        style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
+        parts.append(Text(message.text, style=style))
+    parts.append(Text(HELP if show_help else KEYS_HELP, style="dim"))
+    return Panel(Group(*parts), title=title, border_style="cyan")
+
+
+def verdict_screen(record: RunRecord) -> RenderableType:
+    """The large PASS or FAIL banner with every failing check named."""
+    style = "bold white on green" if record.verdict == "pass" else "bold white on red"
+    big = Text("\n".join(BANNER[record.verdict]), style=style, justify="left", no_wrap=True)
+    lines: list[RenderableType] = [
+        Align.center(big),
+        Text(f"{record.verdict.upper()}  unit {record.serial}", style="bold", justify="center"),
+    ]
+    if record.coefficients is not None:
+        c = record.coefficients
+        table = Table(box=None, show_header=True, pad_edge=False)
+        table.add_column("axis")
+        table.add_column("offset (counts)", justify="right")
+        table.add_column("sensitivity (counts/g)", justify="right")
+        for axis in ("x", "y", "z"):
+            table.add_row(
+                axis, f"{getattr(c.offset, axis):.2f}", f"{getattr(c.sensitivity, axis):.2f}"
+            )
+        lines.append(Align.center(table))
+    for failure in record.failures:
+        lines.append(Text(f"✗ {failure.code}: {failure.message}", style="red"))
+    if record.disposition is not None:
+        step, colour = NEXT_STEP[record.disposition]
+        lines.append(Text(f"next: {step}", style=f"bold {colour}", justify="center"))
+    lines.append(Text(f"run {record.run_id}", style="dim", justify="center"))
+    return Panel(Group(*lines), border_style="green" if record.verdict == "pass" else "red")
+
+
+def serial_prompt(typed: str, note: str | None) -> RenderableType:
+    """The prompt for the next unit's serial number."""
+    parts: list[RenderableType] = [
+        Text.assemble(("Scan the next unit's serial number: ", "bold"), typed, ("█", "blink"))
+    ]
+    if note:
+        parts.append(Text(note, style="yellow"))
+    return Group(*parts)

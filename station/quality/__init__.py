@@ -1,8 +1,0 @@
-"""What the end-of-line report says, apart from how it is computed or shown.
-
-Domain, like :mod:`station.records` and :mod:`station.limits`: the report's figures
-(``figures``: :class:`~station.quality.figures.EolReport` and its parts), the
-parameters it measures and the limits it measures them against (``parameters``), and
-the capability statistics (``capability``). :mod:`db.reports` fills the figures with SQL;
-:mod:`station.report` renders them.
-"""

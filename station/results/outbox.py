@@ -1,0 +1,243 @@
+"""The station's outbox: every finished run goes here first, then to the store.
+
+A run is written to the outbox (one JSON file per run UUID, atomically) before any
+attempt to store it, and removed only once the store confirmed it. The stores are
+idempotent on the run UUID, so a record sent twice (a crash between the store's
+answer and the removal) is still stored once. Nothing in the outbox stops it:
+
+- the store unreachable, or refusing this station's key or URL: the pass stops and
+  every record waits (the operator sees why);
+- the store failing on one record (a 500, a database error on its rows): that record
+  is retried with backoff (:mod:`station.results.backoff`) and the ones behind it go on;
+- the store saying the record itself is invalid (400, 409, 413, 422): it moves to
+  ``refused/`` with the reason;
+- a file that is not a readable run record: it moves to ``unreadable/`` with the
+  reason (:mod:`station.results.outbox_files`);
+- the disk refusing the record's file (full, read-only): the record is kept in memory,
+  written again at every sync and sent from memory meanwhile.
+"""
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+
+from station.domain.records import RunRecord
+from station.results.backoff import RecordBackoff
+from station.results.files import write_atomic
+from station.results.outbox_files import UnreadableRecordError, read_record, set_aside
+from station.results.storage import (
+    RecordFailedError,
+    RunStore,
+    StoreUnavailableError,
+    SubmissionRefusedError,
+)
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class SyncResult:
+    """What one sync did, what still waits, and why it stopped early (``error``)."""
+
+    stored: int
+    refused: int
+    pending: int
+    error: str | None = None
+    #: Files set aside as unreadable in this pass.
+    unreadable: int = 0
+    #: Waiting records the store failed on, retried with backoff, and one such reason.
+    failing: int = 0
+    failure: str | None = None
+
+    def note(self) -> str | None:
+        """One plain line for the operator about this sync (None when all went well)."""
+        lines = []
+        if self.error is not None:
+            lines.append(f"{waiting(self.pending)}: {self.error}")
+        if self.failing:
+            lines.append(
+                f"the store keeps failing on {_runs(self.failing)} ({self.failure}): "
+                "retried with backoff, the others are sent"
+            )
+        aside = [f"{self.refused} refused"] if self.refused else []
+        aside += [f"{self.unreadable} unreadable"] if self.unreadable else []
+        if aside:
+            lines.append(f"{' and '.join(aside)} set aside: see calstation outbox list")
+        return " · ".join(lines) or None
+
+
+class Outbox:
+    """A directory of run records waiting to be stored."""
+
+    def __init__(self, directory: Path, *, backoff: RecordBackoff | None = None) -> None:
+        self.directory = directory
+        self.refused_dir = directory / "refused"
+        self.unreadable_dir = directory / "unreadable"
+        self.backoff = backoff or RecordBackoff()
+        #: Records the disk refused to hold, oldest first, kept until written or stored.
+        self.unwritten: list[RunRecord] = []
+        #: Why the latest write failed (None once a write succeeded).
+        self.write_error: OSError | None = None
+        directory.mkdir(parents=True, exist_ok=True)
+
+    def put(self, record: RunRecord) -> None:
+        """Keep ``record`` until it is stored: on disk, or in memory if the disk refuses."""
+        self.unwritten.append(record)
+        self.flush()
+
+    def flush(self) -> None:
+        """Write the records kept in memory, oldest first, until the disk refuses one."""
+        while self.unwritten:
+            record = self.unwritten[0]
+            try:
+                write_atomic(self._path(record), record.model_dump_json())
+            except OSError as exc:
+                if self.write_error is None:
+                    log.error("cannot write run %s to the outbox: %s", record.run_id, exc)
+                self.write_error = exc
+                return
+            self.unwritten.pop(0)
+        self.write_error = None
+
+    def pending(self) -> list[Path]:
+        """The waiting records' files, oldest first."""
+        return sorted(self.directory.glob("*.json"), key=_age)
+
+    def count(self) -> int:
+        """How many runs wait to be stored (on disk and in memory)."""
+        return len(self.pending()) + len(self.unwritten)
+
+    def set_aside(self) -> tuple[int, int]:
+        """How many files were set aside: (unreadable, refused)."""
+        return _count(self.unreadable_dir), _count(self.refused_dir)
+
+    def sync(self, store: RunStore) -> SyncResult:
+        """Send every waiting record that is due, oldest first.
+
+        Stops at the first sign the store is unreachable or refuses this station.
+        """
+        self.flush()
+        tally = _Tally()
+        try:
+            for record in list(self.unwritten):
+                self._send(store, record, tally, partial(self.unwritten.remove, record))
+            if not self.unwritten:
+                self.write_error = None  # whatever the disk refused is stored now
+            for path in self.pending():
+                self._send_file(store, path, tally)
+        except StoreUnavailableError as exc:
+            return tally.result(self, str(exc))
+        return tally.result(self, None)
+
+    def _send_file(self, store: RunStore, path: Path, tally: "_Tally") -> None:
+        if not self.backoff.due(path.name):
+            return
+        try:
+            record = read_record(path)
+        except UnreadableRecordError as exc:
+            log.warning("outbox file %s is unreadable: %s", path.name, exc)
+            if set_aside(path, self.unreadable_dir, str(exc)):
+                tally.unreadable += 1
+                self.backoff.forget(path.name)
+            else:
+                self.backoff.failed(path.name, f"unreadable and cannot be moved aside: {exc}")
+            return
+        self._send(store, record, tally, lambda: _remove(path), path)
+
+    def _send(
+        self,
+        store: RunStore,
+        record: RunRecord,
+        tally: "_Tally",
+        done: Callable[[], None],
+        path: Path | None = None,
+    ) -> None:
+        """Submit one record; ``done`` forgets it once stored."""
+        name = _name(record)
+        if not self.backoff.due(name):
+            return
+        try:
+            store.submit(record)
+        except RecordFailedError as exc:
+            wait = self.backoff.failed(name, str(exc))
+            log.warning("%s; next try in %.0f s, the other runs go on", exc, wait)
+            return
+        except SubmissionRefusedError as exc:
+            log.warning("run %s refused by the store: %s", record.run_id, exc)
+            if path is None:
+                path = self._path(record)
+                try:
+                    write_atomic(path, record.model_dump_json())
+                except OSError:
+                    self.backoff.failed(name, str(exc))
+                    return
+                done()
+            if set_aside(path, self.refused_dir, str(exc)):
+                tally.refused += 1
+                self.backoff.forget(name)
+            else:
+                self.backoff.failed(name, str(exc))
+            return
+        done()
+        self.backoff.forget(name)
+        tally.stored += 1
+
+    def _path(self, record: RunRecord) -> Path:
+        return self.directory / _name(record)
+
+
+@dataclass
+class _Tally:
+    stored: int = 0
+    refused: int = 0
+    unreadable: int = 0
+
+    def result(self, outbox: Outbox, error: str | None) -> SyncResult:
+        waiting = {p.name for p in outbox.pending()} | {_name(r) for r in outbox.unwritten}
+        failures = outbox.backoff.reasons(waiting)
+        return SyncResult(
+            stored=self.stored,
+            refused=self.refused,
+            pending=len(waiting),
+            error=error,
+            unreadable=self.unreadable,
+            failing=len(failures),
+            failure=next(reversed(failures.values()), None),
+        )
+
+
+def _runs(n: int) -> str:
+    return f"{n} run{'s' * (n != 1)}"
+
+
+def waiting(n: int) -> str:
+    """ "1 run waits in the outbox", "3 runs wait in the outbox": a note's first words."""
+    return f"{_runs(n)} wait{'s' * (n == 1)} in the outbox"
+
+
+def _name(record: RunRecord) -> str:
+    return f"{record.run_id}.json"
+
+
+def _age(path: Path) -> tuple[int, str]:
+    try:
+        return path.stat().st_mtime_ns, path.name
+    except OSError:
+        return 0, path.name
+
+
+def _count(directory: Path) -> int:
+    try:
+        return sum(1 for _ in directory.glob("*.json"))
+    except OSError:
+        return 0
+
+
+def _remove(path: Path) -> None:
+    """Forget a stored record's file; if the disk refuses, it is sent again (idempotent)."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError as exc:
+        log.error("run stored but %s cannot be removed (%s): it will be sent again", path, exc)

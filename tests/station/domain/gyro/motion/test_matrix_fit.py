@@ -1,0 +1,145 @@
+"""K and the bias recovered from synthetic streams with known truth ([Tedaldi2014])."""
+
+import functools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from station.domain.calibration.synthetic import spread_directions
+from station.domain.gyro.motion import GyroMatrixError, Move, calibrate_stream, fit_gyro_matrix
+from station.domain.gyro.motion.synthetic import (
+    StreamPlan,
+    SyntheticImu,
+    pose_orientations,
+    random_imu,
+    synthetic_stream,
+)
+
+#: Small and fast: 200 samples/s, 1.5 s stills, 1 s moves.
+PLAN = StreamPlan(rate_hz=200.0, still_s=1.5, move_s=1.0)
+QUIET = StreamPlan(
+    rate_hz=200.0, still_s=1.5, move_s=1.0, accel_noise_counts=0.0, gyro_noise_dps=0.0
+)
+#: What the integration itself may leave at 200 samples/s (trapezoid steps, 1 s turns).
+INTEGRATION_FLOOR = 1e-4
+
+
+def _unit_and_stream(seed: int, plan: StreamPlan, poses: int = 12) -> tuple[SyntheticImu, object]:
+    rng = np.random.default_rng(seed)
+    imu = random_imu(rng)
+    return imu, synthetic_stream(rng, imu, pose_orientations(rng, spread_directions(poses)), plan)
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_noise_free_stream_gives_k_to_the_integration_floor(seed: int) -> None:
+    imu, stream = _unit_and_stream(seed, QUIET)
+    result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
+    assert len(result.stills) == 12
+    error = result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine")
+    assert np.abs(error).max() < INTEGRATION_FLOOR
+    assert np.allclose(result.bias_dps, imu.bias_dps, atol=1e-12)
+
+
+@settings(max_examples=6, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_noisy_stream_gives_k_within_its_standard_errors(seed: int) -> None:
+    """Errors within 5 σ of the fit's own standard errors (plus the integration floor);
+    the bias within 5 σ of the gyro noise over the still samples."""
+    imu, stream = _unit_and_stream(seed, PLAN)
+    result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
+    se = result.gyro.standard_errors
+    error = np.abs(result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine"))
+    assert (error <= 5 * se + INTEGRATION_FLOOR).all(), (error, se)
+    still_samples = sum(len(s) for s in result.stills)
+    bias_sigma = PLAN.gyro_noise_dps / np.sqrt(still_samples)
+    assert np.abs(result.bias_dps - imu.bias_dps).max() < 5 * bias_sigma
+    # The fit explains the moves far better than no gyro calibration does.
+    assert result.gyro.residual_rms_deg < 0.1
+    assert np.median(result.gyro.residual_identity_deg) > 5 * result.gyro.residual_rms_deg
+
+
+def test_six_parameter_accelerometer_skews_k_on_cross_axis_units() -> None:
+    """2 % cross-axis: the six-parameter gravity directions leave K far off (issue #17)."""
+    imu, stream = _unit_and_stream(5, PLAN)
+    six = calibrate_stream(stream, "six")  # type: ignore[arg-type]
+    nine = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
+    error_six = np.abs(six.gyro.scale_matrix - imu.k_in_calibrated_frame("six")).max()
+    error_nine = np.abs(nine.gyro.scale_matrix - imu.k_in_calibrated_frame("nine")).max()
+    assert error_six > 10 * error_nine
+
+
+@functools.cache
+def _calibrated(seed: int) -> tuple[tuple[Move, ...], np.ndarray]:
+    imu, stream = _unit_and_stream(seed, QUIET, poses=9)
+    result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
+    return tuple(result.moves), imu.bias_dps
+
+
+def _moves_of(seed: int) -> tuple[list[Move], np.ndarray]:
+    moves, bias = _calibrated(seed)
+    return list(moves), bias
+
+
+@settings(max_examples=10, deadline=None)
+@given(
+    seed=st.integers(0, 1),
+    which=st.integers(0, 7),
+    where=st.floats(0.05, 0.95),
+    lost=st.integers(1, 20),
+)
+def test_a_gap_makes_that_move_unusable_and_says_so(
+    seed: int, which: int, where: float, lost: int
+) -> None:
+    moves, bias = _moves_of(seed)
+    move = moves[which]
+    k = int(where * (len(move.t) - 2)) + 1
+    gapped = Move(
+        t=np.concatenate([move.t[:k], move.t[k + lost :]]),
+        rates_dps=np.concatenate([move.rates_dps[:k], move.rates_dps[k + lost :]]),
+        gravity_before=move.gravity_before,
+        gravity_after=move.gravity_after,
+    )
+    if len(gapped.t) < 2:
+        return
+    moves[which] = gapped
+    fit = fit_gyro_matrix(moves, bias)
+    assert [u.index for u in fit.unusable] == [which]
+    assert "gap" in fit.unusable[0].reason
+    assert which not in fit.used
+    assert len(fit.residual_deg) == len(moves) - 1
+
+
+def test_too_few_usable_moves_refuse_naming_them() -> None:
+    moves, bias = _moves_of(0)
+    broken = [
+        Move(m.t[::-1], m.rates_dps, m.gravity_before, m.gravity_after) if i < 4 else m
+        for i, m in enumerate(moves)
+    ]
+    with pytest.raises(GyroMatrixError, match=r"needs 6 usable moves, got 4 of 8.*move 0: time"):
+        fit_gyro_matrix(broken, bias)
+
+
+def test_moves_about_one_axis_do_not_determine_k() -> None:
+    """Turns about body z only: the x/y columns of K are not seen."""
+    t = np.linspace(0.0, 1.0, 201)
+    moves = []
+    for angle in (0.5, -1.0, 1.5, -0.7, 1.2, -0.4):
+        rates = np.tile(np.degrees([0.0, 0.0, angle]), (201, 1))
+        before = np.array([1.0, 0.0, 0.0])
+        c, s = np.cos(angle), np.sin(angle)
+        after = np.array([c, -s, 0.0])
+        moves.append(Move(t, rates, before, after))
+    with pytest.raises(GyroMatrixError, match="too few axes"):
+        fit_gyro_matrix(moves, np.zeros(3))
+
+
+def test_five_moves_are_refused_unless_asked_for() -> None:
+    moves, bias = _moves_of(0)
+    with pytest.raises(GyroMatrixError, match="needs 6 usable moves, got 5 of 5"):
+        fit_gyro_matrix(moves[:5], bias)
+    assert len(fit_gyro_matrix(moves[:5], bias, min_moves=5).used) == 5
+    with pytest.raises(ValueError, match="no degree of freedom"):
+        fit_gyro_matrix(moves, bias, min_moves=4)

@@ -1,0 +1,154 @@
+"""Limits profiles: reading, hashing, checking."""
+
+import math
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from station.domain.errors import InputError
+from station.domain.limits import Bounds, check, load_profile, load_profiles
+from station.domain.sensor import (
+    NOMINAL_OFFSET_COUNTS,
+    NOMINAL_SENSITIVITY_COUNTS_PER_G,
+    OFFSET_SPREAD_COUNTS,
+)
+
+PROFILE = """
+[profiles.line-a]
+version = "7"
+offset_counts = { lower = 1841.0, upper = 2255.0 }
+sensitivity_counts_per_g = { lower = 778.24, upper = 860.16 }
+verification_error_mg = { upper = 30.0 }
+pose_noise_counts = { upper = 8.0 }
+gyro_bias_dps = { lower = -10.0, upper = 10.0 }
+link_loss = { upper = 0.01 }
+writeback_relative_error = { upper = 1e-6 }
+"""
+
+
+def test_shipped_profile_holds_the_datasheet_bounds() -> None:
+    profile = load_profile()
+    assert profile.name == "kxm52-production"
+    assert profile.offset_counts.lower == NOMINAL_OFFSET_COUNTS - OFFSET_SPREAD_COUNTS
+    assert profile.offset_counts.upper == NOMINAL_OFFSET_COUNTS + OFFSET_SPREAD_COUNTS
+    assert profile.sensitivity_counts_per_g.lower == pytest.approx(
+        NOMINAL_SENSITIVITY_COUNTS_PER_G * 0.95
+    )
+    assert profile.sensitivity_counts_per_g.upper == pytest.approx(
+        NOMINAL_SENSITIVITY_COUNTS_PER_G * 1.05
+    )
+
+
+def test_hash_ignores_layout_but_not_bounds(tmp_path: Path) -> None:
+    a = tmp_path / "a.toml"
+    a.write_text(PROFILE)
+    b = tmp_path / "b.toml"
+    b.write_text("# comment\n" + PROFILE.replace(" = ", "="))
+    c = tmp_path / "c.toml"
+    c.write_text(PROFILE.replace("upper = 30.0", "upper = 31.0"))
+    ha, hb, hc = (load_profile(p).sha256 for p in (a, b, c))
+    assert ha == hb
+    assert ha != hc
+    assert load_profile(a).ref.version == "7"
+
+
+def test_check_returns_a_typed_reason_with_the_bounds() -> None:
+    profile = load_profile()
+    assert check(profile, "offset", 2048.0, axis="x") is None
+    reason = check(profile, "sensitivity", 870.5, axis="z")
+    assert reason is not None
+    assert (reason.code, reason.measured, reason.lower, reason.upper, reason.axis) == (
+        "sensitivity",
+        870.5,
+        778.24,
+        860.16,
+        "z",
+    )
+    assert reason.message == "sensitivity z 870.5 counts/g outside [778.24, 860.16]"
+    noisy = check(profile, "pose_noise", 9.5, axis="y", pose=2)
+    assert noisy is not None
+    assert noisy.pose == 2
+    assert "(pose 3)" in noisy.message
+
+
+def test_nan_always_fails() -> None:
+    reason = check(load_profile(), "verification_error", math.nan)
+    assert reason is not None
+    assert reason.measured is None
+
+
+@given(low=st.floats(-1e6, 1e6), width=st.floats(0, 1e6), value=st.floats(-3e6, 3e6))
+def test_bounds_contain_exactly_the_closed_interval(low: float, width: float, value: float) -> None:
+    bounds = Bounds(lower=low, upper=low + width)
+    assert bounds.contains(value) == (low <= value <= low + width)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("not toml [", "not valid TOML"),
+        ("[other]\nx = 1\n", "no [profiles.NAME] tables"),
+        (PROFILE.replace('version = "7"\n', ""), "profile line-a: version: Field required"),
+        (PROFILE.replace("upper = 30.0", "upper = -1.0, lower = 2.0"), "verification_error_mg"),
+        (PROFILE + "bogus = 1\n", "profile line-a: bogus"),
+    ],
+)
+def test_bad_profile_files_name_the_problem(tmp_path: Path, content: str, message: str) -> None:
+    path = tmp_path / "limits.toml"
+    path.write_text(content)
+    with pytest.raises(InputError, match=message.replace("[", r"\[")) as info:
+        load_profiles(path)
+    assert str(path) in str(info.value)
+
+
+def test_unknown_profile_lists_the_known_ones(tmp_path: Path) -> None:
+    path = tmp_path / "limits.toml"
+    path.write_text(PROFILE)
+    with pytest.raises(InputError, match=r"'line-b' not found \(known: line-a\)"):
+        load_profile(path, "line-b")
+    with pytest.raises(InputError, match="cannot read"):
+        load_profiles(tmp_path / "missing.toml")
+
+
+def test_a_fit_residual_limit_is_optional_and_hashes_only_when_set(tmp_path: Path) -> None:
+    plain = tmp_path / "plain.toml"
+    plain.write_text(PROFILE)
+    limited = tmp_path / "limited.toml"
+    limited.write_text(PROFILE + "fit_residual_counts = { upper = 5.0 }\n")
+    without, with_limit = load_profile(plain), load_profile(limited)
+    assert without.max_residual_counts is None
+    assert "fit_residual_counts" not in without.document  # hashes as before the setting
+    assert with_limit.max_residual_counts == 5.0
+    assert with_limit.sha256 != without.sha256
+    assert load_profile().max_residual_counts is None  # the shipped profile: the default
+
+
+def test_the_six_pose_profile_hashes_as_before_the_gyro_bounds_existed() -> None:
+    # The SHA-256 the runs before the gyro bounds carry (migration 0007 stores it).
+    shipped = "e905f35844e7fbe48d498e538a70a61ff222e6cc049d0f477fc8f0d958c66800"
+    profile = load_profile()
+    assert profile.sha256 == shipped
+    assert profile.gyro_scale_error is None
+    assert not {"gyro_scale_error", "gyro_misalignment", "gyro_verification_deg"} & set(
+        profile.document
+    )
+    # Absent bounds are not checked, whatever the value.
+    assert check(profile, "gyro_scale", 0.5, axis="x") is None
+    assert check(profile, "gyro_verification", 90.0) is None
+
+
+def test_the_whole_unit_profile_bounds_the_gyro_matrix() -> None:
+    profile = load_profile(None, "whole-unit")
+    assert profile.checks_gyro_matrix
+    assert profile.sha256 != load_profile().sha256
+    assert check(profile, "gyro_scale", 0.012, axis="y") is None
+    reason = check(profile, "gyro_scale", -0.03, axis="y")
+    assert reason is not None
+    assert (reason.code, reason.axis, reason.lower) == ("gyro_scale", "y", -0.02)
+    verification = check(profile, "gyro_verification", 0.6)
+    assert verification is not None
+    assert verification.message == "gyro verification 0.6 deg outside ≤ 0.25"
+    assert profile.verification_error_mg.upper is not None
+    assert profile.verification_error_mg.upper <= 5

@@ -1,0 +1,75 @@
+"""A unit scanned again after it passed: the station asks, and an abort changes nothing.
+
+A real ``calstation run`` process in a pty, a virtual putter on its port, the embedded
+SQLite results database.
+"""
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO_ROOT
+from tests.station.loop.test_station_terminal import Station
+
+
+@pytest.fixture
+def station(tmp_path: Path) -> Iterator[Station]:
+    s = Station(tmp_path)
+    yield s
+    s.close()
+
+
+def test_a_passed_unit_scanned_again_is_asked_about_and_an_abort_leaves_it_shipped(
+    station: Station,
+) -> None:
+    child = station.start()
+    station.scan()
+    assert station.follow() == "PASS"
+    child.expect("next: SHIP")
+    child.expect("Scan the next unit's serial number")
+    station.scan()
+    child.expect(r"PT000042 passed at \d\d:\d\d on st-1: calibrate again\? y/n")
+    child.send("n")
+    child.expect("not calibrated again: scan the next unit")
+    station.scan()
+    child.expect("calibrate again\\? y/n")
+    child.send("y")
+    station.asked = None
+    station.follow(until_pose=2)  # one pose taken: the abort is recorded
+    child.send("a")
+    child.expect("abort this unit\\? press y")
+    child.send("y")
+    child.expect("FAIL  unit PT000042")
+    child.expect("next: SHIP")  # it holds the coefficients of its pass
+    (answer,) = station.rows("select calibration from units")[0]
+    unit = json.loads(str(answer))
+    passed, aborted = station.rows("select run_id from runs order by started_at")
+    assert unit["verdict"] == "pass"
+    assert unit["holds"]["run_id"].replace("-", "") == str(passed[0]).replace("-", "")
+    assert unit["latest"]["run_id"].replace("-", "") == str(aborted[0]).replace("-", "")
+    assert unit["latest"]["disposition"] == "ship"
+
+
+def test_a_unit_past_its_retest_limit_goes_to_rework(tmp_path: Path) -> None:
+    limits = tmp_path / "limits.toml"
+    shipped = (REPO_ROOT / "station" / "domain" / "profiles" / "limits.toml").read_text()
+    # Every unit fails its sensitivity; one attempt is allowed.
+    limits.write_text(
+        shipped.replace("upper = 860.16", "upper = 790.0").replace(
+            'version = "1"', 'version = "1"\nretest_limit = 1', 1
+        )
+    )
+    limited = Station(tmp_path, limits=limits)
+    try:
+        child = limited.start()
+        limited.scan()
+        assert limited.follow() == "FAIL"
+        child.expect("next: REWORK")
+        child.expect("Scan the next unit's serial number")
+        limited.scan()
+        child.expect(r"PT000042 has failed 1 attempts \(limit 1\): send it to rework")
+        assert limited.rows("select count(*) from runs") == [(1,)]
+    finally:
+        limited.close()

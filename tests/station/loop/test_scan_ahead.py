@@ -1,0 +1,81 @@
+"""Scanning ahead (:class:`station.loop.fixture.ahead.ScanAhead`): what the queue may hold.
+
+The fixture's end-to-end run with labels scanned ahead is in ``test_fixture.py``; here
+any sequence of labels, repeats and Backspaces is typed at the queue directly.
+"""
+
+from pathlib import Path
+from typing import cast
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from station.loop.fixture.ahead import ScanAhead
+from station.loop.fixture.slot import Slot
+from station.results.journal import JournalFile
+from station.run.unit_run import UnitRun
+
+PATTERN = r"^PT\d{6}$"
+
+
+def slots(count: int, inside: dict[int, str]) -> list[Slot]:
+    """``count`` slots; those in ``inside`` calibrate that serial now."""
+    made = [
+        Slot(n, f"/dev/null{n}", JournalFile(Path(f"/nonexistent/j{n}")))
+        for n in range(1, count + 1)
+    ]
+    for number, serial in inside.items():
+        made[number - 1].begin(serial, cast(UnitRun, object()), None)
+    return made
+
+
+labels = st.sampled_from(["PT000001", "PT000002", "PT000003", "PT000004", "PT000005", "nope"])
+
+
+@given(
+    count=st.integers(min_value=1, max_value=4),
+    inside=st.dictionaries(st.integers(min_value=1, max_value=4), labels, max_size=2),
+    typed=st.lists(labels | st.just("\x7f"), max_size=20),
+)
+def test_the_queue_holds_each_serial_once_in_the_lowest_free_slots(
+    count: int, inside: dict[int, str], typed: list[str]
+) -> None:
+    fixture = slots(count, {n: s for n, s in inside.items() if n <= count})
+    said: list[str] = []
+    ahead = ScanAhead(fixture, serial_pattern=PATTERN, tell=said.append)
+    expected: list[str] = []  # the model: serials in scan order, slots 1, 2, ... in turn
+    running = {s.serial for s in fixture if s.run is not None}
+    for entry in typed:
+        before, lines = len(said), 1  # one line for every label, and every label taken off
+        for key in entry if entry == "\x7f" else [*entry, "\r"]:
+            ahead.key(key)
+        if entry == "\x7f":
+            lines = int(bool(expected))
+            expected = expected[:-1]
+        elif entry != "nope" and entry not in expected and entry not in running:
+            expected += [entry][: count - len(expected)]
+        assert len(said) == before + lines, said
+        assert list(ahead.queued.values()) == expected
+        assert sorted(ahead.queued) == list(range(1, len(expected) + 1))
+    taken = [ahead.take(s) for s in fixture]
+    assert [t for t in taken if t is not None] == expected
+    assert not ahead.queued
+
+
+def test_each_refusal_says_why_in_one_line() -> None:
+    fixture = slots(2, {1: "PT000001"})
+    said: list[str] = []
+    ahead = ScanAhead(fixture, serial_pattern=PATTERN, tell=said.append)
+    for label in ("PT000009", "PT000001", "nope", "PT000009", "PT000008", "PT000007", "\x7f"):
+        for key in label if label == "\x7f" else [*label, "\r"]:
+            ahead.key(key)
+    assert said == [
+        "next cycle: slot 1 ← PT000009",
+        "PT000001 is in slot 1 now: scan it again once it is out",
+        "'nope' is not a serial number (expected ^PT\\d{6}$)",
+        "PT000009 is queued for slot 1 already",
+        "next cycle: slot 2 ← PT000008",
+        "every slot has its next unit: PT000007 not queued",
+        "PT000008 taken off the next cycle (slot 2 is free again)",
+    ]
+    assert ahead.typed == ""

@@ -1,0 +1,168 @@
+"""The whole-unit profile end to end: twelve poses, the nine-parameter accelerometer and
+the gyro matrix K, on a virtual putter over a real socket, stored through the real API.
+
+The virtual unit's gyros carry a true scale error (±1 %) and misalignment (±0.5 %): the
+station must recover K = I + scale + misalignment (expressed in the calibrated
+accelerometer's frame) within what the noise allows, write the bias and K⁻¹, read them
+back, see them applied on the unit's own calibrated output over the verification move,
+and store them.
+"""
+
+import time
+import uuid
+from collections.abc import Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+
+from db import Database
+from station.device import DeviceCalibration
+from station.domain.limits import load_profile
+from station.domain.records import RunRecord
+from station.loop.app import open_unit
+from station.loop.config import load_config
+from station.results.journal import JournalFile, RunJournal
+from station.results.storage import HttpStore
+from station.run.phases import Phase
+from station.run.unit_run import UnitRun
+from station.simulator.putter import VirtualPutter
+from station.simulator.sensor import GYRO_SENSE_AXIS
+
+SERIAL = "PT000417"
+#: Virtual seconds per real second: a whole unit (13 poses and a move) in a few seconds.
+SPEED = 20.0
+
+
+class WholeUnit:
+    """A run of the whole-unit profile on one virtual putter, and what it left behind."""
+
+    def __init__(self, tmp: Path, seed: int) -> None:
+        self.putter = VirtualPutter(seed=seed, serial=SERIAL, speed=SPEED)
+        self.url = self.putter.serve_socket()
+        config = load_config(None, {"limits_profile": "whole-unit"})
+        self.settings = config.run
+        self.profile = load_profile(None, "whole-unit")
+        journal = RunJournal(
+            run_id=uuid.uuid4(),
+            serial=SERIAL,
+            station_id="line1-st1",
+            operator_id="op",
+            started_at=datetime.now(UTC),
+            poses=(*self.settings.poses, self.settings.verification_pose),
+        )
+        self.run = UnitRun(
+            driver=open_unit(self.url, SERIAL),
+            journal=journal,
+            journal_file=JournalFile(tmp / "journal.json"),
+            profile=self.profile,
+            settings=self.settings,
+            reopen=lambda: open_unit(self.url, SERIAL),
+            g_sensitivity=self.g_sensitivity(),
+        )
+
+    def g_sensitivity(self) -> np.ndarray:
+        """The unit's [Park2014]_ scale-factor g-sensitivity as a stored fit gives it (the
+        true one here): ``N[i, sense(i)] = G_i``."""
+        n = np.zeros((3, 3))
+        for gyro, sense in enumerate(GYRO_SENSE_AXIS):
+            n[gyro, sense] = self.putter.truth.gyro_g_sensitivity_per_g[gyro]
+        return n
+
+    def drive(self, timeout: float = 90.0) -> RunRecord:
+        """Move the unit wherever the station asks (poses, then the verification move)."""
+        moved_to = None
+        deadline = time.monotonic() + timeout
+        while self.run.phase is not Phase.DONE:
+            assert time.monotonic() < deadline, [m.text for m in self.run.messages]
+            target = self.run.requested
+            if target is not None and target.name != moved_to:
+                moved_to = target.name
+                self.putter.move_to(target.name, 1.5)
+            self.run.step()
+            time.sleep(0.01)
+        assert self.run.record is not None
+        return self.run.record
+
+    def close(self) -> None:
+        self.run.driver.close()
+        self.putter.close()
+
+
+@pytest.fixture(scope="module")
+def whole_unit(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[WholeUnit, RunRecord]]:
+    bench = WholeUnit(tmp_path_factory.mktemp("whole-unit"), seed=12)
+    try:
+        yield bench, bench.drive()
+    finally:
+        bench.close()
+
+
+def true_k_in_calibrated_frame(bench: WholeUnit, record: RunRecord) -> np.ndarray:
+    """The unit's true K (body axes) expressed in its calibrated accelerometer's frame.
+
+    The calibrated accelerometer reads ``A·f`` for a body-frame force ``f``, with
+    ``A = M·diag(s)·C`` (the solved matrix times the true sensitivities and cross-axis
+    coupling), a rotation up to the fit's error: body rates read ``A·ω`` there, and
+    ``measured = bias + K_body·ω = bias + K_body·A⁻¹·(A·ω)``.
+    """
+    truth = bench.putter.truth
+    assert record.coefficients is not None
+    a = np.array(record.coefficients.matrix) @ np.diag(truth.sensitivity_counts_per_g)
+    a = a @ truth.cross_axis
+    return np.asarray(truth.gyro_matrix @ np.linalg.inv(a))
+
+
+@pytest.mark.timeout(180)
+def test_the_whole_unit_run_recovers_k_writes_it_and_verifies_it(
+    whole_unit: tuple[WholeUnit, RunRecord],
+) -> None:
+    bench, record = whole_unit
+    assert record.verdict == "pass", record.failures
+    assert record.model == "nine"
+    assert len(record.poses) == 13
+    fitted = record.gyro_matrix
+    assert fitted is not None
+    assert fitted.g_sensitivity_removed
+    # Twelve poses: eleven moves between fit poses and one into the verification pose.
+    assert [(m.before, m.after) for m in fitted.moves] == [(i, i + 1) for i in range(12)]
+    assert all(m.unusable is None and m.residual_deg is not None for m in fitted.moves)
+    k = np.array(fitted.matrix)
+    assert fitted.standard_errors is not None
+    sigma = np.array(fitted.standard_errors)
+    truth = true_k_in_calibrated_frame(bench, record)
+    # Five standard errors of the fit itself (its residuals carry the gyro noise and the
+    # temperature drift), element by element.
+    tolerance = 5 * sigma
+    assert (np.abs(k - truth) <= tolerance).all(), (k - truth, tolerance)
+    # ... and the unit's gyros are off by more than that: the fit has something to find.
+    assert np.abs(truth - np.eye(3)).max() > tolerance.max()
+    np.testing.assert_allclose(
+        fitted.bias_dps.as_tuple(), bench.putter.truth.gyro_bias_dps, atol=0.01
+    )
+    # Written and read back: the unit holds the bias and K⁻¹, to float32.
+    held = bench.putter.stored_gyro_calibration
+    assert held == DeviceCalibration(np.array(fitted.bias_dps.as_tuple()), np.linalg.inv(k))
+    # The unit's own calibrated gyros carried gravity from the cradle to face up.
+    assert fitted.verification_deg is not None
+    assert bench.profile.gyro_verification_deg is not None
+    assert bench.profile.gyro_verification_deg.contains(fitted.verification_deg)
+
+
+def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
+    whole_unit: tuple[WholeUnit, RunRecord], live_url: str, database: Database, station_key: str
+) -> None:
+    _, record = whole_unit
+    with HttpStore(live_url, station_key) as store:
+        outcome = store.submit(record)
+    assert outcome.created
+    run = httpx.get(f"{live_url}/api/v1/runs/{record.run_id}").json()
+    assert record.gyro_matrix is not None
+    assert run["gyro_matrix"] == record.gyro_matrix.model_dump(mode="json")
+    unit = httpx.get(f"{live_url}/api/v1/units/{SERIAL}").json()
+    assert unit["holds"]["gyro_matrix"]["matrix"] == [list(r) for r in record.gyro_matrix.matrix]
+    page = httpx.get(f"{live_url}/api/v1/units/{SERIAL}/certificate")
+    assert page.status_code == 200
+    assert "Gyro matrix K" in page.text

@@ -1,0 +1,255 @@
+"""One unit's run, stepped in-process against a virtual putter over a real pty."""
+
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from station.device import DeviceCalibration, PutterDriver
+from station.domain.limits import load_profile
+from station.domain.run_settings import RunSettings
+from station.loop.app import open_unit
+from station.results.journal import JournalFile, RunJournal
+from station.run.phases import Phase
+from station.run.unit_run import UnitRun
+from station.simulator.faults import Faults
+from station.simulator.putter import VirtualPutter
+
+SERIAL = "PT000077"
+
+
+class Bench:
+    """A virtual putter on a pty, a driver on it, and a run of that unit."""
+
+    def __init__(
+        self,
+        tmp: Path,
+        faults: Faults | None = None,
+        seed: int = 11,
+        settings: RunSettings | None = None,
+        noise_counts: float | None = None,
+    ) -> None:
+        self.putter = VirtualPutter(
+            seed=seed, serial=SERIAL, speed=20.0, faults=faults, noise_counts=noise_counts
+        )
+        self.port = tmp / "putter"
+        self.putter.serve_pty(self.port)
+        settings = settings or RunSettings()
+        self.journal_file = JournalFile(tmp / "journal.json")
+        journal = RunJournal(
+            run_id=uuid.uuid4(),
+            serial=SERIAL,
+            station_id="st",
+            operator_id="op",
+            started_at=datetime.now(UTC),
+            poses=(*settings.poses, settings.verification_pose),
+        )
+        self.run = UnitRun(
+            driver=self.open(),
+            journal=journal,
+            journal_file=self.journal_file,
+            profile=load_profile(),
+            settings=settings,
+            reopen=self.open,
+        )
+        self.moved_to: str | None = None
+
+    def open(self) -> PutterDriver:
+        return open_unit(str(self.port), SERIAL)
+
+    def drive(self, until: Callable[[UnitRun], bool], timeout: float = 60.0) -> None:
+        """Step the run, moving the unit as asked, until ``until`` holds."""
+        deadline = time.monotonic() + timeout
+        while not until(self.run):
+            assert time.monotonic() < deadline, [m.text for m in self.run.messages]
+            target = self.run.requested
+            if target is not None and target.name != self.moved_to and self.run.phase is Phase.POSE:
+                self.moved_to = target.name
+                self.putter.move_to(target.name, 1.0)
+            self.run.step()
+            time.sleep(0.01)
+
+    def close(self) -> None:
+        self.run.driver.close()
+        self.putter.close()
+
+
+@pytest.fixture
+def bench(tmp_path: Path) -> Iterator[Bench]:
+    b = Bench(tmp_path)
+    yield b
+    b.close()
+
+
+def done(run: UnitRun) -> bool:
+    return run.phase is Phase.DONE
+
+
+def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
+    bench.drive(done)
+    record = bench.run.record
+    assert record is not None
+    assert record.verdict == "pass", record.failures
+    assert [p.role for p in record.poses] == ["fit"] * 6 + ["verify"]
+    stored = bench.putter.stored_calibration
+    # The six-pose default never touches the gyros' coefficients (protocol extension).
+    assert record.gyro_matrix is None
+    assert bench.putter.stored_gyro_calibration == DeviceCalibration.gyro_default()
+    assert record.coefficients is not None
+    np.testing.assert_allclose(stored.offset, record.coefficients.offset.as_tuple(), rtol=1e-6)
+    truth = bench.putter.truth
+    np.testing.assert_allclose(record.coefficients.offset.as_tuple(), truth.offset_counts, atol=1.0)
+    assert record.quality is not None
+    assert record.quality.verification_error_mg is not None
+    assert bench.run.unit_output_error_mg is not None
+    assert record.gyro is not None
+    assert record.gyro.still is not None
+    # The virtual gyros have no bias-form g-sensitivity. A pose's gyro mean carries
+    # about 0.01 deg/s of noise (0.3 deg/s over √1024 samples), so over poses 1 g apart
+    # each slope is known to about 0.01 deg/s/g: all stay well under 0.1 deg/s/g.
+    for axis in record.gyro.still.axes:
+        assert axis.slope_dps_per_g is not None
+        assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
+
+
+def test_adaptive_capture_stores_how_many_samples_each_pose_used(tmp_path: Path) -> None:
+    adaptive = RunSettings(capture="adaptive")
+    counts = {}
+    for noise in (1.0, 3.0):
+        where = tmp_path / f"noise{noise:g}"
+        where.mkdir()
+        bench = Bench(where, settings=adaptive, noise_counts=noise)
+        try:
+            bench.drive(done)
+        finally:
+            bench.close()
+        record = bench.run.record
+        assert record is not None
+        assert record.verdict == "pass", record.failures
+        counts[noise] = [p.sample_count for p in record.poses]
+        floor, ceiling = adaptive.adaptive.floor_samples, adaptive.adaptive.ceiling_samples
+        assert all(floor <= n <= ceiling for n in counts[noise])
+    # The simulator's truth: 1 count of noise meets the budget at the floor (a pose
+    # taken while the put-down tremor dies out may need a hop more), 3 counts need
+    # about (3 / 0.124)² = 590 samples.
+    assert sorted(counts[1.0])[3] == floor
+    assert max(counts[1.0]) < 2 * floor < min(counts[3.0])
+
+
+def test_the_journal_holds_every_pose_taken(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 3)
+    saved = bench.journal_file.load()
+    assert saved is not None
+    assert sorted(saved.captures) == [0, 1, 2]
+    assert saved.next_pose == 3
+
+
+def test_unplugged_while_writing_back_it_writes_again_once_back(bench: Bench) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    bench.putter.unplug()
+    bench.drive(lambda run: run.phase is Phase.RECONNECT)
+    bench.putter.replug()
+    bench.drive(done)
+    assert bench.run.record is not None
+    assert bench.run.record.verdict == "pass", bench.run.record.failures
+
+
+def test_redo_is_refused_once_the_coefficients_are_being_written(bench: Bench) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    bench.run.redo(2)
+    assert bench.run.messages[-1].text.startswith("too late to redo")
+    assert 2 in bench.run.journal.captures
+
+
+def test_a_saturated_axis_fails_the_unit_at_once(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(saturate_axis="y"))
+    try:
+        bench.drive(done, timeout=20)
+        record = bench.run.record
+        assert record is not None
+        assert record.verdict == "fail"
+        assert [(f.code, f.axis) for f in record.failures] == [("saturated", "y")]
+    finally:
+        bench.close()
+
+
+def test_a_unit_that_never_settles_is_said_and_can_be_aborted(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(never_settle=True))
+    try:
+        bench.drive(lambda run: any("not still" in m.text for m in run.messages), timeout=30)
+        assert bench.run.abort() is None  # no pose taken: nothing to record
+        assert bench.run.phase is Phase.DONE
+    finally:
+        bench.close()
+
+
+def test_abort_after_a_redo_records_the_poses_still_held(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 3)
+    bench.run.redo(1)
+    record = bench.run.abort()
+    assert record is not None
+    assert [p.name for p in record.poses] == ["face_up", "toe_up"]
+    assert [p.index for p in record.poses] == [0, 1]
+    assert [f.code for f in record.failures] == ["aborted"]
+
+
+def test_another_unit_plugged_back_in_is_named_until_the_right_one_returns(
+    bench: Bench, tmp_path: Path
+) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 2)
+    bench.putter.unplug()
+    bench.drive(lambda run: run.phase is Phase.RECONNECT)
+    other = VirtualPutter(seed=3, serial="PT000002", speed=20.0)
+    other.serve_pty(bench.port)  # the operator plugs the wrong unit in
+    try:
+        bench.drive(lambda run: run.view().wrong_unit is not None, timeout=20)
+        said = [m.text for m in bench.run.messages]
+        assert said[-1] == (
+            f"PT000002 plugged in, {SERIAL} expected: plug {SERIAL} back in, or abort"
+        )
+    finally:
+        other.close()
+    bench.putter.replug()
+    bench.drive(lambda run: run.phase is Phase.POSE, timeout=20)
+    assert bench.run.view().wrong_unit is None
+    texts = [m.text for m in bench.run.messages]
+    assert texts[-1] == "the unit is back: carry on"
+    assert not any("PT000002" in t or "lost the unit" in t for t in texts)  # no longer true
+    bench.drive(done)
+    assert bench.run.record is not None
+    assert bench.run.record.verdict == "pass"
+
+
+def test_a_key_for_a_pose_not_taken_says_so_and_changes_nothing(bench: Bench) -> None:
+    bench.drive(lambda run: len(run.journal.captures) >= 1)
+    bench.run.redo(4)  # key 5 at pose 2
+    assert bench.run.messages[-1].text == "pose 5 (shaft up) is not taken yet: nothing to redo"
+    assert sorted(bench.run.journal.captures) == [0]
+    assert 4 not in bench.run.journal.replaced
+
+
+def test_an_abort_after_the_write_back_is_not_recorded_as_leaving_the_unit_alone(
+    bench: Bench,
+) -> None:
+    bench.drive(lambda run: run.phase is Phase.UNIT_OUTPUT)
+    record = bench.run.abort()
+    assert record is not None
+    assert [f.code for f in record.failures] == ["unit_output"]
+    assert record.coefficients is not None  # and wrote_unit(record) holds: the unit has them
+
+
+def test_a_capture_refused_for_link_loss_says_why_at_once(tmp_path: Path) -> None:
+    bench = Bench(tmp_path, faults=Faults(drop_rate=0.05))
+    try:
+        bench.drive(lambda run: "cable" in (run.view().live.refused or ""), timeout=20)
+        refused = bench.run.view().live.refused
+        assert refused is not None
+        assert refused.startswith("capture refused: the cable loses")
+        assert not bench.run.journal.captures
+        assert bench.run.phase is Phase.POSE  # long before the 30 s pose timeout
+    finally:
+        bench.close()
