@@ -29,10 +29,9 @@ from typing import Any
 from station.device import DEFAULT_RATE_HZ
 from station.domain.limits import load_profile
 from station.domain.run_settings import RunSettings
-from station.loop.app import open_unit
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
-from station.run.unit_run import UnitRun
+from station.run.unit_run import UnitRun, open_unit
 from station.simulator.putter import VirtualPutter
 
 MOVE_S = 1.5

@@ -97,13 +97,13 @@ def measure(units: int, speed: float) -> dict[str, Any]:
                 units=units,
             )
             operator.station = app
-            finish = app._finish_unit
+            finish = app.lifecycle.finish
 
-            def timed_finish(run: Any) -> None:
+            def timed_finish(slot: Any) -> Any:
                 verdicts.append(time.perf_counter() - clock.stream_started)
-                finish(run)
+                return finish(slot)
 
-            app._finish_unit = timed_finish  # type: ignore[method-assign]
+            app.lifecycle.finish = timed_finish  # type: ignore[method-assign]
             try:
                 records = app.serve()
             finally:
@@ -156,18 +156,18 @@ def cycle(profile: str, capture: str = "fixed", speed: float = 1.0) -> dict[str,
             units=1,
         )
         operator.station = app
-        start, finish = app._start_unit, app._finish_unit
+        start, finish = app.lifecycle.start, app.lifecycle.finish
 
-        def timed_start(*args: Any, **kwargs: Any) -> None:
+        def timed_start(*args: Any, **kwargs: Any) -> Any:
             marks.append(time.perf_counter())
-            start(*args, **kwargs)
+            return start(*args, **kwargs)
 
-        def timed_finish(run: Any) -> None:
+        def timed_finish(slot: Any) -> Any:
             marks.append(time.perf_counter())
-            finish(run)
+            return finish(slot)
 
-        app._start_unit = timed_start  # type: ignore[method-assign]
-        app._finish_unit = timed_finish  # type: ignore[method-assign]
+        app.lifecycle.start = timed_start  # type: ignore[method-assign]
+        app.lifecycle.finish = timed_finish  # type: ignore[method-assign]
         try:
             (record,) = app.serve()
         finally:

@@ -22,7 +22,7 @@ its retest limit) and at the verdict (:func:`disposition`).
 
 from collections.abc import Sequence
 from datetime import datetime
-from typing import Annotated
+from typing import Annotated, Protocol
 from uuid import UUID
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -56,6 +56,18 @@ __all__ = [
 
 Run = RunRecord | RunSummary | StoredRun
 
+
+class Outcome(Protocol):
+    """What a run's disposition is decided on: its verdict and its failures (a run,
+    or a run's verdict before its record is made)."""
+
+    @property
+    def verdict(self) -> Verdict: ...
+
+    @property
+    def failures(self) -> Sequence[FailureReason]: ...
+
+
 #: Failure code of a run the operator aborted.
 ABORTED = "aborted"
 #: Failure codes of runs that ended before a verified write-back.
@@ -73,12 +85,12 @@ def wrote_unit(run: Run) -> bool:
     return not any(f.code in UNWRITTEN for f in run.failures)
 
 
-def counts(run: Run) -> bool:
+def counts(run: Outcome) -> bool:
     """Whether the run is evidence about the unit (every run but an operator's abort)."""
     return not any(f.code == ABORTED for f in run.failures)
 
 
-def disposition(run: Run, earlier: Sequence[Run], retest_limit: int) -> Disposition:
+def disposition(run: Outcome, earlier: Sequence[Run], retest_limit: int) -> Disposition:
     """Where the unit goes after ``run``, given its ``earlier`` runs (oldest first).
 
     A pass ships. An abort leaves the unit as it was: a unit that passed before and holds

@@ -1,89 +1,45 @@
-"""The operator station: serial prompt, one unit after another, verdict banners.
+"""The one-port station: serial prompt, one unit after another, verdict banners.
 
-:class:`StationApp` owns the loop: it reads the operator's keys (a terminal, or the
-demo's scripted operator) and acts on what they answer (:mod:`station.loop.prompt`), steps
-the unit in progress (:class:`station.run.unit_run.UnitRun`), draws the screens
-(:mod:`station.loop.screens`), and hands every finished run to the outbox, which stores it
-(:mod:`station.loop.results_link`). A journal left by a crash is offered for resumption at
+:class:`StationApp` is a station of one slot: it reads the operator's keys (a terminal,
+or the demo's scripted operator) and acts on what they answer (:mod:`station.loop.prompt`),
+hands each unit to the unit lifecycle (:class:`station.loop.lifecycle.UnitLifecycle`:
+scan, start, finish), steps the unit in progress, and draws the screens
+(:mod:`station.loop.screens`). A journal left by a crash is offered for resumption at
 start.
 """
 
 import logging
-import uuid
 from collections.abc import Callable
-from datetime import UTC, datetime
 
 from rich.console import Console, Group, RenderableType
 from rich.text import Text
 
-from station import __version__
-from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
+from station.device import DeviceError, PutterDriver
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
+from station.loop.lifecycle import (
+    Quit,
+    Said,
+    Scanned,
+    UnitLifecycle,
+    Unreachable,
+    WrongUnit,
+    verdict_line,
+)
 from station.loop.live_loop import run_live
 from station.loop.prompt import Prompt, Recalibrate, Resume, Serial, State
-from station.loop.results_link import ResultsLink
 from station.loop.screens import header
-from station.loop.shift_checks import ShiftChecks
+from station.loop.slot import Slot
 from station.loop.unit_history import ScanAction, UnitHistory
-from station.results.journal import DiscardedJournal, JournalFile, RunJournal
+from station.results.journal import JournalFile, RunJournal
 from station.results.storage import RunStore
-from station.run.operator_text import not_a_serial, port_problem
+from station.run.operator_text import port_problem
 from station.run.phases import Phase
-from station.run.record import ALGORITHM
 from station.run.unit_run import UnitRun
 
 log = logging.getLogger(__name__)
-
-
-def open_unit(port: str, serial: str) -> PutterDriver:
-    """Open the unit on ``port``, check it is ``serial``, start its raw stream."""
-    driver = PutterDriver.open(port)
-    try:
-        driver.identify(expected_serial=serial)
-        driver.start_stream()
-    except BaseException:
-        driver.close()
-        raise
-    return driver
-
-
-def new_journal(config: StationConfig, serial: str) -> RunJournal:
-    """The journal of a new run of ``serial`` on the station ``config`` describes."""
-    return RunJournal(
-        run_id=uuid.uuid4(),
-        serial=serial,
-        station_id=config.station_id,
-        operator_id=config.operator_id,
-        lot=config.lot,
-        started_at=datetime.now(UTC),
-        poses=(*config.run.poses, config.run.verification_pose),
-    )
-
-
-def versions(profile: LimitsProfile) -> str:
-    """Software, algorithm and limits versions, as shown at the top of the screen."""
-    p = profile
-    return f"v{__version__} · {ALGORITHM} · limits {p.name} v{p.version} ({p.sha256[:12]})"
-
-
-def with_disposition(
-    record: RunRecord | None, history: UnitHistory | None, profile: LimitsProfile
-) -> RunRecord | None:
-    """The finished run with where the unit goes next, from its history."""
-    if record is None or history is None:
-        return record
-    where = history.disposition(record, profile.attempts_allowed)
-    return record.model_copy(update={"disposition": where})
-
-
-def verdict_line(record: RunRecord) -> str:
-    """``PT000042: FAIL (offset): retest``: the verdict in the station's log."""
-    failed = ", ".join(f.code for f in record.failures)
-    then = f": {record.disposition}" if record.disposition else ""
-    return f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "") + then
 
 
 class StationApp:
@@ -109,56 +65,54 @@ class StationApp:
         self.tick_s = tick_s
         #: Try the putter port at start (the demo's port exists only while a unit is in).
         self.probe_port = probe_port
-        self.journal_file = JournalFile(config.journal_path)
-        self.results = ResultsLink(
-            outbox_dir=config.outbox_dir,
-            data_dir=config.data_dir.expanduser(),
-            journal_files=[self.journal_file],
+        self.slot = Slot(1, config.port, JournalFile(config.journal_path))
+        self.lifecycle = UnitLifecycle(
+            config=config,
+            profile=profile,
+            slots=[self.slot],
             open_store=open_store,
             say_line=self._say_line,
         )
+        self.results = self.lifecycle.results
         self.prompt = Prompt()
-        #: The golden unit, the lock and the drift warning (docs/station.md).
-        self.checks = ShiftChecks(config.golden, config.data_dir.expanduser(), config.station_id)
-        self.run: UnitRun | None = None
-        #: The scanned unit's history (asked about in CONFIRM; its verdict's disposition).
+        #: The scanned unit's history (asked about in CONFIRM).
         self.history: UnitHistory | None = None
         self.last_record: RunRecord | None = None
-        self.records: list[RunRecord] = []
         self.done = False
-        self._said = 0
 
     # -- start and loop ------------------------------------------------------------------
 
     @property
-    def versions(self) -> str:
-        """Software, algorithm and limits versions, as shown at the top."""
-        return versions(self.profile)
+    def run(self) -> UnitRun | None:
+        """The unit in progress."""
+        return self.slot.run
+
+    @property
+    def records(self) -> list[RunRecord]:
+        """Every run recorded since the station started."""
+        return self.lifecycle.records
 
     def serve(self) -> list[RunRecord]:
         """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
-        self._say_line(f"calstation {self.versions}")
-        self.results.check_store()
-        self.results.sync()
+        self._say_line(f"calstation {self.lifecycle.versions}")
+        self.lifecycle.open_results()
         if self.probe_port:
             self._check_port()
-        for line in self.checks.lines():
+        for line in self.lifecycle.checks.lines():
             self._say_line(line)
-        interrupted = self.journal_file.load()
-        if isinstance(interrupted, DiscardedJournal):
-            self._tell(interrupted.sentence)
-        elif interrupted is not None:
-            self.prompt.ask_resume(interrupted)
+        interrupted, discarded = self.lifecycle.interrupted()
+        for _, unreadable in discarded:
+            self._tell(unreadable.sentence)
+        for _, journal in interrupted:
+            self.prompt.ask_resume(journal)
             self._say_line(
-                f"unit {interrupted.serial} was interrupted at pose {interrupted.next_pose + 1} of "
-                f"{len(interrupted.poses)}: resume it? (y/n)"
+                f"unit {journal.serial} was interrupted at pose {journal.next_pose + 1} of "
+                f"{len(journal.poses)}: resume it? (y/n)"
             )
         try:
             run_live(self.console, self.screen, self.tick, lambda: self.done, self.tick_s)
         finally:
-            if self.run is not None:
-                self.run.driver.close()
-            self.results.close()
+            self.lifecycle.close()
         return self.records
 
     def tick(self) -> None:
@@ -171,11 +125,13 @@ class StationApp:
         for key in typed:
             self._key(key)
         self.results.check_disk()
-        if self.run is not None:
-            self.run.step()
-            self._echo_messages(self.run)
-            if self.run.phase is Phase.DONE:
-                self._finish_unit(self.run)
+        run = self.run
+        if run is not None:
+            run.step()
+            for message in self.slot.unsaid():
+                self._say_line(f"{run.journal.serial}: {message.text}")
+            if run.phase is Phase.DONE:
+                self._finish_unit()
         if self.prompt.state is not State.UNIT:
             self.results.sync_if_due()
 
@@ -187,12 +143,12 @@ class StationApp:
         top = header(
             self.config.station_id,
             self.config.operator_id,
-            self.versions,
+            self.lifecycle.versions,
             results.backlog,
             results.set_aside,
         )
         run = self.run.view() if self.run is not None else None
-        checks = [Text(line, style="bold red") for line in self.checks.lines()]
+        checks = [Text(line, style="bold red") for line in self.lifecycle.checks.lines()]
         return Group(
             top, *results.status_lines(), *checks, self.prompt.screen(run, self.last_record)
         )
@@ -202,11 +158,6 @@ class StationApp:
         if not self.console.is_terminal:
             self.console.print(text, markup=False, highlight=False)
 
-    def _echo_messages(self, run: UnitRun) -> None:
-        for message in run.messages.since(self._said):
-            self._say_line(f"{run.journal.serial}: {message.text}")
-        self._said = run.messages.said
-
     # -- keys ----------------------------------------------------------------------------
 
     def _key(self, key: str) -> None:
@@ -215,12 +166,12 @@ class StationApp:
             self._submit_serial(answer.text)
         elif isinstance(answer, Resume) and answer.yes:
             self.history = self.results.history(answer.journal.serial)
-            self._start_unit(answer.journal.serial, answer.journal)
+            self._start_unit(self.history, answer.journal)
         elif isinstance(answer, Resume):
-            self.journal_file.clear()
+            self.slot.journal_file.clear()
             self._tell(f"interrupted run of {answer.journal.serial} discarded")
         elif isinstance(answer, Recalibrate) and answer.yes and self.history is not None:
-            self._start_unit(self.history.serial, None)
+            self._start_unit(self.history)
         elif isinstance(answer, Recalibrate):
             self.prompt.note = "not calibrated again: scan the next unit"
 
@@ -231,24 +182,18 @@ class StationApp:
 
     # -- units ---------------------------------------------------------------------------
 
-    def _submit_serial(self, serial: str) -> None:
-        if serial.lower() == "quit":
+    def _submit_serial(self, text: str) -> None:
+        scan = self.lifecycle.scan(text, self.slot)
+        if isinstance(scan, Quit):
             self.done = True
-            return
-        scan = self.checks.at_scan(serial)
-        if scan.said is not None:
-            self._tell(scan.said)
-            return
-        if scan.golden:  # calibrated at every check: no re-scan question, no retest limit
-            self.history = None
-            self._start_unit(serial, None)
-            return
-        refused = not_a_serial(serial, self.config.serial_pattern)
-        if refused is not None:
-            self._tell(refused)
-            return
-        self.history = history = self.results.history(serial)
-        decision = history.at_scan(self.profile.attempts_allowed)
+        elif isinstance(scan, Said):
+            self._tell(scan.text)
+        else:
+            self._scanned(scan)
+
+    def _scanned(self, scan: Scanned) -> None:
+        self.history = scan.history
+        decision = scan.decision
         if decision.note:
             self._say_line(decision.note)
         self.prompt.note = decision.text or decision.note
@@ -257,63 +202,37 @@ class StationApp:
         if decision.action is ScanAction.CONFIRM:
             self.prompt.state = State.CONFIRM
         elif decision.action is ScanAction.START:
-            self._start_unit(serial, None, keep_note=True)
+            self._start_unit(scan.history, keep_note=True)
 
-    def _open_unit(self, serial: str) -> PutterDriver:
-        port = self.config.port
-        if port is None:
-            raise DeviceError("no putter port configured (--port)")
-        return open_unit(port, serial)
-
-    def _start_unit(self, serial: str, journal: RunJournal | None, keep_note: bool = False) -> None:
+    def _start_unit(
+        self, history: UnitHistory, journal: RunJournal | None = None, keep_note: bool = False
+    ) -> None:
         self.last_record = None
-        try:
-            driver = self._open_unit(serial)
-        except SerialNumberMismatchError as exc:
-            self._tell(f"{exc}: set the unit aside; nothing was recorded")
+        serial = history.serial
+        started = self.lifecycle.start(self.slot, history, journal)
+        if isinstance(started, WrongUnit):
+            self._tell(f"{started.sentence}: set the unit aside; nothing was recorded")
             return
-        except DeviceError as exc:
-            self._tell(f"cannot reach unit {serial} on {self.config.port}: {port_problem(exc)}")
+        if isinstance(started, Unreachable):
+            self._tell(f"cannot reach unit {serial} on {self.config.port}: {started.problem}")
             return
-        if journal is None:
-            journal = new_journal(self.config, serial)
-            # A disk that refuses does not stop the unit: the journal owes the write and
-            # DiskWatch says so until it goes through (docs/station.md, fault matrix).
-            self.journal_file.save(journal)
         self.prompt.note = self.prompt.note if keep_note else None
-        self._said = 0
-        self.run = UnitRun(
-            driver=driver,
-            journal=journal,
-            journal_file=self.journal_file,
-            profile=self.profile,
-            settings=self.config.run,
-            reopen=lambda: self._open_unit(serial),
-            g_sensitivity=self.results.g_sensitivity(serial) if self.config.run.gyro else None,
-        )
         self.prompt.state = State.UNIT
-        self._say_line(f"{serial}: calibration started (run {journal.run_id})")
+        self._say_line(f"{serial}: calibration started (run {started.journal.run_id})")
 
-    def _finish_unit(self, run: UnitRun) -> None:
-        run.driver.close()
-        record = with_disposition(run.record, self.history, self.profile)
-        said = None
-        if record is not None:
-            record, said = self.checks.at_verdict(record)
-            self.results.put(record)
-        self.journal_file.clear()
-        self.run = None
+    def _finish_unit(self) -> None:
+        serial = self.slot.serial
+        record, said = self.lifecycle.finish(self.slot)
         self.prompt.unit_done()
         if record is None:
-            self._tell(f"unit {run.journal.serial} aborted before any pose: nothing recorded")
+            self._tell(f"unit {serial} aborted before any pose: nothing recorded")
         else:
-            self.records.append(record)
             self.last_record = record
             self._say_line(verdict_line(record))
             if said:
                 self._tell(said)
             self.results.sync()
-        if self.units is not None and len(self.records) >= self.units:
+        if self.lifecycle.enough(self.units):
             self.done = True
 
     # -- the port -----------------------------------------------------------------------

@@ -1,10 +1,10 @@
 """The station's checks on itself: the golden unit and its lock, and the drift warning.
 
-:class:`ShiftChecks` is what the station's loop (:class:`station.loop.app.StationApp`) calls:
+:class:`ShiftChecks` is what the unit lifecycle (:mod:`station.loop.lifecycle`) calls:
 at a scan (:meth:`ShiftChecks.at_scan`: a supervisor's ``unlock``, a station locked or
 waiting for its golden unit, the golden unit itself), at a verdict
-(:meth:`ShiftChecks.at_verdict`: a golden run is marked and judged, a production run
-feeds the drift watch), and for the screen (:meth:`ShiftChecks.lines`).
+(:meth:`ShiftChecks.at_verdict`: a golden run is judged, a production run feeds the
+drift watch), and for the screen (:meth:`ShiftChecks.lines`).
 
 A supervisor unlocks at the serial prompt by typing ``unlock NAME REASON…`` (the name
 without spaces, then the reason in words); the unlock is recorded with both in the
@@ -55,11 +55,11 @@ class ShiftChecks:
             return AtScan(refusal)
         return AtScan(golden=self.golden.is_golden(text))
 
-    def at_verdict(self, record: RunRecord) -> tuple[RunRecord, str | None]:
-        """The record as stored (a golden run marked) and the line to say, if any."""
-        if self.golden.is_golden(record.serial):
-            marked = record.model_copy(update={"purpose": "golden", "disposition": None})
+    def at_verdict(self, record: RunRecord) -> str | None:
+        """The line to say about a finished run, if any: the golden unit's run judged
+        against its reference, a production run fed to the drift watch."""
+        if record.purpose == "golden":
             if record.failures and all(f.code == "aborted" for f in record.failures):
-                return marked, "golden unit aborted: it is still due"
-            return marked, self.golden.finish(marked)
-        return record, self.drift.add(record)
+                return "golden unit aborted: it is still due"
+            return self.golden.finish(record)
+        return self.drift.add(record)

@@ -5,8 +5,8 @@ not yet delivered count too). A unit that passed already is not calibrated again
 the operator saying so ("PT000123 passed at 10:42 on line1-st2: calibrate again? y/n");
 a unit that has used up its attempts (the limits profile's retest limit) goes to rework
 instead. When the store cannot be reached the operator is told the history is
-unavailable and goes on. At the verdict the same history gives the run's disposition
-(:func:`station.domain.unit_state.disposition`).
+unavailable and goes on. The same runs decide where the unit goes after its verdict
+(:func:`station.domain.unit_state.disposition`, in the run's record).
 """
 
 from collections.abc import Sequence
@@ -17,8 +17,8 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from station.domain.records import Disposition, RunRecord, RunSummary
-from station.domain.unit_state import UnitCalibration, disposition
+from station.domain.records import RunRecord, RunSummary
+from station.domain.unit_state import UnitCalibration
 from station.results.storage import RunStore, StoreError
 
 Run = RunRecord | RunSummary
@@ -111,8 +111,3 @@ class UnitHistory:
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         return ScanDecision(ScanAction.START, note=note)
-
-    def disposition(self, record: RunRecord, attempts_allowed: int) -> Disposition:
-        """Where the unit goes after ``record``."""
-        earlier = [r for r in self.runs if r.run_id != record.run_id]
-        return disposition(record, earlier, attempts_allowed)

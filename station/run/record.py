@@ -16,6 +16,7 @@ from station.domain.gyro import summarize_still_poses
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
     Coefficients,
+    Disposition,
     FailureReason,
     GyroMatrixRecord,
     GyroSummary,
@@ -26,6 +27,7 @@ from station.domain.records import (
     ReplacedCapture,
     RunRecord,
     Vector3,
+    Verdict,
 )
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
@@ -165,13 +167,17 @@ def run_record(
     profile: LimitsProfile,
     solution: Solution | None,
     *,
-    failures: list[FailureReason],
+    verdict: Verdict,
+    failures: tuple[FailureReason, ...],
+    disposition: Disposition | None,
+    golden: bool,
     verification_error_mg: float | None,
     gyro: GyroSummary | None,
     poses: tuple[PoseRecord, ...],
     gyro_matrix: GyroMatrixRecord | None = None,
 ) -> RunRecord:
-    """The record of the finished run, as it goes to the outbox."""
+    """The record of the finished run, as it goes to the outbox: where its unit goes
+    (``disposition``) and whether it was the station's ``golden`` unit included."""
     coefficients = quality = None
     if solution is not None:
         cal = solution.calibration.to_dict()
@@ -193,8 +199,10 @@ def run_record(
         algorithm=ALGORITHM if settings.model == "six" else "autocal-ls9",
         model=settings.model,
         limits=profile.ref,
-        verdict="fail" if failures else "pass",
-        failures=tuple(failures),
+        verdict=verdict,
+        disposition=disposition,
+        purpose="golden" if golden else None,
+        failures=failures,
         coefficients=coefficients,
         quality=quality,
         gyro=gyro,

@@ -38,17 +38,17 @@ from station.results.journal import JournalFile, RunJournal
 from station.run import record
 from station.run.acquisition.pose import PoseResult
 from station.run.capture import PoseCapture, Saturated
-from station.run.conclusion import conclude
 from station.run.gyro import LiveGyro
 from station.run.messages import MessageLog
 from station.run.operator_text import pose_words
-from station.run.phases import Phase, advance
+from station.run.phases import REDO_ALLOWED, Phase, advance
 from station.run.reconnect import Reconnect
-from station.run.redo import latest_capture, redo_refusal, set_aside
 from station.run.unit_output import UnitOutputCheck
 from station.run.verdict import (
     Failures,
+    Purpose,
     calibration_failed,
+    conclude,
     gyro_matrix_failed,
     saturated,
     writeback_failed,
@@ -57,8 +57,26 @@ from station.run.view import RunView
 from station.run.writeback import write_and_read_back
 
 
+def open_unit(port: str, serial: str) -> PutterDriver:
+    """Open the unit on ``port``, check it is ``serial``, start its raw stream."""
+    driver = PutterDriver.open(port)
+    try:
+        driver.identify(expected_serial=serial)
+        driver.start_stream()
+    except BaseException:
+        driver.close()
+        raise
+    return driver
+
+
 class UnitRun:
-    """The calibration of one unit, driven step by step by the interface."""
+    """The calibration of one unit, driven step by step by the interface.
+
+    ``purpose`` says where the unit goes after its verdict (from its earlier runs), or
+    that it is the station's golden unit; ``g_sensitivity`` is the scale-factor
+    g-sensitivity of the unit's stored [Park2014]_ fit, taken out before its gyro matrix
+    is fitted.
+    """
 
     def __init__(
         self,
@@ -69,6 +87,7 @@ class UnitRun:
         profile: LimitsProfile,
         settings: RunSettings,
         reopen: Callable[[], PutterDriver],
+        purpose: Purpose | None = None,
         g_sensitivity: FloatArray | None = None,
     ) -> None:
         self.driver = driver
@@ -76,6 +95,7 @@ class UnitRun:
         self.journal_file = journal_file
         self.profile = profile
         self.settings = settings
+        self.purpose = purpose or Purpose()
         self.sequence: tuple[Pose, ...] = tuple(pose(n) for n in journal.poses)
         self.phase = Phase.POSE
         self.index = journal.next_pose
@@ -114,6 +134,12 @@ class UnitRun:
             return pose(self.settings.gyro_verification_pose)
         return self.sequence[self.index] if self.index < len(self.sequence) else None
 
+    @property
+    def verifying_gyros(self) -> bool:
+        """Whether the unit is on its verification move (a whole-unit run, after its
+        write-back): it waits to be turned into :attr:`requested`."""
+        return self._gyro is not None and self._gyro.verifying
+
     def view(self) -> RunView:
         """This moment of the run, for the unit screen."""
         return RunView(
@@ -134,21 +160,29 @@ class UnitRun:
         """Take pose ``index`` again; its current capture is kept for audit."""
         if not 0 <= index < len(self.sequence):
             return
-        if (refusal := redo_refusal(self.journal, self.sequence, index, self.phase)) is not None:
-            self.messages.say("warn", refusal)
+        name = pose_words(self.sequence[index].name)
+        if index not in self.journal.captures:
+            self.messages.say(
+                "warn", f"pose {index + 1} ({name}) is not taken yet: nothing to redo"
+            )
             return
-        set_aside(self.journal, index)
+        if self.phase not in REDO_ALLOWED:
+            self.messages.say("warn", "too late to redo a pose: the coefficients are being written")
+            return
+        capture = self.journal.captures.pop(index)
+        replaced = record.replaced_capture(capture, "redone by the operator")
+        self.journal.replaced.setdefault(index, []).append(replaced)
         self.journal_file.save(self.journal)
         self.solution = None
         self.index = self.journal.next_pose
         self._restart_capture()
-        name = pose_words(self.sequence[index].name)
         self.messages.say("info", f"pose {index + 1} ({name}) will be taken again")
 
     def redo_last(self) -> None:
         """Take the most recently captured pose again."""
-        if (index := latest_capture(self.journal)) is not None:
-            self.redo(index)
+        captures = self.journal.captures
+        if captures:
+            self.redo(max(captures, key=lambda i: captures[i].captured_at))
 
     def abort(self) -> RunRecord | None:
         """Stop this unit. With poses taken, the run is recorded as failed ("aborted")."""
@@ -293,14 +327,17 @@ class UnitRun:
 
     def _finish(self, *, store: bool) -> None:
         self._go(Phase.VERDICT)
+        gyro = self._gyro
         outcome = conclude(
             self.journal,
             self.settings,
             self.profile,
             self.solution,
             self._failures,
+            purpose=self.purpose,
             evidence=self._evidence,
-            gyro=self._gyro,
+            gyro_checks=gyro.checks(self.profile) if gyro is not None else (),
+            gyro_matrix=gyro.record() if gyro is not None else None,
             store=store,
         )
         self.verification_error_mg = outcome.verification_error_mg

@@ -1,20 +1,43 @@
-"""The failures found during a run, and the list its verdict is made of.
+"""The verdict of one unit's run, reached in one place, and the run's record built once.
 
-Failures found while the run goes (a saturated axis, a failed solve or write-back, the
-unit's output) are kept in the order found; at the end the limit checks of
-:mod:`station.run.checks` are added, unless the operator aborted (an abort says nothing
-about the unit). An abort after the write-back is not recorded as an abort: the unit
-holds the coefficients, and its own output was not checked.
+A run's failures are those found while it went, in the order found (a saturated axis,
+a failed solve or write-back, the unit's own output, the gyro matrix), then the limit
+checks of what it measured (:func:`station.domain.judging.limit_checks`, which the
+report's what-if uses too): every pose's noise and link loss, the offsets and
+sensitivities, the verification pose's calibrated |g| and the gyro biases, each against
+the limits profile. An abort replaces whatever was found and is not checked: it says
+nothing about the unit. An abort after the write-back is not recorded as an abort: the
+unit holds the coefficients, and its own output was not checked.
+
+The record (:func:`conclude`) carries, from the start, where the unit goes next
+(:func:`station.domain.unit_state.disposition`, from its earlier runs) and what the run
+was for (the station's golden unit, or production).
 """
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
-from station.domain.calibration import CalibrationError, Solution
-from station.domain.judging import verdict_failures
+import numpy as np
+
+from station.domain.calibration import CalibrationError, Solution, apply
+from station.domain.judging import Measured, limit_checks, verdict_failures
 from station.domain.limits import LimitsProfile
-from station.domain.records import FailureReason, GyroSummary
-from station.results.journal import Capture
-from station.run.checks import CheckResult, run_checks
+from station.domain.records import (
+    Disposition,
+    FailureReason,
+    GyroMatrixRecord,
+    GyroSummary,
+    PoseRecord,
+    RunRecord,
+    Verdict,
+)
+from station.domain.run_settings import RunSettings
+from station.domain.unit_state import Run, disposition
+from station.results.journal import Capture, RunJournal
+from station.run import record
+
+#: Longest failure message kept (the record's limit is 500 characters).
+MESSAGE_MAX = 300
 
 
 def saturated(axes: tuple[str, ...], pose: int) -> FailureReason:
@@ -38,10 +61,6 @@ def writeback_failed(exc: Exception) -> FailureReason:
     return FailureReason(code="writeback", message=f"write-back failed: {exc}")
 
 
-#: Longest failure message kept (the record's limit is 500 characters).
-MESSAGE_MAX = 300
-
-
 def gyro_matrix_failed(exc: Exception) -> FailureReason:
     """The moves between the poses could not give the gyro matrix (``exc`` says why,
     move by move: cut short past :data:`MESSAGE_MAX` characters)."""
@@ -57,7 +76,7 @@ def verification_move_failed(problem: str) -> FailureReason:
 
 
 class Failures:
-    """The failures of one run so far."""
+    """The failures of one run found while it goes."""
 
     def __init__(self) -> None:
         self.found: list[FailureReason] = []
@@ -84,22 +103,117 @@ class Failures:
         """Whether the operator aborted the run before the write-back."""
         return any(f.code == "aborted" for f in self.found)
 
-    def final(
-        self,
-        profile: LimitsProfile,
-        captures: Mapping[int, Capture],
-        solution: Solution | None,
-        fit_count: int,
-        gyro: GyroSummary | None,
-    ) -> CheckResult:
-        """The verdict's failures: those found, then the limit checks not among them.
 
-        With the verification pose's error (mg) when it was checked; an abort is not
-        checked.
-        """
-        if self.aborted:
-            return CheckResult(list(self.found), None)
-        calibration = solution.calibration if solution is not None else None
-        checked = run_checks(profile, captures, calibration, fit_count, gyro)
-        reasons = verdict_failures(self.found, checked.reasons)
-        return CheckResult(reasons, checked.verification_error_mg)
+@dataclass(frozen=True)
+class Judged:
+    """A run's verdict and its failures: what its disposition is decided on."""
+
+    verdict: Verdict
+    failures: tuple[FailureReason, ...]
+
+
+@dataclass(frozen=True)
+class Purpose:
+    """What the run is for, which decides where its unit goes: a production unit with its
+    ``earlier`` runs and the profile's retest limit, or the station's golden unit."""
+
+    earlier: Sequence[Run] = ()
+    golden: bool = False
+
+    def disposition(self, judged: Judged, attempts_allowed: int) -> Disposition | None:
+        """Where the unit goes (None: the golden unit goes back to its place)."""
+        if self.golden:
+            return None
+        return disposition(judged, self.earlier, attempts_allowed)
+
+
+@dataclass(frozen=True)
+class Conclusion:
+    """The verification pose's error (mg, when checked) and the run's record (None
+    when nothing is to be stored)."""
+
+    verification_error_mg: float | None
+    record: RunRecord | None
+
+
+def conclude(
+    journal: RunJournal,
+    settings: RunSettings,
+    profile: LimitsProfile,
+    solution: Solution | None,
+    failures: Failures,
+    *,
+    purpose: Purpose,
+    evidence: PoseRecord | None = None,
+    gyro_checks: Sequence[FailureReason] = (),
+    gyro_matrix: GyroMatrixRecord | None = None,
+    store: bool,
+) -> Conclusion:
+    """The verdict of the run and, if ``store``, its record.
+
+    ``evidence`` is the live window that failed the unit before its pose was captured;
+    ``gyro_checks`` the limit checks of a whole-unit run's gyro matrix (found while it
+    went), ``gyro_matrix`` that matrix as recorded.
+    """
+    captures = journal.captures
+    fit_count = len(settings.poses)
+    gyro = record.gyro_summary(captures, fit_count, solution)
+    for reason in gyro_checks:
+        failures.add(reason)
+    error = _verification_error_mg(captures, solution, fit_count)
+    if failures.aborted:
+        reasons, error = list(failures.found), None
+    else:
+        measured = _measured(captures, solution, fit_count, error, gyro)
+        reasons = verdict_failures(failures.found, limit_checks(profile, measured))
+    if not store:
+        return Conclusion(error, None)
+    judged = Judged("fail" if reasons else "pass", tuple(reasons))
+    run = record.run_record(
+        journal,
+        settings,
+        profile,
+        solution,
+        verdict=judged.verdict,
+        failures=judged.failures,
+        disposition=purpose.disposition(judged, profile.attempts_allowed),
+        golden=purpose.golden,
+        verification_error_mg=error,
+        gyro=gyro,
+        poses=record.pose_records(captures, evidence),
+        gyro_matrix=gyro_matrix,
+    )
+    return Conclusion(error, run)
+
+
+def _verification_error_mg(
+    captures: Mapping[int, Capture], solution: Solution | None, fit_count: int
+) -> float | None:
+    """How far the verification pose's calibrated |g| is from 1 g (mg), once taken."""
+    if solution is None or fit_count not in captures:
+        return None
+    raw = np.array(captures[fit_count].record.mean.as_tuple())
+    return abs(float(np.linalg.norm(apply(solution.calibration, raw))) - 1.0) * 1000.0
+
+
+def _measured(
+    captures: Mapping[int, Capture],
+    solution: Solution | None,
+    fit_count: int,
+    verification_error_mg: float | None,
+    gyro: GyroSummary | None,
+) -> Measured:
+    """What the limits judge, from the poses taken, the solve and the gyro summary."""
+    calibration = solution.calibration if solution is not None else None
+    return Measured(
+        pose_noise={i: c.record.std.as_tuple() for i, c in captures.items()},
+        link_loss={i: c.loss_fraction for i, c in captures.items()},
+        offset=None if calibration is None else _triple(calibration.offset),
+        sensitivity=None if calibration is None else _triple(calibration.sensitivity),
+        verification=None if verification_error_mg is None else (fit_count, verification_error_mg),
+        gyro_bias=None if gyro is None else gyro.bias.as_tuple(),
+    )
+
+
+def _triple(values: np.ndarray) -> tuple[float, float, float]:
+    return (float(values[0]), float(values[1]), float(values[2]))

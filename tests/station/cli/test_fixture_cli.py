@@ -112,3 +112,31 @@ def test_ports_on_the_command_line_replace_the_files_and_one_slot_is_the_one_por
     two = load_config(path, {"slots": ["/dev/ttyACM0", "/dev/ttyACM1"]})
     assert two.ports == ("/dev/ttyACM0", "/dev/ttyACM1")
     assert two.slot_journal_path(2).name == "journal-station-1-slot2.json"
+
+
+@pytest.mark.timeout(300)
+def test_a_stored_g_sensitivity_fit_is_applied_in_every_slot_as_on_one_port(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    """A whole-unit run takes the unit's stored [Park2014] fit out before fitting K,
+    whether the unit lies on the one-port station or in a fixture's slot."""
+    log = tmp_path / "centrifuge.csv"
+    made = run_cli("gyro", "simulate-centrifuge", "--seed", "4", "--out", str(log))
+    assert made.returncode == 0, made.stderr
+    removed: dict[int, list[tuple[str, bool]]] = {}
+    for slots in (1, 2):
+        env = _env(tmp_path / f"slots{slots}")
+        for serial in ("PT001001", "PT001002"):
+            stored = run_cli("gyro", "fit", str(log), "--store", serial, env=env)
+            assert stored.returncode == 0, stored.stderr
+        args = ("demo", "--units", "2", "--slots", str(slots), "--profile", "whole-unit")
+        result = run_cli(*args, "--json", "--speed", "20", env=env, timeout=280)
+        assert result.returncode == 0, result.stderr
+        units = json.loads(result.stdout)
+        assert [u["verdict"] for u in units] == ["pass", "pass"], (slots, units)
+        database = tmp_path / f"slots{slots}" / "data" / "calstation.sqlite3"
+        with sqlite3.connect(database) as db:
+            rows = db.execute("select serial, gyro_matrix from runs order by serial").fetchall()
+        removed[slots] = [(s, json.loads(k)["g_sensitivity_removed"]) for s, k in rows]
+    expected = [("PT001001", True), ("PT001002", True)]
+    assert removed == {1: expected, 2: expected}

@@ -25,7 +25,7 @@ from station.loop.config import StationConfig
 from station.loop.fixture.app import FixtureApp, Stage
 from station.loop.fixture.demo import mounts
 from station.loop.fixture.plan import next_fixture_pose
-from station.loop.fixture.slot import SlotState
+from station.loop.slot import SlotState
 from station.results.storage import DatabaseStore
 from station.run.phases import Phase
 from station.simulator.faults import Faults

@@ -27,7 +27,8 @@ T0 = datetime(2026, 11, 2, 8, 0, tzinfo=UTC)
 
 
 def golden_run(offset: tuple[float, float, float] = OFFSET, **kw: object) -> RunRecord:
-    return make_record(serial="GU-001", offset=offset, sensitivity=SENSITIVITY, **kw)
+    record = make_record(serial="GU-001", offset=offset, sensitivity=SENSITIVITY, **kw)
+    return record.model_copy(update={"purpose": "golden", "disposition": None})
 
 
 def test_a_run_within_tolerance_agrees_and_one_beyond_names_what_disagrees() -> None:
@@ -73,9 +74,7 @@ def test_a_disagreeing_golden_unit_locks_the_station_across_a_restart(tmp_path: 
     checks = ShiftChecks(GOLDEN, tmp_path, "st-1")
     assert checks.at_scan("PT000001").said is not None  # due: never checked
     assert checks.at_scan("GU-001").golden
-    record, said = checks.at_verdict(golden_run((2081.9 + 13.4, 2041.2, 1960.5)))
-    assert record.purpose == "golden"
-    assert record.disposition is None
+    said = checks.at_verdict(golden_run((2081.9 + 13.4, 2041.2, 1960.5)))
     expected = (
         "LOCKED: golden unit GU-001 offset x 2095.3 vs reference 2081.9 ± 5: call a supervisor"
     )
@@ -101,9 +100,8 @@ def test_a_disagreeing_golden_unit_locks_the_station_across_a_restart(tmp_path: 
 
 def test_an_agreeing_golden_unit_lets_production_go_on(tmp_path: Path) -> None:
     checks = ShiftChecks(GOLDEN, tmp_path, "st-1")
-    record, said = checks.at_verdict(golden_run(started_at=datetime.now(UTC)))
+    said = checks.at_verdict(golden_run(started_at=datetime.now(UTC)))
     assert said == "GOLDEN OK: golden unit GU-001 agrees with its reference: go on"
-    assert record.purpose == "golden"
     assert checks.lines() == []
     assert checks.at_scan("PT000001").said is None
 
@@ -134,8 +132,7 @@ def test_the_drift_line_follows_the_stations_own_passed_units(tmp_path: Path, dr
         offset = 2048 + rng.uniform(-150, 150, 3)
         offset[1] += drift * k
         record = make_record(serial=f"PT{k:06d}", offset=tuple(offset))
-        record_out, said = checks.at_verdict(record)
-        assert record_out.purpose is None
+        said = checks.at_verdict(record)
     restarted = ShiftChecks(None, tmp_path, "st-1")
     if drift:
         assert said is not None

@@ -53,8 +53,8 @@ def test_a_disagreeing_golden_unit_locks_the_station_until_a_supervisor_unlocks_
         child.expect("serial number mismatch")
     finally:
         station.close()
-    rows = station.rows("select serial, verdict, purpose from runs")
-    assert rows == [(GOLDEN, "pass", "golden")]
+    rows = station.rows("select serial, verdict, purpose, disposition from runs")
+    assert rows == [(GOLDEN, "pass", "golden", None)]
     audit = tmp_path / "data" / "audit-st-1.jsonl"
     events = [json.loads(line) for line in audit.read_text(encoding="utf-8").splitlines()]
     assert [e["event"] for e in events] == ["lock", "unlock"]

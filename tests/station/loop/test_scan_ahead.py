@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from station.loop.fixture.ahead import ScanAhead
-from station.loop.fixture.slot import Slot
+from station.loop.slot import Slot
 from station.results.journal import JournalFile
 from station.run.unit_run import UnitRun
 
@@ -25,7 +25,7 @@ def slots(count: int, inside: dict[int, str]) -> list[Slot]:
         for n in range(1, count + 1)
     ]
     for number, serial in inside.items():
-        made[number - 1].begin(serial, cast(UnitRun, object()), None)
+        made[number - 1].begin(serial, cast(UnitRun, object()))
     return made
 
 

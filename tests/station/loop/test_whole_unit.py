@@ -22,12 +22,11 @@ from db import Database
 from station.device import DeviceCalibration
 from station.domain.limits import load_profile
 from station.domain.records import RunRecord
-from station.loop.app import open_unit
 from station.loop.config import load_config
 from station.results.journal import JournalFile, RunJournal
 from station.results.storage import HttpStore
 from station.run.phases import Phase
-from station.run.unit_run import UnitRun
+from station.run.unit_run import UnitRun, open_unit
 from station.simulator.putter import VirtualPutter
 from station.simulator.sensor import GYRO_SENSE_AXIS
 

@@ -12,10 +12,9 @@ import pytest
 from station.device import DeviceCalibration, PutterDriver
 from station.domain.limits import load_profile
 from station.domain.run_settings import RunSettings
-from station.loop.app import open_unit
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
-from station.run.unit_run import UnitRun
+from station.run.unit_run import UnitRun, open_unit
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 

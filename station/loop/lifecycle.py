@@ -1,0 +1,247 @@
+"""A unit's way through the station, once for every front-end: scanned, opened in its
+slot, calibrated, judged, stored.
+
+The one-port station (:class:`station.loop.app.StationApp`) is a station of one slot;
+the fixture (:class:`station.loop.fixture.app.FixtureApp`) has several. Both hand every
+unit to one :class:`UnitLifecycle`, which takes it through these steps, each in one
+place:
+
+- **the scan** (:meth:`UnitLifecycle.scan`): ``quit``; the station's own checks (a
+  supervisor's unlock, the lock, the golden unit due, the golden unit itself,
+  :class:`station.loop.shift_checks.ShiftChecks`); a serial number; not in another
+  slot; the unit's history (:class:`station.loop.unit_history.UnitHistory`: passed
+  already, ask; no attempts left, refuse);
+- **the start** (:meth:`UnitLifecycle.start`): the unit opened on its slot's port (the
+  serial it reports checked against its label, which catches a unit in the wrong slot),
+  its journal (new, or the interrupted one resumed), and its run
+  (:class:`station.run.unit_run.UnitRun`) with what its record needs: its earlier runs
+  or that it is the golden unit, and the stored [Park2014]_ g-sensitivity fit of a
+  whole-unit run;
+- **the end** (:meth:`UnitLifecycle.finish`): the record, built by the run with its
+  disposition and purpose, into the outbox first, then the journal cleared, then the
+  shift checks told (the golden unit judged, the drift watch fed).
+
+The front-ends word what comes back on their own screens.
+"""
+
+import uuid
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from station import __version__
+from station.device import DeviceError, SerialNumberMismatchError
+from station.domain.limits import LimitsProfile
+from station.domain.records import RunRecord
+from station.loop.config import StationConfig
+from station.loop.results_link import ResultsLink
+from station.loop.shift_checks import ShiftChecks
+from station.loop.slot import Slot, SlotState
+from station.loop.unit_history import ScanAction, ScanDecision, UnitHistory
+from station.results.journal import DiscardedJournal, RunJournal
+from station.results.storage import RunStore
+from station.run.operator_text import not_a_serial, port_problem
+from station.run.record import ALGORITHM
+from station.run.unit_run import UnitRun, open_unit
+from station.run.verdict import Purpose
+
+
+@dataclass(frozen=True)
+class Quit:
+    """``quit`` was typed at the scan."""
+
+
+@dataclass(frozen=True)
+class Said:
+    """The station's own answer to a scanned line: nothing is calibrated."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Scanned:
+    """A unit's serial number scanned, its history, and what the history decided."""
+
+    serial: str
+    history: UnitHistory
+    decision: ScanDecision
+
+
+@dataclass(frozen=True)
+class WrongUnit:
+    """The unit on the slot's port reports another serial than its label
+    (``sentence``: the link's own words)."""
+
+    reported: str
+    sentence: str
+
+
+@dataclass(frozen=True)
+class Unreachable:
+    """The slot's port could not be opened, or the unit there does not answer."""
+
+    problem: str
+
+
+def versions(profile: LimitsProfile) -> str:
+    """Software, algorithm and limits versions, as shown at the top of the screen."""
+    p = profile
+    return f"v{__version__} · {ALGORITHM} · limits {p.name} v{p.version} ({p.sha256[:12]})"
+
+
+def verdict_line(record: RunRecord) -> str:
+    """``PT000042: FAIL (offset): retest``: the verdict in the station's log."""
+    failed = ", ".join(f.code for f in record.failures)
+    then = f": {record.disposition}" if record.disposition else ""
+    return f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "") + then
+
+
+def _new_journal(config: StationConfig, serial: str) -> RunJournal:
+    """The journal of a new run of ``serial`` on the station ``config`` describes."""
+    return RunJournal(
+        run_id=uuid.uuid4(),
+        serial=serial,
+        station_id=config.station_id,
+        operator_id=config.operator_id,
+        lot=config.lot,
+        started_at=datetime.now(UTC),
+        poses=(*config.run.poses, config.run.verification_pose),
+    )
+
+
+class UnitLifecycle:
+    """The station's slots, its results and its own checks; every unit's steps."""
+
+    def __init__(
+        self,
+        *,
+        config: StationConfig,
+        profile: LimitsProfile,
+        slots: Sequence[Slot],
+        open_store: Callable[[], RunStore],
+        say_line: Callable[[str], None],
+    ) -> None:
+        self.config = config
+        self.profile = profile
+        self.slots = slots
+        self.results = ResultsLink(
+            outbox_dir=config.outbox_dir,
+            data_dir=config.data_dir.expanduser(),
+            journal_files=[slot.journal_file for slot in slots],
+            open_store=open_store,
+            say_line=say_line,
+        )
+        #: The golden unit, the lock and the drift warning (docs/station.md).
+        self.checks = ShiftChecks(config.golden, config.data_dir.expanduser(), config.station_id)
+        #: Every run recorded since the station started, in order.
+        self.records: list[RunRecord] = []
+
+    @property
+    def versions(self) -> str:
+        """Software, algorithm and limits versions, as shown at the top."""
+        return versions(self.profile)
+
+    def open_results(self) -> None:
+        """Reach the store and send what waits in the outbox, before the first unit."""
+        self.results.check_store()
+        self.results.sync()
+
+    def interrupted(
+        self,
+    ) -> tuple[list[tuple[Slot, RunJournal]], list[tuple[Slot, DiscardedJournal]]]:
+        """Each slot's run left by a crash, and each journal that could not be resumed."""
+        found: list[tuple[Slot, RunJournal]] = []
+        discarded: list[tuple[Slot, DiscardedJournal]] = []
+        for slot in self.slots:
+            loaded = slot.journal_file.load()
+            if isinstance(loaded, DiscardedJournal):
+                discarded.append((slot, loaded))
+            elif loaded is not None:
+                found.append((slot, loaded))
+        return found, discarded
+
+    def scan(self, text: str, slot: Slot) -> Quit | Said | Scanned:
+        """What a line scanned (or typed) for ``slot`` asks for."""
+        if text.lower() == "quit":
+            return Quit()
+        gate = self.checks.at_scan(text)
+        if gate.said is not None:
+            return Said(gate.said)
+        if gate.golden:  # calibrated at every check: no re-scan question, no retest limit
+            return Scanned(text, UnitHistory(text), ScanDecision(ScanAction.START))
+        refused = not_a_serial(text, self.config.serial_pattern)
+        if refused is not None:
+            return Said(refused)
+        elsewhere = next((s for s in self.slots if s.serial == text and s is not slot), None)
+        if elsewhere is not None:
+            return Said(
+                f"{text} is in {elsewhere.name} already: scan the unit in {slot.name} "
+                f"(Enter: leave {slot.name} empty)"
+            )
+        history = self.results.history(text)
+        return Scanned(text, history, history.at_scan(self.profile.attempts_allowed))
+
+    def start(
+        self, slot: Slot, history: UnitHistory, journal: RunJournal | None = None
+    ) -> UnitRun | WrongUnit | Unreachable:
+        """Open ``history``'s unit in ``slot`` and start its run (``journal``: resume it)."""
+        serial, port = history.serial, slot.port
+        if port is None:
+            return Unreachable("no putter port configured (--port)")
+        try:
+            driver = open_unit(port, serial)
+        except SerialNumberMismatchError as exc:
+            return WrongUnit(exc.reported, str(exc))
+        except DeviceError as exc:
+            return Unreachable(port_problem(exc))
+        if journal is None:
+            journal = _new_journal(self.config, serial)
+            # A disk that refuses does not stop the unit: the journal owes the write and
+            # DiskWatch says so until it goes through (docs/station.md, fault matrix).
+            slot.journal_file.save(journal)
+        golden = self.checks.golden.is_golden(serial)
+        settings = self.config.run
+        run = UnitRun(
+            driver=driver,
+            journal=journal,
+            journal_file=slot.journal_file,
+            profile=self.profile,
+            settings=settings,
+            reopen=lambda: open_unit(port, serial),
+            purpose=Purpose(earlier=history.runs, golden=golden),
+            g_sensitivity=self.results.g_sensitivity(serial) if settings.gyro else None,
+        )
+        slot.begin(serial, run)
+        return run
+
+    def finish(self, slot: Slot) -> tuple[RunRecord | None, str | None]:
+        """The slot's run ended: its record kept (None: nothing to store) and the shift
+        checks' line about it (None: nothing to say)."""
+        run = slot.run
+        assert run is not None
+        run.driver.close()
+        record = run.record
+        if record is not None:
+            self.results.put(record)  # kept before its journal goes
+        slot.journal_file.clear()
+        slot.end(record)
+        if record is None:
+            return None, None
+        self.records.append(record)
+        return record, self.checks.at_verdict(record)
+
+    @property
+    def running(self) -> list[Slot]:
+        """The slots whose unit is being calibrated."""
+        return [s for s in self.slots if s.state is SlotState.RUNNING]
+
+    def enough(self, units: int | None) -> bool:
+        """Whether ``units`` runs are recorded (None: never enough)."""
+        return units is not None and len(self.records) >= units
+
+    def close(self) -> None:
+        """Close every unit's link still open and the store's connection."""
+        for slot in self.running:
+            assert slot.run is not None
+            slot.run.driver.close()
+        self.results.close()
