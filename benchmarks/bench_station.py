@@ -35,7 +35,7 @@ from station.loop.app import StationApp
 from station.loop.config import StationConfig
 from station.loop.demo import ScriptedOperator
 from station.results.storage import DatabaseStore
-from station.run.acquisition.pose import PoseAcquisition, PoseResult
+from station.run.acquisition import PoseAcquisition, PoseResult
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
 
 WINDOW = 1024

@@ -59,7 +59,7 @@ from station.loop.fixture.ahead import ScanAhead
 from station.loop.fixture.app import FixtureApp
 from station.loop.fixture.demo import FixtureOperator
 from station.results.storage import DatabaseStore
-from station.run.acquisition.pose import PoseResult
+from station.run.acquisition import PoseResult
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
 from station.run.unit_run import UnitRun
 from station.simulator.putter import VirtualPutter

@@ -4,7 +4,7 @@ import json
 from datetime import datetime
 from typing import Any
 
-from db.models import Pose, Run, RunFailure
+from db.models import Run, RunFailure, RunPose
 from station.domain.records import PoseRecord, RunRecord, RunSummary, StoredRun
 
 
@@ -149,7 +149,7 @@ def summary_of(run: Run, failures: list[RunFailure]) -> RunSummary:
     return RunSummary.model_validate(_header(run, failures))
 
 
-def _pose(pose: Pose) -> dict[str, Any]:
+def _pose(pose: RunPose) -> dict[str, Any]:
     return {
         "index": pose.index,
         "name": pose.name,
@@ -172,7 +172,7 @@ def _pose(pose: Pose) -> dict[str, Any]:
 
 
 def stored_run_of(
-    run: Run, failures: list[RunFailure], poses: list[Pose], profile: str | None = None
+    run: Run, failures: list[RunFailure], poses: list[RunPose], profile: str | None = None
 ) -> StoredRun:
     """The stored run ``run`` with every pose and its stored limits ``profile`` (JSON)."""
     header = _header(run, failures)

@@ -95,15 +95,15 @@ class Run(Base):
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
 
-    poses: Mapped[list["Pose"]] = relationship(
-        back_populates="run", order_by="Pose.index", lazy="raise"
+    poses: Mapped[list["RunPose"]] = relationship(
+        back_populates="run", order_by="RunPose.index", lazy="raise"
     )
     failures: Mapped[list["RunFailure"]] = relationship(
         back_populates="run", order_by="RunFailure.position", lazy="raise"
     )
 
 
-class Pose(Base):
+class RunPose(Base):
     """One still pose of a run: the accepted capture (counts, deg/s, °C) and link health."""
 
     __tablename__ = "poses"

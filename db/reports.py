@@ -414,7 +414,7 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     return float((end - start).total_seconds() / 3600)
 
 
-class _Failing(NamedTuple):
+class _FailingRow(NamedTuple):
     """Failing runs of one first failure reason, station and operator (a Pareto row)."""
 
     code: str
@@ -423,7 +423,7 @@ class _Failing(NamedTuple):
     runs: int
 
 
-def _pareto(rows: Sequence[Row[Any] | _Failing]) -> list[ParetoEntry]:
+def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
@@ -634,7 +634,7 @@ def _what_if(
     return WhatIf(
         limits=candidate.ref,
         summary=_summary(counts, hours),
-        pareto=_pareto([_Failing(*key, n) for key, n in judged.failures.items()]),
+        pareto=_pareto([_FailingRow(*key, n) for key, n in judged.failures.items()]),
         parameters=parameters,
         pass_to_fail=judged.pass_to_fail,
         fail_to_pass=judged.fail_to_pass,

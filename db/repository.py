@@ -26,14 +26,14 @@ from db.base import Base
 from db.engine import for_dialect, open_database
 from db.limits_profiles import store_profile
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
-from db.models import GyroFit, Pose, Run, RunFailure, StationKey, StoredLimitsProfile
+from db.models import GyroFit, Run, RunFailure, RunPose, StationKey, StoredLimitsProfile
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
 from station.domain.errors import CalstationError, InputError
 from station.domain.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
 
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
-_POSES = Base.metadata.tables[Pose.__tablename__]
+_POSES = Base.metadata.tables[RunPose.__tablename__]
 _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 # Built once, values bound at execution: the compiled statement is cached.
@@ -198,7 +198,7 @@ class RunRepository:
         if run is None:
             return None
         poses = self.session.scalars(
-            select(Pose).where(Pose.run_pk == run.id).order_by(Pose.index)
+            select(RunPose).where(RunPose.run_pk == run.id).order_by(RunPose.index)
         ).all()
         profile = self.session.scalar(
             select(StoredLimitsProfile.document).where(

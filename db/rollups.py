@@ -69,7 +69,6 @@ from sqlalchemy.sql.functions import FunctionElement
 from sqlalchemy.sql.visitors import InternalTraversal
 
 from db.models import (
-    Pose,
     ReportBounds,
     ReportCounts,
     ReportFailures,
@@ -77,6 +76,7 @@ from db.models import (
     Run,
     RunFacts,
     RunFailure,
+    RunPose,
     StoredLimitsProfile,
 )
 from station.domain.limits import LimitsProfile
@@ -112,14 +112,17 @@ PER_RUN: dict[str, InstrumentedAttribute[float | None]] = {
     **{f"gyro_bias_{a}": getattr(RunFacts, f"gyro_bias_{a}") for a in "xyz"},
 }
 PER_POSE: dict[str, InstrumentedAttribute[float | None]] = {
-    f"pose_noise_{a}": getattr(Pose, f"std_{a}") for a in "xyz"
+    f"pose_noise_{a}": getattr(RunPose, f"std_{a}") for a in "xyz"
 }
 
 #: The pose noise of a run summed over its poses (``run_facts``), by fact column: a
 #: trend's moments of the per-pose parameters read these, one row per run.
 NOISE_TOTALS: dict[str, ColumnElement[float]] = {
-    **{f"noise_sum_{a}": getattr(Pose, f"std_{a}") for a in "xyz"},
-    **{f"noise_squares_{a}": getattr(Pose, f"std_{a}") * getattr(Pose, f"std_{a}") for a in "xyz"},
+    **{f"noise_sum_{a}": getattr(RunPose, f"std_{a}") for a in "xyz"},
+    **{
+        f"noise_squares_{a}": getattr(RunPose, f"std_{a}") * getattr(RunPose, f"std_{a}")
+        for a in "xyz"
+    },
 }
 
 #: How each value column merges across rows: ``sum``, ``min`` or ``max``.
@@ -317,12 +320,12 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
         select(RunFailure.code)
         .where(RunFailure.run_pk == Run.id, RunFailure.position == 0)
         .scalar_subquery(),
-        select(func.count()).select_from(Pose).where(Pose.run_pk == Run.id).scalar_subquery(),
+        select(func.count()).select_from(RunPose).where(RunPose.run_pk == Run.id).scalar_subquery(),
         bias["x"],
         bias["y"],
         bias["z"],
         *(
-            select(func.sum(total)).where(Pose.run_pk == Run.id).scalar_subquery()
+            select(func.sum(total)).where(RunPose.run_pk == Run.id).scalar_subquery()
             for total in NOISE_TOTALS.values()
         ),
         line_first,
@@ -493,7 +496,7 @@ def parameter_contributions(
         return [_moments(keys, where, bounds, columns)]
     selects = []
     runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
-    poses = Pose.__table__.join(Run.__table__, Pose.run_pk == Run.id)
+    poses = RunPose.__table__.join(Run.__table__, RunPose.run_pk == Run.id)
     for rows, stored in ((runs, PER_RUN), (poses, PER_POSE)):
         specs = [spec for spec in PARAMETERS if spec.name in stored]
         limits = _limits_of(specs, bounds)

@@ -17,7 +17,7 @@ from typing import Any
 from sqlalchemy import ColumnElement, Row, and_, select
 from sqlalchemy.orm import Session
 
-from db.models import Pose, Run, RunFacts, RunFailure
+from db.models import Run, RunFacts, RunFailure, RunPose
 from station.domain.judging import Measured, rejudge
 from station.domain.limits import LimitsProfile
 from station.domain.records import FailureReason
@@ -86,15 +86,15 @@ def _judged(
         poses: dict[int, list[Any]] = {}
         for pose in session.execute(
             select(
-                Pose.run_pk,
-                Pose.index.label("position"),
-                Pose.role,
-                Pose.std_x,
-                Pose.std_y,
-                Pose.std_z,
+                RunPose.run_pk,
+                RunPose.index.label("position"),
+                RunPose.role,
+                RunPose.std_x,
+                RunPose.std_y,
+                RunPose.std_z,
             )
-            .where(Pose.run_pk.in_(ids))
-            .order_by(Pose.run_pk, Pose.index)
+            .where(RunPose.run_pk.in_(ids))
+            .order_by(RunPose.run_pk, RunPose.index)
         ):
             poses.setdefault(pose.run_pk, []).append(pose)
         failures: dict[int, list[FailureReason]] = {}

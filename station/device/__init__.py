@@ -22,7 +22,7 @@ from station.device.errors import (
 )
 from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import DEFAULT_BAUD, DEFAULT_RATE_HZ, MAX_RATE_HZ, PROTOCOL_VERSION
-from station.device.stats import LinkStats
+from station.device.stats import LinkCounters
 from station.domain.samples import SAMPLE_COLUMNS
 
 __all__ = [
@@ -37,7 +37,7 @@ __all__ = [
     "DeviceRejectedError",
     "DeviceTimeoutError",
     "Identity",
-    "LinkStats",
+    "LinkCounters",
     "NoReplyError",
     "ProtocolError",
     "PutterDriver",

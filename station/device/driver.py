@@ -44,7 +44,7 @@ from station.device.protocol import (
     decode_text,
     encode_frame,
 )
-from station.device.stats import LinkStats
+from station.device.stats import LinkCounters
 from station.domain.closing import Closing
 from station.domain.samples import SampleBlock
 
@@ -138,7 +138,7 @@ class PutterDriver(Closing):
         return self._rate_hz
 
     @property
-    def stats(self) -> LinkStats:
+    def stats(self) -> LinkCounters:
         """A snapshot of the link's counters."""
         return self._link.stats()
 

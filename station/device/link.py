@@ -20,7 +20,7 @@ from station.device.buffer import SampleBuffer
 from station.device.errors import DeviceDisconnectedError, DeviceError, ProtocolError
 from station.device.protocol import Frame, FrameParser, FrameType, decode_samples
 from station.device.sequence import SequenceTracker
-from station.device.stats import LinkStats
+from station.device.stats import LinkCounters
 from station.domain.samples import SampleBlock
 from station.domain.sensor import ADC_MAX
 
@@ -51,11 +51,11 @@ class PutterLink(Protocol):
         """Why the link ended, if it did."""
         return self._failure
 
-    def stats(self) -> LinkStats:
+    def stats(self) -> LinkCounters:
         """A snapshot of the link's counters."""
         parser = self._parser
         with self._lock:
-            return LinkStats(
+            return LinkCounters(
                 samples=self._samples,
                 lost_samples=self._seq.lost,
                 gaps=self._seq.gaps,

@@ -1,10 +1,10 @@
 """Link statistics: how healthy the serial line to the putter is."""
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 
 
 @dataclass(frozen=True, slots=True)
-class LinkStats:
+class LinkCounters:
     """Counters of one link since it was opened (or the difference of two snapshots).
 
     The four counters a pose's record stores keep the record's names
@@ -32,12 +32,8 @@ class LinkStats:
         expected = self.samples + self.lost_samples
         return self.lost_samples / expected if expected else 0.0
 
-    def __sub__(self, earlier: "LinkStats") -> "LinkStats":
+    def __sub__(self, earlier: "LinkCounters") -> "LinkCounters":
         """Counters accumulated between ``earlier`` and this snapshot."""
-        return LinkStats(
+        return LinkCounters(
             **{f.name: getattr(self, f.name) - getattr(earlier, f.name) for f in fields(self)}
         )
-
-    def to_dict(self) -> dict[str, float]:
-        """Plain counters plus ``loss_fraction``, for JSON."""
-        return {**asdict(self), "loss_fraction": self.loss_fraction}

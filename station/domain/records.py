@@ -12,7 +12,7 @@ temperatures in °C, residuals and errors in mg (1 mg = 0.001 g), times in UTC.
 import hashlib
 import json
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from datetime import UTC, datetime, timedelta
 from typing import Annotated, Final, Literal, Self
 from uuid import UUID
@@ -28,6 +28,7 @@ from pydantic import (
     model_validator,
 )
 
+from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroDwells
@@ -49,6 +50,7 @@ from station.domain.record_bounds import (
     plain_document,
     printable,
 )
+from station.domain.samples import WindowSummary
 from station.domain.sensor import ADC_MAX, ADC_MIN, Axis
 
 __all__ = [
@@ -129,6 +131,11 @@ class Vector3(_Record):
         """The three components in axis order."""
         return (self.x, self.y, self.z)
 
+    @classmethod
+    def of(cls, values: Sequence[float] | FloatArray) -> Self:
+        """The vector of three values in axis order."""
+        return cls(x=float(values[0]), y=float(values[1]), z=float(values[2]))
+
 
 def _within(
     lower: float, upper: float, what: str, *, above: bool = False
@@ -200,6 +207,32 @@ class PoseRecord(_Record):
     temperature_c: Temperature | None = None
     link: LinkStats = LinkStats()
     replaced: tuple[ReplacedCapture, ...] = ()
+
+    @classmethod
+    def of_window(
+        cls,
+        summary: WindowSummary,
+        *,
+        index: int,
+        name: str,
+        role: PoseRole,
+        link: LinkStats | None = None,
+        replaced: tuple[ReplacedCapture, ...] = (),
+    ) -> Self:
+        """The record of a still window from its summary (the one place a window's
+        statistics become a pose record's)."""
+        return cls(
+            index=index,
+            name=name,
+            role=role,
+            mean=Vector3.of(summary.accel_mean),
+            std=Vector3.of(summary.accel_std),
+            sample_count=summary.count,
+            gyro_mean=Vector3.of(summary.gyro_mean),
+            temperature_c=summary.temperature_c,
+            link=link or LinkStats(),
+            replaced=replaced,
+        )
 
 
 class FailureReason(_Record):

@@ -13,7 +13,7 @@ window in which the unit demonstrably did not move ([Song2006]_: at rest). A win
   vertical changes no accelerometer reading at all: only the gyro sees it);
 - link: few samples are missing in the window, and no axis sits at an ADC rail.
 
-Live, :class:`station.run.acquisition.stillness.StillnessDetector` evaluates the trailing
+Live, :class:`station.run.acquisition.StillnessDetector` evaluates the trailing
 window every ``hop_samples`` samples, so a unit that is still from the start is accepted
 after at most ``window + hop`` samples. Recorded, :func:`still_segments` judges the
 windows starting every ``hop_samples`` rows of a whole stream and merges the still ones
@@ -25,8 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from station.domain.arrays import FloatArray
-from station.domain.samples import SampleBlock
+from station.domain.samples import SampleBlock, WindowSummary
 from station.domain.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -104,8 +103,8 @@ class WindowVerdict:
     loss_fraction: float
     motion: bool
     window: SampleBlock
-    #: The window's per-axis accelerometer spread (sample standard deviation, counts).
-    accel_std: FloatArray
+    #: The window's means and spreads (sample standard deviations), as judged.
+    summary: WindowSummary
 
     @property
     def still(self) -> bool:
@@ -158,7 +157,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
         if s > limits.gyro_std_max_dps:
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
             motion = True
-    return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary.accel_std)
+    return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary)
 
 
 @dataclass(frozen=True)

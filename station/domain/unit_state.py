@@ -57,7 +57,7 @@ __all__ = [
 Run = RunRecord | RunSummary | StoredRun
 
 
-class Outcome(Protocol):
+class RunOutcome(Protocol):
     """What a run's disposition is decided on: its verdict and its failures (a run,
     or a run's verdict before its record is made)."""
 
@@ -85,12 +85,12 @@ def wrote_unit(run: Run) -> bool:
     return not any(f.code in UNWRITTEN for f in run.failures)
 
 
-def counts(run: Outcome) -> bool:
+def counts(run: RunOutcome) -> bool:
     """Whether the run is evidence about the unit (every run but an operator's abort)."""
     return not any(f.code == ABORTED for f in run.failures)
 
 
-def disposition(run: Outcome, earlier: Sequence[Run], retest_limit: int) -> Disposition:
+def disposition(run: RunOutcome, earlier: Sequence[Run], retest_limit: int) -> Disposition:
     """Where the unit goes after ``run``, given its ``earlier`` runs (oldest first).
 
     A pass ships. An abort leaves the unit as it was: a unit that passed before and holds
@@ -112,11 +112,11 @@ def disposition(run: Outcome, earlier: Sequence[Run], retest_limit: int) -> Disp
     return "retest"
 
 
-class _Part(BaseModel):
+class _UnitPart(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-class HeldCalibration(_Part):
+class HeldCalibration(_UnitPart):
     """The coefficients the unit holds: those of the last run that wrote it."""
 
     run_id: UUID
@@ -135,7 +135,7 @@ class HeldCalibration(_Part):
     ] = None
 
 
-class UnitAttempt(_Part):
+class UnitAttempt(_UnitPart):
     """The unit's latest calibration attempt, whatever it wrote."""
 
     run_id: UUID
@@ -156,7 +156,7 @@ class UnitAttempt(_Part):
     failures: tuple[FailureReason, ...]
 
 
-class UnitCalibration(_Part):
+class UnitCalibration(_UnitPart):
     """A unit's current state: what it holds, its latest attempt, and its verdict.
 
     What ``GET /api/v1/units/{serial}`` answers; the results database keeps it ready,

@@ -18,7 +18,7 @@ LONGEST_S = 300.0
 
 
 @dataclass
-class _Failing:
+class _Retry:
     failures: int
     next_try: float
     reason: str
@@ -29,7 +29,7 @@ class RecordBackoff:
 
     def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self.clock = clock
-        self._failing: dict[str, _Failing] = {}
+        self._failing: dict[str, _Retry] = {}
 
     def due(self, name: str) -> bool:
         """Whether record ``name`` may be sent now."""
@@ -40,7 +40,7 @@ class RecordBackoff:
         """Record one more failure of ``name``; return the seconds until its next try."""
         failures = self._failing[name].failures + 1 if name in self._failing else 1
         wait = min(FIRST_S * 2.0 ** (failures - 1), LONGEST_S)
-        self._failing[name] = _Failing(failures, self.clock() + wait, reason)
+        self._failing[name] = _Retry(failures, self.clock() + wait, reason)
         return wait
 
     def forget(self, name: str) -> None:

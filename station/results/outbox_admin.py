@@ -12,7 +12,7 @@ from typing import Literal
 from station.domain.errors import InputError
 from station.results.outbox import Outbox
 from station.results.outbox_files import (
-    Summary,
+    FileSummary,
     UnreadableRecordError,
     read_record,
     reason_of,
@@ -32,7 +32,7 @@ class Entry:
 
     state: State
     path: Path
-    summary: Summary
+    summary: FileSummary
     reason: str | None
 
 

@@ -59,7 +59,7 @@ def _validation_reason(exc: ValidationError) -> str:
 
 
 @dataclass(frozen=True)
-class Summary:
+class FileSummary:
     """What can be told about a record file even when it does not validate."""
 
     run_id: str
@@ -67,7 +67,7 @@ class Summary:
     verdict: str | None
 
 
-def summarise(path: Path) -> Summary:
+def summarise(path: Path) -> FileSummary:
     """Run id, serial and verdict of ``path`` as far as its JSON gives them."""
     fields: dict[str, Any] = {}
     try:
@@ -76,7 +76,7 @@ def summarise(path: Path) -> Summary:
         loaded = None
     if isinstance(loaded, dict):
         fields = {k: v for k, v in loaded.items() if isinstance(v, str)}
-    return Summary(fields.get("run_id", path.stem), fields.get("serial"), fields.get("verdict"))
+    return FileSummary(fields.get("run_id", path.stem), fields.get("serial"), fields.get("verdict"))
 
 
 def reason_path(path: Path) -> Path:

@@ -4,7 +4,7 @@
 samples of the last quarter second (the live view the operator watches), how many of
 them lay still in the pose asked for (the capture's share), whether the unit moved since
 the last capture, and which wrong place was named already. It polls
-:class:`station.run.acquisition.pose.PoseAcquisition` and hands over a captured window only
+:class:`station.run.acquisition.PoseAcquisition` and hands over a captured window only
 when the unit lies in the pose asked for, away from every pose taken before; what is
 done with it is :class:`station.run.unit_run.UnitRun`'s business.
 """
@@ -22,9 +22,15 @@ from station.domain.poses import Pose
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
 from station.results.journal import RunJournal
-from station.run.acquisition.errors import LinkQualityError, NotStillError, SaturatedAxisError
-from station.run.acquisition.pose import PoseAcquisition, PoseResult
-from station.run.acquisition.stillness import WindowVerdict, judge_window
+from station.run.acquisition import (
+    LinkQualityError,
+    NotStillError,
+    PoseAcquisition,
+    PoseResult,
+    SaturatedAxisError,
+    WindowVerdict,
+    judge_window,
+)
 from station.run.messages import MessageLog
 from station.run.operator_text import MOVED_EARLY, capture_refused, pose_words
 
@@ -177,7 +183,7 @@ class PoseCapture:
 
     def _acceptable(self, result: PoseResult, index: int, target: Pose) -> bool:
         """Whether the still window lies in ``target``, away from every pose taken."""
-        sensed = sense(result.accel_mean)
+        sensed = sense(result.summary.accel_mean)
         close_to_earlier = any(
             angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
             for _, direction in self._captured_directions()

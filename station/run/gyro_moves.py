@@ -19,7 +19,7 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.samples import SampleBlock
-from station.run.acquisition.pose import PoseResult
+from station.run.acquisition import PoseResult
 
 #: Longest move kept, in device seconds (a unit left lying is no move).
 MAX_MOVE_S: Final = 120.0
@@ -87,7 +87,9 @@ class MoveRecorder:
 
     def captured(self, index: int, result: PoseResult) -> None:
         """Pose ``index`` was captured: the move that led to it is complete."""
-        still = _Still(index, self._epoch, result.first_seq, result.last_seq, result.accel_mean)
+        still = _Still(
+            index, self._epoch, result.first_seq, result.last_seq, result.summary.accel_mean
+        )
         samples = SampleBlock.concat(self._pending)
         previous = self._still
         if previous is not None:

@@ -11,7 +11,7 @@ import errno
 import re
 
 from station.device import DeviceTimeoutError, NoReplyError
-from station.run.acquisition.stillness import StillnessThresholds, WindowVerdict
+from station.run.acquisition import StillnessThresholds, WindowVerdict
 
 #: Longest explanation taken over from an error the station does not know.
 MAX_UNKNOWN = 80

@@ -30,35 +30,15 @@ from station.domain.records import (
     Verdict,
 )
 from station.domain.run_settings import RunSettings
-from station.domain.samples import SampleBlock
 from station.results.journal import Capture, RunJournal
-from station.run.acquisition.pose import PoseResult
+from station.run.acquisition import PoseResult
 
 ALGORITHM = "autocal-eq10"
-
-
-def _vec(values: Array | tuple[float, float, float]) -> Vector3:
-    return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
 
 
 def now() -> datetime:
     """The time stamps of captures and records (UTC)."""
     return datetime.now(UTC)
-
-
-def window_record(window: SampleBlock, index: int, name: str, role: PoseRole) -> PoseRecord:
-    """The record of a live window kept as evidence (it failed the unit uncaptured)."""
-    summary = window.summary()
-    return PoseRecord(
-        index=index,
-        name=name,
-        role=role,
-        mean=_vec(summary.accel_mean),
-        std=_vec(summary.accel_std),
-        sample_count=summary.count,
-        gyro_mean=_vec(summary.gyro_mean),
-        temperature_c=summary.temperature_c,
-    )
 
 
 def capture_of(
@@ -69,26 +49,23 @@ def capture_of(
     replaced: tuple[ReplacedCapture, ...],
 ) -> Capture:
     """The journal's capture of an accepted pose, with the captures it replaced."""
-    record = PoseRecord(
+    link = result.link
+    record = PoseRecord.of_window(
+        result.summary,
         index=index,
         name=name,
         role=role,
-        mean=_vec(result.accel_mean),
-        std=_vec(result.accel_std),
-        sample_count=result.sample_count,
-        gyro_mean=_vec(result.gyro_mean),
-        temperature_c=result.temperature_c,
         link=LinkStats(
-            crc_errors=result.link.crc_errors,
-            gaps=result.link.gaps,
-            resyncs=result.link.resyncs,
-            lost_samples=result.link.lost_samples,
+            crc_errors=link.crc_errors,
+            gaps=link.gaps,
+            resyncs=link.resyncs,
+            lost_samples=link.lost_samples,
         ),
         replaced=replaced,
     )
     return Capture(
         record=record,
-        gyro_std=_vec(result.gyro_std),
+        gyro_std=Vector3.of(result.summary.gyro_std),
         captured_at=now(),
         duration_s=result.duration_s,
         loss_fraction=result.loss_fraction,
@@ -127,8 +104,8 @@ def gyro_summary(
         gravity = apply(solution.calibration, fit_means(captures, fit_count))
         still = summarize_still_poses(means, stds, gravity)
     return GyroSummary(
-        bias=_vec(means.mean(axis=0)),
-        noise=_vec(np.sqrt((stds**2).mean(axis=0))),
+        bias=Vector3.of(means.mean(axis=0)),
+        noise=Vector3.of(np.sqrt((stds**2).mean(axis=0))),
         still=still,
     )
 

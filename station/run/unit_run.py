@@ -36,7 +36,7 @@ from station.domain.records import PoseRecord, PoseRole, RunRecord
 from station.domain.run_settings import RunSettings
 from station.results.journal import JournalFile, RunJournal
 from station.run import record
-from station.run.acquisition.pose import PoseResult
+from station.run.acquisition import PoseResult
 from station.run.capture import PoseCapture, Saturated
 from station.run.gyro import LiveGyro
 from station.run.messages import MessageLog
@@ -233,7 +233,9 @@ class UnitRun:
         """
         verdict = outcome.verdict
         role = self._role(self.index)
-        self._evidence = record.window_record(verdict.window, self.index, target.name, role)
+        self._evidence = PoseRecord.of_window(
+            verdict.summary, index=self.index, name=target.name, role=role
+        )
         self._failures.add(saturated(verdict.saturated_axes, self.index))
         self._finish(store=True)
 

@@ -10,7 +10,7 @@ import pytest
 from sqlalchemy import func, select
 
 from db import Database
-from db.models import Pose, Run
+from db.models import Run, RunPose
 from station.domain.records import RunRecord
 from station.results.storage import DatabaseStore, HttpStore, RunStore, StoreUnavailableError
 from tests.db.records import T0, make_record
@@ -40,7 +40,7 @@ def _assert_stored_once(
     assert set(created.values()) == {1}
     with database.session() as session:
         stored = Counter(session.scalars(select(Run.run_id)))
-        poses = session.scalar(select(func.count()).select_from(Pose))
+        poses = session.scalar(select(func.count()).select_from(RunPose))
     assert stored == Counter(expected)
     assert poses == len(expected) * poses_each
 

@@ -181,7 +181,7 @@ def test_no_body_ever_gets_a_5xx(
     assert answer.is_success or answer.json()["detail"]
 
 
-#: Pose means: mostly ADC counts, sometimes any float at all.
+#: RunPose means: mostly ADC counts, sometimes any float at all.
 any_count = st.one_of(
     st.floats(min_value=0.0, max_value=4095.0),
     st.floats(allow_nan=False, allow_infinity=False),

@@ -10,7 +10,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db import RunConflictError, RunQuery, RunRepository
-from db.models import Pose, StationKey
+from db.models import RunPose, StationKey
 from db.repository import KeyHolder, encode_cursor, record_sha256
 from station.domain.errors import InputError
 from station.domain.records import StoredRun
@@ -51,7 +51,7 @@ def test_the_poses_a_solve_left_out_read_back(session: Session) -> None:
 def test_every_pose_is_stored_with_its_replaced_captures(session: Session) -> None:
     record = make_record()
     RunRepository(session).submit(record)
-    poses = session.scalars(select(Pose).order_by(Pose.index)).all()
+    poses = session.scalars(select(RunPose).order_by(RunPose.index)).all()
     assert [p.name for p in poses] == [p.name for p in record.poses]
     assert poses[0].replaced[0]["reason"] == "moved during capture"
     assert poses[1].crc_errors == 1

@@ -41,9 +41,9 @@ from station.domain.calibration.residual import MAX_CONDITION
 from station.domain.calibration.solution import (
     MIN_DOF_SHOWN,
     SENSITIVITY_CONVENTION,
+    CoefficientErrors,
     Quality,
     Solution,
-    StandardErrors,
 )
 from station.domain.calibration.solve import solve
 
@@ -56,6 +56,7 @@ __all__ = [
     "BeyondDatasheetError",
     "Calibration",
     "CalibrationError",
+    "CoefficientErrors",
     "CoplanarPosesError",
     "DuplicatePoseError",
     "GeometryLimits",
@@ -70,7 +71,6 @@ __all__ = [
     "Quality",
     "RailValueError",
     "Solution",
-    "StandardErrors",
     "TooFewPosesError",
     "apply",
     "coverage",

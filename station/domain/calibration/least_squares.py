@@ -46,7 +46,7 @@ from station.domain.calibration.residual import (
     leverage,
     normalise,
 )
-from station.domain.calibration.solution import Solution, StandardErrors, quality_of
+from station.domain.calibration.solution import CoefficientErrors, Solution, quality_of
 from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 UNKNOWNS: dict[Model, int] = {"six": 6, "nine": 9}
@@ -204,7 +204,7 @@ def _refuse_degenerate_geometry(v: FloatArray, model: Model, max_condition: floa
 
 def _standard_errors(
     jac: FloatArray, residual: FloatArray, c_n: FloatArray, model: Model
-) -> StandardErrors | None:
+) -> CoefficientErrors | None:
     """σ̂²(JᵀJ)⁻¹ in counts; ``None`` without redundancy (N = p)."""
     n, p = jac.shape
     if n <= p:
@@ -213,11 +213,11 @@ def _standard_errors(
     cov = sigma2 * np.linalg.pinv(jac.T @ jac)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) * NOMINAL_SENSITIVITY_COUNTS_PER_G
     if model == "six":
-        return StandardErrors(offset=se[:3], sensitivity=se[3:6], dof=n - p)
+        return CoefficientErrors(offset=se[:3], sensitivity=se[3:6], dof=n - p)
     # sensitivity_j = 819.2 / C_jj (normalised): se = 819.2·se(C_jj)/C_jj²
     diag_index = [3, 6, 8]  # positions of C_00, C_11, C_22 in θ
     c_diag = np.diag(c_n)
-    return StandardErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2, dof=n - p)
+    return CoefficientErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2, dof=n - p)
 
 
 def _k(calibration: Calibration) -> tuple[float, float]:

@@ -33,7 +33,7 @@ SENSITIVITY_CONVENTION = {
 
 
 @dataclass(frozen=True, eq=False)
-class StandardErrors:
+class CoefficientErrors:
     """1-σ standard errors of a redundant fit (N poses > unknowns), counts and counts/g.
 
     ``dof`` = N − p, the degrees of freedom of σ̂: with one or two, σ̂ rests on one or two
@@ -89,7 +89,7 @@ class Solution:
     calibration: Calibration
     method: Method
     quality: Quality
-    standard_errors: StandardErrors | None = None
+    standard_errors: CoefficientErrors | None = None
     k: tuple[float, float] | None = None
     excluded: tuple[int, ...] = ()
     residual_limit_counts: float | None = None

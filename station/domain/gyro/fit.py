@@ -36,7 +36,7 @@ Vector = list[float | None]
 Matrix = list[list[float | None]]
 
 
-class StandardErrors(BaseModel):
+class GyroFitErrors(BaseModel):
     """One-sigma standard errors, same shapes and units as the estimates."""
 
     bias_dps: Vector
@@ -56,7 +56,7 @@ class GyroFitReport(BaseModel):
     sense_axis: list[str | None]
     sense_axis_reason: list[str | None]
     residual_rms_dps: list[float]
-    standard_errors: StandardErrors
+    standard_errors: GyroFitErrors
     unestimable: list[TermStatus]
     identifiability: IdentifiabilityReport
     comparison: list[AxisComparison]
@@ -160,7 +160,7 @@ def fit_log(log: GyroLog, alpha: float = DEFAULT_ALPHA) -> GyroFitReport:
         sense_axis=[s[0] for s in sense],
         sense_axis_reason=[s[1] for s in sense],
         residual_rms_dps=rms,
-        standard_errors=StandardErrors(
+        standard_errors=GyroFitErrors(
             bias_dps=[e[0] for e in error_parts],
             scale_matrix=[e[1] for e in error_parts],
             bias_g_sensitivity_dps_per_g=[e[2] for e in error_parts],

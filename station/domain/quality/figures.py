@@ -15,11 +15,11 @@ from station.domain.records import LimitsRef, Verdict
 Disposition = Literal["ship", "hold"]
 
 
-class _Part(BaseModel):
+class _FigurePart(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-class ReportFilter(_Part):
+class ReportFilter(_FigurePart):
     """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time),
     and only this station, operator or production lot when given."""
 
@@ -30,7 +30,7 @@ class ReportFilter(_Part):
     lot: str | None = None
 
 
-class Summary(_Part):
+class Summary(_FigurePart):
     """Counts and yields of the runs in range.
 
     A unit's first and latest run are its first and latest run *ever* on the line, by
@@ -60,14 +60,14 @@ class Summary(_Part):
     poses: int
 
 
-class StationSummary(_Part):
+class StationSummary(_FigurePart):
     """The summary of one station."""
 
     station_id: str
     summary: Summary
 
 
-class ParetoEntry(_Part):
+class ParetoEntry(_FigurePart):
     """Failing runs whose first failure reason is ``code``."""
 
     code: str
@@ -78,7 +78,7 @@ class ParetoEntry(_Part):
     by_operator: dict[str, int]
 
 
-class Histogram(_Part):
+class Histogram(_FigurePart):
     """Counts of ``bins`` equal bins from ``start``; outliers land in the end bins."""
 
     start: float
@@ -86,7 +86,7 @@ class Histogram(_Part):
     counts: list[int]
 
 
-class ParameterStats(_Part):
+class ParameterStats(_FigurePart):
     """Distribution and capability of one parameter against its limits."""
 
     name: str
@@ -106,7 +106,7 @@ class ParameterStats(_Part):
     histogram: Histogram
 
 
-class ChartPoint(_Part):
+class ChartPoint(_FigurePart):
     """One run on a control chart."""
 
     started_at: datetime
@@ -121,7 +121,7 @@ class ChartPoint(_Part):
     )
 
 
-class ControlChart(_Part):
+class ControlChart(_FigurePart):
     """Individuals and moving-range chart of one coefficient: ``count`` runs in range set
     its limits, the latest of them are ``points``, each with the Western Electric rules
     it completes (:mod:`station.domain.quality.control`) among the points plotted."""
@@ -141,7 +141,7 @@ class ControlChart(_Part):
     )
 
 
-class TrendFigures(_Part):
+class TrendFigures(_FigurePart):
     """The figures of one period of the trend: the units whose first run on the line was
     in it, with their first-pass and final yield, its runs, and the Cpk of its values."""
 
@@ -169,7 +169,7 @@ class TrendShift(TrendFigures):
     end: AwareDatetime = Field(description="the next shift's start (UTC)")
 
 
-class UnitVerdict(_Part):
+class UnitVerdict(_FigurePart):
     """A unit's final state for the ship/hold decision: its latest run (``runs``: every
     run of the unit)."""
 
@@ -183,7 +183,7 @@ class UnitVerdict(_Part):
     failure: str | None = Field(description="first failure reason of the latest run")
 
 
-class WhatIf(_Part):
+class WhatIf(_FigurePart):
     """The report's runs re-judged against a candidate limits profile, nothing stored
     changed: yields, Pareto and capability as they would have been."""
 
@@ -195,7 +195,7 @@ class WhatIf(_Part):
     fail_to_pass: int = Field(description="runs that failed and would pass")
 
 
-class EolReport(_Part):
+class EolReport(_FigurePart):
     """The end-of-line report over ``filter``."""
 
     generated_at: datetime

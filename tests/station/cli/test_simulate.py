@@ -81,7 +81,7 @@ def test_the_simulator_is_moved_and_faulted_from_outside(simulator: Simulator) -
         expected = np.array(truth["offset_counts"]) + np.array(
             truth["sensitivity_counts_per_g"]
         ) * (np.array(truth["cross_axis"]) @ pose("toe_up").gravity_body)
-        np.testing.assert_allclose(result.accel_mean, expected, atol=1.0)
+        np.testing.assert_allclose(result.summary.accel_mean, expected, atol=1.0)
         assert simulator.send("fault serial_mismatch true") == "ok"
         with pytest.raises(SerialNumberMismatchError):
             driver.identify(expected_serial="PT000808")

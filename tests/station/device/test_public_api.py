@@ -18,7 +18,7 @@ def test_device_surface() -> None:
         "DeviceRejectedError",
         "DeviceTimeoutError",
         "Identity",
-        "LinkStats",
+        "LinkCounters",
         "NoReplyError",
         "ProtocolError",
         "PutterDriver",

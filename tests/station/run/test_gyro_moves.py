@@ -7,12 +7,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from station.device import LinkStats
+from station.device import LinkCounters
 from station.domain.calibration import Calibration
 from station.domain.gyro.motion import GyroMatrixError, Move
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
-from station.run.acquisition.pose import PoseResult
+from station.run.acquisition import PoseResult
 from station.run.gyro import LiveGyro
 from station.run.gyro_moves import MoveRecorder
 from station.run.verdict import MESSAGE_MAX, gyro_matrix_failed
@@ -29,8 +29,16 @@ def block(first: int, last: int, rate_dps: float = 0.0) -> SampleBlock:
 
 
 def still(first: int, last: int) -> PoseResult:
-    return PoseResult.from_window(
-        block(first, last), pose=None, rate_hz=RATE, wait_s=0.0, link=LinkStats(), loss_fraction=0
+    window = block(first, last)
+    return PoseResult(
+        pose=None,
+        summary=window.summary(),
+        first_seq=first,
+        last_seq=last,
+        duration_s=window.span / RATE,
+        wait_s=0.0,
+        loss_fraction=0.0,
+        link=LinkCounters(),
     )
 
 

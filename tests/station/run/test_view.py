@@ -5,7 +5,7 @@ from rich.console import Console
 
 from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.loop.screens import unit_screen
-from station.run.acquisition.stillness import StillnessThresholds
+from station.run.acquisition import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message, MessageLog
 from station.run.phases import Phase

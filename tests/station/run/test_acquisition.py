@@ -106,26 +106,26 @@ def test_a_whole_unit_of_seven_poses_matches_the_truth(
         result = acquire_pose(driver, pose=name, timeout_s=20.0, from_seq=moved_at)
         assert result.first_seq > moved_at
         assert result.pose == name
-        assert result.sample_count == 1024
+        assert result.summary.count == 1024
         # The window starts once the put-down tremor has died down (device time).
         assert earliest <= result.wait_s <= latest
         assert result.duration_s == pytest.approx(1024 / 500)
         # The model at the window's temperature, within 5 σ of the mean of 1024 samples
         # of noise and rounding, plus the drift over half a step of the temperature.
-        expected = reading(unit, name, result.temperature_c)
+        expected = reading(unit, name, result.summary.temperature_c)
         tempco = np.abs(
             reading(unit, name, REFERENCE_TEMPERATURE_C + 1)
             - reading(unit, name, REFERENCE_TEMPERATURE_C)
         )
         sigma = math.sqrt(unit.truth.noise_counts**2 + 1 / 12) / math.sqrt(1024)
         np.testing.assert_array_less(
-            np.abs(result.accel_mean - expected), 5 * sigma + tempco * TEMP_C_PER_LSB / 2
+            np.abs(result.summary.accel_mean - expected), 5 * sigma + tempco * TEMP_C_PER_LSB / 2
         )
-        assert np.all(result.accel_std < StillnessThresholds().accel_std_max_counts)
-        np.testing.assert_allclose(result.gyro_mean, unit.truth.gyro_bias_dps, atol=0.03)
-        assert 24.0 < result.temperature_c < 27.0
+        assert np.all(result.summary.accel_std < StillnessThresholds().accel_std_max_counts)
+        np.testing.assert_allclose(result.summary.gyro_mean, unit.truth.gyro_bias_dps, atol=0.03)
+        assert 24.0 < result.summary.temperature_c < 27.0
         assert result.link.lost_samples == 0
-        assert result.to_dict()["link"]["loss_fraction"] == 0.0
+        assert result.link.loss_fraction == 0.0
 
 
 def test_a_unit_that_never_settles_is_not_still(unit: VirtualPutter, driver: PutterDriver) -> None:

@@ -206,11 +206,11 @@ def test_the_virtual_putter_at_high_speed_gives_windows_to_its_noise() -> None:
                 result = acquire_pose(
                     driver, pose="toe_up", timeout_s=20.0, from_seq=moved_at, policy=POLICY
                 )
-        counts[noise] = result.sample_count
-        assert SETTINGS.floor_samples <= result.sample_count <= SETTINGS.ceiling_samples
+        counts[noise] = result.summary.count
+        assert SETTINGS.floor_samples <= result.summary.count <= SETTINGS.ceiling_samples
         # Known truth: white noise σ (plus rounding) needs (σ_eff / budget)² samples; the
         # put-down tremor's tail may add to the spread, never take from it.
         expected = (noise**2 + 1 / 12) / BUDGET**2
-        assert 0.8 * expected <= result.sample_count
-        assert result.sample_count <= max(SETTINGS.floor_samples, 1.4 * expected) + 64
+        assert 0.8 * expected <= result.summary.count
+        assert result.summary.count <= max(SETTINGS.floor_samples, 1.4 * expected) + 64
     assert counts[3.0] > 2 * counts[1.0]
