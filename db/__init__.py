@@ -15,14 +15,8 @@ Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
     └── RunConflictError            repository.py  a run with this UUID is stored differently
 """
 
-from db.engine import (
-    Database,
-    DatabaseUnavailableError,
-    make_async_engine,
-    make_engine,
-    open_database,
-    upgrade_database,
-)
+from db.database import Database, open_database, upgrade_database
+from db.engine import DatabaseUnavailableError, make_async_engine, make_engine
 from db.migrate import SchemaOutOfDateError
 from db.repository import (
     RunConflictError,

@@ -5,12 +5,10 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from sqlalchemy import URL, Connection, Engine, create_engine, event, make_url
-from sqlalchemy.exc import OperationalError
 from sqlalchemy.ext.asyncio import AsyncEngine, create_async_engine
-from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy.orm import Session
 
-from db import migrate
-from db.settings import DatabaseSettings, check_database_url
+from db.settings import check_database_url
 from db.timeouts import sqlite_statement_timeout, with_statement_timeout
 from station.domain.errors import CalstationError, InputError
 
@@ -109,59 +107,3 @@ class DatabaseUnavailableError(CalstationError):
         driver = getattr(exc, "orig", None) or exc  # SQLAlchemy's errors wrap the driver's
         reason = (str(driver).strip().splitlines() or [type(driver).__name__])[0]
         return cls(f"database {shown} unavailable: {reason}")
-
-
-class Database:
-    """One results database: its engine and a factory of sessions."""
-
-    def __init__(self, engine: Engine) -> None:
-        self.engine = engine
-        self.sessions = sessionmaker(engine, expire_on_commit=False)
-
-    @property
-    def is_sqlite(self) -> bool:
-        """Whether this is the embedded (SQLite) database."""
-        return self.engine.dialect.name == "sqlite"
-
-    def session(self) -> Session:
-        """A new session (use it as a context manager)."""
-        return self.sessions()
-
-    def dispose(self) -> None:
-        """Close every pooled connection."""
-        self.engine.dispose()
-
-
-def open_database(url: str | None = None, *, auto_migrate: bool | None = None) -> Database:
-    """Open the results database at ``url`` (default: from :class:`DatabaseSettings`).
-
-    A SQLite database is created and migrated to the latest schema on first use, so the
-    embedded default needs no set-up. A server database is migrated explicitly
-    (``calstation db upgrade``); opening one whose schema is behind raises
-    :class:`db.migrate.SchemaOutOfDateError`.
-    """
-    engine = make_engine(url or DatabaseSettings.from_environment().url())
-    database = Database(engine)
-    try:
-        if auto_migrate if auto_migrate is not None else database.is_sqlite:
-            migrate.upgrade(engine)
-        else:
-            migrate.require_current(engine)
-    except OperationalError as exc:
-        database.dispose()
-        raise DatabaseUnavailableError.of(engine.url, exc) from None
-    except BaseException:
-        database.dispose()
-        raise
-    return database
-
-
-def upgrade_database(url: str | None = None) -> str:
-    """Migrate the database at ``url`` to the packaged head; return the revision reached."""
-    database = open_database(url, auto_migrate=True)
-    try:
-        revision = migrate.current_revision(database.engine)
-    finally:
-        database.dispose()
-    assert revision is not None
-    return revision

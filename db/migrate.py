@@ -37,25 +37,19 @@ def current_revision(engine: Engine) -> str | None:
         return MigrationContext.configure(connection).get_current_revision()
 
 
-def upgrade(engine: Engine, revision: str = "head") -> None:
-    """Migrate the database up to ``revision``, in one transaction.
+def migrate_schema(connection: Connection, revision: str = "head") -> None:
+    """Migrate the schema on ``connection`` up to ``revision`` (within its transaction).
 
-    At the head, derived data of an older definition is rewritten too
-    (:func:`db.derived.rewrite_if_stale`).
+    :class:`SchemaOutOfDateError` for a revision the packaged migrations do not know.
     """
-    from db.derived import rewrite_if_stale  # it needs the models, which import this
-
-    with engine.begin() as connection:
-        try:
-            command.upgrade(alembic_config(connection), revision)
-        except CommandError as exc:  # a revision the packaged migrations do not know
-            url = engine.url.render_as_string(hide_password=True)
-            raise SchemaOutOfDateError(
-                f"database {url} cannot be migrated to {revision}: {exc} "
-                "(written by a newer calstation?)"
-            ) from None
-        if revision == "head":
-            rewrite_if_stale(connection)
+    try:
+        command.upgrade(alembic_config(connection), revision)
+    except CommandError as exc:  # a revision the packaged migrations do not know
+        url = connection.engine.url.render_as_string(hide_password=True)
+        raise SchemaOutOfDateError(
+            f"database {url} cannot be migrated to {revision}: {exc} "
+            "(written by a newer calstation?)"
+        ) from None
 
 
 def require_current(engine: Engine) -> None:

@@ -23,7 +23,8 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
-from db.engine import for_dialect, open_database
+from db.database import open_database
+from db.engine import for_dialect
 from db.limits_profiles import store_profile
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import GyroFit, Run, RunFailure, RunPose, StationKey, StoredLimitsProfile

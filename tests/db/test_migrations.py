@@ -25,8 +25,9 @@ from db import (
     open_database,
 )
 from db.base import Base
+from db.database import upgrade
 from db.mapping import failure_rows, run_row
-from db.migrate import alembic_config, current_revision, head_revision, upgrade
+from db.migrate import alembic_config, current_revision, head_revision
 from db.models import ReportCounts, Run, RunFacts, RunFailure, StoredLimitsProfile, Unit
 from db.reports import eol_report
 from db.repository import KeyHolder, key_sha256

@@ -1,0 +1,81 @@
+"""The results database opened: migrated (or its schema checked), with its sessions.
+
+Opening the embedded SQLite database migrates it to the packaged head; a server
+database is migrated by ``calstation db upgrade`` and refused when behind. At the head,
+derived data of an older definition is rewritten in the same transaction as the schema
+(:func:`db.derived.rewrite_if_stale`).
+"""
+
+from sqlalchemy import Engine
+from sqlalchemy.exc import OperationalError
+from sqlalchemy.orm import Session, sessionmaker
+
+from db.derived import rewrite_if_stale
+from db.engine import DatabaseUnavailableError, make_engine
+from db.migrate import current_revision, migrate_schema, require_current
+from db.settings import DatabaseSettings
+
+
+def upgrade(engine: Engine, revision: str = "head") -> None:
+    """Migrate the database up to ``revision`` in one transaction; at the head, derived
+    data of an older definition is rewritten too."""
+    with engine.begin() as connection:
+        migrate_schema(connection, revision)
+        if revision == "head":
+            rewrite_if_stale(connection)
+
+
+class Database:
+    """One results database: its engine and a factory of sessions."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self.sessions = sessionmaker(engine, expire_on_commit=False)
+
+    @property
+    def is_sqlite(self) -> bool:
+        """Whether this is the embedded (SQLite) database."""
+        return self.engine.dialect.name == "sqlite"
+
+    def session(self) -> Session:
+        """A new session (use it as a context manager)."""
+        return self.sessions()
+
+    def dispose(self) -> None:
+        """Close every pooled connection."""
+        self.engine.dispose()
+
+
+def open_database(url: str | None = None, *, auto_migrate: bool | None = None) -> Database:
+    """Open the results database at ``url`` (default: from :class:`DatabaseSettings`).
+
+    A SQLite database is created and migrated to the latest schema on first use, so the
+    embedded default needs no set-up. A server database is migrated explicitly
+    (``calstation db upgrade``); opening one whose schema is behind raises
+    :class:`db.migrate.SchemaOutOfDateError`.
+    """
+    engine = make_engine(url or DatabaseSettings.from_environment().url())
+    database = Database(engine)
+    try:
+        if auto_migrate if auto_migrate is not None else database.is_sqlite:
+            upgrade(engine)
+        else:
+            require_current(engine)
+    except OperationalError as exc:
+        database.dispose()
+        raise DatabaseUnavailableError.of(engine.url, exc) from None
+    except BaseException:
+        database.dispose()
+        raise
+    return database
+
+
+def upgrade_database(url: str | None = None) -> str:
+    """Migrate the database at ``url`` to the packaged head; return the revision reached."""
+    database = open_database(url, auto_migrate=True)
+    try:
+        revision = current_revision(database.engine)
+    finally:
+        database.dispose()
+    assert revision is not None
+    return revision
