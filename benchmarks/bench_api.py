@@ -50,9 +50,10 @@ from db.limits_profiles import profile_row
 from db.models import StoredLimitsProfile
 from db.rollups import rebuild
 from station.domain.calibration import solve
-from station.domain.calibration.synthetic import pose_means, random_unit, six_directions
 from station.domain.limits import load_profile
 from station.domain.records import RunRecord
+from station.simulator.recording import pose_means, six_directions
+from station.simulator.sensor import SensorTruth
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -352,7 +353,7 @@ async def measure(
 
 def new_record(rng: random.Random, np_rng: np.random.Generator, index: int) -> RunRecord:
     """A fresh passing run whose coefficients are what the server will recompute."""
-    unit = random_unit(np_rng)
+    unit = SensorTruth.draw_accelerometer(np_rng)
     directions = np.vstack([six_directions(np_rng, tilt_deg=3.0), [[0.577, 0.577, 0.577]]])
     means = pose_means(unit, directions, 0.05, np_rng)
     calibration = solve(means[:6], "six").calibration

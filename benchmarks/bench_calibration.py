@@ -22,17 +22,16 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from station.domain.calibration import solve, solve_classic, solve_paper, solve_paper_batch
-from station.domain.calibration.synthetic import (
-    TrueUnit,
+from station.simulator.recording import (
     pose_means,
     random_directions,
-    random_unit,
     six_directions,
     spread_directions,
 )
+from station.simulator.sensor import SensorTruth
 
 
-def crb_six(unit: TrueUnit, directions: np.ndarray, sigma: float) -> np.ndarray:
+def crb_six(unit: SensorTruth, directions: np.ndarray, sigma: float) -> np.ndarray:
     """Cramér–Rao bound (variances) of (o, s) for pose means a_i = o + diag(s)·u_i + n_i.
 
     n_i ~ N(0, σ²I); the unknown gravity directions u_i are nuisance parameters (two
@@ -40,7 +39,7 @@ def crb_six(unit: TrueUnit, directions: np.ndarray, sigma: float) -> np.ndarray:
     inverse Fisher information, counts².
     """
     n = len(directions)
-    s = unit.sensitivity
+    s = unit.sensitivity_counts_per_g
     jac = np.zeros((3 * n, 6 + 2 * n))
     for i, u in enumerate(directions):
         rows = slice(3 * i, 3 * i + 3)
@@ -80,9 +79,9 @@ def accuracy(trials: int, sigma: float) -> None:
     )
     rng = np.random.default_rng(2026)
     for n in (6, 7, 9, 12, 18):
-        unit = random_unit(rng)
+        unit = SensorTruth.draw_accelerometer(rng)
         directions = Rotation.random(random_state=n).apply(spread_directions(n))
-        truth = np.concatenate([unit.offset, unit.sensitivity])
+        truth = np.concatenate([unit.offset_counts, unit.sensitivity_counts_per_g])
         errors = np.empty((trials, 6))
         for t in range(trials):
             sol = solve(pose_means(unit, directions, sigma, rng), "six")
@@ -116,14 +115,16 @@ def jig(units: int) -> None:
         rng = np.random.default_rng(7)
         c_off, c_sens, a_off, a_sens = [], [], [], []
         for _ in range(units):
-            unit = random_unit(rng)
+            unit = SensorTruth.draw_accelerometer(rng)
             poses = pose_means(unit, six_directions(rng, tilt), 0.1, rng)
             classic = solve_classic(poses[0::2], poses[1::2])
             auto = solve_paper(poses).calibration
-            c_off.append(np.abs(classic.offset - unit.offset).mean())
-            c_sens.append(np.abs(classic.sensitivity / unit.sensitivity - 1).mean() * 100)
-            a_off.append(np.abs(auto.offset - unit.offset).mean())
-            a_sens.append(np.abs(auto.sensitivity / unit.sensitivity - 1).mean() * 100)
+            c_off.append(np.abs(classic.offset - unit.offset_counts).mean())
+            c_sens.append(
+                np.abs(classic.sensitivity / unit.sensitivity_counts_per_g - 1).mean() * 100
+            )
+            a_off.append(np.abs(auto.offset - unit.offset_counts).mean())
+            a_sens.append(np.abs(auto.sensitivity / unit.sensitivity_counts_per_g - 1).mean() * 100)
         row(
             f"{tilt:g}",
             f"{np.mean(c_off):.3f}",
@@ -136,7 +137,7 @@ def jig(units: int) -> None:
 def speed(batch_units: int) -> None:
     print("\n(c) speed (one core)")
     rng = np.random.default_rng(1)
-    unit = random_unit(rng, cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     cases = [
         ("paper eq. 10, 6 poses", spread_directions(6), "six"),
         ("least squares six, 12 poses", spread_directions(12), "six"),
@@ -191,7 +192,9 @@ def speed(batch_units: int) -> None:
 def one_size(n: int, model: str) -> None:
     """Solve n random poses of a coupled unit; print seconds and this process's peak RSS."""
     rng = np.random.default_rng(n)
-    poses = pose_means(random_unit(rng, cross_axis=0.02), random_directions(rng, n), 0.05, rng)
+    poses = pose_means(
+        SensorTruth.draw_accelerometer(rng, cross_axis=0.02), random_directions(rng, n), 0.05, rng
+    )
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.perf_counter()
     solution = solve(poses, model)  # type: ignore[arg-type]
@@ -216,7 +219,7 @@ def many_poses() -> None:
     rng = np.random.default_rng(12)
     found, trials = 0, 200
     for _ in range(trials):
-        unit = random_unit(rng, cross_axis=0.02)
+        unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
         directions = Rotation.random(random_state=rng).apply(spread_directions(12))
         poses = pose_means(unit, directions, 0.05, rng)
         bad = int(rng.integers(12))

@@ -1,6 +1,6 @@
 """Gyro matrix K from the moves ([Tedaldi2014]): accuracy against truth, and time per unit.
 
-Hundreds of simulated units (:mod:`station.domain.gyro.motion.synthetic`): K with ±1 % scale
+Hundreds of simulated units (:mod:`station.simulator.recording`): K with ±1 % scale
 and ±0.5 % misalignment, bias ±0.3 deg/s, accelerometers with 2 % cross-axis coupling,
 500 samples/s, gyro noise 0.08 deg/s, accelerometer noise 1 count, 2 s stills, 1.5 s
 minimum-jerk turns with a 5° wobble. Profiles: the six ±1 g poses (alone, or followed
@@ -25,9 +25,15 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from station.domain.calibration import Model
-from station.domain.calibration.synthetic import six_directions, spread_directions
 from station.domain.gyro.motion import Move, calibrate_stream
-from station.domain.gyro.motion.synthetic import pose_orientations, random_imu, synthetic_stream
+from station.simulator.recording import (
+    k_in_calibrated_frame,
+    pose_orientations,
+    random_imu,
+    recorded_stream,
+    six_directions,
+    spread_directions,
+)
 
 SIX = six_directions()
 #: The six ±1 g poses, then back to the first: six moves.
@@ -75,14 +81,14 @@ def main() -> None:
         errors, bias_errors, seconds, ref_errors, ref_gaps = [], [], [], [], []
         for unit in range(units):
             imu = random_imu(rng, cross_axis=cross_axis)
-            stream = synthetic_stream(rng, imu, pose_orientations(rng, directions))
+            stream = recorded_stream(rng, imu, pose_orientations(rng, directions))
             start = time.perf_counter()
             # Five moves are below the fit's default minimum: measured here to show why.
             result = calibrate_stream(stream, model, min_moves=5)
             seconds.append(time.perf_counter() - start)
-            truth = imu.k_in_calibrated_frame(model)
+            truth = k_in_calibrated_frame(imu, model)
             errors.append(result.gyro.scale_matrix - truth)
-            bias_errors.append(np.abs(result.bias_dps - imu.bias_dps).max())
+            bias_errors.append(np.abs(result.bias_dps - imu.gyro_bias_dps).max())
             if unit < reference_units:
                 ref = reference_k(result.moves, result.bias_dps)
                 ref_errors.append(np.abs(ref - truth).max())

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from station.domain.calibration.synthetic import spread_directions
-from station.domain.gyro.motion.synthetic import (
+from station.simulator.recording import (
     StreamPlan,
     pose_orientations,
     random_imu,
-    synthetic_stream,
+    recorded_stream,
+    spread_directions,
 )
 
 ROWS = (20_000, 200_000, 1_000_000)
@@ -35,7 +35,7 @@ def main() -> None:
             still_s = (rows / 500.0 - 11 * 1.5) / 12
             rng = np.random.default_rng(rows)
             imu = random_imu(rng)
-            stream = synthetic_stream(
+            stream = recorded_stream(
                 rng,
                 imu,
                 pose_orientations(rng, spread_directions(12)),

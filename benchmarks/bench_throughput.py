@@ -188,7 +188,7 @@ def run_station(
             config=config,
             open_store=lambda: DatabaseStore(database),
             keys=operator,
-            probe_port=False,
+            probe_ports=False,
             **common,
         )
     else:

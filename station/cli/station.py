@@ -53,24 +53,15 @@ def _station(
     probe_port: bool = True,
 ) -> StationApp | FixtureApp:
     """The one-port station, or the fixture's when several slots are configured."""
-    if config.slots:
-        return FixtureApp(
-            config=config,
-            profile=profile,
-            open_store=_store_opener(config),
-            keys=keys,
-            console=console,
-            units=units,
-            probe_ports=probe_port,
-        )
-    return StationApp(
+    front_end = FixtureApp if config.slots else StationApp
+    return front_end(
         config=config,
         profile=profile,
         open_store=_store_opener(config),
         keys=keys,
         console=console,
         units=units,
-        probe_port=probe_port,
+        probe_ports=probe_port,
     )
 
 

@@ -1,7 +1,7 @@
 """A run's limit checks on its measured values, and the failure list of its verdict.
 
 One place for judging, used by the station at a run's verdict
-(:mod:`station.run.checks`, :mod:`station.run.verdict`) and by the end-of-line report to
+(:mod:`station.run.verdict`) and by the end-of-line report to
 re-judge stored runs against a candidate limits profile (:func:`rejudge`, the report's
 what-if). Each value is compared with the profile by :func:`station.domain.limits.check`, in a
 fixed order: every pose's noise per axis and link loss, the offsets, the sensitivities,

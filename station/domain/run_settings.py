@@ -2,9 +2,18 @@
 
 Part of the station's configuration (:class:`station.loop.config.StationConfig`); read by
 every step of a unit's run (:class:`station.run.unit_run.UnitRun`).
+
+Run plans ship beside the limits profiles: ``station/domain/profiles/plans.toml`` holds
+one ``[plans.NAME]`` table per profile that is not run the default way (six poses,
+[Song2006]_). :func:`shipped_plan` gives the table of a profile name, which the station's
+configuration takes as its ``[run]`` defaults, so that ``--profile whole-unit`` chooses
+the limits and the poses, model and gyro calibration together.
 """
 
-from typing import Literal
+import tomllib
+from functools import cache
+from importlib import resources
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -72,3 +81,18 @@ class RunSettings(BaseModel):
                 self.min_pose_separation_deg,
             )
         return self
+
+
+@cache
+def _plans() -> dict[str, dict[str, Any]]:
+    source = resources.files("station.domain.profiles").joinpath("plans.toml")
+    plans: dict[str, dict[str, Any]] = tomllib.loads(source.read_text(encoding="utf-8"))["plans"]
+    return plans
+
+
+def shipped_plan(profile: object) -> dict[str, Any] | None:
+    """The ``[run]`` settings shipped for limits profile ``profile``, or None."""
+    if not isinstance(profile, str):
+        return None
+    plan = _plans().get(profile)
+    return dict(plan) if plan is not None else None

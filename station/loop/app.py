@@ -12,25 +12,15 @@ import logging
 from collections.abc import Callable
 
 from rich.console import Console, Group, RenderableType
-from rich.text import Text
 
 from station.device import DeviceError, PutterDriver
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
-from station.loop.lifecycle import (
-    Quit,
-    Said,
-    Scanned,
-    UnitLifecycle,
-    Unreachable,
-    WrongUnit,
-    verdict_line,
-)
-from station.loop.live_loop import run_live
+from station.loop.lifecycle import Quit, Said, Scanned, Unreachable, WrongUnit, verdict_line
+from station.loop.live_loop import FrontEnd
 from station.loop.prompt import Prompt, Recalibrate, Resume, Serial, State
-from station.loop.screens import header
 from station.loop.slot import Slot
 from station.loop.unit_history import ScanAction, UnitHistory
 from station.results.journal import JournalFile, RunJournal
@@ -42,7 +32,7 @@ from station.run.unit_run import UnitRun
 log = logging.getLogger(__name__)
 
 
-class StationApp:
+class StationApp(FrontEnd):
     """One station serving units until its keys run out (or ``units`` are done)."""
 
     def __init__(
@@ -55,51 +45,45 @@ class StationApp:
         console: Console,
         units: int | None = None,
         tick_s: float = 0.01,
-        probe_port: bool = True,
+        probe_ports: bool = True,
     ) -> None:
-        self.config = config
-        self.profile = profile
-        self.keys = keys
-        self.console = console
-        self.units = units
-        self.tick_s = tick_s
-        #: Try the putter port at start (the demo's port exists only while a unit is in).
-        self.probe_port = probe_port
         self.slot = Slot(1, config.port, JournalFile(config.journal_path))
-        self.lifecycle = UnitLifecycle(
+        super().__init__(
             config=config,
             profile=profile,
             slots=[self.slot],
             open_store=open_store,
-            say_line=self._say_line,
+            keys=keys,
+            console=console,
+            units=units,
+            tick_s=tick_s,
+            probe_ports=probe_ports,
         )
-        self.results = self.lifecycle.results
         self.prompt = Prompt()
         #: The scanned unit's history (asked about in CONFIRM).
         self.history: UnitHistory | None = None
         self.last_record: RunRecord | None = None
-        self.done = False
-
-    # -- start and loop ------------------------------------------------------------------
 
     @property
     def run(self) -> UnitRun | None:
         """The unit in progress."""
         return self.slot.run
 
-    @property
-    def records(self) -> list[RunRecord]:
-        """Every run recorded since the station started."""
-        return self.lifecycle.records
+    # -- start and loop ------------------------------------------------------------------
 
-    def serve(self) -> list[RunRecord]:
-        """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
-        self._say_line(f"calstation {self.lifecycle.versions}")
-        self.lifecycle.open_results()
-        if self.probe_port:
-            self._check_port()
-        for line in self.lifecycle.checks.lines():
-            self._say_line(line)
+    def _port_lines(self) -> list[str]:
+        port = self.config.port
+        if not self.probe_ports:
+            return []
+        if port is None:
+            return ["no putter port configured"]
+        try:
+            PutterDriver.open(port).close()
+        except DeviceError as exc:
+            return [f"putter port {port}: {port_problem(exc)} (waiting for a unit)"]
+        return []
+
+    def _begin(self) -> None:
         interrupted, discarded = self.lifecycle.interrupted()
         for _, unreadable in discarded:
             self._tell(unreadable.sentence)
@@ -109,11 +93,6 @@ class StationApp:
                 f"unit {journal.serial} was interrupted at pose {journal.next_pose + 1} of "
                 f"{len(journal.poses)}: resume it? (y/n)"
             )
-        try:
-            run_live(self.console, self.screen, self.tick, lambda: self.done, self.tick_s)
-        finally:
-            self.lifecycle.close()
-        return self.records
 
     def tick(self) -> None:
         """One pass: keys, the unit in progress, the outbox."""
@@ -135,28 +114,10 @@ class StationApp:
         if self.prompt.state is not State.UNIT:
             self.results.sync_if_due()
 
-    # -- screens -------------------------------------------------------------------------
-
     def screen(self) -> RenderableType:
         """The whole screen as it stands."""
-        results = self.results
-        top = header(
-            self.config.station_id,
-            self.config.operator_id,
-            self.lifecycle.versions,
-            results.backlog,
-            results.set_aside,
-        )
         run = self.run.view() if self.run is not None else None
-        checks = [Text(line, style="bold red") for line in self.lifecycle.checks.lines()]
-        return Group(
-            top, *results.status_lines(), *checks, self.prompt.screen(run, self.last_record)
-        )
-
-    def _say_line(self, text: str) -> None:
-        """A line for a console that is not a terminal (logs, the demo's stderr)."""
-        if not self.console.is_terminal:
-            self.console.print(text, markup=False, highlight=False)
+        return Group(*self.top(), self.prompt.screen(run, self.last_record))
 
     # -- keys ----------------------------------------------------------------------------
 
@@ -234,16 +195,3 @@ class StationApp:
             self.results.sync()
         if self.lifecycle.enough(self.units):
             self.done = True
-
-    # -- the port -----------------------------------------------------------------------
-
-    def _check_port(self) -> None:
-        if self.config.port is None:
-            self._say_line("no putter port configured")
-            return
-        try:
-            PutterDriver.open(self.config.port).close()
-        except DeviceError as exc:
-            self._say_line(
-                f"putter port {self.config.port}: {port_problem(exc)} (waiting for a unit)"
-            )

@@ -14,9 +14,8 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from station.domain.errors import InputError, validation_problem
-from station.domain.plans import shipped_plan
 from station.domain.quality.golden import GoldenUnit
-from station.domain.run_settings import RunSettings
+from station.domain.run_settings import RunSettings, shipped_plan
 from station.results.storage import DatabaseUrl, DataDir, default_data_dir
 
 #: Serial numbers on the putters' labels: PT and six digits.

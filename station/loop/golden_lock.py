@@ -6,7 +6,7 @@ append-only record of every golden check, lock and unlock (one JSON object a lin
 fsynced), with the supervisor and the reason of each unlock. A state file that cannot be
 read locks the station: it cannot tell whether it was locked.
 
-:class:`GoldenLock` answers the station's loop (:class:`station.loop.app.StationApp`): what
+:class:`GoldenLock` answers the unit lifecycle (:mod:`station.loop.lifecycle`): what
 stops a scanned serial (the lock, or the golden unit being due), whether a serial is
 the golden unit, what the golden run's verdict means, and a supervisor's unlock.
 """

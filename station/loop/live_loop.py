@@ -1,45 +1,142 @@
-"""The station's loop around its screen: tick, redraw every so often, until done.
+"""The station's loop around its screen, shared by both front-ends.
 
-Both the one-port station (:class:`station.loop.app.StationApp`) and the multi-slot fixture
-(:class:`station.loop.fixture.app.FixtureApp`) run it: on a terminal the screen is a rich
-:class:`~rich.live.Live` display redrawn every :data:`DRAW_EVERY_S`; on anything else
-(logs, the demo's stderr) nothing is drawn and the station says its lines instead.
+:class:`FrontEnd` is what the one-port station (:class:`station.loop.app.StationApp`) and
+the multi-slot fixture (:class:`station.loop.fixture.app.FixtureApp`) have in common: their
+slots and the unit lifecycle behind them (:class:`station.loop.lifecycle.UnitLifecycle`),
+the keys they read, the console they draw on, and the loop: tick, redraw every so often,
+until done. On a terminal the screen is a rich :class:`~rich.live.Live` display redrawn
+every :data:`DRAW_EVERY_S`; on anything else (logs, the demo's stderr) nothing is drawn
+and the station says its lines instead.
 """
 
 import time
-from collections.abc import Callable
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Sequence
 
 from rich.console import Console, RenderableType
 from rich.live import Live
+from rich.text import Text
+
+from station.domain.limits import LimitsProfile
+from station.domain.records import RunRecord
+from station.loop.config import StationConfig
+from station.loop.keyboard import KeySource
+from station.loop.lifecycle import UnitLifecycle
+from station.loop.screens import header
+from station.loop.slot import Slot
+from station.results.storage import RunStore
 
 #: Seconds between screen refreshes.
 DRAW_EVERY_S = 0.1
 
 
-def run_live(
-    console: Console,
-    screen: Callable[[], RenderableType],
-    tick: Callable[[], None],
-    done: Callable[[], bool],
-    tick_s: float,
-) -> None:
-    """Call ``tick`` every ``tick_s`` until ``done()``, drawing ``screen()`` on a terminal."""
-    if console.is_terminal:
-        with Live(screen(), console=console, auto_refresh=False) as live:
-            _loop(lambda: live.update(screen(), refresh=True), tick, done, tick_s)
-    else:
-        _loop(lambda: None, tick, done, tick_s)
+class FrontEnd(ABC):
+    """A station's front-end: its slots, keys and console, served until done.
 
+    ``units``: stop once that many runs are recorded; ``probe_ports``: try the putter
+    ports at start (the demo's ports exist only while a unit is in).
+    """
 
-def _loop(
-    draw: Callable[[], None], tick: Callable[[], None], done: Callable[[], bool], tick_s: float
-) -> None:
-    next_draw = 0.0
-    while not done():
-        tick()
-        now = time.monotonic()
-        if now >= next_draw:
-            draw()
-            next_draw = now + DRAW_EVERY_S
-        time.sleep(tick_s)
-    draw()
+    def __init__(
+        self,
+        *,
+        config: StationConfig,
+        profile: LimitsProfile,
+        slots: Sequence[Slot],
+        open_store: Callable[[], RunStore],
+        keys: KeySource,
+        console: Console,
+        units: int | None = None,
+        tick_s: float = 0.01,
+        probe_ports: bool = True,
+    ) -> None:
+        self.config = config
+        self.profile = profile
+        self.keys = keys
+        self.console = console
+        self.units = units
+        self.tick_s = tick_s
+        self.probe_ports = probe_ports
+        self.lifecycle = UnitLifecycle(
+            config=config,
+            profile=profile,
+            slots=slots,
+            open_store=open_store,
+            say_line=self._say_line,
+        )
+        self.results = self.lifecycle.results
+        self.done = False
+
+    @property
+    def records(self) -> list[RunRecord]:
+        """Every run recorded since the station started."""
+        return self.lifecycle.records
+
+    def serve(self) -> list[RunRecord]:
+        """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
+        self._say_line(f"calstation {self.lifecycle.versions}{self._title()}")
+        self.lifecycle.open_results()
+        for line in [*self._port_lines(), *self.lifecycle.checks.lines()]:
+            self._say_line(line)
+        self._begin()
+        try:
+            if self.console.is_terminal:
+                with Live(self.screen(), console=self.console, auto_refresh=False) as live:
+                    self._loop(lambda: live.update(self.screen(), refresh=True))
+            else:
+                self._loop(lambda: None)
+        finally:
+            self.lifecycle.close()
+        return self.records
+
+    def _loop(self, draw: Callable[[], None]) -> None:
+        next_draw = 0.0
+        while not self.done:
+            self.tick()
+            now = time.monotonic()
+            if now >= next_draw:
+                draw()
+                next_draw = now + DRAW_EVERY_S
+            time.sleep(self.tick_s)
+        draw()
+
+    def top(self) -> list[RenderableType]:
+        """The top of the screen: who, the outbox, versions, the store and the disk, the
+        station's own checks."""
+        results = self.results
+        return [
+            header(
+                self.config.station_id,
+                self.config.operator_id,
+                self.lifecycle.versions,
+                results.backlog,
+                results.set_aside,
+            ),
+            *results.status_lines(),
+            *(Text(line, style="bold red") for line in self.lifecycle.checks.lines()),
+        ]
+
+    def _say_line(self, text: str) -> None:
+        """A line for a console that is not a terminal (logs, the demo's stderr)."""
+        if not self.console.is_terminal:
+            self.console.print(text, markup=False, highlight=False)
+
+    def _title(self) -> str:
+        """What follows the versions in the first line said."""
+        return ""
+
+    @abstractmethod
+    def _port_lines(self) -> list[str]:
+        """Lines about the putter ports at start (none when not probed)."""
+
+    @abstractmethod
+    def _begin(self) -> None:
+        """What the front-end does before its first tick (offer an interrupted run)."""
+
+    @abstractmethod
+    def tick(self) -> None:
+        """One pass: keys, the units in progress, the outbox."""
+
+    @abstractmethod
+    def screen(self) -> RenderableType:
+        """The whole screen as it stands."""

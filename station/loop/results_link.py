@@ -4,8 +4,8 @@
 the results store when it can (at start, after each unit, and every
 :data:`SYNC_EVERY_S` while idle), reconnects to the store after it failed, asks the
 disk watch to write again what the disk refused, and keeps, in one line each, what the
-operator is told about the store and the disk. The station's loop
-(:class:`station.loop.app.StationApp`) only calls it.
+operator is told about the store and the disk. The unit lifecycle
+(:class:`station.loop.lifecycle.UnitLifecycle`) owns it; the front-ends read its lines.
 """
 
 import time

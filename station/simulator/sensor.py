@@ -80,6 +80,67 @@ class SensorTruth:
             np.eye(3) + np.diag(self.gyro_scale_error) + self.gyro_misalignment, dtype=np.float64
         )
 
+    @property
+    def counts_per_g(self) -> FloatArray:
+        """The accelerometer's counts-per-g matrix ``S = diag(s) · C`` at 25 °C (the inverse
+        of :attr:`matrix`): a unit at rest reads ``o + S · f``."""
+        return np.asarray(
+            np.diag(self.sensitivity_counts_per_g) @ self.cross_axis, dtype=np.float64
+        )
+
+    def still_counts(self, force_g: FloatArray) -> FloatArray:
+        """Noise-free accelerometer counts at 25 °C (N-by-3, not rounded, not clipped) for
+        specific forces ``force_g`` (N-by-3, g): the mean of a long still window."""
+        return np.asarray(self.offset_counts + force_g @ self.counts_per_g.T, dtype=np.float64)
+
+    @classmethod
+    def accelerometer(
+        cls,
+        offset_counts: FloatArray,
+        counts_per_g: FloatArray,
+        *,
+        gyro_matrix: FloatArray | None = None,
+        gyro_bias_dps: FloatArray | None = None,
+    ) -> "SensorTruth":
+        """A unit with this accelerometer (offsets, counts, and counts-per-g matrix
+        ``S = diag(s) · C``) and these gyros (``K`` and bias, deg/s), perfect otherwise: no
+        temperature drift, no g-sensitivity, no noise (noise is the recording's)."""
+        sensitivity = np.diag(counts_per_g).astype(np.float64)
+        k = np.eye(3) if gyro_matrix is None else np.asarray(gyro_matrix, dtype=np.float64)
+        return cls(
+            offset_counts=np.asarray(offset_counts, dtype=np.float64),
+            sensitivity_counts_per_g=sensitivity,
+            cross_axis=np.asarray(counts_per_g / sensitivity[:, None], dtype=np.float64),
+            noise_counts=0.0,
+            offset_tempco_counts_per_c=np.zeros(3),
+            sensitivity_tempco_per_c=np.zeros(3),
+            gyro_bias_dps=np.zeros(3) if gyro_bias_dps is None else gyro_bias_dps,
+            gyro_scale_error=np.diag(k) - 1.0,
+            gyro_misalignment=k - np.diag(np.diag(k)),
+            gyro_g_sensitivity_per_g=np.zeros(3),
+            gyro_noise_dps=0.0,
+        )
+
+    @classmethod
+    def draw_accelerometer(
+        cls,
+        rng: np.random.Generator,
+        cross_axis: float = 0.0,
+        offset_spread: float = OFFSET_SPREAD_COUNTS,
+        sensitivity_tolerance: float = SENSITIVITY_TOLERANCE,
+    ) -> "SensorTruth":
+        """An accelerometer drawn uniformly within the datasheet spreads ([Song2006]_
+        Table 1), perfect gyros (:meth:`accelerometer`). ``cross_axis``: each off-diagonal
+        coupling uniform in ±cross_axis (the KXM52's typical value is
+        :data:`station.domain.sensor.CROSS_AXIS_TYPICAL`)."""
+        offset = NOMINAL_OFFSET_COUNTS + rng.uniform(-offset_spread, offset_spread, 3)
+        s = NOMINAL_SENSITIVITY_COUNTS_PER_G * (
+            1 + rng.uniform(-sensitivity_tolerance, sensitivity_tolerance, 3)
+        )
+        coupling = rng.uniform(-cross_axis, cross_axis, (3, 3))
+        np.fill_diagonal(coupling, 0.0)
+        return cls.accelerometer(offset, np.diag(s) @ (np.eye(3) + coupling))
+
     @classmethod
     def draw(cls, rng: np.random.Generator) -> "SensorTruth":
         """A unit as the line meets them: every parameter within its datasheet spread."""

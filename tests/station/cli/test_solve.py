@@ -8,14 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from station.domain.calibration.synthetic import (
-    pose_means,
-    random_directions,
-    random_unit,
-    spread_directions,
-)
 from station.domain.errors import InputError
 from station.domain.posefile import read_pose_file
+from station.simulator.recording import pose_means, random_directions, spread_directions
+from station.simulator.sensor import SensorTruth
 from tests.conftest import REPO_ROOT, CliRunner
 
 PAPER_CSV = REPO_ROOT / "examples" / "paper_table2.csv"
@@ -53,7 +49,7 @@ def test_readable_table(run_cli: CliRunner) -> None:
 
 def test_nine_model_on_a_generated_file(run_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
-    unit = random_unit(rng, cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     poses = pose_means(unit, spread_directions(18), 0.05, rng)
     path = tmp_path / "poses.csv"
     path.write_text("temp,ax,ay,az,note\n" + "".join(f"25.0,{x},{y},{z},ok\n" for x, y, z in poses))
@@ -62,7 +58,7 @@ def test_nine_model_on_a_generated_file(run_cli: CliRunner, tmp_path: Path) -> N
     data = json.loads(result.stdout)
     assert data["model"] == "nine"
     assert data["poses"] == 18
-    np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset, atol=0.5)
+    np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset_counts, atol=0.5)
     assert data["standard_errors"] is not None
 
 
@@ -136,7 +132,7 @@ def _write(path: Path, poses: np.ndarray) -> Path:
 
 def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(12)
-    unit = random_unit(rng, cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     directions = spread_directions(12)
     poses = pose_means(unit, directions, 0.05, rng)
     poses[2] += 100.0 * directions[2]  # pose 3, line 4
@@ -148,7 +144,7 @@ def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path
     assert data["residual_limit_counts"] == pytest.approx(2.0)
     assert data["sensitivity_convention"].startswith("1/diag(C), C upper-triangular")
     assert data["standard_errors"]["dof"] == 11 - 9
-    np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset, atol=0.5)
+    np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset_counts, atol=0.5)
     text = run_cli("solve", str(path), "--model", "nine")
     assert f"EXCLUDED pose 3 ({path}:4)" in text.stdout
     assert "no ± shown: 2 degree(s) of freedom" in text.stdout
@@ -156,7 +152,7 @@ def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path
 
 def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(13)
-    unit = random_unit(rng)
+    unit = SensorTruth.draw_accelerometer(rng)
     directions = spread_directions(12)
     poses = pose_means(unit, directions, 0.05, rng)
     poses[5] += 30.0 * directions[5]
@@ -197,7 +193,7 @@ def test_refusals_name_the_real_cause(
 def test_100000_poses_solve_or_refuse_in_one_line(run_cli: CliRunner, tmp_path: Path) -> None:
     # Memory linear in the poses: no N×N table (1e5² would be 75 GiB of float64).
     rng = np.random.default_rng(14)
-    unit = random_unit(rng, cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     poses = pose_means(unit, random_directions(rng, 100_000), 0.05, rng)
     result = run_cli(
         "solve", str(_write(tmp_path / "many.csv", poses)), "--model", "nine", "--json"

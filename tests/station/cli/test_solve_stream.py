@@ -7,17 +7,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.domain.calibration.synthetic import spread_directions
 from station.domain.errors import InputError
 from station.domain.gyro.motion import StreamError
 from station.domain.gyro.motion.stream_file import read_stream_file
-from station.domain.gyro.motion.synthetic import (
+from station.simulator.recording import (
     StreamPlan,
-    SyntheticImu,
+    k_in_calibrated_frame,
     pose_orientations,
     random_imu,
-    synthetic_stream,
+    recorded_stream,
+    spread_directions,
 )
+from station.simulator.sensor import SensorTruth
 from tests.conftest import CliRunner
 
 HEADER = "t,ax,ay,az,gx,gy,gz"
@@ -30,15 +31,15 @@ def _write(path: Path, rows: np.ndarray, header: str = HEADER) -> Path:
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[SyntheticImu, np.ndarray]:
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[SensorTruth, np.ndarray]:
     rng = np.random.default_rng(11)
     imu = random_imu(rng)
-    stream = synthetic_stream(rng, imu, pose_orientations(rng, spread_directions(12)), PLAN)
+    stream = recorded_stream(rng, imu, pose_orientations(rng, spread_directions(12)), PLAN)
     return imu, np.column_stack([stream.t, stream.accel_counts, stream.gyro_dps])
 
 
 def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     imu, rows = recorded
     path = _write(tmp_path / "log.csv", rows)
@@ -50,14 +51,14 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     gyro = data["gyro"]
     k = np.array(gyro["scale_matrix"])
     se = np.array(gyro["scale_matrix_standard_errors"])
-    assert (np.abs(k - imu.k_in_calibrated_frame("nine")) <= 5 * se + 1e-4).all()
-    assert np.allclose(gyro["bias_dps"], imu.bias_dps, atol=0.01)
+    assert (np.abs(k - k_in_calibrated_frame(imu, "nine")) <= 5 * se + 1e-4).all()
+    assert np.allclose(gyro["bias_dps"], imu.gyro_bias_dps, atol=0.01)
     assert len(gyro["residual_deg"]) == 11
     assert gyro["unusable_moves"] == []
 
 
 def test_lost_samples_make_a_move_unusable_and_say_so(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)
@@ -75,7 +76,7 @@ def test_lost_samples_make_a_move_unusable_and_say_so(
 
 
 def test_text_output_names_k_and_the_residuals(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     path = _write(tmp_path / "log.csv", rows)
@@ -100,9 +101,7 @@ def test_missing_column_is_refused(run_cli: CliRunner, tmp_path: Path) -> None:
     assert "header lacks column(s) gz" in _refused(run_cli, path)
 
 
-def test_time_going_back_is_named(
-    tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
-) -> None:
+def test_time_going_back_is_named(tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]) -> None:
     _, rows = recorded
     back = rows.copy()
     back[100, 0] = back[98, 0]
@@ -126,7 +125,7 @@ def test_a_short_row_is_named_with_its_line(tmp_path: Path) -> None:
 
 
 def test_too_few_stills_are_refused(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SyntheticImu, np.ndarray]
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)

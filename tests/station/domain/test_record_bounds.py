@@ -10,10 +10,11 @@ from hypothesis import strategies as st
 from pydantic import ValidationError
 
 from station.domain.calibration import CalibrationError, apply, solve
-from station.domain.calibration.synthetic import TrueUnit, pose_means, six_directions
 from station.domain.gyro.still import summarize_still_poses
 from station.domain.record_bounds import ERROR_MAX_MG, GYRO_RANGE_DPS
 from station.domain.records import Coefficients, GyroSummary, QualityMetrics, RunRecord, Vector3
+from station.simulator.recording import pose_means, six_directions
+from station.simulator.sensor import SensorTruth
 from tests.db.records import make_record
 
 
@@ -45,9 +46,9 @@ def test_whatever_the_station_computes_from_in_range_counts_validates(
     rng = np.random.default_rng(seed)
     cross = np.array(coupling).reshape(3, 3)
     np.fill_diagonal(cross, 0.0)
-    unit = TrueUnit(offset=np.array(offset), scale=np.diag(sensitivity) @ (np.eye(3) + cross))
+    unit = SensorTruth.accelerometer(np.array(offset), np.diag(sensitivity) @ (np.eye(3) + cross))
     poses = np.clip(pose_means(unit, six_directions(rng, tilt), noise, rng), 0, 4095)
-    verify = np.clip(unit.counts(np.array([[0.577, 0.577, 0.577]]))[0], 0, 4095)
+    verify = np.clip(unit.still_counts(np.array([[0.577, 0.577, 0.577]]))[0], 0, 4095)
     try:
         solution = solve(poses)
     except CalibrationError:

@@ -20,9 +20,9 @@ Public surface::
     calibrate_stream(stream, model, *, thresholds=None, min_moves=6) -> StreamCalibration
         .stills, .accel (calibration.Solution), .gravity, .bias_dps, .moves, .gyro
     stream_thresholds(rate_hz, still_window_s)                  stream.py
-    SyntheticImu, StreamPlan, random_imu, pose_orientations, synthetic_stream
-                                                                synthetic.py (not
-                                                                imported here)
+
+Recorded streams of virtual units with known truth, for the tests and benchmarks, come
+from the simulator (:mod:`station.simulator.recording`).
 
 Errors::
 

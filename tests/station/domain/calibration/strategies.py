@@ -4,8 +4,8 @@ import numpy as np
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from station.domain.calibration.synthetic import TrueUnit
 from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.simulator.sensor import SensorTruth
 
 offsets = st.floats(NOMINAL_OFFSET_COUNTS - 207, NOMINAL_OFFSET_COUNTS + 207)
 sensitivities = st.floats(
@@ -14,7 +14,7 @@ sensitivities = st.floats(
 
 
 @st.composite
-def true_units(draw: st.DrawFn, cross_axis: float = 0.0) -> TrueUnit:
+def true_units(draw: st.DrawFn, cross_axis: float = 0.0) -> SensorTruth:
     """A unit within the datasheet spreads; off-diagonal coupling uniform in ±cross_axis."""
     offset = np.array([draw(offsets) for _ in range(3)])
     s = np.array([draw(sensitivities) for _ in range(3)])
@@ -22,7 +22,7 @@ def true_units(draw: st.DrawFn, cross_axis: float = 0.0) -> TrueUnit:
     if cross_axis > 0:
         for i, j in [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]:
             coupling[i, j] = draw(st.floats(-cross_axis, cross_axis))
-    return TrueUnit(offset=offset, scale=np.diag(s) @ (np.eye(3) + coupling))
+    return SensorTruth.accelerometer(offset, np.diag(s) @ (np.eye(3) + coupling))
 
 
 @st.composite

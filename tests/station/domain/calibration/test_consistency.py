@@ -18,19 +18,15 @@ from station.domain.calibration import (
     solve,
 )
 from station.domain.calibration.residual import leverage
-from station.domain.calibration.synthetic import (
-    TrueUnit,
-    pose_means,
-    random_unit,
-    spread_directions,
-)
+from station.simulator.recording import pose_means, spread_directions
+from station.simulator.sensor import SensorTruth
 from tests.station.domain.calibration.strategies import rotations, seeds, true_units
 
 NOISE = 0.05  # counts per pose mean, about the virtual putter's 1 count over 1024 samples
 
 
 def spoiled(
-    unit: TrueUnit, n: int, pose: int, counts: float, seed: int
+    unit: SensorTruth, n: int, pose: int, counts: float, seed: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """n well-spread poses of ``unit`` with ``counts`` added along gravity to ``pose``."""
     rng = np.random.default_rng(seed)
@@ -42,17 +38,21 @@ def spoiled(
 
 @pytest.mark.parametrize(("model", "cross_axis"), [("six", 0.0), ("nine", 0.02), ("six", 0.02)])
 def test_a_100_count_outlier_on_one_of_12_poses_is_excluded(model: str, cross_axis: float) -> None:
-    unit = random_unit(np.random.default_rng(17), cross_axis=cross_axis)
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(17), cross_axis=cross_axis)
     poses, _ = spoiled(unit, 12, pose=4, counts=100.0, seed=17)
     solution = solve(poses, model)  # type: ignore[arg-type]
     assert solution.excluded == (4,)
     assert solution.to_dict()["excluded"] == [5]  # numbered as the CLI numbers poses
-    assert solution.quality.pose_g[4] == pytest.approx(1 + 100 / unit.sensitivity.mean(), abs=0.02)
+    assert solution.quality.pose_g[4] == pytest.approx(
+        1 + 100 / unit.sensitivity_counts_per_g.mean(), abs=0.02
+    )
     if cross_axis == 0.0 or model == "nine":  # the model holds the truth: back within noise
         clean = solve(np.delete(poses, 4, axis=0), model)  # type: ignore[arg-type]
         assert solution.standard_errors is not None
         np.testing.assert_allclose(
-            solution.calibration.offset, unit.offset, atol=6 * solution.standard_errors.offset.max()
+            solution.calibration.offset,
+            unit.offset_counts,
+            atol=6 * solution.standard_errors.offset.max(),
         )
         np.testing.assert_allclose(solution.calibration.offset, clean.calibration.offset)
 
@@ -60,7 +60,7 @@ def test_a_100_count_outlier_on_one_of_12_poses_is_excluded(model: str, cross_ax
 def test_seven_poses_with_an_outlier_are_refused_without_blaming_a_pose() -> None:
     # One spare equation: every pose's studentised residual is the same, and leaving out
     # any one of the seven fits the other six exactly. No pose can be named.
-    unit = random_unit(np.random.default_rng(3))
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(3))
     poses, _ = spoiled(unit, 7, pose=2, counts=100.0, seed=3)
     t = np.abs(_studentised(poses))
     np.testing.assert_allclose(t, t[0], rtol=1e-6)  # the evidence: all alike
@@ -79,7 +79,7 @@ def _studentised(poses: np.ndarray) -> np.ndarray:
 
 
 def test_a_pose_clipped_at_4094_is_refused_as_at_the_rail() -> None:
-    unit = random_unit(np.random.default_rng(5))
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(5))
     poses, _ = spoiled(unit, 12, pose=7, counts=0.0, seed=5)
     poses[7, 1] = 4094.0
     with pytest.raises(CalibrationError, match=r"pose 8: y is at the ADC rail") as info:
@@ -98,7 +98,7 @@ def test_a_pose_clipped_at_4094_is_refused_as_at_the_rail() -> None:
     tilt_deg=st.floats(0.0, 60.0),
 )
 def test_one_random_outlier_is_the_pose_excluded(
-    unit: TrueUnit,
+    unit: SensorTruth,
     rotation: Rotation,
     seed: int,
     n: int,
@@ -112,7 +112,7 @@ def test_one_random_outlier_is_the_pose_excluded(
     directions = rotation.apply(spread_directions(n))
     model = "nine" if n >= 11 else "six"
     if model == "six":  # the six-parameter model holds only for units without coupling
-        unit = TrueUnit(unit.offset, np.diag(unit.sensitivity))
+        unit = SensorTruth.accelerometer(unit.offset_counts, np.diag(unit.sensitivity_counts_per_g))
     poses = pose_means(unit, directions, NOISE, rng)
     side = np.cross(directions[bad], rng.standard_normal(3))
     side /= np.linalg.norm(side)
@@ -152,7 +152,7 @@ def _spare(directions: np.ndarray, model: str) -> np.ndarray:
     sigma=st.floats(0.0, 0.25),
 )
 def test_clean_poses_exclude_nothing(
-    unit: TrueUnit, rotation: Rotation, seed: int, n: int, sigma: float
+    unit: SensorTruth, rotation: Rotation, seed: int, n: int, sigma: float
 ) -> None:
     """Noise up to the worst a still pose may carry (0.25 counts) never trips the limit.
 
@@ -161,7 +161,7 @@ def test_clean_poses_exclude_nothing(
     rng = np.random.default_rng(seed)
     model = "nine" if n >= 10 else "six"  # at least one spare equation to check
     if model == "six":
-        unit = TrueUnit(unit.offset, np.diag(unit.sensitivity))
+        unit = SensorTruth.accelerometer(unit.offset_counts, np.diag(unit.sensitivity_counts_per_g))
     poses = pose_means(unit, rotation.apply(spread_directions(n)), sigma, rng)
     solution = solve(poses, model)  # type: ignore[arg-type]
     assert solution.excluded == ()
@@ -172,7 +172,7 @@ def test_clean_poses_exclude_nothing(
 
 def test_six_model_on_twelve_coupled_poses_is_judged_with_the_nine() -> None:
     # 2 % coupling leaves ~10-30 counts in a six-parameter fit: not a bad pose.
-    unit = random_unit(np.random.default_rng(21), cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(21), cross_axis=0.02)
     poses, _ = spoiled(unit, 12, pose=0, counts=0.0, seed=21)
     solution = solve(poses, "six")
     assert solution.excluded == ()
@@ -184,7 +184,7 @@ def test_seven_coupled_poses_refuse_with_a_hint_at_the_model() -> None:
     # Too few poses for the nine-parameter check: the six-parameter misfit of a coupled
     # unit exceeds the noise limit, and the refusal says the model may be the cause. A
     # profile whose limit covers the coupling (~40 counts) accepts the same poses.
-    unit = random_unit(np.random.default_rng(22), cross_axis=0.02)
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(22), cross_axis=0.02)
     poses, _ = spoiled(unit, 7, pose=0, counts=0.0, seed=22)
     with pytest.raises(InconsistentPosesError, match="cross-axis coupling"):
         solve(poses, "six")
@@ -192,14 +192,14 @@ def test_seven_coupled_poses_refuse_with_a_hint_at_the_model() -> None:
 
 
 def test_the_limit_comes_from_the_caller() -> None:
-    unit = random_unit(np.random.default_rng(9))
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(9))
     poses, _ = spoiled(unit, 12, pose=3, counts=30.0, seed=9)
     assert solve(poses, "six").excluded == (3,)
     assert solve(poses, "six", max_residual_counts=100.0).excluded == ()
 
 
 def test_two_bad_poses_are_refused_not_half_fixed() -> None:
-    unit = random_unit(np.random.default_rng(11))
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(11))
     poses, directions = spoiled(unit, 14, pose=2, counts=80.0, seed=11)
     poses[9] -= 90.0 * directions[9]
     with pytest.raises(InconsistentPosesError, match="more than one pose is off"):

@@ -19,11 +19,7 @@ from station.domain.calibration import (
     solve,
 )
 from station.domain.calibration.geometry import GeometryLimits, screen
-from station.domain.calibration.synthetic import (
-    random_directions,
-    six_directions,
-    spread_directions,
-)
+from station.simulator.recording import random_directions, six_directions, spread_directions
 from tests.station.domain.calibration.test_paper import TABLE_2
 
 NOMINAL = 2048.0 + 819.2 * six_directions()

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.domain.calibration import Calibration, apply
-from station.domain.calibration.synthetic import random_directions
+from station.simulator.recording import random_directions
 from tests.station.domain.calibration.strategies import true_units
 
 
@@ -14,8 +14,8 @@ from tests.station.domain.calibration.strategies import true_units
 @given(unit=true_units(cross_axis=0.02), seed=st.integers(0, 2**32 - 1), n=st.integers(1, 50))
 def test_the_exact_calibration_inverts_the_sensor(unit, seed: int, n: int) -> None:  # type: ignore[no-untyped-def]
     g = random_directions(np.random.default_rng(seed), n) * 1.7
-    exact = Calibration("nine", unit.offset, np.linalg.inv(unit.scale))
-    np.testing.assert_allclose(apply(exact, unit.counts(g)), g, atol=1e-9)
+    exact = Calibration("nine", unit.offset_counts, np.linalg.inv(unit.counts_per_g))
+    np.testing.assert_allclose(apply(exact, unit.still_counts(g)), g, atol=1e-9)
 
 
 def test_apply_takes_one_sample_or_many() -> None:

@@ -15,12 +15,8 @@ from station.domain.calibration import (
     solve_paper_batch,
 )
 from station.domain.calibration.paper import eq10_system
-from station.domain.calibration.synthetic import (
-    pose_means,
-    random_unit,
-    six_directions,
-    spread_directions,
-)
+from station.simulator.recording import pose_means, six_directions, spread_directions
+from station.simulator.sensor import SensorTruth
 from tests.station.domain.calibration.strategies import seeds, true_units
 
 # Paper 1, Table 2: mean counts of the six poses.
@@ -84,15 +80,15 @@ def test_recovers_a_true_unit_from_six_noisy_poses(unit, seed) -> None:  # type:
     rng = np.random.default_rng(seed)
     poses = pose_means(unit, six_directions(rng, tilt_deg=5.0), 0.05, rng)
     cal = solve_paper(poses).calibration
-    np.testing.assert_allclose(cal.offset, unit.offset, atol=1.0)
-    np.testing.assert_allclose(cal.sensitivity, unit.sensitivity, rtol=1e-3)
+    np.testing.assert_allclose(cal.offset, unit.offset_counts, atol=1.0)
+    np.testing.assert_allclose(cal.sensitivity, unit.sensitivity_counts_per_g, rtol=1e-3)
 
 
 @settings(max_examples=25, deadline=None)
 @given(seed=seeds, k=st.integers(1, 40))
 def test_batch_is_bit_identical_to_the_single_unit_path(seed: int, k: int) -> None:
     rng = np.random.default_rng(seed)
-    units = [random_unit(rng) for _ in range(k)]
+    units = [SensorTruth.draw_accelerometer(rng) for _ in range(k)]
     poses = np.stack([pose_means(u, six_directions(rng, tilt_deg=8.0), 0.1, rng) for u in units])
     batch = solve_paper_batch(poses)
     for i in range(k):
@@ -107,7 +103,7 @@ def test_batch_is_bit_identical_to_the_single_unit_path(seed: int, k: int) -> No
 
 def test_a_bad_unit_does_not_spoil_the_batch() -> None:
     rng = np.random.default_rng(7)
-    units = [random_unit(rng) for _ in range(4)]
+    units = [SensorTruth.draw_accelerometer(rng) for _ in range(4)]
     poses = np.stack([pose_means(u, six_directions(), 0.05, rng) for u in units])
     poses[1, 2, 0] = np.nan
     poses[2, 3] = poses[2, 0]  # duplicate pose
@@ -119,7 +115,9 @@ def test_a_bad_unit_does_not_spoil_the_batch() -> None:
         Outcome.OK,
     ]
     assert np.isnan(batch.offset[1:3]).all()
-    np.testing.assert_allclose(batch.offset[[0, 3]], [units[0].offset, units[3].offset], atol=0.5)
+    np.testing.assert_allclose(
+        batch.offset[[0, 3]], [units[0].offset_counts, units[3].offset_counts], atol=0.5
+    )
 
 
 def test_refuses_other_than_six_poses() -> None:
@@ -142,7 +140,7 @@ def test_refuses_ill_conditioned_poses() -> None:
     # Six well-separated poses all within ±1° of the x-y plane: z is barely seen.
     # (The coverage screen would refuse them first; switched off to reach the check.)
     rng = np.random.default_rng(3)
-    unit = random_unit(rng)
+    unit = SensorTruth.draw_accelerometer(rng)
     d = spread_directions(6)
     d[:, 2] *= np.sin(np.radians(1)) / np.abs(d[:, 2]).max()
     d /= np.linalg.norm(d, axis=1, keepdims=True)
@@ -154,7 +152,10 @@ def test_refuses_ill_conditioned_poses() -> None:
 def test_chunked_batch_equals_one_chunk(monkeypatch: pytest.MonkeyPatch) -> None:
     rng = np.random.default_rng(9)
     poses = np.stack(
-        [pose_means(random_unit(rng), six_directions(rng, 6.0), 0.1, rng) for _ in range(10)]
+        [
+            pose_means(SensorTruth.draw_accelerometer(rng), six_directions(rng, 6.0), 0.1, rng)
+            for _ in range(10)
+        ]
     )
     poses[4, 0, 0] = np.nan
     whole = solve_paper_batch(poses)

@@ -7,15 +7,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from station.domain.calibration.synthetic import spread_directions
 from station.domain.gyro.motion import GyroMatrixError, Move, calibrate_stream, fit_gyro_matrix
-from station.domain.gyro.motion.synthetic import (
+from station.simulator.recording import (
     StreamPlan,
-    SyntheticImu,
+    k_in_calibrated_frame,
     pose_orientations,
     random_imu,
-    synthetic_stream,
+    recorded_stream,
+    spread_directions,
 )
+from station.simulator.sensor import SensorTruth
 
 #: Small and fast: 200 samples/s, 1.5 s stills, 1 s moves.
 PLAN = StreamPlan(rate_hz=200.0, still_s=1.5, move_s=1.0)
@@ -26,10 +27,10 @@ QUIET = StreamPlan(
 INTEGRATION_FLOOR = 1e-4
 
 
-def _unit_and_stream(seed: int, plan: StreamPlan, poses: int = 12) -> tuple[SyntheticImu, object]:
+def _unit_and_stream(seed: int, plan: StreamPlan, poses: int = 12) -> tuple[SensorTruth, object]:
     rng = np.random.default_rng(seed)
     imu = random_imu(rng)
-    return imu, synthetic_stream(rng, imu, pose_orientations(rng, spread_directions(poses)), plan)
+    return imu, recorded_stream(rng, imu, pose_orientations(rng, spread_directions(poses)), plan)
 
 
 @settings(max_examples=6, deadline=None)
@@ -38,9 +39,9 @@ def test_noise_free_stream_gives_k_to_the_integration_floor(seed: int) -> None:
     imu, stream = _unit_and_stream(seed, QUIET)
     result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
     assert len(result.stills) == 12
-    error = result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine")
+    error = result.gyro.scale_matrix - k_in_calibrated_frame(imu, "nine")
     assert np.abs(error).max() < INTEGRATION_FLOOR
-    assert np.allclose(result.bias_dps, imu.bias_dps, atol=1e-12)
+    assert np.allclose(result.bias_dps, imu.gyro_bias_dps, atol=1e-12)
 
 
 @settings(max_examples=6, deadline=None)
@@ -51,11 +52,11 @@ def test_noisy_stream_gives_k_within_its_standard_errors(seed: int) -> None:
     imu, stream = _unit_and_stream(seed, PLAN)
     result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
     se = result.gyro.standard_errors
-    error = np.abs(result.gyro.scale_matrix - imu.k_in_calibrated_frame("nine"))
+    error = np.abs(result.gyro.scale_matrix - k_in_calibrated_frame(imu, "nine"))
     assert (error <= 5 * se + INTEGRATION_FLOOR).all(), (error, se)
     still_samples = sum(len(s) for s in result.stills)
     bias_sigma = PLAN.gyro_noise_dps / np.sqrt(still_samples)
-    assert np.abs(result.bias_dps - imu.bias_dps).max() < 5 * bias_sigma
+    assert np.abs(result.bias_dps - imu.gyro_bias_dps).max() < 5 * bias_sigma
     # The fit explains the moves far better than no gyro calibration does.
     assert result.gyro.residual_rms_deg < 0.1
     assert np.median(result.gyro.residual_identity_deg) > 5 * result.gyro.residual_rms_deg
@@ -66,8 +67,8 @@ def test_six_parameter_accelerometer_skews_k_on_cross_axis_units() -> None:
     imu, stream = _unit_and_stream(5, PLAN)
     six = calibrate_stream(stream, "six")  # type: ignore[arg-type]
     nine = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
-    error_six = np.abs(six.gyro.scale_matrix - imu.k_in_calibrated_frame("six")).max()
-    error_nine = np.abs(nine.gyro.scale_matrix - imu.k_in_calibrated_frame("nine")).max()
+    error_six = np.abs(six.gyro.scale_matrix - k_in_calibrated_frame(imu, "six")).max()
+    error_nine = np.abs(nine.gyro.scale_matrix - k_in_calibrated_frame(imu, "nine")).max()
     assert error_six > 10 * error_nine
 
 
@@ -75,7 +76,7 @@ def test_six_parameter_accelerometer_skews_k_on_cross_axis_units() -> None:
 def _calibrated(seed: int) -> tuple[tuple[Move, ...], np.ndarray]:
     imu, stream = _unit_and_stream(seed, QUIET, poses=9)
     result = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
-    return tuple(result.moves), imu.bias_dps
+    return tuple(result.moves), imu.gyro_bias_dps
 
 
 def _moves_of(seed: int) -> tuple[list[Move], np.ndarray]:
