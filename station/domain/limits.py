@@ -122,11 +122,6 @@ class LimitsProfile(BaseModel):
         return document
 
     @property
-    def checks_gyro_matrix(self) -> bool:
-        """Whether the profile bounds the gyro matrix (so the run must fit it)."""
-        return self.gyro_scale_error is not None or self.gyro_misalignment is not None
-
-    @property
     def sha256(self) -> str:
         """SHA-256 of the profile's canonical JSON (sorted keys, no whitespace)."""
         return document_sha256(self.document)

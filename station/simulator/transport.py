@@ -30,12 +30,9 @@ class Link(Protocol):
 class _Outbox:
     def __init__(self) -> None:
         self.pending = bytearray()
-        self.dropped = 0
 
     def add(self, data: bytes) -> None:
-        if len(self.pending) + len(data) > TX_LIMIT:
-            self.dropped += len(data)
-        else:
+        if len(self.pending) + len(data) <= TX_LIMIT:
             self.pending += data
 
 

@@ -12,8 +12,9 @@ from sqlalchemy.orm import Session
 from db import RunQuery, RunRepository
 from db.reports import eol_report
 from db.rollups import rebuild
+from station.domain.limits import load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
-from station.domain.quality.parameters import default_bounds
+from station.domain.quality.parameters import profile_bounds
 from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 
@@ -72,7 +73,7 @@ def test_pareto_counts_each_failing_runs_first_reason(session: Session) -> None:
 
 def test_capability_of_the_offsets_against_the_datasheet_bounds(session: Session) -> None:
     report = _report(session)
-    lower, upper = default_bounds()["offset"]
+    lower, upper = profile_bounds(load_profile())["offset"]
     assert (lower, upper) == (1841.0, 2255.0)
     params = {p.name: p for p in report.parameters}
     xs = [run[5] for run in IN_RANGE]

@@ -78,11 +78,6 @@ class GyroErrorModel:
             [[self.bias[axis]], self.scale[axis], self.bias_g[axis], self.n_g[axis]]
         )
 
-    @classmethod
-    def from_rows(cls, rows: FloatArray) -> "GyroErrorModel":
-        """Build from a 3-by-10 array of :meth:`row` vectors."""
-        return cls(rows[:, 0], rows[:, 1:4], rows[:, 4:7], rows[:, 7:10])
-
     def predict(self, rate: FloatArray, acc: FloatArray) -> FloatArray:
         """Gyro output (N-by-3, deg/s) for applied rate (deg/s) and specific force (g)."""
         rate = np.asarray(rate, dtype=np.float64)

@@ -66,13 +66,6 @@ class GyroStillSummary(BaseModel):
     bias_limit_dps: Annotated[float, Field(gt=0, le=MEASURE_MAX)] | None
     axes: Annotated[list[GyroAxisStill], Field(max_length=3)]
 
-    @property
-    def bias_pass(self) -> bool | None:
-        """Every gyro's |bias| within the limit (None without a limit)."""
-        if self.bias_limit_dps is None:
-            return None
-        return all(bool(axis.bias_within_limit) for axis in self.axes)
-
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dictionary, for storage and the API."""
         return self.model_dump(mode="json")

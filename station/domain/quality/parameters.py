@@ -10,7 +10,7 @@ limits family (``offset``, ``sensitivity``, ``verification_error``, ``pose_noise
 
 from dataclasses import dataclass
 
-from station.domain.limits import CHECKS, LimitsProfile, load_profile
+from station.domain.limits import CHECKS, LimitsProfile
 
 #: Limits family → ``(lower, upper)`` of the profile's :class:`station.domain.limits.Bounds`
 #: (``None`` for an unbounded side): the plain pair the database stores and compares.
@@ -24,11 +24,6 @@ def profile_bounds(profile: LimitsProfile) -> FamilyBounds:
     """The bounds of ``profile`` per limits family (counts, counts/g, mg, counts, deg/s)."""
     bounds = {family: getattr(profile, CHECKS[family]) for family in FAMILIES}
     return {family: (b.lower, b.upper) for family, b in bounds.items()}
-
-
-def default_bounds() -> FamilyBounds:
-    """The bounds of the shipped default profile (datasheet figures of the KXM52-1050)."""
-    return profile_bounds(load_profile())
 
 
 @dataclass(frozen=True)

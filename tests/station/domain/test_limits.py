@@ -141,7 +141,8 @@ def test_the_six_pose_profile_hashes_as_before_the_gyro_bounds_existed() -> None
 
 def test_the_whole_unit_profile_bounds_the_gyro_matrix() -> None:
     profile = load_profile(None, "whole-unit")
-    assert profile.checks_gyro_matrix
+    assert profile.gyro_scale_error is not None
+    assert profile.gyro_misalignment is not None
     assert profile.sha256 != load_profile().sha256
     assert check(profile, "gyro_scale", 0.012, axis="y") is None
     reason = check(profile, "gyro_scale", -0.03, axis="y")

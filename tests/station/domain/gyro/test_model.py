@@ -19,7 +19,8 @@ finite = st.floats(-1e3, 1e3, allow_nan=False)
 def test_regressors_reproduce_the_prediction(
     coefficients: np.ndarray, rate: np.ndarray, acc: np.ndarray
 ) -> None:
-    model = GyroErrorModel.from_rows(coefficients)
+    rows = coefficients  # each gyro's row: bias, scale row, bias-g row, g-sensitivity row
+    model = GyroErrorModel(rows[:, 0], rows[:, 1:4], rows[:, 4:7], rows[:, 7:10])
     predicted = model.predict(rate, acc)
     for axis in range(3):
         np.testing.assert_allclose(
