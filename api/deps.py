@@ -83,7 +83,8 @@ _bearer = HTTPBearer(
     auto_error=False,
     description=(
         "An API key: a station's (`calstation keys create --station ID`) stores that "
-        "station's runs, a lab's (`calstation keys create --lab ID`) stores gyro fits."
+        "station's runs, a lab's (`calstation keys create --lab ID`) stores gyro fits, "
+        "a quality engineer's (`calstation keys create --quality ID`) reviews units on hold."
     ),
 )
 CredentialsDep = Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]
@@ -144,5 +145,19 @@ async def require_lab(credentials: CredentialsDep, sessions: SessionsDep) -> str
     return holder.holder
 
 
+async def require_quality(credentials: CredentialsDep, sessions: SessionsDep) -> str:
+    """The quality engineer whose key authorises a review of a unit on hold; 403 for
+    any other key."""
+    holder = await _key_holder(credentials, sessions)
+    if holder.scope != "quality":
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            f"this API key belongs to {holder.scope} {holder.holder}: reviews of units on "
+            "hold need a quality key (calstation keys create --quality ID)",
+        )
+    return holder.holder
+
+
 StationDep = Annotated[str, Depends(require_station)]
 LabDep = Annotated[str, Depends(require_lab)]
+QualityDep = Annotated[str, Depends(require_quality)]

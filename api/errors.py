@@ -17,7 +17,12 @@ from sqlalchemy.exc import OperationalError
 
 from api.report_pool import ReadTimeoutError, ReportsBusyError
 from api.verification import CalibrationMismatchError
-from db import DatabaseUnavailableError, RunConflictError, SchemaOutOfDateError
+from db import (
+    DatabaseUnavailableError,
+    ReviewRefusedError,
+    RunConflictError,
+    SchemaOutOfDateError,
+)
 from db.timeouts import is_statement_timeout
 from station.domain.errors import InputError
 
@@ -114,6 +119,7 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _validation_error)
     app.add_exception_handler(InputError, _answer(status.HTTP_400_BAD_REQUEST))
     app.add_exception_handler(RunConflictError, _answer(status.HTTP_409_CONFLICT))
+    app.add_exception_handler(ReviewRefusedError, _answer(status.HTTP_409_CONFLICT))
     app.add_exception_handler(CalibrationMismatchError, _calibration_mismatch)
     app.add_exception_handler(SchemaOutOfDateError, _database_unavailable)
     app.add_exception_handler(OperationalError, _database_error)

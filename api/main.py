@@ -14,7 +14,7 @@ from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.report_pool import ReportPool
 from api.responses import json_problems, problems
-from api.routes import events, gyro, health, reports, runs, unit_pages, units
+from api.routes import events, gyro, health, reports, reviews, runs, unit_pages, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
@@ -103,6 +103,8 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     v1.include_router(runs.submissions)
     v1.include_router(gyro.router, dependencies=reads, responses=keyed)
     v1.include_router(gyro.submissions)
+    v1.include_router(reviews.router, dependencies=reads, responses=keyed)
+    v1.include_router(reviews.submissions)
     v1.include_router(reports.router, dependencies=reads, responses=keyed)
     # The event stream's own answer is not JSON: its errors name their media type.
     keyed_stream = json_problems(401) if settings.read_requires_key else None

@@ -13,7 +13,10 @@ from station.domain.records import (
     Disposition,
     GyroFitRecord,
     GyroSummary,
+    HoldReview,
     LogSource,
+    Reason,
+    ReviewDecision,
     RunSummary,
     Verdict,
 )
@@ -95,3 +98,26 @@ class UnitGyro(BaseModel):
     serial: str
     fit: GyroFitRecord | None
     still: GyroSummary | None
+
+
+class ReviewSubmission(BaseModel):
+    """``POST /api/v1/units/{serial}/reviews``: a quality review of the unit's latest,
+    failed run (:class:`station.domain.records.HoldReview`; the reviewer is the key's
+    holder, the time the server's)."""
+
+    model_config = {"extra": "forbid"}
+
+    run_id: Annotated[UUID, Field(description="the unit's latest run, the one on hold")]
+    root_cause: Reason
+    repair_action: Reason
+    decision: Annotated[
+        ReviewDecision,
+        Field(description="retest: calibrate it again (attempts count afresh); scrap"),
+    ]
+
+
+class ReviewList(BaseModel):
+    """``GET /api/v1/units/{serial}/reviews``: the unit's reviews, oldest first."""
+
+    data: list[HoldReview]
+    count: int

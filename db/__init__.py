@@ -12,13 +12,15 @@ Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
     ├── DatabaseUnavailableError    engine.py      the database does not answer
     ├── SchemaOutOfDateError        migrate.py     the schema is not the one this software
     │                                              needs (behind, or from a newer calstation)
-    └── RunConflictError            repository.py  a run with this UUID is stored differently
+    ├── RunConflictError            repository.py  a run with this UUID is stored differently
+    └── ReviewRefusedError          repository.py  a review of a unit not on hold
 """
 
 from db.database import Database, open_database, upgrade_database
 from db.engine import DatabaseUnavailableError, make_async_engine, make_engine
 from db.migrate import SchemaOutOfDateError
 from db.repository import (
+    ReviewRefusedError,
     RunConflictError,
     RunPage,
     RunQuery,
@@ -32,6 +34,7 @@ __all__ = [
     "Database",
     "DatabaseSettings",
     "DatabaseUnavailableError",
+    "ReviewRefusedError",
     "RunConflictError",
     "RunPage",
     "RunQuery",

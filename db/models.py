@@ -198,15 +198,36 @@ class GyroFit(Base):
     document: Mapped[dict[str, Any]] = mapped_column(JsonDocument)
 
 
+class HoldReview(Base):
+    """A quality review of a unit on hold (:class:`station.domain.records.HoldReview`),
+    append-only: a unit's latest review decides whether it may be calibrated again."""
+
+    __tablename__ = "hold_reviews"
+    __table_args__ = (
+        CheckConstraint("decision IN ('retest', 'scrap')", name="decision"),
+        Index("ix_hold_reviews_serial_reviewed_at", "serial", "reviewed_at", "id"),
+    )
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    serial: Mapped[str] = mapped_column(String(NAME))
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid())
+    reviewed_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    reviewer: Mapped[str] = mapped_column(String(NAME))
+    root_cause: Mapped[str] = mapped_column(Text())
+    repair_action: Mapped[str] = mapped_column(Text())
+    decision: Mapped[str] = mapped_column(String(8))
+
+
 class StationKey(Base):
     """An API key, stored as its SHA-256 (the key itself is shown once).
 
     ``scope`` says what it may store: ``station``, the runs of station ``station_id``;
-    ``lab``, units' gyro fits (``station_id`` then names the lab).
+    ``lab``, units' gyro fits; ``quality``, reviews of units on hold (``station_id``
+    then names the lab or the quality engineer).
     """
 
     __tablename__ = "station_keys"
-    __table_args__ = (CheckConstraint("scope IN ('station', 'lab')", name="scope"),)
+    __table_args__ = (CheckConstraint("scope IN ('station', 'lab', 'quality')", name="scope"),)
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
     station_id: Mapped[str] = mapped_column(String(NAME), index=True)

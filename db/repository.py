@@ -27,11 +27,29 @@ from db.database import open_database
 from db.engine import for_dialect
 from db.limits_profiles import store_profile
 from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
-from db.models import GyroFit, Run, RunFailure, RunPose, StationKey, StoredLimitsProfile
+from db.models import (
+    GyroFit,
+    Run,
+    RunFailure,
+    RunPose,
+    StationKey,
+    StoredLimitsProfile,
+)
+from db.models import (
+    HoldReview as ReviewRow,
+)
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
 from station.domain.errors import CalstationError, InputError
-from station.domain.records import GyroFitRecord, RunRecord, RunSummary, StoredRun, Verdict
+from station.domain.records import (
+    GyroFitRecord,
+    HoldReview,
+    ReviewDecision,
+    RunRecord,
+    RunSummary,
+    StoredRun,
+    Verdict,
+)
 
 # Core tables for the bulk inserts of a submission (lighter than the ORM's bulk path).
 _POSES = Base.metadata.tables[RunPose.__tablename__]
@@ -56,7 +74,7 @@ class RunConflictError(CalstationError):
 
 
 #: What an API key may store: its station's runs, or units' gyro fits (a lab's).
-KeyScope = Literal["station", "lab"]
+KeyScope = Literal["station", "lab", "quality"]
 
 
 @dataclass(frozen=True)
@@ -314,6 +332,46 @@ class RunRepository:
         # The table's check constraint holds the scope to the two names.
         return None if row is None else KeyHolder(row.station_id, cast(KeyScope, row.scope))
 
+    # -- reviews of units on hold ---------------------------------------------------------
+
+    def add_review(self, review: HoldReview) -> None:
+        """Store a review of a unit on hold: ``review.run_id`` must be the unit's latest
+        run, and that run failed; :class:`ReviewRefusedError` otherwise (None stored)."""
+        latest = self.latest_for_serial(review.serial)
+        if latest is None:
+            raise ReviewRefusedError(f"no calibration run of serial {review.serial}")
+        if latest.run_id != review.run_id:
+            raise ReviewRefusedError(
+                f"run {review.run_id} is not the latest run of {review.serial} "
+                f"(run {latest.run_id} is): review the unit's latest run"
+            )
+        if latest.verdict != "fail":
+            raise ReviewRefusedError(
+                f"{review.serial} is not on hold: its latest run {latest.run_id} passed"
+            )
+        self.session.add(ReviewRow(**review.model_dump()))
+        self.session.flush()
+
+    def reviews(self, serial: str) -> list[HoldReview]:
+        """Every review of the unit, oldest first."""
+        rows = self.session.scalars(
+            select(ReviewRow)
+            .where(ReviewRow.serial == serial)
+            .order_by(ReviewRow.reviewed_at, ReviewRow.id)
+        ).all()
+        return [
+            HoldReview(
+                serial=row.serial,
+                run_id=row.run_id,
+                reviewed_at=row.reviewed_at,
+                reviewer=row.reviewer,
+                root_cause=row.root_cause,
+                repair_action=row.repair_action,
+                decision=cast(ReviewDecision, row.decision),
+            )
+            for row in rows
+        ]
+
     # -- gyro error-model fits ----------------------------------------------------------
 
     def add_gyro_fit(self, fit: GyroFitRecord) -> None:
@@ -346,6 +404,10 @@ class RunRepository:
                 **row.document,
             }
         )
+
+
+class ReviewRefusedError(CalstationError):
+    """A review of a unit that is not on hold, or of a run that is not its latest."""
 
 
 @contextmanager

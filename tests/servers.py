@@ -105,3 +105,10 @@ def client(database: Database, live_url: str) -> Iterator[httpx.Client]:
     """An HTTP client of the live server; the database is emptied after the test."""
     with httpx.Client(base_url=live_url, timeout=10) as client:
         yield client
+
+
+@pytest.fixture
+def quality_key(database: Database) -> str:
+    """A valid API key of quality engineer ``qe-ana`` (reviews units on hold)."""
+    with database.session() as session, session.begin():
+        return RunRepository(session).create_key("qe-ana", "quality")

@@ -1,27 +1,37 @@
-"""``calstation db upgrade``, ``calstation db rebuild-report`` and ``calstation keys
-create|revoke --station ID|--lab ID``: the results database by hand."""
+"""``calstation db upgrade``, ``calstation db rebuild-report``, ``calstation keys
+create|revoke --station ID|--lab ID|--quality ID`` and ``calstation review SERIAL``: the
+results database by hand."""
 
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated, cast
+from typing import Annotated
 
 import typer
 from pydantic import TypeAdapter, ValidationError
 from sqlalchemy import func, make_url, select
 
-from db import DatabaseSettings, open_database, repository_transaction, upgrade_database
+from db import (
+    DatabaseSettings,
+    ReviewRefusedError,
+    open_database,
+    repository_transaction,
+    upgrade_database,
+)
 from db.models import Run
 from db.repository import KeyScope
 from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
+from station.domain.errors import InputError, validation_problem
 from station.domain.limits import load_profile
 from station.domain.quality.parameters import profile_bounds
-from station.domain.records import Identifier
+from station.domain.records import HoldReview, Identifier, ReviewDecision
 
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True
 )
 keys_app = typer.Typer(
-    help="API keys of the stations (runs) and labs (gyro fits) that submit over HTTP.",
+    help="API keys of the stations (runs), labs (gyro fits) and quality engineers (reviews "
+    "of units on hold) that submit over HTTP.",
     no_args_is_help=True,
 )
 
@@ -104,24 +114,45 @@ LabOption = Annotated[
 ]
 
 
-def _holder(station: str | None, lab: str | None) -> tuple[str, KeyScope]:
-    """The key's holder and scope from ``--station`` or ``--lab`` (exactly one)."""
-    if (station is None) == (lab is None):
+QualityOption = Annotated[
+    str | None,
+    typer.Option(
+        "--quality",
+        help="A quality engineer's key: reviews units on hold.",
+        callback=_optional_id,
+    ),
+]
+
+
+def _holder(station: str | None, lab: str | None, quality: str | None) -> tuple[str, KeyScope]:
+    """The key's holder and scope from ``--station``, ``--lab`` or ``--quality`` (one)."""
+    scopes: tuple[tuple[str | None, KeyScope], ...] = (
+        (station, "station"),
+        (lab, "lab"),
+        (quality, "quality"),
+    )
+    named = [(holder, scope) for holder, scope in scopes if holder is not None]
+    if len(named) != 1:
         raise typer.BadParameter(
-            "give either --station ID or --lab ID", param_hint="--station/--lab"
+            "give one of --station ID, --lab ID or --quality ID",
+            param_hint="--station/--lab/--quality",
         )
-    return (station, "station") if station is not None else (cast(str, lab), "lab")
+    return named[0]
 
 
 @keys_app.command("create")
 def keys_create(
-    station: StationOption = None, lab: LabOption = None, database_url: DatabaseUrlOption = None
+    station: StationOption = None,
+    lab: LabOption = None,
+    quality: QualityOption = None,
+    database_url: DatabaseUrlOption = None,
 ) -> None:
-    """Create an API key for a station (its runs) or a lab (gyro fits) and print it.
+    """Create an API key for a station (its runs), a lab (gyro fits) or a quality
+    engineer (reviews of units on hold) and print it.
 
     Only the key's hash is stored: it is shown this once.
     """
-    holder, scope = _holder(station, lab)
+    holder, scope = _holder(station, lab, quality)
     with repository_transaction(database_url) as repository:
         key = repository.create_key(holder, scope)
     err.print(f"API key for {scope} {holder} (shown once, store it where it is used):")
@@ -130,10 +161,52 @@ def keys_create(
 
 @keys_app.command("revoke")
 def keys_revoke(
-    station: StationOption = None, lab: LabOption = None, database_url: DatabaseUrlOption = None
+    station: StationOption = None,
+    lab: LabOption = None,
+    quality: QualityOption = None,
+    database_url: DatabaseUrlOption = None,
 ) -> None:
-    """Revoke every API key of a station or a lab (lost, replaced or retired)."""
-    holder, scope = _holder(station, lab)
+    """Revoke every API key of a station, a lab or a quality engineer (lost, replaced or
+    retired)."""
+    holder, scope = _holder(station, lab, quality)
     with repository_transaction(database_url) as repository:
         revoked = repository.revoke_keys(holder, scope)
     out.print(f"revoked {revoked} API key(s) of {scope} {holder}")
+
+
+def review_command(
+    serial: Annotated[str, typer.Argument(metavar="SERIAL", help="The unit on hold.")],
+    decision: Annotated[
+        ReviewDecision,
+        typer.Option(help="retest: calibrate it again (attempts count afresh); scrap."),
+    ],
+    root_cause: Annotated[str, typer.Option("--root-cause", help="Why its latest run failed.")],
+    repair: Annotated[str, typer.Option("--repair", help="What was repaired (or why not).")],
+    by: Annotated[str, typer.Option("--by", help="Who reviewed it (a name, no spaces).")],
+    database_url: DatabaseUrlOption = None,
+) -> None:
+    """Review a unit on hold: release it for a retest, or scrap it (recorded, append-only).
+
+    A unit sent to rework is refused at every station's scan until it is reviewed.
+    """
+    with repository_transaction(database_url) as repository:
+        latest = repository.latest_for_serial(serial)
+        if latest is None:
+            raise InputError(f"no calibration run of serial {serial!r}")
+        try:
+            review = HoldReview(
+                serial=serial,
+                run_id=latest.run_id,
+                reviewed_at=datetime.now(UTC),
+                reviewer=by,
+                root_cause=root_cause,
+                repair_action=repair,
+                decision=decision,
+            )
+        except ValidationError as exc:
+            raise InputError(f"review: {validation_problem(exc)}") from None
+        try:
+            repository.add_review(review)
+        except ReviewRefusedError as exc:
+            raise InputError(str(exc)) from None
+    out.print(f"{serial}: {decision} (run {latest.run_id}), reviewed by {by}")

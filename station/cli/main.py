@@ -30,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "gyro": ("station.cli.gyro", "app"),
     "db": ("station.cli.db", "db_app"),
     "keys": ("station.cli.db", "keys_app"),
+    "review": ("station.cli.db", "review_command"),
     "outbox": ("station.cli.outbox", "outbox_app"),
 }
 

@@ -64,6 +64,7 @@ __all__ = [
     "GyroMatrixRecord",
     "GyroMove",
     "GyroSummary",
+    "HoldReview",
     "LimitsRef",
     "LinkStats",
     "Matrix3",
@@ -72,6 +73,7 @@ __all__ = [
     "PoseRole",
     "QualityMetrics",
     "ReplacedCapture",
+    "ReviewDecision",
     "RunRecord",
     "RunSummary",
     "StoredRun",
@@ -83,6 +85,8 @@ __all__ = [
 Verdict = Literal["pass", "fail"]
 #: Where a unit goes after a run: out of the door, back on a station, or to the repair bench.
 Disposition = Literal["ship", "retest", "rework"]
+#: What a quality review decides for a unit on hold: calibrate it again, or scrap it.
+ReviewDecision = Literal["retest", "scrap"]
 #: ``fit`` poses feed the calibration solve; ``verify`` poses only check its result.
 PoseRole = Literal["fit", "verify"]
 
@@ -472,3 +476,27 @@ class GyroFitRecord(_Record):
     report: Annotated[GyroFitReport, AfterValidator(plain_document)]
     #: The log's dwells, kept to draw the fit's scale-factor plot (certificate).
     dwells: Annotated[GyroDwells, AfterValidator(plain_document)] | None = None
+
+
+Reason = Annotated[
+    str,
+    StringConstraints(strip_whitespace=True, min_length=1, max_length=500),
+    AfterValidator(printable),
+]
+"""A person's reason for a decision: one line, not empty."""
+
+
+class HoldReview(_Record):
+    """A quality review of a unit on hold: an append-only record of why its latest run
+    (``run_id``) failed (``root_cause``), what was repaired (``repair_action``), who
+    reviewed it and when, and what it decided: calibrate it again (``retest``: its
+    retest limit counts afresh from here) or ``scrap`` it. A unit sent to rework is
+    not calibrated again until a review releases it."""
+
+    serial: Serial
+    run_id: UUID
+    reviewed_at: UtcDatetime
+    reviewer: Identifier
+    root_cause: Reason
+    repair_action: Reason
+    decision: ReviewDecision

@@ -208,7 +208,7 @@ class UnitLifecycle:
             profile=self.profile,
             settings=settings,
             reopen=lambda: open_unit(port, serial),
-            purpose=Purpose(earlier=history.runs, golden=golden),
+            purpose=Purpose(earlier=history.counted, golden=golden),
             g_sensitivity=self.results.g_sensitivity(serial) if settings.gyro else None,
         )
         slot.begin(serial, run)

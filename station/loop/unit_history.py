@@ -1,10 +1,12 @@
 """A unit's history at the station: what to ask at the scan, where it goes at the verdict.
 
 At the scan the station gathers the unit's runs from its store and from its outbox (runs
-not yet delivered count too). A unit that passed already is not calibrated again without
-the operator saying so ("PT000123 passed at 10:42 on line1-st2: calibrate again? y/n");
-a unit that has used up its attempts (the limits profile's retest limit) goes to rework
-instead. When the store cannot be reached the operator is told the history is
+not yet delivered count too), and its quality reviews. A unit that passed already is not
+calibrated again without the operator saying so ("PT000123 passed at 10:42 on line1-st2:
+calibrate again? y/n"); a unit that has used up its attempts (the limits profile's
+retest limit) goes to rework instead. A unit sent to rework is refused until a quality
+review releases it for a retest (its attempts then count afresh); a scrapped unit is
+refused for good. When the store cannot be reached the operator is told the history is
 unavailable and goes on. The same runs decide where the unit goes after its verdict
 (:func:`station.domain.unit_state.disposition`, in the run's record).
 """
@@ -17,7 +19,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from station.domain.records import RunRecord, RunSummary
+from station.domain.records import HoldReview, RunRecord, RunSummary
 from station.domain.unit_state import UnitCalibration
 from station.results.storage import RunStore, StoreError
 
@@ -56,17 +58,21 @@ class UnitHistory:
     runs: tuple[Run, ...] = ()
     #: Why the store's part is missing (None: the store answered).
     unavailable: str | None = None
+    #: The unit's quality reviews, oldest first.
+    reviews: tuple[HoldReview, ...] = ()
 
     @classmethod
     def gather(cls, serial: str, store: RunStore | None, waiting: Sequence[Path]) -> "UnitHistory":
         """The runs of ``serial`` in ``store`` and in the outbox files ``waiting``."""
         runs: dict[str, Run] = {}
+        reviews: tuple[HoldReview, ...] = ()
         unavailable = None
         if store is None:
             unavailable = "results database unreachable"
         else:
             try:
                 runs.update((str(r.run_id), r) for r in store.history(serial))
+                reviews = tuple(store.reviews(serial))
             except StoreError as exc:
                 unavailable = str(exc)
         for path in waiting:
@@ -79,18 +85,44 @@ class UnitHistory:
             except (OSError, UnicodeDecodeError, ValidationError):
                 continue  # the outbox sets such files aside; they are no history
         ordered = sorted(runs.values(), key=lambda r: (r.started_at, str(r.run_id)))
-        return cls(serial, tuple(ordered), unavailable)
+        return cls(serial, tuple(ordered), unavailable, reviews)
+
+    @property
+    def decided(self) -> HoldReview | None:
+        """The latest review, if it came after the unit's latest run: it decides."""
+        review = self.reviews[-1] if self.reviews else None
+        if review is None or (self.runs and review.reviewed_at < self.runs[-1].finished_at):
+            return None
+        return review
+
+    @property
+    def counted(self) -> tuple[Run, ...]:
+        """The runs that count now: those after the latest release for a retest."""
+        released = [r.reviewed_at for r in self.reviews if r.decision == "retest"]
+        if not released:
+            return self.runs
+        return tuple(r for r in self.runs if r.started_at > released[-1])
 
     def at_scan(self, attempts_allowed: int) -> ScanDecision:
-        """Start, ask first (it passed already), or refuse (no attempts left)."""
+        """Start, ask first (it passed already), or refuse (scrapped, sent to rework and
+        not released, no attempts left)."""
         note = (
             f"history of {self.serial} unavailable ({self.unavailable}): going on"
             if self.unavailable
             else None
         )
-        if not self.runs:
+        decided = self.decided
+        if decided is not None and decided.decision == "scrap":
+            text = (
+                f"{self.serial} was scrapped by {decided.reviewer} on "
+                f"{local_time(decided.reviewed_at)} ({decided.root_cause}): it is not "
+                "calibrated again"
+            )
+            return ScanDecision(ScanAction.REFUSE, text, note)
+        runs = self.counted
+        if not runs:
             return ScanDecision(ScanAction.START, note=note)
-        state = UnitCalibration.of_history(self.runs)
+        state = UnitCalibration.of_history(runs)
         used = state.attempts >= attempts_allowed
         if state.verdict == "pass" and state.holds is not None:
             passed = (
@@ -108,6 +140,14 @@ class UnitHistory:
             text = (
                 f"{self.serial} has failed {state.attempts} attempts "
                 f"(limit {attempts_allowed}): send it to rework, it is not calibrated again"
+            )
+            return ScanDecision(ScanAction.REFUSE, text, note)
+        if runs[-1].disposition == "rework":
+            failed = ", ".join(f.code for f in runs[-1].failures) or "failed"
+            text = (
+                f"{self.serial} was sent to rework at {local_time(runs[-1].finished_at)} "
+                f"({failed}): it is not calibrated until a quality review releases it "
+                f"(calstation review {self.serial} --decision retest …)"
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         return ScanDecision(ScanAction.START, note=note)

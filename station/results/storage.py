@@ -45,7 +45,7 @@ from db import (
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.domain.closing import Closing
 from station.domain.errors import CalstationError, InputError
-from station.domain.records import GyroFitRecord, RunRecord, RunSummary, StoredRun
+from station.domain.records import GyroFitRecord, HoldReview, RunRecord, RunSummary, StoredRun
 
 __all__ = [
     "DataDir",
@@ -107,6 +107,10 @@ class RunStore(Protocol):
         """The unit's latest [Park2014]_ gyro fit, or None; :class:`StoreUnavailableError`."""
         ...
 
+    def reviews(self, serial: str) -> list[HoldReview]:
+        """The unit's quality reviews, oldest first; :class:`StoreUnavailableError`."""
+        ...
+
     def close(self) -> None:
         """Release connections."""
         ...
@@ -153,6 +157,14 @@ class DatabaseStore(Closing):
         try:
             with self.database.session() as session:
                 return RunRepository(session).latest_gyro_fit(serial)
+        except SQLAlchemyError as exc:
+            url = self.database.engine.url
+            raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
+
+    def reviews(self, serial: str) -> list[HoldReview]:
+        try:
+            with self.database.session() as session:
+                return RunRepository(session).reviews(serial)
         except SQLAlchemyError as exc:
             url = self.database.engine.url
             raise StoreUnavailableError(str(DatabaseUnavailableError.of(url, exc))) from None
@@ -235,6 +247,17 @@ class HttpStore(Closing):
                 f"results server {self.client.base_url}: no gyro fit of {serial}: {exc}"
             ) from None
 
+    def reviews(self, serial: str) -> list[HoldReview]:
+        """``GET /api/v1/units/{serial}/reviews``."""
+        try:
+            response = self.client.get(f"{UNITS_PATH}/{serial}/reviews", timeout=HISTORY_TIMEOUT_S)
+            response.raise_for_status()
+            return UnitReviews.model_validate_json(response.content).data
+        except (httpx.HTTPError, ValueError) as exc:
+            raise StoreUnavailableError(
+                f"results server {self.client.base_url}: no reviews of {serial}: {exc}"
+            ) from None
+
     def close(self) -> None:
         self.client.close()
 
@@ -303,6 +326,12 @@ class RunHistory(BaseModel):
     """The body of ``GET /api/v1/units/{serial}/runs``."""
 
     data: list[RunSummary]
+
+
+class UnitReviews(BaseModel):
+    """The part of ``GET /api/v1/units/{serial}/reviews`` the station reads."""
+
+    data: list[HoldReview]
 
 
 def _detail(response: httpx.Response) -> str:

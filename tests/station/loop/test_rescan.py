@@ -5,13 +5,16 @@ SQLite results database.
 """
 
 import json
+import os
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO_ROOT
-from tests.station.loop.test_station_terminal import Station
+from station.simulator.faults import Faults
+from station.simulator.putter import VirtualPutter
+from tests.conftest import REPO_ROOT, CliRunner
+from tests.station.loop.test_station_terminal import SPEED, Station
 
 
 @pytest.fixture
@@ -73,3 +76,63 @@ def test_a_unit_past_its_retest_limit_goes_to_rework(tmp_path: Path) -> None:
         assert limited.rows("select count(*) from runs") == [(1,)]
     finally:
         limited.close()
+
+
+def test_a_unit_sent_to_rework_is_refused_until_a_review_releases_it(
+    tmp_path: Path, run_cli: CliRunner
+) -> None:
+    broken = Station(tmp_path, faults=Faults(saturate_axis="y"))
+    env = {**os.environ, "CALSTATION_DATABASE_URL": broken.database_url}
+    review = ("review", "PT000042", "--by", "qe-ana", "--repair", "U3 reflowed")
+    try:
+        child = broken.start()
+        broken.scan()
+        assert broken.follow() == "FAIL"
+        child.expect("next: REWORK")
+        child.expect("Scan the next unit's serial number")
+        broken.scan()
+        child.expect(
+            r"PT000042 was sent to rework at \d\d:\d\d \(saturated\): it is not calibrated "
+            r"until a quality review releases it"
+        )
+        assert broken.rows("select count(*) from runs") == [(1,)]
+        released = run_cli(
+            *review, "--decision", "retest", "--root-cause", "cracked joint", env=env
+        )
+        assert released.returncode == 0, released.stderr
+        broken.putter.close()  # to the repair bench, and back repaired
+        broken.putter = VirtualPutter(seed=5, serial="PT000042", speed=SPEED)
+        broken.putter.serve_pty(broken.port)
+        broken.asked = None
+        broken.scan()
+        broken.wait_asked()  # the new run is under way (the last verdict was on screen)
+        assert broken.follow() == "PASS"
+        child.expect("next: SHIP")
+        again = run_cli(*review, "--decision", "scrap", "--root-cause", "too late", env=env)
+        assert again.returncode == 2  # it passed: not on hold, nothing to review
+        assert "is not on hold" in again.stderr
+    finally:
+        broken.close()
+
+
+def test_a_scrapped_unit_is_refused_for_good(tmp_path: Path, run_cli: CliRunner) -> None:
+    broken = Station(tmp_path, faults=Faults(saturate_axis="y"))
+    env = {**os.environ, "CALSTATION_DATABASE_URL": broken.database_url}
+    try:
+        child = broken.start()
+        broken.scan()
+        assert broken.follow() == "FAIL"
+        child.expect("Scan the next unit's serial number")
+        scrapped = run_cli(
+            "review", "PT000042", "--decision", "scrap", "--by", "qe-ana",
+            "--root-cause", "housing cracked", "--repair", "none: not worth it", env=env,
+        )  # fmt: skip
+        assert scrapped.returncode == 0, scrapped.stderr
+        broken.scan()
+        child.expect(
+            r"PT000042 was scrapped by qe-ana on \d\d:\d\d \(housing cracked\): it is not "
+            "calibrated again"
+        )
+        assert broken.rows("select count(*) from runs") == [(1,)]
+    finally:
+        broken.close()

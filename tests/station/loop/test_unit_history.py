@@ -10,7 +10,7 @@ import pytest
 from db import Database
 from station.device import PutterDriver
 from station.domain.errors import CalstationError
-from station.domain.records import RunRecord
+from station.domain.records import HoldReview, RunRecord
 from station.domain.unit_state import disposition
 from station.loop.unit_history import ScanAction, UnitHistory
 from station.results.outbox import Outbox
@@ -110,3 +110,45 @@ def test_a_missing_port_is_said_in_words_naming_it_once(tmp_path: Path) -> None:
     words = port_problem(caught.value)
     assert words == "no such port: is the unit's cable plugged in?"
     assert str(port) not in words
+
+
+def _review(decision: str, minutes: int, run: RunRecord) -> HoldReview:
+    return HoldReview(
+        serial=run.serial,
+        run_id=run.run_id,
+        reviewed_at=T0 + timedelta(minutes=minutes),
+        reviewer="qe-ana",
+        root_cause="cracked joint",
+        repair_action="reflowed",
+        decision=decision,  # type: ignore[arg-type]
+    )
+
+
+def test_a_release_counts_attempts_afresh_and_a_scrap_ends_the_unit() -> None:
+    runs = tuple(_fail("offset", m) for m in (0, 10, 20))  # the third used up the limit
+    held = runs[-1].model_copy(update={"disposition": "rework"})
+    history = UnitHistory(held.serial, (*runs[:2], held))
+    assert history.at_scan(3).action is ScanAction.REFUSE
+    released = UnitHistory(held.serial, (*runs[:2], held), reviews=(_review("retest", 30, held),))
+    assert released.counted == ()
+    assert released.at_scan(3).action is ScanAction.START
+    after = _fail("offset", 40).model_copy(update={"disposition": "retest"})
+    again = UnitHistory(
+        held.serial, (*runs[:2], held, after), reviews=(_review("retest", 30, held),)
+    )
+    assert again.counted == (after,)
+    assert again.at_scan(3).action is ScanAction.START  # one attempt since the release
+    scrapped = UnitHistory(held.serial, (*runs[:2], held), reviews=(_review("scrap", 30, held),))
+    decision = scrapped.at_scan(3)
+    assert decision.action is ScanAction.REFUSE
+    assert decision.text is not None
+    assert "was scrapped by qe-ana" in decision.text
+
+
+def test_a_broken_unit_is_refused_before_its_attempts_are_used() -> None:
+    broken = _fail("saturated").model_copy(update={"disposition": "rework"})
+    decision = UnitHistory(broken.serial, (broken,)).at_scan(3)
+    assert decision.action is ScanAction.REFUSE
+    assert decision.text is not None
+    assert "sent to rework" in decision.text
+    assert "(saturated)" in decision.text
