@@ -134,7 +134,7 @@ def _holder(station: str | None, lab: str | None, quality: str | None) -> tuple[
     named = [(holder, scope) for holder, scope in scopes if holder is not None]
     if len(named) != 1:
         raise typer.BadParameter(
-            "give one of --station ID, --lab ID or --quality ID",
+            "name one holder",
             param_hint="--station/--lab/--quality",
         )
     return named[0]

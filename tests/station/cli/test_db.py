@@ -99,7 +99,7 @@ def test_keys_create_needs_exactly_one_holder(
 ) -> None:
     result = run_cli("keys", "create", *given, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
     assert result.returncode == 2
-    assert "give one of --station ID, --lab ID or --quality ID" in result.stderr
+    assert "--station/--lab/--quality: name one holder" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "calstation.sqlite3").exists()
 
