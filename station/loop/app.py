@@ -20,7 +20,16 @@ from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
 from station.loop.lifecycle import Quit, Said, Scanned, Unreachable, WrongUnit, verdict_line
 from station.loop.live_loop import FrontEnd
-from station.loop.prompt import Prompt, Recalibrate, Resume, Serial, State
+from station.loop.prompt import (
+    UNIT_KEYS,
+    Label,
+    LabelReader,
+    Prompt,
+    Recalibrate,
+    Resume,
+    Serial,
+    State,
+)
 from station.loop.slot import Slot
 from station.loop.unit_history import ScanAction, UnitHistory
 from station.results.journal import JournalFile, RunJournal
@@ -60,6 +69,8 @@ class StationApp(FrontEnd):
             probe_ports=probe_ports,
         )
         self.prompt = Prompt()
+        #: During a unit: tells the next unit's label from the unit's keys.
+        self.labels = LabelReader(UNIT_KEYS)
         #: The scanned unit's history (asked about in CONFIRM).
         self.history: UnitHistory | None = None
         self.last_record: RunRecord | None = None
@@ -101,8 +112,7 @@ class StationApp(FrontEnd):
         except EOFError:
             self.done = True
             return
-        for key in typed:
-            self._key(key)
+        self._keys(typed)
         self.results.check_disk()
         run = self.run
         if run is not None:
@@ -117,9 +127,32 @@ class StationApp(FrontEnd):
     def screen(self) -> RenderableType:
         """The whole screen as it stands."""
         run = self.run.view() if self.run is not None else None
-        return Group(*self.top(), self.prompt.screen(run, self.last_record))
+        return Group(*self.top(), self.prompt.screen(run, self.last_record, self.labels.typed))
 
     # -- keys ----------------------------------------------------------------------------
+
+    def _keys(self, typed: str) -> None:
+        """Act on everything typed since the last tick: during a unit, a scanned label is
+        the next unit's, never keys (:class:`station.loop.prompt.LabelReader`)."""
+        if self.prompt.state is not State.UNIT or self.prompt.asking:
+            for key in typed:
+                self._key(key)
+            return
+        for event in self.labels.feed(typed):
+            if isinstance(event, Label):
+                self._label(event.text)
+            else:
+                self._key(event)
+
+    def _label(self, text: str) -> None:
+        """A label scanned during the unit: the next unit's (not the unit on the station)."""
+        run = self.run
+        assert run is not None
+        if text == self.slot.serial:
+            run.messages.say("warn", f"{text} is the unit on the station now: finish it first")
+            return
+        self.prompt.next_serial = text
+        run.messages.say("info", f"next unit {text} scanned: Enter at the prompt takes it")
 
     def _key(self, key: str) -> None:
         answer = self.prompt.key(key, self.run)
@@ -185,6 +218,8 @@ class StationApp(FrontEnd):
         serial = self.slot.serial
         record, said = self.lifecycle.finish(self.slot)
         self.prompt.unit_done()
+        # A label half-scanned as the unit ended goes on at the serial prompt.
+        self.prompt.typed, self.labels.typed = self.labels.typed, ""
         if record is None:
             self._tell(f"unit {serial} aborted before any pose: nothing recorded")
         else:

@@ -1,12 +1,19 @@
 """What the station waits for from the operator, and what the keys typed mean.
 
 :class:`Prompt` holds the questions the station has asked (resume an interrupted unit?
-calibrate a passed unit again? abort this unit?), the serial number typed so far and
-the note shown under the prompt. It turns keys into answers (:data:`Answer`) for the
-station's loop (:class:`station.loop.app.StationApp`), which acts on them; keys during a
-unit go to the run (redo, abort) or toggle the help. It draws its part of the screen
-(:meth:`Prompt.screen`): the question asked, the unit in progress, or the last verdict
-and the serial prompt.
+calibrate a passed unit again? abort this unit? take this pose again?), the serial number
+typed so far and the note shown under the prompt. It turns keys into answers
+(:data:`Answer`) for the station's loop (:class:`station.loop.app.StationApp`), which acts
+on them; keys during a unit go to the run (redo, abort, each asked first) or toggle the
+help. It draws its part of the screen (:meth:`Prompt.screen`): the question asked, the
+unit in progress, or the last verdict and the serial prompt.
+
+**A scanner is not a keyboard** (:class:`LabelReader`). A barcode scanner types a label
+and Enter in one burst; an operator presses one key. During a unit a key acts only when
+it arrives alone, is one of the unit's keys, and no label is being typed; anything else
+is a label, queued as the next unit (Enter at the serial prompt takes it). So the next
+unit's label scanned during a run never redoes a pose, and a key that would throw away
+work (a redo, an abort) asks first.
 """
 
 from dataclasses import dataclass
@@ -18,11 +25,14 @@ from rich.text import Text
 from station.domain.records import RunRecord
 from station.loop.screens import serial_prompt, unit_screen, verdict_screen
 from station.results.journal import RunJournal
+from station.run.operator_text import pose_words
 from station.run.unit_run import UnitRun
 from station.run.view import RunView
 
 ENTER = ("\r", "\n")
 BACKSPACE = ("\x7f", "\b")
+#: The keys that act on the unit in progress when pressed alone.
+UNIT_KEYS = "r123456789ah?"
 
 
 class State(StrEnum):
@@ -59,6 +69,42 @@ class Recalibrate:
 Answer = Serial | Resume | Recalibrate
 
 
+@dataclass(frozen=True)
+class Label:
+    """A label scanned (or typed and entered) while keys act on something else."""
+
+    text: str
+
+
+class LabelReader:
+    """Tells labels from keys: a key is a key only when it arrives alone (nothing else
+    typed since the last look), is one of ``commands``, and no label is being typed;
+    everything else is typed into a label, which Enter ends and Backspace edits (a
+    Backspace on an empty line is a key)."""
+
+    def __init__(self, commands: str) -> None:
+        self.commands = commands
+        #: The label typed so far.
+        self.typed = ""
+
+    def feed(self, chunk: str) -> list[str | Label]:
+        """The keys and labels of ``chunk``, everything typed since the last look."""
+        events: list[str | Label] = []
+        for key in chunk:
+            if key in ENTER:
+                if self.typed.strip():
+                    events.append(Label(self.typed.strip()))
+                self.typed = ""
+            elif key in BACKSPACE and self.typed:
+                self.typed = self.typed[:-1]
+            elif self.typed or len(chunk) > 1 or key not in (*self.commands, *BACKSPACE):
+                if key.isprintable():
+                    self.typed += key
+            else:
+                events.append(key)
+        return events
+
+
 def edit_line(typed: str, key: str) -> tuple[str, str | None]:
     """The line typed so far after ``key``, and the line entered (stripped) on Enter."""
     if key in ENTER:
@@ -79,19 +125,31 @@ class Prompt:
         self.pending_resume: RunJournal | None = None
         self.show_help = False
         self.confirm_abort = False
+        #: The pose a redo key asked about (the question waits for y).
+        self.confirm_redo: int | None = None
+        #: The next unit's label, scanned during the last unit (Enter takes it).
+        self.next_serial: str | None = None
 
     def ask_resume(self, journal: RunJournal) -> None:
         """Ask whether to resume the unit ``journal`` left at a crash."""
         self.pending_resume = journal
         self.state = State.RESUME
 
+    @property
+    def asking(self) -> bool:
+        """Whether a question about the unit in progress waits for its answer."""
+        return self.confirm_abort or self.confirm_redo is not None
+
     def unit_done(self) -> None:
         """The unit ended: back to the serial prompt, questions and help closed."""
         self.state = State.SERIAL
         self.confirm_abort = False
+        self.confirm_redo = None
         self.show_help = False
 
-    def screen(self, run: RunView | None, last_record: RunRecord | None) -> RenderableType:
+    def screen(
+        self, run: RunView | None, last_record: RunRecord | None, label: str = ""
+    ) -> RenderableType:
         """The part of the screen under the header: the question asked, or the unit."""
         parts: list[RenderableType] = []
         if self.state is State.RESUME and self.pending_resume is not None:
@@ -114,10 +172,22 @@ class Prompt:
                         style="bold red",
                     )
                 )
+            if self.confirm_redo is not None:
+                index = self.confirm_redo
+                parts.append(
+                    Text(
+                        f"take pose {index + 1} ({pose_words(run.poses[index].name)}) again? "
+                        "press y to confirm, any other key to go on",
+                        style="bold red",
+                    )
+                )
+            if label or self.next_serial:
+                shown = f"{label}█" if label else f"{self.next_serial} (Enter at the prompt)"
+                parts.append(Text(f"next unit: {shown}", style="bold"))
         else:
             if last_record is not None:
                 parts.append(verdict_screen(last_record))
-            parts.append(serial_prompt(self.typed, self.note))
+            parts.append(serial_prompt(self.typed, self.note, self.next_serial))
         return Group(*parts)
 
     def key(self, key: str, run: UnitRun | None) -> Answer | None:
@@ -138,7 +208,10 @@ class Prompt:
 
     def _serial_key(self, key: str) -> Serial | None:
         self.typed, entered = edit_line(self.typed, key)
-        return Serial(entered) if entered else None
+        if entered is None:
+            return None
+        text, self.next_serial = entered or self.next_serial, None
+        return Serial(text) if text else None
 
     def _unit_key(self, run: UnitRun, key: str) -> None:
         if self.confirm_abort:
@@ -146,11 +219,23 @@ class Prompt:
             if key.lower() == "y":
                 run.abort()
             return
+        if self.confirm_redo is not None:
+            index, self.confirm_redo = self.confirm_redo, None
+            if key.lower() == "y":
+                run.redo(index)
+            return
         if key in ("h", "?"):
             self.show_help = not self.show_help
-        elif key == "r":
-            run.redo_last()
+        elif key == "r" and run.latest_pose is not None:
+            self._ask_redo(run, run.latest_pose)
         elif key.isdigit() and key != "0":
-            run.redo(int(key) - 1)
+            self._ask_redo(run, int(key) - 1)
         elif key == "a":
             self.confirm_abort = True
+
+    def _ask_redo(self, run: UnitRun, index: int) -> None:
+        """Ask before taking a pose again; a pose that cannot be is refused by the run."""
+        if run.redoable(index):
+            self.confirm_redo = index
+        else:
+            run.redo(index)

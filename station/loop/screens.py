@@ -51,15 +51,20 @@ NEXT_STEP: dict[str, tuple[str, str]] = {
     "rework": ("REWORK: take the unit to the repair bench; do not calibrate it again", "red"),
 }
 
-KEYS_HELP = "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help"
+KEYS_HELP = (
+    "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help · "
+    "scan the next unit's label any time"
+)
 HELP = """\
 The station asks for one pose at a time. Put the putter in the pose shown, let go,
 and keep hands off: the capture starts by itself once it lies still in that pose.
 
-  r      redo the last pose taken
-  1…9    redo pose number N, once taken (its old capture is kept for audit)
+  r      redo the last pose taken (then y to confirm)
+  1…9    redo pose number N, once taken (then y; its old capture is kept for audit)
   a      abort this unit (press a, then y to confirm)
   h, ?   show or hide this help
+
+A label scanned during a unit is the next unit's: Enter at the serial prompt takes it.
 
 At the serial prompt: scan the label (or type it and press Enter); type quit to stop."""
 
@@ -189,10 +194,14 @@ def verdict_screen(record: RunRecord) -> RenderableType:
     return Panel(Group(*lines), border_style="green" if record.verdict == "pass" else "red")
 
 
-def serial_prompt(typed: str, note: str | None) -> RenderableType:
-    """The prompt for the next unit's serial number."""
+def serial_prompt(typed: str, note: str | None, queued: str | None = None) -> RenderableType:
+    """The prompt for the next unit's serial number (``queued``: scanned during the last
+    unit, taken by Enter)."""
+    take = f" (Enter: {queued}, scanned during the last unit)" if queued else ""
     parts: list[RenderableType] = [
-        Text.assemble(("Scan the next unit's serial number: ", "bold"), typed, ("█", "blink"))
+        Text.assemble(
+            ("Scan the next unit's serial number", "bold"), f"{take}: ", typed, ("█", "blink")
+        )
     ]
     if note:
         parts.append(Text(note, style="yellow"))

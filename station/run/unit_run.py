@@ -3,7 +3,7 @@
 :class:`UnitRun` is the station's logic without a screen or a keyboard. The interface
 calls :meth:`UnitRun.step` from its own loop (it never blocks for long: it drains the
 samples received so far and acts on them), draws :meth:`UnitRun.view`, and passes the
-operator's keys on as :meth:`redo`, :meth:`redo_last` and :meth:`abort`.
+operator's keys on as :meth:`redo` and :meth:`abort`.
 
 A pose is captured only when the unit lies in the pose asked for and a whole window
 of samples is still (:mod:`station.run.capture`). After the fit poses the station
@@ -156,15 +156,25 @@ class UnitRun:
 
     # -- operator commands -----------------------------------------------------------
 
+    @property
+    def latest_pose(self) -> int | None:
+        """The pose captured most recently, if any."""
+        captures = self.journal.captures
+        return max(captures, key=lambda i: captures[i].captured_at) if captures else None
+
+    def redoable(self, index: int) -> bool:
+        """Whether pose ``index`` can be taken again now (taken, and not too late)."""
+        return index in self.journal.captures and self.phase in REDO_ALLOWED
+
     def redo(self, index: int) -> None:
-        """Take pose ``index`` again; its current capture is kept for audit."""
+        """Take pose ``index`` again; its current capture is kept for audit. A pose that
+        cannot be (:meth:`redoable`) is said why, and nothing changes."""
         if not 0 <= index < len(self.sequence):
             return
         name = pose_words(self.sequence[index].name)
         if index not in self.journal.captures:
-            self.messages.say(
-                "warn", f"pose {index + 1} ({name}) is not taken yet: nothing to redo"
-            )
+            refusal = f"pose {index + 1} ({name}) is not taken yet: nothing to redo"
+            self.messages.say("warn", refusal)
             return
         if self.phase not in REDO_ALLOWED:
             self.messages.say("warn", "too late to redo a pose: the coefficients are being written")
@@ -177,12 +187,6 @@ class UnitRun:
         self.index = self.journal.next_pose
         self._restart_capture()
         self.messages.say("info", f"pose {index + 1} ({name}) will be taken again")
-
-    def redo_last(self) -> None:
-        """Take the most recently captured pose again."""
-        captures = self.journal.captures
-        if captures:
-            self.redo(max(captures, key=lambda i: captures[i].captured_at))
 
     def abort(self) -> RunRecord | None:
         """Stop this unit. With poses taken, the run is recorded as failed ("aborted")."""

@@ -4,6 +4,7 @@ The fixture's end-to-end run with labels scanned ahead is in ``test_fixture.py``
 any sequence of labels, repeats and Backspaces is typed at the queue directly.
 """
 
+import itertools
 from pathlib import Path
 from typing import cast
 
@@ -11,6 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from station.loop.fixture.ahead import ScanAhead
+from station.loop.prompt import Label, LabelReader
 from station.loop.slot import Slot
 from station.results.journal import JournalFile
 from station.run.unit_run import UnitRun
@@ -47,8 +49,7 @@ def test_the_queue_holds_each_serial_once_in_the_lowest_free_slots(
     running = {s.serial for s in fixture if s.run is not None}
     for entry in typed:
         before, lines = len(said), 1  # one line for every label, and every label taken off
-        for key in entry if entry == "\x7f" else [*entry, "\r"]:
-            ahead.key(key)
+        ahead.scanned(entry if entry == "\x7f" else Label(entry))
         if entry == "\x7f":
             lines = int(bool(expected))
             expected = expected[:-1]
@@ -67,8 +68,7 @@ def test_each_refusal_says_why_in_one_line() -> None:
     said: list[str] = []
     ahead = ScanAhead(fixture, serial_pattern=PATTERN, tell=said.append)
     for label in ("PT000009", "PT000001", "nope", "PT000009", "PT000008", "PT000007", "\x7f"):
-        for key in label if label == "\x7f" else [*label, "\r"]:
-            ahead.key(key)
+        ahead.scanned(label if label == "\x7f" else Label(label))
     assert said == [
         "next cycle: slot 1 ← PT000009",
         "PT000001 is in slot 1 now: scan it again once it is out",
@@ -78,4 +78,34 @@ def test_each_refusal_says_why_in_one_line() -> None:
         "every slot has its next unit: PT000007 not queued",
         "PT000008 taken off the next cycle (slot 2 is free again)",
     ]
-    assert ahead.typed == ""
+
+
+@given(
+    label=st.text(alphabet="aPT0123456789h?-", min_size=2, max_size=12),
+    cuts=st.lists(st.integers(min_value=1, max_value=11), max_size=4),
+)
+def test_a_scanned_label_is_one_label_however_the_burst_arrives(
+    label: str, cuts: list[int]
+) -> None:
+    """A label and Enter typed as one burst, cut into any pieces of two keys or more (a
+    scanner's keys arrive together), is that label, never a key: whatever its letters."""
+    burst = label + "\r"
+    edges = sorted({0, len(burst), *(c for c in cuts if c < len(burst))})
+    pieces = [burst[a:b] for a, b in itertools.pairwise(edges)]
+    if any(len(piece) < 2 for piece in pieces):
+        pieces = [burst]
+    reader = LabelReader("ah?")
+    events = [event for piece in pieces for event in reader.feed(piece)]
+    assert events == [Label(label)]
+    assert reader.typed == ""
+
+
+def test_a_key_alone_is_a_key_and_a_label_being_typed_takes_every_key() -> None:
+    reader = LabelReader("ah?")
+    assert reader.feed("a") == ["a"]
+    assert reader.feed("x") == []  # not a command: a label begins
+    assert reader.feed("a") == []  # a label is being typed: its keys are the label's
+    assert reader.feed("\x7f") == []
+    assert reader.typed == "x"
+    assert reader.feed("\x7f") == []
+    assert reader.feed("\x7f") == ["\x7f"]  # an empty line: Backspace is a key

@@ -207,9 +207,16 @@ def test_redo_keeps_the_replaced_capture(station: Station) -> None:
     station.scan()
     station.follow(until_pose=4)  # poses 1-3 taken, pose 4 asked for
     child.send("r")
+    child.expect("take pose 3 \\(toe up\\) again\\? press y to confirm")
+    child.send("y")
     child.expect("pose 3 \\(toe up\\) will be taken again")
     station.asked = None
+    child.send("2")
+    child.expect("take pose 2 \\(face down\\) again\\? press y")
+    child.send("n")  # not confirmed: pose 2 stays
     child.send("1")
+    child.expect("take pose 1 \\(face up\\) again\\? press y")
+    child.send("y")
     child.expect("pose 1 \\(face up\\) will be taken again")
     assert station.follow() == "PASS"
     replaced = station.rows(
@@ -217,6 +224,19 @@ def test_redo_keeps_the_replaced_capture(station: Station) -> None:
     )
     assert [index for index, _ in replaced] == [0, 2]
     assert all("redone by the operator" in str(text) for _, text in replaced)
+
+
+def test_a_label_scanned_during_a_run_is_the_next_unit_never_keys(station: Station) -> None:
+    child = station.start()
+    station.scan()
+    station.follow(until_pose=4)  # poses 1-3 taken: the digits of a label would redo 1 and 2
+    child.send("PT000125\r")  # the scanner's burst, Enter included
+    child.expect("next unit PT000125 scanned: Enter at the prompt takes it")
+    assert station.follow() == "PASS"
+    child.expect(r"\(Enter: PT000125, scanned during the last unit\)")
+    child.send("\r")  # PT000042 is still on the port: PT000125 is the one scanned
+    child.expect("serial number mismatch")
+    assert station.rows("select count(*) from poses where replaced != '[]'") == [(0,)]
 
 
 def test_abort_records_a_failed_run_with_the_poses_taken(station: Station) -> None:
