@@ -46,6 +46,15 @@ def serving(database_url: str, *, workers: int = 1, **settings: str) -> Iterator
 
     ``settings`` become ``CALSTATION_<NAME>`` variables of the server process.
     """
+    with server_process(database_url, workers=workers, **settings) as (base, _):
+        yield base
+
+
+@contextmanager
+def server_process(
+    database_url: str, *, workers: int = 1, **settings: str
+) -> Iterator[tuple[str, "subprocess.Popen[bytes]"]]:
+    """:func:`serving`, yielding the server's process too (one worker: it serves)."""
     port = free_port()
     env = {
         **{k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")},
@@ -73,7 +82,7 @@ def serving(database_url: str, *, workers: int = 1, **settings: str) -> Iterator
                 if time.monotonic() > deadline:
                     pytest.fail("calstation serve did not answer /healthz within 30 s")
                 time.sleep(0.05)
-            yield base
+            yield base, server
         finally:
             server.terminate()
             server.wait(timeout=10)

@@ -18,7 +18,16 @@ from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
-from station.loop.lifecycle import Quit, Said, Scanned, Unreachable, WrongUnit, verdict_line
+from station.loop.lifecycle import (
+    Looking,
+    Quit,
+    Said,
+    Scanned,
+    StoredAlready,
+    Unreachable,
+    WrongUnit,
+    verdict_line,
+)
 from station.loop.live_loop import FrontEnd
 from station.loop.prompt import (
     UNIT_KEYS,
@@ -30,8 +39,9 @@ from station.loop.prompt import (
     Serial,
     State,
 )
+from station.loop.results_link import UnitLookup
 from station.loop.slot import Slot
-from station.loop.unit_history import ScanAction, UnitHistory
+from station.loop.unit_history import ScanAction
 from station.results.journal import JournalFile, RunJournal
 from station.results.storage import RunStore
 from station.run.operator_text import port_problem
@@ -71,8 +81,13 @@ class StationApp(FrontEnd):
         self.prompt = Prompt()
         #: During a unit: tells the next unit's label from the unit's keys.
         self.labels = LabelReader(UNIT_KEYS)
-        #: The scanned unit's history (asked about in CONFIRM).
-        self.history: UnitHistory | None = None
+        #: What the store knows of the scanned unit (its history, asked about in CONFIRM).
+        self.known: UnitLookup | None = None
+        #: The unit whose history is being looked up, the journal to resume then, and
+        #: the keys typed meanwhile.
+        self.looking: Looking | None = None
+        self._resume: RunJournal | None = None
+        self._held = ""
         self.last_record: RunRecord | None = None
 
     @property
@@ -113,7 +128,8 @@ class StationApp(FrontEnd):
             self.done = True
             return
         self._keys(typed)
-        self.results.check_disk()
+        self.results.poll()
+        self._take_lookup()
         run = self.run
         if run is not None:
             run.step()
@@ -133,11 +149,18 @@ class StationApp(FrontEnd):
 
     def _keys(self, typed: str) -> None:
         """Act on everything typed since the last tick: during a unit, a scanned label is
-        the next unit's, never keys (:class:`station.loop.prompt.LabelReader`)."""
-        if self.prompt.state is not State.UNIT or self.prompt.asking:
-            for key in typed:
-                self._key(key)
-            return
+        the next unit's, never keys (:class:`station.loop.prompt.LabelReader`). While a
+        unit is looked up, keys are kept until its answer is in."""
+        for i, key in enumerate(typed):
+            if self.looking is not None:
+                self._held += typed[i:]
+                return
+            if self.prompt.state is State.UNIT and not self.prompt.asking:
+                self._unit_keys(typed[i:])
+                return
+            self._key(key)
+
+    def _unit_keys(self, typed: str) -> None:
         for event in self.labels.feed(typed):
             if isinstance(event, Label):
                 self._label(event.text)
@@ -159,13 +182,12 @@ class StationApp(FrontEnd):
         if isinstance(answer, Serial):
             self._submit_serial(answer.text)
         elif isinstance(answer, Resume) and answer.yes:
-            self.history = self.results.history(answer.journal.serial)
-            self._start_unit(self.history, answer.journal)
+            self._look_up(self.lifecycle.look_up(answer.journal.serial), answer.journal)
         elif isinstance(answer, Resume):
             self.slot.journal_file.clear()
             self._tell(f"interrupted run of {answer.journal.serial} discarded")
-        elif isinstance(answer, Recalibrate) and answer.yes and self.history is not None:
-            self._start_unit(self.history)
+        elif isinstance(answer, Recalibrate) and answer.yes and self.known is not None:
+            self._start_unit(self.known)
         elif isinstance(answer, Recalibrate):
             self.prompt.note = "not calibrated again: scan the next unit"
 
@@ -183,10 +205,31 @@ class StationApp(FrontEnd):
         elif isinstance(scan, Said):
             self._tell(scan.text)
         else:
-            self._scanned(scan)
+            self._look_up(scan)
+
+    def _look_up(self, looking: Looking, resume: RunJournal | None = None) -> None:
+        """Wait, beside the loop, for what the store knows of the unit (then resume
+        ``resume``, or decide on the scan)."""
+        self.looking, self._resume = looking, resume
+        self.prompt.state = State.LOOKING
+
+    def _take_lookup(self) -> None:
+        """Go on with the unit looked up once the store's answer is in."""
+        looking = self.looking
+        scanned = None if looking is None else self.lifecycle.scanned(looking)
+        if scanned is None:
+            return
+        self.looking, held, self._held = None, self._held, ""
+        self.prompt.state = State.SERIAL
+        if self._resume is not None:
+            self.known = scanned.known
+            self._start_unit(scanned.known, self._resume)
+        else:
+            self._scanned(scanned)
+        self._keys(held)
 
     def _scanned(self, scan: Scanned) -> None:
-        self.history = scan.history
+        self.known = scan.known
         decision = scan.decision
         if decision.note:
             self._say_line(decision.note)
@@ -196,14 +239,20 @@ class StationApp(FrontEnd):
         if decision.action is ScanAction.CONFIRM:
             self.prompt.state = State.CONFIRM
         elif decision.action is ScanAction.START:
-            self._start_unit(scan.history, keep_note=True)
+            self._start_unit(scan.known, keep_note=True)
 
     def _start_unit(
-        self, history: UnitHistory, journal: RunJournal | None = None, keep_note: bool = False
+        self, known: UnitLookup, journal: RunJournal | None = None, keep_note: bool = False
     ) -> None:
         self.last_record = None
-        serial = history.serial
-        started = self.lifecycle.start(self.slot, history, journal)
+        serial = known.history.serial
+        started = self.lifecycle.start(self.slot, known, journal)
+        if isinstance(started, StoredAlready):
+            self._tell(
+                f"run {started.run_id} of {serial} is stored already: its journal was left "
+                "behind, discarded; scan the next unit"
+            )
+            return
         if isinstance(started, WrongUnit):
             self._tell(f"{started.sentence}: set the unit aside; nothing was recorded")
             return

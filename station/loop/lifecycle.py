@@ -9,8 +9,10 @@ place:
 - **the scan** (:meth:`UnitLifecycle.scan`): ``quit``; the station's own checks (a
   supervisor's unlock, the lock, the golden unit due, the golden unit itself,
   :class:`station.loop.shift_checks.ShiftChecks`); a serial number; not in another
-  slot; the unit's history (:class:`station.loop.unit_history.UnitHistory`: passed
-  already, ask; no attempts left, refuse);
+  slot; then the unit's history is looked up beside the loop
+  (:meth:`station.loop.results_link.ResultsLink.look_up`), and once it is there
+  (:meth:`UnitLifecycle.scanned`) it decides (:class:`station.loop.unit_history.UnitHistory`:
+  passed already, ask; sent to rework or no attempts left, refuse);
 - **the start** (:meth:`UnitLifecycle.start`): the unit opened on its slot's port (the
   serial it reports checked against its label, which catches a unit in the wrong slot),
   its journal (new, or the interrupted one resumed), and its run
@@ -34,7 +36,7 @@ from station.device import DeviceError, SerialNumberMismatchError
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
-from station.loop.results_link import ResultsLink
+from station.loop.results_link import ResultsLink, UnitLookup
 from station.loop.shift_checks import ShiftChecks
 from station.loop.slot import Slot, SlotState
 from station.loop.unit_history import ScanAction, ScanDecision, UnitHistory
@@ -59,12 +61,34 @@ class Said:
 
 
 @dataclass(frozen=True)
-class Scanned:
-    """A unit's serial number scanned, its history, and what the history decided."""
+class Looking:
+    """A unit whose history is asked of the results store, beside the loop."""
 
     serial: str
-    history: UnitHistory
+    golden: bool = False
+
+
+@dataclass(frozen=True)
+class Scanned:
+    """A unit's serial number scanned, what the store knows of it, and what its history
+    decided."""
+
+    serial: str
+    known: UnitLookup
     decision: ScanDecision
+
+    @property
+    def history(self) -> UnitHistory:
+        """The unit's runs and reviews."""
+        return self.known.history
+
+
+@dataclass(frozen=True)
+class StoredAlready:
+    """An interrupted run to resume is stored already (the station quit after storing it,
+    its journal's removal refused by the disk): it is not calibrated again."""
+
+    run_id: str
 
 
 @dataclass(frozen=True)
@@ -142,9 +166,8 @@ class UnitLifecycle:
         return versions(self.profile)
 
     def open_results(self) -> None:
-        """Reach the store and send what waits in the outbox, before the first unit."""
-        self.results.check_store()
-        self.results.sync()
+        """Reach the store and send what waits in the outbox, beside the loop."""
+        self.results.open()
 
     def interrupted(
         self,
@@ -160,15 +183,16 @@ class UnitLifecycle:
                 found.append((slot, loaded))
         return found, discarded
 
-    def scan(self, text: str, slot: Slot) -> Quit | Said | Scanned:
-        """What a line scanned (or typed) for ``slot`` asks for."""
+    def scan(self, text: str, slot: Slot) -> Quit | Said | Looking:
+        """What a line scanned (or typed) for ``slot`` asks for; a unit's history is
+        then looked up (:meth:`scanned` gives the decision once it is there)."""
         if text.lower() == "quit":
             return Quit()
         gate = self.checks.at_scan(text)
         if gate.said is not None:
             return Said(gate.said)
         if gate.golden:  # calibrated at every check: no re-scan question, no retest limit
-            return Scanned(text, UnitHistory(text), ScanDecision(ScanAction.START))
+            return self.look_up(text, golden=True)
         refused = not_a_serial(text, self.config.serial_pattern)
         if refused is not None:
             return Said(refused)
@@ -178,14 +202,34 @@ class UnitLifecycle:
                 f"{text} is in {elsewhere.name} already: scan the unit in {slot.name} "
                 f"(Enter: leave {slot.name} empty)"
             )
-        history = self.results.history(text)
-        return Scanned(text, history, history.at_scan(self.profile.attempts_allowed))
+        return self.look_up(text)
+
+    def look_up(self, serial: str, *, golden: bool = False) -> Looking:
+        """Ask the store about ``serial`` beside the loop (its stored fit too, when the
+        runs fit the gyro matrix)."""
+        self.results.look_up(serial, gyro=self.config.run.gyro)
+        return Looking(serial, golden)
+
+    def scanned(self, looking: Looking) -> Scanned | None:
+        """The decision about a unit looked up, once the store's answer is there."""
+        known = self.results.looked_up(looking.serial)
+        if known is None:
+            return None
+        if looking.golden:
+            return Scanned(looking.serial, known, ScanDecision(ScanAction.START))
+        decision = known.history.at_scan(self.profile.attempts_allowed)
+        return Scanned(looking.serial, known, decision)
 
     def start(
-        self, slot: Slot, history: UnitHistory, journal: RunJournal | None = None
-    ) -> UnitRun | WrongUnit | Unreachable:
-        """Open ``history``'s unit in ``slot`` and start its run (``journal``: resume it)."""
+        self, slot: Slot, known: UnitLookup, journal: RunJournal | None = None
+    ) -> UnitRun | WrongUnit | Unreachable | StoredAlready:
+        """Open the unit ``known`` is about in ``slot`` and start its run (``journal``:
+        resume it, unless its run is stored already)."""
+        history = known.history
         serial, port = history.serial, slot.port
+        if journal is not None and any(r.run_id == journal.run_id for r in history.runs):
+            slot.journal_file.clear()
+            return StoredAlready(str(journal.run_id))
         if port is None:
             return Unreachable("no putter port configured (--port)")
         try:
@@ -209,7 +253,7 @@ class UnitLifecycle:
             settings=settings,
             reopen=lambda: open_unit(port, serial),
             purpose=Purpose(earlier=history.counted, golden=golden),
-            g_sensitivity=self.results.g_sensitivity(serial) if settings.gyro else None,
+            g_sensitivity=known.g_sensitivity,
         )
         slot.begin(serial, run)
         return run

@@ -40,6 +40,8 @@ class State(StrEnum):
 
     RESUME = "resume"
     SERIAL = "serial"
+    #: A scanned unit's history is being looked up (keys wait until it is in).
+    LOOKING = "looking"
     CONFIRM = "confirm"
     UNIT = "unit"
 

@@ -1,16 +1,28 @@
 """The station's way to its results: the outbox, the results store, the data disk.
 
-:class:`ResultsLink` hands every finished run to the outbox, empties the outbox into
-the results store when it can (at start, after each unit, and every
-:data:`SYNC_EVERY_S` while idle), reconnects to the store after it failed, asks the
-disk watch to write again what the disk refused, and keeps, in one line each, what the
-operator is told about the store and the disk. The unit lifecycle
-(:class:`station.loop.lifecycle.UnitLifecycle`) owns it; the front-ends read its lines.
+:class:`ResultsLink` hands every finished run to the outbox (on the loop's own thread: a
+local write, done before the run's journal goes), and does everything that talks to the
+results store **beside the loop**, so the operator's screen never waits on the network:
+
+- the outbox is emptied into the store by a worker thread of its own (at start, after
+  each unit, and every :data:`SYNC_EVERY_S` while runs wait), which reconnects after a
+  failure;
+- a unit's history, reviews and stored [Park2014]_ fit are looked up at its scan by a
+  second worker (:meth:`ResultsLink.look_up`), so a slow lookup never holds up a sync
+  and a hung server never freezes the screen.
+
+The loop calls :meth:`ResultsLink.poll` every tick: what a worker finished is taken in
+there, on the loop's thread, and said (one line each about the store and the disk, kept
+for the screen, which also says what the station waits for).
 """
 
+import threading
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 from rich.console import RenderableType
 from rich.text import Text
@@ -21,11 +33,83 @@ from station.domain.records import RunRecord
 from station.loop.unit_history import UnitHistory
 from station.results.disk import DiskWatch
 from station.results.journal import JournalFile
-from station.results.outbox import Outbox, waiting
+from station.results.outbox import Outbox, SyncResult, waiting
 from station.results.storage import RunStore, StoreError
 
 #: Seconds between attempts to empty a non-empty outbox while idle.
 SYNC_EVERY_S = 5.0
+#: Seconds a sync may run before the screen says the station waits for it.
+SAY_WAITING_AFTER_S = 1.0
+
+T = TypeVar("T")
+
+#: Opening a store may migrate the embedded database (Alembic is not thread-safe): the
+#: workers open theirs one at a time.
+_OPENING = threading.Lock()
+
+
+@dataclass(frozen=True)
+class UnitLookup:
+    """What the store (and the outbox) know of a unit at its scan: its history, and the
+    scale-factor g-sensitivity ``N`` (3×3, 1/g) of its stored fit, if asked for and known,
+    with a line to say when the fit could not be had."""
+
+    history: UnitHistory
+    g_sensitivity: FloatArray | None = None
+    fit_note: str | None = None
+
+
+class StoreWorker:
+    """One thread that talks to the results store, with a connection of its own.
+
+    Work is queued in order; the store is opened in the thread when first needed and
+    dropped after a failure, so the next piece of work reconnects.
+    """
+
+    def __init__(self, open_store: Callable[[], RunStore], name: str) -> None:
+        self._open_store = open_store
+        self._store: RunStore | None = None
+        #: Why the store could not be opened last time (None: it was, or not tried).
+        self.unavailable: str | None = None
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+
+    def submit(self, work: Callable[[RunStore | None], T]) -> "Future[T]":
+        """Run ``work`` with the store (None: it cannot be opened now) in the thread."""
+        return self._pool.submit(self._run, work)
+
+    def _run(self, work: Callable[[RunStore | None], T]) -> T:
+        if self._store is None:
+            try:
+                with _OPENING:
+                    self._store = self._open_store()
+                self.unavailable = None
+            except StoreError as exc:
+                self._store, self.unavailable = None, str(exc)
+        try:
+            return work(self._store)
+        except BaseException:
+            self.drop()
+            raise
+
+    def drop(self) -> None:
+        """Close the store's connection; the next work opens a new one."""
+        if self._store is not None:
+            self._store.close()
+            self._store = None
+
+    def close(self, wait: bool) -> None:
+        """Stop taking work; ``wait``: finish what is under way (and its connection)."""
+        self._pool.shutdown(wait=wait, cancel_futures=True)
+        if wait:
+            self.drop()
+
+
+@dataclass(frozen=True)
+class _Synced:
+    """What a sync did, or why it could not start (``error``)."""
+
+    result: SyncResult | None = None
+    error: str | None = None
 
 
 class ResultsLink:
@@ -41,10 +125,14 @@ class ResultsLink:
         say_line: Callable[[str], None],
     ) -> None:
         self.outbox = Outbox(outbox_dir)
-        self._open_store = open_store
-        self._store: RunStore | None = None
         self._say_line = say_line
+        self._sender = StoreWorker(open_store, "results-sync")
+        self._reader = StoreWorker(open_store, "results-lookup")
+        self._opened: Future[bool] | None = None
+        self._sync: Future[_Synced] | None = None
+        self._sync_started = 0.0
         self._next_sync = 0.0
+        self._lookups: dict[str, Future[UnitLookup]] = {}
         self.store_note: str | None = None
         #: Runs waiting in the outbox (counted at every sync, kept up to date between).
         self.backlog = 0
@@ -54,45 +142,27 @@ class ResultsLink:
         #: What the disk refused, in one line (None when every write went through).
         self.disk_note: str | None = None
 
+    # -- what the screen shows -----------------------------------------------------------
+
     def status_lines(self) -> list[RenderableType]:
-        """What the disk refuses and how the store fares, for the top of the screen."""
+        """What the disk refuses, how the store fares and what the station waits for."""
         lines: list[RenderableType] = []
         if self.disk_note:
             lines.append(Text(self.disk_note, style="bold red"))
         if self.store_note:
             lines.append(Text(self.store_note, style="yellow"))
+        for serial in self._lookups:
+            lines.append(Text(f"waiting for the results store: the history of {serial}…"))
+        if self._sync is not None and time.monotonic() - self._sync_started > SAY_WAITING_AFTER_S:
+            lines.append(Text(f"waiting for the results store: {waiting(self.backlog)}…"))
         return lines
 
+    # -- runs out ------------------------------------------------------------------------
+
     def put(self, record: RunRecord) -> None:
-        """Keep a finished run in the outbox, to be sent."""
+        """Keep a finished run in the outbox, to be sent (a local write, on the loop)."""
         self.outbox.put(record)
         self.backlog += 1
-
-    def history(self, serial: str) -> UnitHistory:
-        """The unit's runs, from the store (if reachable) and the outbox."""
-        if self._store is None:
-            self.check_store()
-        return UnitHistory.gather(serial, self._store, self.outbox.pending())
-
-    def g_sensitivity(self, serial: str) -> FloatArray | None:
-        """The scale-factor g-sensitivity ``N`` (3×3, 1/g) of the unit's stored
-        [Park2014]_ fit, for the gyro matrix (None: no fit, or the store cannot say)."""
-        if self._store is None:
-            self.check_store()
-        if self._store is None:
-            return None
-        try:
-            fit = self._store.gyro_fit(serial)
-        except StoreError as exc:
-            self._say_line(f"gyro fit of {serial} unavailable ({exc}): K keeps its g-sensitivity")
-            return None
-        if fit is None:
-            return None
-        try:
-            return fit.report.error_model().n_g
-        except NotIdentifiableError:
-            self._say_line(f"gyro fit of {serial} is incomplete: K keeps its g-sensitivity")
-            return None
 
     def sync_if_due(self) -> None:
         """Try the outbox again when runs wait in it and the last try is long enough ago."""
@@ -100,27 +170,103 @@ class ResultsLink:
             self.sync()
 
     def sync(self) -> None:
-        """Send what waits in the outbox to the store, and say how it went."""
+        """Send what waits in the outbox to the store, beside the loop (one sync at a time;
+        the result is taken in by :meth:`poll`)."""
         self._next_sync = time.monotonic() + SYNC_EVERY_S
         self.backlog = self.outbox.count()
         self.set_aside = self.outbox.set_aside()
+        if self._sync is not None:
+            return
         if not self.backlog:
             self._store_says(None)
             return
+        self._sync_started = time.monotonic()
+        self._sync = self._sender.submit(self._send)
+
+    def _send(self, store: RunStore | None) -> _Synced:
+        """In the sender's thread: one pass over the outbox."""
+        if store is None:
+            return _Synced(error=f"results store unreachable ({self._sender.unavailable})")
         try:
-            if self._store is None:
-                self._store = self._open_store()
-            result = self.outbox.sync(self._store)
+            result = self.outbox.sync(store)
         except (StoreError, OSError) as exc:  # OSError: the outbox's own disk
-            self._drop_store()
-            reason = str(exc) if isinstance(exc, StoreError) else type(exc).__name__
-            self._store_says(f"{waiting(self.backlog)}: results store unreachable ({reason})")
-            return
-        self.backlog = result.pending
-        self.set_aside = self.outbox.set_aside()
+            self._sender.drop()
+            return _Synced(error=str(exc) if isinstance(exc, StoreError) else type(exc).__name__)
         if result.error is not None:
-            self._drop_store()
-        self._store_says(result.note())
+            self._sender.drop()
+        return _Synced(result)
+
+    # -- what the store knows of a unit ---------------------------------------------------
+
+    def look_up(self, serial: str, *, gyro: bool) -> None:
+        """Ask, beside the loop, what the store knows of ``serial`` (its stored fit too,
+        with ``gyro``); :meth:`looked_up` gives the answer once it is there."""
+        if serial in self._lookups:
+            return
+        pending = self.outbox.pending()
+        self._lookups[serial] = self._reader.submit(
+            lambda store: self._look_up(store, serial, pending, gyro)
+        )
+
+    def looked_up(self, serial: str) -> UnitLookup | None:
+        """The answer about ``serial``, once it is there (None: not yet)."""
+        answer = self._lookups.get(serial)
+        if answer is None or not answer.done():
+            return None
+        del self._lookups[serial]
+        lookup = answer.result()
+        if lookup.fit_note:
+            self._say_line(lookup.fit_note)
+        return lookup
+
+    def _look_up(
+        self, store: RunStore | None, serial: str, pending: Sequence[Path], gyro: bool
+    ) -> UnitLookup:
+        """In the reader's thread: the unit's history (store and outbox), reviews and fit."""
+        history = UnitHistory.gather(serial, store, pending)
+        if not gyro or store is None:
+            return UnitLookup(history)
+        try:
+            fit = store.gyro_fit(serial)
+        except StoreError as exc:
+            note = f"gyro fit of {serial} unavailable ({exc}): K keeps its g-sensitivity"
+            return UnitLookup(history, fit_note=note)
+        if fit is None:
+            return UnitLookup(history)
+        try:
+            return UnitLookup(history, fit.report.error_model().n_g)
+        except NotIdentifiableError:
+            note = f"gyro fit of {serial} is incomplete: K keeps its g-sensitivity"
+            return UnitLookup(history, fit_note=note)
+
+    # -- the loop's part ------------------------------------------------------------------
+
+    def poll(self) -> None:
+        """Take in what the workers finished and say how it went; write again what the
+        disk refused."""
+        self._check_disk()
+        opened = self._opened
+        if opened is not None and opened.done():
+            self._opened = None
+            if opened.result():
+                self._say_line("results database: connected")
+            else:
+                self._store_says(
+                    f"results database unreachable ({self._sender.unavailable}): "
+                    "runs will wait in the outbox"
+                )
+        sync = self._sync
+        if sync is None or not sync.done():
+            return
+        self._sync = None
+        synced = sync.result()
+        self.backlog = self.outbox.count()
+        self.set_aside = self.outbox.set_aside()
+        if synced.result is None:
+            self._store_says(f"{waiting(self.backlog)}: {synced.error}")
+        else:
+            self.backlog = synced.result.pending
+            self._store_says(synced.result.note())
 
     def _store_says(self, note: str | None) -> None:
         """Show ``note`` about the store; a changed note also goes to the log."""
@@ -128,28 +274,30 @@ class ResultsLink:
             self._say_line(note)
         self.store_note = note
 
-    def check_disk(self) -> None:
+    def _check_disk(self) -> None:
         """Write again what the disk refused; say what is still refused."""
         note = self.disk.check()
         if note is not None and note != self.disk_note:
             self._say_line(note)
         self.disk_note = note
 
-    def check_store(self) -> None:
-        """Connect to the store at start, so the first unit does not wait for it."""
-        try:
-            self._store = self._open_store()
-        except StoreError as exc:
-            self.store_note = f"results database unreachable ({exc}): runs will wait in the outbox"
-            self._say_line(self.store_note)
-        else:
-            self._say_line("results database: connected")
-
-    def _drop_store(self) -> None:
-        if self._store is not None:
-            self._store.close()
-            self._store = None
+    def open(self) -> None:
+        """At start: reach the store (said once it answers) and send what waits in the
+        outbox, beside the loop."""
+        self._opened = self._sender.submit(lambda store: store is not None)
+        self.sync()
 
     def close(self) -> None:
-        """Close the store's connection, if open."""
-        self._drop_store()
+        """Finish the sync under way and send what is left (bounded by the store's own
+        time-outs), then stop."""
+        self._reader.close(wait=False)
+        if self._sync is not None:
+            self._sync.result()
+            self.poll()
+        if self.outbox.count():
+            self._next_sync = 0.0
+            self.sync()
+            if self._sync is not None:
+                self._sync.result()
+            self.poll()
+        self._sender.close(wait=True)

@@ -18,6 +18,7 @@ answer and the removal) is still stored once. Nothing in the outbox stops it:
 """
 
 import logging
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -80,26 +81,38 @@ class Outbox:
         self.unwritten: list[RunRecord] = []
         #: Why the latest write failed (None once a write succeeded).
         self.write_error: OSError | None = None
+        #: The station's loop puts runs while a worker thread sends them: the records
+        #: kept in memory change under this lock only (never held across a network call).
+        self._lock = threading.Lock()
         directory.mkdir(parents=True, exist_ok=True)
 
     def put(self, record: RunRecord) -> None:
         """Keep ``record`` until it is stored: on disk, or in memory if the disk refuses."""
-        self.unwritten.append(record)
+        with self._lock:
+            self.unwritten.append(record)
         self.flush()
 
     def flush(self) -> None:
         """Write the records kept in memory, oldest first, until the disk refuses one."""
-        while self.unwritten:
-            record = self.unwritten[0]
-            try:
-                write_atomic(self._path(record), record.model_dump_json())
-            except OSError as exc:
-                if self.write_error is None:
-                    log.error("cannot write run %s to the outbox: %s", record.run_id, exc)
-                self.write_error = exc
-                return
-            self.unwritten.pop(0)
-        self.write_error = None
+        with self._lock:
+            while self.unwritten:
+                record = self.unwritten[0]
+                try:
+                    write_atomic(self._path(record), record.model_dump_json())
+                except OSError as exc:
+                    if self.write_error is None:
+                        log.error("cannot write run %s to the outbox: %s", record.run_id, exc)
+                    self.write_error = exc
+                    return
+                self.unwritten.pop(0)
+            self.write_error = None
+
+    def _forget(self, record: RunRecord) -> None:
+        """The store holds ``record``: no longer kept in memory (written meanwhile, its
+        file goes at the next pass: sending it again stores nothing new)."""
+        with self._lock:
+            if record in self.unwritten:
+                self.unwritten.remove(record)
 
     def pending(self) -> list[Path]:
         """The waiting records' files, oldest first."""
@@ -121,8 +134,10 @@ class Outbox:
         self.flush()
         tally = _Tally()
         try:
-            for record in list(self.unwritten):
-                self._send(store, record, tally, partial(self.unwritten.remove, record))
+            with self._lock:
+                in_memory = list(self.unwritten)
+            for record in in_memory:
+                self._send(store, record, tally, partial(self._forget, record))
             if not self.unwritten:
                 self.write_error = None  # whatever the disk refused is stored now
             for path in self.pending():

@@ -178,6 +178,7 @@ def test_a_full_disk_mid_unit_is_told_and_the_station_goes_on(
         station.putter.move_to(fifth, 1.0)
         assert station.follow() == "PASS"
         child.expect("Scan the next unit's serial number")
+        station.wait_stored(1)
         assert station.rows("select serial, verdict from runs") == [("PT000042", "pass")]
         assert not saved.path.exists()  # the unit is done: nothing to resume
     finally:

@@ -13,6 +13,7 @@ import secrets
 import signal
 import sqlite3
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,11 +21,12 @@ import pexpect
 import pytest
 from sqlalchemy import make_url, text
 
-from db import make_engine, open_database
+from db import Database, RunRepository, make_engine, open_database
 from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url
+from tests.servers import server_process
 
 SPEED = 20.0
 POSE_ASKED = re.compile(r"pose (\d) of (\d): ([a-z ]+?)\x1b")
@@ -56,7 +58,7 @@ class Station:
         self.child: pexpect.spawn | None = None
         self.asked: str | None = None
 
-    def start(self, *, prompt: bool = True) -> pexpect.spawn:
+    def start(self, *, prompt: bool = True, extra: tuple[str, ...] = ()) -> pexpect.spawn:
         env = {
             **os.environ,
             "PYTHONPATH": str(REPO_ROOT),
@@ -79,6 +81,7 @@ class Station:
         ]
         if self.limits is not None:
             args += ["--limits", str(self.limits)]
+        args += extra
         self.child = pexpect.spawn(
             sys.executable,
             args,
@@ -119,8 +122,23 @@ class Station:
                 self.putter.move_to(name, 1.0)
 
     def rows(self, sql: str) -> list[tuple[object, ...]]:
+        """``sql`` on the results database, once the station's outbox is empty (the
+        station sends its runs beside its loop, a moment after each verdict)."""
+        outbox = self.tmp / "data" / "outbox"
+        deadline = time.monotonic() + 30
+        while list(outbox.glob("*.json")) and time.monotonic() < deadline:
+            time.sleep(0.05)
         with sqlite3.connect(self.database) as db:
             return db.execute(sql).fetchall()
+
+    def wait_stored(self, runs: int) -> None:
+        """Wait (30 s at most) until ``runs`` runs are in the results database: the
+        station sends them beside its loop, a moment after each verdict."""
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            if self.database.exists() and self.rows("select count(*) from runs") >= [(runs,)]:
+                return
+            time.sleep(0.05)
 
     def close(self) -> None:
         if self.child is not None and self.child.isalive():
@@ -330,3 +348,32 @@ def test_database_down_then_back_drains_the_outbox_once(tmp_path: Path) -> None:
         with admin.connect() as connection:
             connection.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
         admin.dispose()
+
+
+def test_a_hung_results_server_never_freezes_the_screen(
+    tmp_path: Path, database: Database, database_url: str
+) -> None:
+    """The results server stops answering (SIGSTOP): the station looks the unit up and
+    sends its run beside its loop, says on the screen what it waits for, and calibrates
+    on; once the server answers again the run is stored, once."""
+    with database.session() as session, session.begin():
+        key = RunRepository(session).create_key("st-1")
+    with server_process(database_url) as (url, process):
+        server = process.pid
+        station = Station(tmp_path)
+        try:
+            child = station.start(extra=("--server", url, "--api-key", key))
+            os.kill(server, signal.SIGSTOP)
+            station.scan()
+            child.expect("waiting for the results store: the history of PT000042…")
+            assert station.follow() == "PASS"  # calibrated while the server hangs
+            child.expect("waiting for the results store: 1 run waits in the outbox…")
+            child.expect("Scan the next unit's serial number")
+            os.kill(server, signal.SIGCONT)
+            child.expect("outbox empty", timeout=60)
+        finally:
+            os.kill(server, signal.SIGCONT)
+            station.close()
+    with database.session() as session:
+        stored = RunRepository(session).history("PT000042")
+    assert [r.verdict for r in stored] == ["pass"]
