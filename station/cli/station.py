@@ -6,6 +6,7 @@ from typing import Annotated, Any
 import typer
 
 from station.cli.output import err, out, print_json
+from station.domain.errors import CalstationError
 from station.domain.limits import LimitsProfile, load_profile
 from station.domain.records import RunRecord
 from station.loop.app import StationApp
@@ -65,6 +66,17 @@ def _station(
     )
 
 
+def _stopped(app: StationApp | FixtureApp) -> None:
+    """A station that stopped holding runs only in memory says where they went (the runs
+    themselves on standard error when no directory took them) and exits with status 2."""
+    rescued = app.rescued
+    if rescued is None:
+        return
+    for line in rescued.lines:
+        err.print(line, markup=False, highlight=False, soft_wrap=True)
+    raise CalstationError(rescued.sentence)
+
+
 def run_command(
     ports: Annotated[
         list[str] | None,
@@ -103,7 +115,9 @@ def run_command(
     if not config.slots:
         check_port(config.port)
     with TerminalKeys() as keys:
-        _station(config, limits_profile, keys, out, units).serve()
+        app = _station(config, limits_profile, keys, out, units)
+        app.serve()
+    _stopped(app)
 
 
 def demo_command(
@@ -171,6 +185,7 @@ def demo_command(
         records = app.serve()
     finally:
         operator_script.close()
+    _stopped(app)
     _demo_summary(records, operator_script.done, as_json)
     if not as_json:
         backlog = app.results.outbox.count()

@@ -125,10 +125,11 @@ class StationApp(FrontEnd):
         try:
             typed = self.keys.read()
         except EOFError:
-            self.done = True
-            return
+            typed = ""
+            self._stop()
         self._keys(typed)
         self.results.poll()
+        self._stopping_tick()
         self._take_lookup()
         run = self.run
         if run is not None:
@@ -201,7 +202,7 @@ class StationApp(FrontEnd):
     def _submit_serial(self, text: str) -> None:
         scan = self.lifecycle.scan(text, self.slot)
         if isinstance(scan, Quit):
-            self.done = True
+            self._stop()
         elif isinstance(scan, Said):
             self._tell(scan.text)
         else:

@@ -24,6 +24,7 @@ from station.loop.keyboard import KeySource
 from station.loop.lifecycle import UnitLifecycle
 from station.loop.screens import header
 from station.loop.slot import Slot
+from station.results.rescue import Rescued
 from station.results.storage import RunStore
 
 #: Seconds between screen refreshes.
@@ -66,6 +67,12 @@ class FrontEnd(ABC):
         )
         self.results = self.lifecycle.results
         self.done = False
+        #: Asked to stop with runs only in memory: one more sync first, then a warning;
+        #: asked again, they are rescued (:mod:`station.results.rescue`).
+        self._stopping = False
+        self._warned = False
+        #: Where what only the memory held went when the station stopped (None: nothing).
+        self.rescued: Rescued | None = None
 
     @property
     def records(self) -> list[RunRecord]:
@@ -87,7 +94,43 @@ class FrontEnd(ABC):
                 self._loop(lambda: None)
         finally:
             self.lifecycle.close()
+            self.rescued = self.results.rescue()
         return self.records
+
+    def _stop(self) -> None:
+        """``quit`` or Ctrl-D: stop, unless runs are only in memory. Then one more sync is
+        tried, and if it cannot take them the operator is told where they are and what to
+        do; asked again, the station stops and saves them anywhere it can."""
+        runs, journals = self.results.in_memory()
+        if not (runs or journals) or self._warned:
+            self.done = True
+        elif not self._stopping:
+            self._stopping = True
+            self.results.sync()
+
+    def _stopping_tick(self) -> None:
+        """Once the last sync before stopping is done: stop, or say what is held."""
+        if not self._stopping or self.results.syncing:
+            return
+        self._stopping = False
+        runs, journals = self.results.in_memory()
+        if not (runs or journals):
+            self.done = True
+            return
+        self._warned = True
+        held = " and ".join(
+            part
+            for part in (
+                f"{runs} finished run{'s' * (runs != 1)}" if runs else "",
+                f"{journals} unit journal{'s' * (journals != 1)}" if journals else "",
+            )
+            if part
+        )
+        self._tell(
+            f"NOT STOPPED: {held} only in memory (the disk refuses them, the results store "
+            "does not take them): free the disk or bring the store back and they go; quit "
+            "or Ctrl-D again to save them elsewhere and stop"
+        )
 
     def _loop(self, draw: Callable[[], None]) -> None:
         next_draw = 0.0
@@ -124,6 +167,10 @@ class FrontEnd(ABC):
     def _title(self) -> str:
         """What follows the versions in the first line said."""
         return ""
+
+    @abstractmethod
+    def _tell(self, note: str) -> None:
+        """Show ``note`` on the screen, and log it."""
 
     @abstractmethod
     def _port_lines(self) -> list[str]:

@@ -34,6 +34,7 @@ from station.loop.unit_history import UnitHistory
 from station.results.disk import DiskWatch
 from station.results.journal import JournalFile
 from station.results.outbox import Outbox, SyncResult, waiting
+from station.results.rescue import Rescued, rescue
 from station.results.storage import RunStore, StoreError
 
 #: Seconds between attempts to empty a non-empty outbox while idle.
@@ -238,6 +239,23 @@ class ResultsLink:
         except NotIdentifiableError:
             note = f"gyro fit of {serial} is incomplete: K keeps its g-sensitivity"
             return UnitLookup(history, fit_note=note)
+
+    # -- what only the station's memory holds ---------------------------------------------
+
+    @property
+    def syncing(self) -> bool:
+        """Whether a sync is under way."""
+        return self._sync is not None
+
+    def in_memory(self) -> tuple[int, int]:
+        """Finished runs and unit journals the disk refused: (runs, journals)."""
+        journals = sum(1 for j in self.disk.journal_files if j.unwritten is not None)
+        return len(self.outbox.unwritten), journals
+
+    def rescue(self) -> Rescued | None:
+        """Save what only the station's memory holds anywhere it can be (None: nothing)."""
+        journals = [j.unwritten for j in self.disk.journal_files if j.unwritten is not None]
+        return rescue(list(self.outbox.unwritten), journals, self.disk.data_dir)
 
     # -- the loop's part ------------------------------------------------------------------
 

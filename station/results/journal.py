@@ -100,6 +100,11 @@ class JournalFile:
         #: Why the latest write failed (None once a write succeeded).
         self.write_error: OSError | None = None
 
+    @property
+    def unwritten(self) -> RunJournal | None:
+        """The journal the disk refused to hold: kept only in memory (None: none)."""
+        return self._owed if isinstance(self._owed, RunJournal) else None
+
     def save(self, journal: RunJournal) -> None:
         """Write the state durably (atomic replace); if the disk refuses, owe it."""
         self._owed = journal

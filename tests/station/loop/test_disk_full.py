@@ -17,11 +17,13 @@ from uuid import uuid4
 import pexpect
 import pytest
 
+from station.domain.records import RunRecord
 from station.results.disk import DiskWatch
 from station.results.journal import JournalFile, RunJournal
 from station.results.outbox import Outbox
 from station.results.storage import DatabaseStore, HttpStore
 from tests.db.records import make_record
+from tests.servers import free_port
 from tests.station.loop.test_station_terminal import Station
 
 
@@ -181,5 +183,63 @@ def test_a_full_disk_mid_unit_is_told_and_the_station_goes_on(
         station.wait_stored(1)
         assert station.rows("select serial, verdict from runs") == [("PT000042", "pass")]
         assert not saved.path.exists()  # the unit is done: nothing to resume
+    finally:
+        station.close()
+
+
+def test_stopping_with_a_run_only_in_memory_asks_then_saves_it_elsewhere(
+    small_disk: SmallDisk, tmp_path: Path
+) -> None:
+    """The data directory turns read-only and the results server is gone: the finished
+    run exists only in the station's memory. Ctrl-D does not stop the station but says
+    so; a second Ctrl-D stops it, saving the run beside the data directory, exit 2."""
+    station = Station(tmp_path)
+    nobody = f"http://127.0.0.1:{free_port()}"
+    try:
+        child = station.start(extra=("--server", nobody, "--api-key", "csk_none"))
+        station.scan()
+        station.follow(until_pose=2)
+        small_disk.read_only(True)
+        assert station.follow() == "PASS"
+        child.expect("Scan the next unit's serial number")
+        child.sendcontrol("d")
+        child.expect("NOT STOPPED: 1 finished run only in memory")
+        assert child.isalive()
+        child.sendcontrol("d")
+        child.expect("stopped holding 1 run only in memory: saved to ")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 2
+    finally:
+        small_disk.read_only(False)
+        station.close()
+    (saved,) = (tmp_path / "data-rescue").glob("*.json")
+    record = RunRecord.model_validate_json(saved.read_text(encoding="utf-8"))
+    assert (record.serial, record.verdict) == ("PT000042", "pass")
+
+
+def test_a_journal_left_by_a_read_only_disk_never_calibrates_a_stored_run_again(
+    small_disk: SmallDisk, tmp_path: Path
+) -> None:
+    """The unit's run is stored, but the read-only disk kept its journal: at the next
+    start the station offers to resume it, and "y" finds its run stored and discards it."""
+    station = Station(tmp_path)
+    try:
+        child = station.start()
+        station.scan()
+        station.follow(until_pose=2)
+        small_disk.read_only(True)
+        assert station.follow() == "PASS"
+        station.wait_stored(1)
+        child.sendcontrol("d")
+        child.expect(pexpect.EOF)
+        small_disk.read_only(False)
+        assert list(small_disk.path.glob("journal-*.json"))  # its removal was refused
+        child = station.start(prompt=False)
+        child.expect(r"Resume it\? press y")
+        child.send("y")
+        child.expect(r"is stored already: its journal was left behind, discarded")
+        assert station.rows("select count(*) from runs") == [(1,)]
+        assert not list(small_disk.path.glob("journal-*.json"))
     finally:
         station.close()
