@@ -243,6 +243,17 @@ class RunRepository:
         ).all()
         return self._summaries(runs)
 
+    def serials(self, prefix: str) -> list[str]:
+        """The serial numbers stored that begin with ``prefix``, in order."""
+        return list(
+            self.session.scalars(
+                select(Run.serial)
+                .where(Run.serial.startswith(prefix))
+                .distinct()
+                .order_by(Run.serial)
+            )
+        )
+
     def list_runs(self, query: RunQuery) -> RunPage:
         """A page of runs matching ``query``, newest first."""
         if not 1 <= query.limit <= MAX_PAGE:

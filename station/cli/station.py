@@ -1,21 +1,26 @@
 """``calstation run`` (the operator station) and ``calstation demo`` (the same, scripted)."""
 
+import re
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from sqlalchemy.exc import SQLAlchemyError
 
+from db import repository_transaction
 from station.cli.output import err, out, print_json
 from station.domain.errors import CalstationError
 from station.domain.limits import LimitsProfile, load_profile
 from station.domain.records import RunRecord
 from station.loop.app import StationApp
 from station.loop.config import MAX_SLOTS, StationConfig, load_config
-from station.loop.demo import DemoUnit, ScriptedOperator
+from station.loop.demo import DemoUnit, ScriptedOperator, demo_serial
 from station.loop.fixture.app import FixtureApp
 from station.loop.fixture.demo import FixtureOperator
 from station.loop.keyboard import KeySource, TerminalKeys
 from station.loop.startup import check_port, prepare_data_dir
+from station.results.outbox import Outbox
+from station.results.outbox_files import summarise
 from station.results.storage import DatabaseStore, HttpStore, RunStore
 
 ConfigOption = Annotated[
@@ -157,17 +162,22 @@ def demo_command(
         },
     )
     prepare_data_dir(config.data_dir)
+    first = _first_new_unit(config, seed)
     demo_dir = config.data_dir.expanduser() / "demo"
     operator_script: ScriptedOperator | FixtureOperator
     if slots == 1:
         port = demo_dir / "putter"
         config = config.model_copy(update={"port": str(port), "slots": ()})
-        operator_script = ScriptedOperator(units=units, port=port, seed=seed, speed=speed)
+        operator_script = ScriptedOperator(
+            units=units, port=port, seed=seed, speed=speed, first=first
+        )
         where = f"each plugged into {port} in turn and moved through the poses"
     else:
         ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
         config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
-        operator_script = FixtureOperator(units=units, ports=ports, seed=seed, speed=speed)
+        operator_script = FixtureOperator(
+            units=units, ports=ports, seed=seed, speed=speed, first=first
+        )
         where = (
             f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"
         )
@@ -186,6 +196,9 @@ def demo_command(
     finally:
         operator_script.close()
     _stopped(app)
+    if not records:
+        why = app.last_note or "no unit got through its scan"
+        raise CalstationError(f"demo: no unit was calibrated: {why}")
     _demo_summary(records, operator_script.done, as_json)
     if not as_json:
         backlog = app.results.outbox.count()
@@ -193,6 +206,22 @@ def demo_command(
             f"{len(records)} units calibrated; outbox {backlog}; "
             f"database {config.database_url or config.data_dir}"
         )
+
+
+def _first_new_unit(config: StationConfig, seed: int) -> int:
+    """The number of the demo's first unit: after every demo unit of ``seed`` the results
+    database or the outbox already holds, so that a demo run again calibrates new units
+    (a unit calibrated again and again would use up its retest limit)."""
+    prefix = demo_serial(seed, 0)[:-3]
+    known = {s.serial for s in map(summarise, Outbox(config.outbox_dir).pending()) if s.serial}
+    if not config.server_url:
+        try:
+            with repository_transaction(config.database_url) as repository:
+                known.update(repository.serials(prefix))
+        except (CalstationError, SQLAlchemyError):
+            pass  # the store is out of reach: the outbox is what is known
+    numbers = [int(s[len(prefix) :]) for s in known if re.fullmatch(rf"{prefix}\d{{3}}", s)]
+    return max(numbers, default=0) + 1
 
 
 def _demo_summary(records: list[RunRecord], done: list[DemoUnit], as_json: bool) -> None:

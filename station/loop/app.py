@@ -192,6 +192,11 @@ class StationApp(FrontEnd):
         elif isinstance(answer, Recalibrate):
             self.prompt.note = "not calibrated again: scan the next unit"
 
+    @property
+    def last_note(self) -> str | None:
+        """The note shown last (what the station last told the operator)."""
+        return self.prompt.note
+
     def _tell(self, note: str) -> None:
         """Show ``note`` under the prompt, and log it."""
         self.prompt.note = note

@@ -35,6 +35,11 @@ class DemoUnit:
         }
 
 
+def demo_serial(seed: int, number: int) -> str:
+    """The serial number of the demo's unit ``number`` with ``seed``: ``PT001042``."""
+    return f"PT{seed % 1000:03d}{number:03d}"
+
+
 #: The demo operator's answers to the station's questions (see :class:`ScriptedOperator`).
 ANSWERS = {"confirm": "y", "resume": "n"}
 
@@ -53,6 +58,9 @@ class ScriptedOperator:
     port: Path
     seed: int = 0
     speed: float = 10.0
+    #: The number of the demo's first unit: a demo run again on the same data takes new
+    #: units (:func:`demo_serial`), as a line does.
+    first: int = 1
     station: Any = None
     done: list[DemoUnit] = field(default_factory=list)
     _current: DemoUnit | None = None
@@ -82,8 +90,8 @@ class ScriptedOperator:
         return ""
 
     def _next_unit(self) -> str:
-        number = len(self.done) + 1
-        serial = f"PT{self.seed % 1000:03d}{number:03d}"
+        number = self.first + len(self.done)
+        serial = demo_serial(self.seed, number)
         putter = VirtualPutter(seed=self.seed * 1000 + number, serial=serial, speed=self.speed)
         self.port.parent.mkdir(parents=True, exist_ok=True)
         putter.serve_pty(self.port)

@@ -172,6 +172,11 @@ class FrontEnd(ABC):
     def _tell(self, note: str) -> None:
         """Show ``note`` on the screen, and log it."""
 
+    @property
+    @abstractmethod
+    def last_note(self) -> str | None:
+        """The note shown last (what the station last told the operator)."""
+
     @abstractmethod
     def _port_lines(self) -> list[str]:
         """Lines about the putter ports at start (none when not probed)."""

@@ -38,13 +38,37 @@ def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Pat
     ]
     assert np.isfinite([u["estimate"]["offset"]["x"] for u in units]).all()
 
-    # Run again on the same data, the demo's units have passed already: its operator
-    # answers "calibrate again?" and it goes on (it used to wait there for ever).
-    again = run_cli("demo", "--units", "1", "--json", "--speed", "20", env=env, timeout=180)
-    assert again.returncode == 0, again.stderr
-    assert "PT001001 passed at" in again.stderr
-    assert "calibrate again? y/n" in again.stderr
-    assert [u["verdict"] for u in json.loads(again.stdout)] == ["pass"]
+    # Run again on the same data, the demo takes the next new units, as a line does: the
+    # README's demos calibrate units whatever they ran before, in any order.
+    for expected in ("PT001003", "PT001004"):
+        again = run_cli("demo", "--units", "1", "--json", "--speed", "20", env=env, timeout=180)
+        assert again.returncode == 0, again.stderr
+        assert [(u["serial"], u["verdict"]) for u in json.loads(again.stdout)] == [
+            (expected, "pass")
+        ]
+        assert "calibrate again?" not in again.stderr
+
+
+def test_a_demo_that_calibrates_nothing_says_why_and_exits_2(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    golden = {
+        "serial": "GU-001",
+        "offset_counts": [2048.0, 2048.0, 2048.0],
+        "sensitivity_counts_per_g": [819.2, 819.2, 819.2],
+    }
+    env = {
+        **os.environ,
+        "CALSTATION_DATA_DIR": str(tmp_path),
+        "CALSTATION_GOLDEN": json.dumps(golden),
+    }
+    env.pop("CALSTATION_DATABASE_URL", None)
+    result = run_cli("demo", "--units", "1", "--speed", "20", env=env, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.splitlines()[-1] == (
+        "calstation: error: demo: no unit was calibrated: GOLDEN UNIT due: scan golden unit "
+        "GU-001 before the next unit (every 8 h and at each shift start)"
+    )
 
 
 def test_unreadable_outbox_files_no_longer_stop_the_demo(
