@@ -14,7 +14,7 @@ from station.domain.limits import LimitsProfile, load_profile
 from station.domain.records import RunRecord
 from station.loop.app import StationApp
 from station.loop.config import MAX_SLOTS, StationConfig, load_config
-from station.loop.demo import DemoUnit, ScriptedOperator, demo_serial
+from station.loop.demo import CablePuller, DemoUnit, ScriptedOperator, demo_serial
 from station.loop.fixture.app import FixtureApp
 from station.loop.fixture.demo import FixtureOperator
 from station.loop.keyboard import KeySource, TerminalKeys
@@ -146,6 +146,15 @@ def demo_command(
         int,
         typer.Option(min=1, max=MAX_SLOTS, help="Slots of the fixture: units calibrated together."),
     ] = 1,
+    pull_cables: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=1.0,
+            help="The operator pulls a unit's cable at a move with this chance, and plugs "
+            "it back a moment later: the station carries on.",
+        ),
+    ] = 0.0,
     config_file: ConfigOption = None,
     station: StationOption = None,
     operator: OperatorOption = None,
@@ -163,20 +172,21 @@ def demo_command(
     )
     prepare_data_dir(config.data_dir)
     first = _first_new_unit(config, seed)
+    cables = CablePuller(rate=pull_cables, seed=seed)
     demo_dir = config.data_dir.expanduser() / "demo"
     operator_script: ScriptedOperator | FixtureOperator
     if slots == 1:
         port = demo_dir / "putter"
         config = config.model_copy(update={"port": str(port), "slots": ()})
         operator_script = ScriptedOperator(
-            units=units, port=port, seed=seed, speed=speed, first=first
+            units=units, port=port, seed=seed, speed=speed, first=first, cables=cables
         )
         where = f"each plugged into {port} in turn and moved through the poses"
     else:
         ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
         config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
         operator_script = FixtureOperator(
-            units=units, ports=ports, seed=seed, speed=speed, first=first
+            units=units, ports=ports, seed=seed, speed=speed, first=first, cables=cables
         )
         where = (
             f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"
@@ -195,11 +205,11 @@ def demo_command(
         records = app.serve()
     finally:
         operator_script.close()
+    _demo_summary(records, operator_script.done, as_json)
     _stopped(app)
     if not records:
         why = app.last_note or "no unit got through its scan"
         raise CalstationError(f"demo: no unit was calibrated: {why}")
-    _demo_summary(records, operator_script.done, as_json)
     if not as_json:
         backlog = app.results.outbox.count()
         out.print(

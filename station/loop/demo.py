@@ -7,6 +7,8 @@ with the handling motion and settling tremor of a person. The station runs exact
 as on the line; only its keys come from here instead of a keyboard.
 """
 
+import random
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -40,6 +42,37 @@ def demo_serial(seed: int, number: int) -> str:
     return f"PT{seed % 1000:03d}{number:03d}"
 
 
+@dataclass
+class CablePuller:
+    """The demo operator's clumsy hand: at each move, with chance ``rate``, it pulls the
+    unit's cable and plugs it back ``back_after_s`` wall seconds later (a demo of how the
+    station carries on; ``calstation demo --pull-cables RATE``)."""
+
+    rate: float = 0.0
+    seed: int = 0
+    back_after_s: float = 0.5
+    pulls: int = 0
+    _rng: random.Random = field(init=False)
+    _out: list[tuple[float, VirtualPutter]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self._rng = random.Random(self.seed)
+
+    def maybe_pull(self, putter: VirtualPutter) -> None:
+        """Pull ``putter``'s cable, now and then."""
+        if self.rate and self._rng.random() < self.rate:
+            putter.unplug()
+            self.pulls += 1
+            self._out.append((time.monotonic() + self.back_after_s, putter))
+
+    def plug_back(self) -> None:
+        """Plug back every cable pulled long enough ago."""
+        now = time.monotonic()
+        for due in [entry for entry in self._out if entry[0] <= now]:
+            self._out.remove(due)
+            due[1].replug()
+
+
 #: The demo operator's answers to the station's questions (see :class:`ScriptedOperator`).
 ANSWERS = {"confirm": "y", "resume": "n"}
 
@@ -61,6 +94,7 @@ class ScriptedOperator:
     #: The number of the demo's first unit: a demo run again on the same data takes new
     #: units (:func:`demo_serial`), as a line does.
     first: int = 1
+    cables: CablePuller = field(default_factory=CablePuller)
     station: Any = None
     done: list[DemoUnit] = field(default_factory=list)
     _current: DemoUnit | None = None
@@ -69,6 +103,7 @@ class ScriptedOperator:
     def read(self) -> str:
         """The keys the operator types now; also moves the unit in the operator's hands."""
         app = self.station
+        self.cables.plug_back()
         if app.prompt.state in ANSWERS:
             return ANSWERS[app.prompt.state]
         if app.prompt.state == "serial":
@@ -87,6 +122,7 @@ class ScriptedOperator:
                 putter = self._current.putter
                 if (putter.orientation.inv() * target.rotation).magnitude() > 1e-9:
                     putter.move_to(target.name, MOVE_S)
+                self.cables.maybe_pull(putter)
         return ""
 
     def _next_unit(self) -> str:

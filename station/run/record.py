@@ -171,7 +171,9 @@ def run_record(
         operator_id=journal.operator_id,
         lot=journal.lot,
         started_at=journal.started_at,
-        finished_at=now(),
+        # A wall clock stepped back during the run (NTP, a technician) must not make
+        # a run that ends before it began: it ends no earlier than it started.
+        finished_at=max(now(), journal.started_at),
         software_version=__version__,
         algorithm=ALGORITHM if settings.model == "six" else "autocal-ls9",
         model=settings.model,

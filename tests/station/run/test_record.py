@@ -1,9 +1,20 @@
-"""The run record's calibration part: what the solve found, and which poses it left out."""
+"""The run record: the solve's part (what it found, which poses it left out), and its
+times whatever the wall clock did."""
+
+from datetime import UTC, datetime, timedelta
+from uuid import uuid4
 
 import numpy as np
 
+from station.device import LinkCounters
 from station.domain.calibration import solve
-from station.run.record import quality_metrics
+from station.domain.limits import load_profile
+from station.domain.records import FailureReason
+from station.domain.run_settings import RunSettings
+from station.domain.samples import SampleBlock
+from station.results.journal import RunJournal
+from station.run.acquisition import PoseResult
+from station.run.record import capture_of, pose_records, quality_metrics, run_record
 from station.simulator.recording import pose_means, spread_directions
 from station.simulator.sensor import SensorTruth
 
@@ -25,3 +36,52 @@ def test_a_clean_run_records_no_exclusion_field() -> None:
     quality = quality_metrics(solve(poses), verification_error_mg=None)
     assert quality.excluded_poses is None
     assert "excluded_poses" not in quality.model_dump(exclude_none=True)
+
+
+def _pose_result() -> PoseResult:
+    n = 1024
+    window = SampleBlock.from_columns(
+        np.arange(n, dtype=np.float64),
+        np.tile([2048.0, 2048.0, 2867.0], (n, 1)),
+        np.zeros((n, 3)),
+        np.full(n, 25.0),
+    )
+    return PoseResult(
+        pose="face_up",
+        summary=window.summary(),
+        first_seq=0,
+        last_seq=n - 1,
+        duration_s=2.0,
+        wait_s=2.0,
+        loss_fraction=0.0,
+        link=LinkCounters(),
+    )
+
+
+def test_a_clock_stepped_back_never_ends_a_run_before_it_began() -> None:
+    """The wall clock stepped back an hour during the run (NTP, a technician): the run
+    still ends no earlier than it began, so its record is valid and is stored."""
+    started = datetime.now(UTC) + timedelta(hours=1)
+    journal = RunJournal(
+        run_id=uuid4(),
+        serial="PT000001",
+        station_id="st-1",
+        operator_id="op-1",
+        started_at=started,
+        poses=("face_up",),
+        captures={0: capture_of(_pose_result(), 0, "face_up", "fit", ())},
+    )
+    record = run_record(
+        journal,
+        RunSettings(),
+        load_profile(),
+        None,
+        verdict="fail",
+        failures=(FailureReason(code="aborted", message="aborted by the operator"),),
+        disposition="retest",
+        golden=False,
+        verification_error_mg=None,
+        gyro=None,
+        poses=pose_records(journal.captures, None),
+    )
+    assert record.finished_at == started
