@@ -11,10 +11,11 @@ from station.cli.output import out
 from station.domain.errors import InputError
 from station.loop.config import load_config
 from station.results.outbox import Outbox
-from station.results.outbox_admin import Entry, entries, find, resend
+from station.results.outbox_admin import Entry, entries, find, resend, send
+from station.results.storage import HttpStore
 
 outbox_app = typer.Typer(
-    help="The station's outbox: list, show and resend the runs waiting or set aside.",
+    help="The station's outbox: list, show, resend and send the runs waiting or set aside.",
     no_args_is_help=True,
 )
 
@@ -113,3 +114,33 @@ def resend_command(
         else:
             moved += 1
     out.print(f"{moved} run{'s' * (moved != 1)} back in the outbox", markup=False)
+
+
+@outbox_app.command("send")
+def send_command(
+    run_id: Annotated[str, typer.Argument(help="Run id (or its first characters).")],
+    api_key: Annotated[
+        str,
+        typer.Option(
+            "--api-key",
+            envvar="CALSTATION_SEND_API_KEY",
+            help="The key of the station that recorded the run (a renamed station's former name).",
+        ),
+    ],
+    server: Annotated[
+        str | None, typer.Option("--server", help="Results server URL (default: the config's).")
+    ] = None,
+    config_file: ConfigOption = None,
+    data_dir: DataDirOption = None,
+) -> None:
+    """Store one run now with the given key, waiting or set aside; the file goes once stored."""
+    config = load_config(
+        config_file, {"data_dir": data_dir, "server_url": server, "api_key": api_key}
+    )
+    if not config.server_url:
+        raise InputError("no results server: give --server URL or set server_url")
+    entry = find(_outbox(config_file, data_dir), run_id)
+    with HttpStore(config.server_url, api_key) as store:
+        outcome = send(entry, store)
+    said = "stored" if outcome.created else "already stored"
+    out.print(f"run {entry.summary.run_id} {said} ({entry.state} before)", markup=False)

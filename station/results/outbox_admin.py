@@ -1,4 +1,4 @@
-"""What ``calstation outbox`` does: list, show and resend the outbox's records.
+"""What ``calstation outbox`` does: list, show, resend and send the outbox's records.
 
 Reads the same directory the station writes (``DATA_DIR/outbox``), and may run while
 the station runs: a resend only moves a file back into the queue (atomically), and the
@@ -19,6 +19,7 @@ from station.results.outbox_files import (
     reason_path,
     summarise,
 )
+from station.results.storage import RunStore, StoreError, SubmitOutcome
 
 State = Literal["waiting", "unreadable", "refused"]
 
@@ -84,3 +85,23 @@ def resend(outbox: Outbox, entry: Entry) -> None:
         raise InputError(f"run {entry.path.stem} already waits in {outbox.directory}")
     entry.path.replace(target)
     reason_path(entry.path).unlink(missing_ok=True)
+
+
+def send(entry: Entry, store: RunStore) -> SubmitOutcome:
+    """Store one record now through ``store`` (another station's key, say), then forget it.
+
+    The way out for a run a renamed station recorded under its former name: the queue
+    refuses it (:meth:`Outbox._submit`), a key of that former station stores it. Raises
+    :class:`InputError` naming why the record was not stored; the file then stays.
+    """
+    try:
+        record = read_record(entry.path)
+    except UnreadableRecordError as exc:
+        raise InputError(f"run {entry.path.stem} is unreadable ({exc}): nothing sent") from None
+    try:
+        outcome = store.submit(record)
+    except StoreError as exc:
+        raise InputError(f"run {entry.path.stem} not stored: {exc}") from None
+    entry.path.unlink()
+    reason_path(entry.path).unlink(missing_ok=True)
+    return outcome

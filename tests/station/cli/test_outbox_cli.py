@@ -1,15 +1,20 @@
-"""``calstation outbox``: list, show and resend what the outbox set aside, as real processes."""
+"""``calstation outbox``: list, show, resend and send what was set aside, as real processes."""
 
 import os
 from pathlib import Path
 from uuid import uuid4
 
 import pytest
+from sqlalchemy import select
 
+from db import Database
+from db.models import Run
+from db.repository import RunRepository
 from station.results.outbox import Outbox
-from station.results.storage import DatabaseStore
+from station.results.storage import DatabaseStore, HttpStore
 from tests.conftest import CliRunner
 from tests.db.records import make_record
+from tests.servers import STATION
 
 
 @pytest.fixture
@@ -86,3 +91,64 @@ def test_resend_with_bad_input_is_one_line_and_exit_2(
     assert result.returncode == 2
     assert len(result.stderr.splitlines()) == 1
     assert result.stderr.startswith("calstation: error: ")
+
+
+def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
+    run_cli: CliRunner, tmp_path: Path, live_url: str, database: Database, station_key: str
+) -> None:
+    """Issue 24 #3: a run queued under the station's former name used to get 403 (read as
+    a bad key, "fix api_key") and stop every run behind it, forever."""
+    outbox = Outbox(tmp_path / "data" / "outbox", station_id=STATION)
+    former = make_record(serial="PT000010", station_id="line0-old")
+    outbox.put(former)
+    current = make_record(serial="PT000011", station_id=STATION)
+    outbox.put(current)
+    with HttpStore(live_url, station_key) as store:
+        result = outbox.sync(store)
+    assert (result.stored, result.refused, result.pending, result.error) == (1, 1, 0, None)
+    listed = run_cli("outbox", "list", env=env(outbox))
+    assert listed.returncode == 0, listed.stderr
+    refused = listed.stdout.splitlines()[0]
+    assert refused.split()[:3] == ["refused", str(former.run_id), "PT000010"]
+    assert refused.endswith(
+        f"only a key of line0-old can store it (calstation outbox send {former.run_id} "
+        "--api-key KEY)"
+    )
+    with database.session() as session, session.begin():
+        former_key = RunRepository(session).create_key("line0-old")
+    wrong = run_cli(
+        "outbox",
+        "send",
+        str(former.run_id),
+        "--api-key",
+        station_key,
+        "--server",
+        live_url,
+        env=env(outbox),
+    )
+    assert wrong.returncode == 2
+    assert wrong.stderr.startswith(f"calstation: error: run {former.run_id} not stored: ")
+    assert "belongs to station line1-st1, the run to line0-old" in wrong.stderr
+    sent = run_cli(
+        "outbox",
+        "send",
+        str(former.run_id)[:8],
+        "--api-key",
+        former_key,
+        "--server",
+        live_url,
+        env=env(outbox),
+    )
+    assert sent.returncode == 0, sent.stderr
+    assert sent.stdout == f"run {former.run_id} stored (refused before)\n"
+    assert not any(outbox.refused_dir.iterdir())
+    with database.session() as session:
+        stored = session.execute(
+            select(Run.run_id, Run.station_id).where(
+                Run.run_id.in_([former.run_id, current.run_id])
+            )
+        )
+        assert {run_id: station for run_id, station in stored} == {
+            former.run_id: "line0-old",
+            current.run_id: STATION,
+        }
