@@ -2,7 +2,9 @@
 
 Each command lives in its own module, and only the module of the command being run is
 imported (the modules pull in scipy, SQLAlchemy, FastAPI and more): ``calstation
-solve`` starts without loading the web server; ``calstation --help`` loads them all.
+solve`` starts without loading the web server, and ``calstation --help``, ``version``
+or a mistyped command load none of them: the list of commands is drawn from their
+one-line summaries here (a test holds each equal to its command's own help).
 Errors meant for a person (:class:`station.domain.errors.CalstationError`) end as one line on
 standard error and exit status 2; nothing else is caught, so a genuine bug still shows
 its traceback.
@@ -10,6 +12,7 @@ its traceback.
 
 import importlib
 import sys
+from typing import NamedTuple
 
 import typer
 
@@ -19,19 +22,70 @@ from station.domain.errors import CalstationError
 
 EXIT_USER_ERROR = 2
 
-#: Command name → (module, attribute): a function (one command) or a ``typer.Typer``.
-COMMANDS: dict[str, tuple[str, str]] = {
-    "run": ("station.cli.station", "run_command"),
-    "demo": ("station.cli.station", "demo_command"),
-    "solve": ("station.cli.solve", "solve_command"),
-    "simulate": ("station.cli.simulate", "simulate"),
-    "serve": ("station.cli.serve", "serve"),
-    "report": ("station.cli.report", "report"),
-    "gyro": ("station.cli.gyro", "app"),
-    "db": ("station.cli.db", "db_app"),
-    "keys": ("station.cli.db", "keys_app"),
-    "review": ("station.cli.db", "review_command"),
-    "outbox": ("station.cli.outbox", "outbox_app"),
+
+class Command(NamedTuple):
+    """Where a command lives, and the line ``calstation --help`` shows for it."""
+
+    module: str
+    #: A function (one command) or a ``typer.Typer`` (a group).
+    attribute: str
+    summary: str
+
+
+#: Every command by name, in the order ``calstation --help`` lists them.
+COMMANDS: dict[str, Command] = {
+    "run": Command(
+        "station.cli.station",
+        "run_command",
+        "The operator station: scan a unit, take its poses, judge it, store it.",
+    ),
+    "demo": Command(
+        "station.cli.station",
+        "demo_command",
+        "The station on virtual putters, with a scripted operator: the main job's demo.",
+    ),
+    "solve": Command(
+        "station.cli.solve",
+        "solve_command",
+        "Compute offsets and sensitivities from still-pose means (ADC counts).",
+    ),
+    "simulate": Command(
+        "station.cli.simulate",
+        "simulate",
+        "Run a virtual putter that speaks the station's serial protocol.",
+    ),
+    "serve": Command("station.cli.serve", "serve", "Serve the results API (OpenAPI at /docs)."),
+    "report": Command(
+        "station.cli.report",
+        "report",
+        "End-of-line report: yields, failure Pareto, capability, control charts, ship/hold.",
+    ),
+    "review": Command(
+        "station.cli.db",
+        "review_command",
+        "Review a unit on hold: release it for a retest, or scrap it (recorded, append-only).",
+    ),
+    "gyro": Command(
+        "station.cli.gyro",
+        "app",
+        "Gyros: fit the g-sensitivity error model, simulate the centrifuge test.",
+    ),
+    "db": Command(
+        "station.cli.db",
+        "db_app",
+        "The results database: schema migrations, the report's roll-ups.",
+    ),
+    "keys": Command(
+        "station.cli.db",
+        "keys_app",
+        "API keys of the stations (runs), labs (gyro fits) and quality engineers (reviews of "
+        "units on hold) that submit over HTTP.",
+    ),
+    "outbox": Command(
+        "station.cli.outbox",
+        "outbox_app",
+        "The station's outbox: list, show, resend and send the runs waiting or set aside.",
+    ),
 }
 
 
@@ -44,17 +98,12 @@ def _root() -> None:
     """Calibration station for the smart putter."""
 
 
-def _needed(command: str | None) -> list[str]:
-    """The commands to load for ``command``: itself, none for ``version``, else all."""
-    if command in COMMANDS:
-        return [command]
-    if command == "version":
-        return []
-    return list(COMMANDS)
+def _summary_only() -> None:
+    """Never runs: ``main`` loads the real command whenever its name is given."""
 
 
 def build_app(command: str | None = None) -> typer.Typer:
-    """The ``calstation`` app with ``command`` (every command when it names none of them)."""
+    """The ``calstation`` app with ``command`` loaded; the others by their summary only."""
     app = typer.Typer(
         name="calstation",
         help="Calibration station for the smart putter: solve, simulate, run, serve.",
@@ -63,8 +112,10 @@ def build_app(command: str | None = None) -> typer.Typer:
         pretty_exceptions_enable=False,
     )
     app.callback()(_root)
-    for name in _needed(command):
-        module, attribute = COMMANDS[name]
+    for name, (module, attribute, summary) in COMMANDS.items():
+        if name != command:
+            app.command(name=name, help=summary)(_summary_only)
+            continue
         target = getattr(importlib.import_module(module), attribute)
         if isinstance(target, typer.Typer):
             app.add_typer(target, name=name)
