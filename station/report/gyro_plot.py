@@ -9,11 +9,9 @@ ppm/g. Drawn by matplotlib's Agg canvas (no display), to PNG or SVG by the suffi
 
 import io
 from pathlib import Path
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from station.domain.errors import InputError
 from station.domain.gyro.compensation import compensate
@@ -21,6 +19,9 @@ from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroLog
 from station.domain.gyro.model import PPM, GyroErrorModel
 from station.domain.sensor import AXES
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 MIN_RATE_DPS: Final = 10.0
 FORMATS: Final = (".png", ".svg")
@@ -55,7 +56,12 @@ def svg_g_sensitivity(log: GyroLog, model: GyroErrorModel, sense_axes: list[int]
     return text[text.index("<svg") :]
 
 
-def _figure(log: GyroLog, model: GyroErrorModel, sense_axes: list[int]) -> Figure:
+def _figure(log: GyroLog, model: GyroErrorModel, sense_axes: list[int]) -> "Figure":
+    # matplotlib is imported when a plot is drawn, not with the report pages: it takes
+    # about a second to load, which the server's start and most reports do not need.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     ordinary = GyroErrorModel(model.bias, model.scale, model.bias_g, np.zeros((3, 3)))
     before = compensate(ordinary, log.gyro, log.acc)
     after = compensate(model, log.gyro, log.acc)

@@ -33,7 +33,6 @@ from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.errors import (
@@ -225,6 +224,10 @@ def _nearest_one(points: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
     nearest = np.zeros(len(points))
     neighbour = np.zeros(len(points), dtype=np.int64)
     if len(distinct) > 1:
+        # Imported here: scipy.spatial takes ~0.5 s to load, and only many poses need it
+        # (the server and the command line import this module at start).
+        from scipy.spatial import cKDTree
+
         distance, index = cKDTree(distinct).query(distinct, k=2)
         nearest = np.asarray(distance)[:, 1][inverse]
         neighbour = first[np.asarray(index)[:, 1]][inverse]

@@ -27,7 +27,6 @@ cov(θ) = σ̂²·(JᵀJ)⁻¹ with σ̂² = Σr²/(N − p).
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.errors import (
@@ -141,6 +140,10 @@ def solve_least_squares(
         _refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p)
         raise
+    # Imported here: scipy.optimize takes ~0.5 s to load, and the server imports this
+    # module at start while most six-pose runs never reach this solver.
+    from scipy.optimize import least_squares
+
     fit = least_squares(param.residual, theta0, jac=param.jacobian, method="lm", args=(v,))
     if fit.status <= 0 or not np.all(np.isfinite(fit.x)):
         _refuse_degenerate_geometry(v, model, max_condition)

@@ -14,7 +14,6 @@ from typing import Any, Final
 
 import numpy as np
 from pydantic import BaseModel
-from scipy import special
 
 from station.domain.errors import InputError
 from station.domain.gyro.comparison import AxisComparison, compare_axis
@@ -100,6 +99,10 @@ def _sense_axis(
     plain model when B cannot be fitted); then the largest |N_ij| among the terms that
     differ from zero on their own, or else the one with the largest |N_ij|/σ.
     """
+    # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
+    # imports this module with the run record, rarely needs it (issue 28's start-up).
+    from scipy import special
+
     if all(v is None for v in values):
         return None, "no N term is estimable from this log"
     tests = {(t.full, t.reduced): t.p_value for t in comparison.tests}

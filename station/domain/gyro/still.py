@@ -17,7 +17,6 @@ from typing import Annotated, Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
-from scipy import special
 
 from station.domain.arrays import FloatArray
 from station.domain.errors import InputError
@@ -100,6 +99,10 @@ def summarize_still_poses(
     pose), ``gravity`` P-by-3 g (from the calibrated accelerometer); pose ``p`` is row p.
     With ``bias_limit_dps`` each gyro's |bias| is checked against it.
     """
+    # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
+    # imports this module with the run record, rarely needs it (issue 28's start-up).
+    from scipy import special
+
     if bias_limit_dps is not None and not bias_limit_dps > 0:
         raise InputError(f"bias limit: must be positive, got {bias_limit_dps:g} deg/s")
     means = _checked("gyro means", gyro_means, None)
