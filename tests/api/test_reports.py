@@ -282,23 +282,27 @@ def test_an_export_while_the_database_refuses_connections_is_a_503_and_then_work
     _store_runs(database, 3)
     database.dispose()
     name = make_url(postgres_database_url).database
-    with (
-        serving(postgres_database_url) as base,
-        httpx.Client(base_url=base, timeout=30) as client,
-        make_engine(postgres_server_url(), isolation_level="AUTOCOMMIT").connect() as admin,
-    ):
-        assert client.get("/api/v1/reports/eol/runs.csv").status_code == 200
-        admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS false'))
-        admin.execute(
-            text(
-                "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
-                "WHERE datname = :name AND pid <> pg_backend_pid()"
-            ),
-            {"name": name},
-        )
-        down = client.get("/api/v1/reports/eol/runs.csv")
-        admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true'))
-        again = client.get("/api/v1/reports/eol/runs.csv")
+    server = make_engine(postgres_server_url(), isolation_level="AUTOCOMMIT")
+    try:
+        with (
+            serving(postgres_database_url) as base,
+            httpx.Client(base_url=base, timeout=30) as client,
+            server.connect() as admin,
+        ):
+            assert client.get("/api/v1/reports/eol/runs.csv").status_code == 200
+            admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS false'))
+            admin.execute(
+                text(
+                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+                    "WHERE datname = :name AND pid <> pg_backend_pid()"
+                ),
+                {"name": name},
+            )
+            down = client.get("/api/v1/reports/eol/runs.csv")
+            admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true'))
+            again = client.get("/api/v1/reports/eol/runs.csv")
+    finally:
+        server.dispose()
     assert down.status_code == 503, down.text
     assert down.json() == {"detail": "results database unavailable"}
     assert again.status_code == 200
