@@ -91,6 +91,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         lifespan=lifespan,
         responses=problems(413, 503),
     )
+    app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)

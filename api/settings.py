@@ -40,6 +40,9 @@ class ApiSettings(DatabaseSettings):
     times and days in, and read dates without a zone in; stored times stay UTC.
     ``plant_shifts`` (``CALSTATION_PLANT_SHIFTS``, e.g. ``06:00,14:00,22:00``): the
     shifts' start times in that zone; the report adds a trend per shift.
+    ``event_listeners`` (``CALSTATION_EVENT_LISTENERS``): the most event streams
+    (``GET /api/v1/events``) each server process serves at once; one more is answered
+    503 with ``Retry-After`` (:mod:`api.routes.events`).
     """
 
     read_requires_key: bool = False
@@ -51,3 +54,4 @@ class ApiSettings(DatabaseSettings):
     report_wait_s: Annotated[float, Field(gt=0, le=3600)] = 10.0
     plant_timezone: Annotated[str, AfterValidator(_zone)] = "UTC"
     plant_shifts: Annotated[str, AfterValidator(_shifts)] = ""
+    event_listeners: Annotated[int, Field(ge=1)] = 64

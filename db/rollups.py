@@ -174,9 +174,20 @@ def _utc_day_pg(element: utc_day, compiler: SQLCompiler, **kw: Any) -> str:
     return f"((({moment}) AT TIME ZONE 'UTC')::date - DATE '1970-01-01')"
 
 
+def _sqlite_moment(moment: str) -> str:
+    """A stored SQLite moment (``YYYY-MM-DD HH:MM:SS.ffffff``, UTC) as its date functions
+    can read it for any moment of the years 1…9999: cut to milliseconds.
+
+    Those functions round a moment to milliseconds first, and the last half millisecond
+    of 9999 rounds into a year they do not hold: they answer NULL, which the roll-ups'
+    NOT NULL columns refuse. Cut, it never leaves its year.
+    """
+    return f"substr({moment}, 1, 23)"
+
+
 @compiles(utc_day, "sqlite")
 def _utc_day_sqlite(element: utc_day, compiler: SQLCompiler, **kw: Any) -> str:
-    moment = compiler.process(element.clauses, **kw)
+    moment = _sqlite_moment(compiler.process(element.clauses, **kw))
     return f"CAST(julianday(date({moment})) - 2440587.5 AS INTEGER)"
 
 
@@ -195,7 +206,7 @@ def _duration_ms_pg(element: duration_ms, compiler: SQLCompiler, **kw: Any) -> s
 
 @compiles(duration_ms, "sqlite")
 def _duration_ms_sqlite(element: duration_ms, compiler: SQLCompiler, **kw: Any) -> str:
-    start, end = (compiler.process(c, **kw) for c in element.clauses)
+    start, end = (_sqlite_moment(compiler.process(c, **kw)) for c in element.clauses)
     return f"CAST(round((julianday({end}) - julianday({start})) * 86400000.0) AS INTEGER)"
 
 

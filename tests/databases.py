@@ -56,6 +56,24 @@ def postgresql_url() -> Iterator[str]:
         admin.dispose()
 
 
+@pytest.fixture
+def postgres_database_url() -> Iterator[str]:
+    """A URL of a PostgreSQL database of its own, created empty and dropped after the
+    test: one whose connections a test may refuse (``ALLOW_CONNECTIONS false``) without
+    touching any other test's database."""
+    server_url = postgres_server_url()
+    name = f"calstation_own_{os.getpid()}_{secrets.token_hex(4)}"
+    admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
+    with admin.connect() as connection:
+        connection.execute(text(f'CREATE DATABASE "{name}"'))
+    try:
+        yield make_url(server_url).set(database=name).render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as connection:
+            connection.execute(text(f'DROP DATABASE "{name}" WITH (FORCE)'))
+        admin.dispose()
+
+
 @pytest.fixture(scope="session")
 def sqlite_url(tmp_path_factory: pytest.TempPathFactory) -> str:
     """A SQLite file for the session."""

@@ -15,6 +15,7 @@ from db import RunQuery
 from db.repository import MAX_PAGE
 from station.domain.errors import InputError
 from station.domain.limits import profile_of
+from station.domain.record_bounds import RUN_YEARS, implausible_run_time
 from station.domain.records import (
     IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
@@ -88,7 +89,8 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             422,
             _403="the API key belongs to another station",
             _422="invalid (each offending field named: a limits profile that does not hash to "
-            "its sha256 is one), or the poses give other coefficients",
+            "its sha256 is one; a `started_at` or `finished_at` outside the years "
+            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another), or the poses give other coefficients",
         ),
     },
 )
@@ -99,6 +101,10 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
             status.HTTP_403_FORBIDDEN,
             f"this API key belongs to station {station}, the run to {record.station_id}",
         )
+    for field, moment in (("started_at", record.started_at), ("finished_at", record.finished_at)):
+        why = implausible_run_time(moment)
+        if why is not None:
+            raise invalid(("body", field), why)
     try:
         profile_of(record.limits)
     except InputError as exc:

@@ -13,6 +13,7 @@ inside by construction (tests/station/test_record_bounds.py checks it).
 """
 
 import re
+from datetime import UTC, datetime
 from typing import Annotated, Final, TypeVar
 
 from pydantic import AfterValidator, BaseModel, Field, StringConstraints
@@ -61,6 +62,25 @@ MEASURE_MAX: Final = 1e150
 #: A run's duration: a unit's poses are taken within a shift; one resumed from its
 #: journal after a long stop may span days; a run of more than 31 days is not a run.
 RUN_MAX_DAYS: Final = 31
+
+#: The years (UTC) a run the results server stores may start and end in. A station
+#: stamps its runs with its own clock; one that lost its time or was set by hand (the
+#: year 1, the year 9999) stamps a moment no report asks about, so the server refuses
+#: it (422 naming the field) rather than file it there. Stored runs are not checked
+#: again, and a station's own database stores any time of the years 1…9999: the
+#: roll-ups hold either (:mod:`db.rollups`).
+RUN_YEARS: Final = (2000, 2199)
+
+
+def implausible_run_time(moment: datetime) -> str | None:
+    """Why ``moment`` cannot be a run's start or end (outside :data:`RUN_YEARS` in UTC),
+    or None when it can."""
+    first, last = RUN_YEARS
+    if first <= moment.astimezone(UTC).year <= last:
+        return None
+    shown = moment.astimezone(UTC).isoformat().replace("+00:00", "Z")
+    return f"{shown} is outside the years {first}…{last} (UTC): the station's clock is wrong"
+
 
 AdcSpread = Annotated[float, Field(ge=0, le=ADC_SPAN)]
 """A spread (standard deviation) of ADC readings, counts."""

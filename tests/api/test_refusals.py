@@ -1,6 +1,8 @@
 """Nonsense is refused before it reaches SQL: 422 naming the field or parameter, never
 500, on SQLite and PostgreSQL (a real server process on each)."""
 
+from datetime import UTC, datetime, timedelta
+
 import httpx
 import pytest
 
@@ -101,3 +103,48 @@ def test_a_forged_cursor_that_overflows_is_400_not_500(client: httpx.Client) -> 
     answer = client.get(RUNS, params={"cursor": forged})
     assert answer.status_code == 400, answer.text
     assert "cursor" in answer.json()["detail"]
+
+
+#: The last moment a time can hold: SQLite's date functions round it into the year 10000.
+LAST_MOMENT = datetime(9999, 12, 31, 23, 59, 59, 999999, tzinfo=UTC)
+
+
+@pytest.mark.parametrize(
+    ("started_at", "finished_at", "loc"),
+    [
+        (datetime(1, 1, 1, tzinfo=UTC), None, "body.started_at"),
+        (LAST_MOMENT - timedelta(seconds=95), LAST_MOMENT, "body.started_at"),
+        (
+            datetime(2199, 12, 31, 23, 59, tzinfo=UTC),
+            datetime(2200, 1, 1, tzinfo=UTC),
+            "body.finished_at",
+        ),
+        (
+            datetime(1999, 12, 31, 23, 59, tzinfo=UTC),
+            datetime(2000, 1, 1, tzinfo=UTC),
+            "body.started_at",
+        ),
+    ],
+    ids=["year-1", "end-of-9999", "into-2200", "from-1999"],
+)
+def test_a_run_stamped_outside_the_years_2000_to_2199_is_refused_naming_the_field(
+    client: httpx.Client,
+    station_key: str,
+    started_at: datetime,
+    finished_at: datetime | None,
+    loc: str,
+) -> None:
+    stored = make_record(started_at=datetime(2000, 1, 1, tzinfo=UTC))
+    answer = client.post(RUNS, json=stored.model_dump(mode="json"), headers=_auth(station_key))
+    assert answer.status_code == 201, answer.text
+    moved = {"finished_at": finished_at.isoformat()} if finished_at else {}
+    body = make_record(started_at=started_at, **moved).model_dump(mode="json")
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    [error] = answer.json()["errors"]
+    assert error["loc"] == loc
+    assert "outside the years 2000…2199 (UTC)" in error["msg"]
+    report = client.get(EOL, params={"from": "2000-01-01", "to": "2000-01-02"})
+    assert report.status_code == 200, report.text
+    assert report.json()["summary"]["runs"] == 1
+    assert client.get(f"/api/v1/units/{stored.serial}").json()["attempts"] == 1

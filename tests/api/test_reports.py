@@ -8,10 +8,12 @@ from importlib import resources
 
 import httpx
 import pytest
-from sqlalchemy import select
+from sqlalchemy import make_url, select, text, update
 
-from db import Database, RunRepository
+from db import Database, RunRepository, make_engine, open_database
 from db.models import Run, RunFailure
+from db.run_export import PAGE
+from tests.databases import postgres_server_url
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
 from tests.servers import serving
@@ -218,14 +220,19 @@ def test_the_units_list_shows_held_units_a_page_at_a_time(client: httpx.Client) 
     assert 'rel="prev"' in html
 
 
-def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Database) -> None:
+def _store_runs(database: Database, count: int) -> None:
+    """``count`` runs of units ``U0``, ``U1``, … started 10 s apart from :data:`T0`."""
     with database.session() as session:
         repository = RunRepository(session)
-        for i in range(1005):  # more than a page of the export
+        for i in range(count):
             repository.submit(
                 make_record(serial=f"U{i}", started_at=T0 + timedelta(seconds=10 * i))
             )
         session.commit()
+
+
+def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Database) -> None:
+    _store_runs(database, 1005)  # more than a page of the export
     params = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z", "station": ""}
     with client.stream("GET", "/api/v1/reports/eol/runs.csv", params=params) as answer:
         assert answer.status_code == 200
@@ -239,6 +246,67 @@ def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Data
     assert rows[0]["offset_x"] != ""
     schema = client.get("/openapi.json").json()["paths"]["/api/v1/reports/eol/runs.csv"]
     assert "text/csv; charset=utf-8" in schema["get"]["responses"]["200"]["content"]
+
+
+def test_an_export_whose_second_page_cannot_be_read_ends_as_an_incomplete_transfer(
+    client: httpx.Client, database: Database
+) -> None:
+    """The first page is read before the answer starts; a later one that fails cuts the
+    answer short of its last chunk, so no client takes the rows it got for the period."""
+    _store_runs(database, PAGE + 1)
+    unreadable = (
+        "12000-01-01 00:00:00+00"  # past what the driver reads back
+        if database.engine.dialect.name == "postgresql"
+        else "not a time"
+    )
+    with database.engine.begin() as connection:
+        connection.execute(
+            update(Run).where(Run.serial == f"U{PAGE}").values(finished_at=text(f"'{unreadable}'"))
+        )
+    received: list[str] = []
+    with client.stream("GET", "/api/v1/reports/eol/runs.csv") as answer:
+        assert answer.status_code == 200
+        with pytest.raises(httpx.RemoteProtocolError, match="incomplete chunked read"):
+            received.extend(answer.iter_text())
+    rows = list(csv.DictReader(io.StringIO("".join(received))))
+    assert [r["serial"] for r in rows] == [f"U{i}" for i in range(PAGE)]
+
+
+@pytest.mark.postgres
+def test_an_export_while_the_database_refuses_connections_is_a_503_and_then_works(
+    postgres_database_url: str,
+) -> None:
+    """A PostgreSQL database of its own, closed to connections (every open one ended) and
+    opened again: the export answers 503 with the problem body, not a 200 that stops."""
+    database = open_database(postgres_database_url, auto_migrate=True)
+    _store_runs(database, 3)
+    database.dispose()
+    name = make_url(postgres_database_url).database
+    server = make_engine(postgres_server_url(), isolation_level="AUTOCOMMIT")
+    try:
+        with (
+            serving(postgres_database_url) as base,
+            httpx.Client(base_url=base, timeout=30) as client,
+            server.connect() as admin,
+        ):
+            assert client.get("/api/v1/reports/eol/runs.csv").status_code == 200
+            admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS false'))
+            admin.execute(
+                text(
+                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+                    "WHERE datname = :name AND pid <> pg_backend_pid()"
+                ),
+                {"name": name},
+            )
+            down = client.get("/api/v1/reports/eol/runs.csv")
+            admin.execute(text(f'ALTER DATABASE "{name}" ALLOW_CONNECTIONS true'))
+            again = client.get("/api/v1/reports/eol/runs.csv")
+    finally:
+        server.dispose()
+    assert down.status_code == 503, down.text
+    assert down.json() == {"detail": "results database unavailable"}
+    assert again.status_code == 200
+    assert [r["serial"] for r in csv.DictReader(io.StringIO(again.text))] == ["U0", "U1", "U2"]
 
 
 #: The shipped limits file with the offsets' upper limit at 2051 counts, not 2255.

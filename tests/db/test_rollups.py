@@ -11,7 +11,7 @@ tables must give the rows the submissions left.
 import math
 import statistics
 from dataclasses import dataclass, replace
-from datetime import date, datetime, time, timedelta
+from datetime import UTC, date, datetime, time, timedelta
 from itertools import pairwise
 from typing import Any
 from zoneinfo import ZoneInfo
@@ -387,3 +387,34 @@ def test_every_report_parameter_is_stored_in_exactly_one_column() -> None:
     stored = [*PER_RUN, *PER_POSE]
     assert sorted(stored) == sorted(spec.name for spec in PARAMETERS)
     assert len(set(stored)) == len(stored)
+
+
+#: The last moment a stored time can hold: SQLite's date functions round it into 10000.
+LAST_MOMENT = datetime(9999, 12, 31, 23, 59, 59, 999999, tzinfo=UTC)
+
+
+def test_runs_of_one_unit_in_the_year_1_and_the_last_moment_of_9999_are_rolled_up(
+    session: Session,
+) -> None:
+    """A station's own database takes any time of the years 1…9999 (only the results
+    server refuses implausible ones): the roll-ups count either, to the millisecond."""
+    first = make_record(started_at=datetime(1, 1, 1, tzinfo=UTC))
+    last = make_record(
+        started_at=LAST_MOMENT - timedelta(seconds=95, milliseconds=250),
+        finished_at=LAST_MOMENT.isoformat(),
+        verdict="fail",
+    )
+    repository = RunRepository(session)
+    for record in (first, last):
+        repository.submit(record)
+    session.flush()
+    counts = session.execute(
+        select(ReportCounts.day, ReportCounts.duration_ms).order_by(ReportCounts.day)
+    ).all()
+    days = [(d.date() - date(1970, 1, 1)).days for d in (first.started_at, last.started_at)]
+    assert [tuple(row) for row in counts] == [(days[0], 95_000), (days[1], 95_250)]
+    report = eol_report(session, ReportFilter())
+    assert (report.summary.runs, report.summary.cycle_time_per_run_s) == (2, 95.125)
+    kept = rollup_rows(session)
+    rebuild(session.connection())
+    assert rollup_rows(session) == kept

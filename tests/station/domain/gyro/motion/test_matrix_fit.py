@@ -4,7 +4,7 @@ import functools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from station.domain.gyro.motion import GyroMatrixError, Move, calibrate_stream, fit_gyro_matrix
@@ -84,27 +84,53 @@ def _moves_of(seed: int) -> tuple[list[Move], np.ndarray]:
     return list(moves), bias
 
 
+#: The most samples a generated gap removes.
+MAX_LOST = 20
+
+
+def _gap(samples: int, where: float, lost: int) -> tuple[int, int]:
+    """The samples ``[start, end)`` a gap of ``lost`` samples removes from a move of
+    ``samples``, ``where`` (0…1) along it: strictly inside, a sample kept on each side."""
+    start = 1 + int(where * (samples - 2 - lost))
+    return start, start + lost
+
+
+@given(
+    samples=st.integers(2 + MAX_LOST, 10_000),
+    where=st.floats(0.0, 1.0),
+    lost=st.integers(1, MAX_LOST),
+)
+@example(samples=310, where=0.949, lost=17)  # once drawn as the move's last 17 samples
+def test_a_generated_gap_lies_strictly_inside_its_move(
+    samples: int, where: float, lost: int
+) -> None:
+    start, end = _gap(samples, where, lost)
+    assert start >= 1
+    assert end - start == lost
+    assert end <= samples - 1
+
+
 @settings(max_examples=10, deadline=None)
 @given(
     seed=st.integers(0, 1),
     which=st.integers(0, 7),
-    where=st.floats(0.05, 0.95),
-    lost=st.integers(1, 20),
+    where=st.floats(0.0, 1.0),
+    lost=st.integers(1, MAX_LOST),
 )
+@example(seed=0, which=0, where=0.949, lost=17)  # a gap that once took the move's end
+@example(seed=1, which=7, where=1.0, lost=MAX_LOST)  # the latest gap, in a shorter move
 def test_a_gap_makes_that_move_unusable_and_says_so(
     seed: int, which: int, where: float, lost: int
 ) -> None:
     moves, bias = _moves_of(seed)
     move = moves[which]
-    k = int(where * (len(move.t) - 2)) + 1
+    start, end = _gap(len(move.t), where, lost)
     gapped = Move(
-        t=np.concatenate([move.t[:k], move.t[k + lost :]]),
-        rates_dps=np.concatenate([move.rates_dps[:k], move.rates_dps[k + lost :]]),
+        t=np.concatenate([move.t[:start], move.t[end:]]),
+        rates_dps=np.concatenate([move.rates_dps[:start], move.rates_dps[end:]]),
         gravity_before=move.gravity_before,
         gravity_after=move.gravity_after,
     )
-    if len(gapped.t) < 2:
-        return
     moves[which] = gapped
     fit = fit_gyro_matrix(moves, bias)
     assert [u.index for u in fit.unusable] == [which]
