@@ -1,13 +1,20 @@
 """Nonsense is refused before it reaches SQL: 422 naming the field or parameter, never
 500, on SQLite and PostgreSQL (a real server process on each)."""
 
+from datetime import UTC, datetime
+from typing import Any
+
 import httpx
 import pytest
 
+from station.domain.records import document_sha256
+from station.report.period import start_of_day
 from tests.db.records import make_record
 
 RUNS = "/api/v1/runs"
 EOL = "/api/v1/reports/eol"
+#: Seconds a report may take before a test gives up on it (not a bound it must meet).
+SAFETY_S = 120
 
 
 def _auth(key: str) -> dict[str, str]:
@@ -51,6 +58,49 @@ def test_a_poison_run_is_refused_naming_the_field_and_the_report_still_answers(
     report = client.get(EOL)
     assert report.status_code == 200, report.text
     assert report.json()["summary"]["runs"] == 1
+
+
+def _with_profile(body: dict[str, Any], field: str, bounds: dict[str, float | None]) -> None:
+    """Give the run of ``body`` its limits profile with ``field`` set to ``bounds``, hashed
+    as a station would hash it (so only the bounds themselves can be refused)."""
+    profile = {**body["limits"]["profile"], field: bounds}
+    body["limits"] = {**body["limits"], "profile": profile, "sha256": document_sha256(profile)}
+
+
+@pytest.mark.parametrize(
+    ("field", "bounds"),
+    [
+        ("offset_counts", {"lower": 1841.0, "upper": 1e300}),
+        ("pose_noise_counts", {"lower": None, "upper": 1e308}),
+        ("gyro_bias_dps", {"lower": -1e308, "upper": 10.0}),
+        ("verification_error_mg", {"lower": -1e200, "upper": 30.0}),
+    ],
+    ids=["offset-1e300", "pose-noise-1e308", "gyro-bias-minus-1e308", "verification-minus-1e200"],
+)
+def test_a_run_whose_limits_profile_has_absurd_bounds_is_refused_and_the_reports_answer(
+    client: httpx.Client, station_key: str, field: str, bounds: dict[str, float | None]
+) -> None:
+    today = start_of_day(datetime.now(UTC), "UTC")  # in the dashboard's range too
+    good = make_record(started_at=today)
+    assert client.post(
+        RUNS, json=good.model_dump(mode="json"), headers=_auth(station_key)
+    ).is_success
+    body = make_record(serial="PT-000002", started_at=today).model_dump(mode="json")
+    _with_profile(body, field, bounds)
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    error = answer.json()["errors"][0]
+    assert error["loc"] == "body.limits.profile"
+    assert field in error["msg"]
+    assert field in answer.json()["detail"]
+    for fmt in ("json", "csv", "html"):
+        # The first report starts the server's report processes: a generous safety net.
+        report = client.get(EOL, params={"format": fmt}, timeout=SAFETY_S)
+        assert report.status_code == 200, (fmt, report.text)
+    assert client.get(EOL, timeout=SAFETY_S).json()["summary"]["runs"] == 1
+    dashboard = client.get("/", timeout=SAFETY_S)
+    assert dashboard.status_code == 200, dashboard.text
+    assert "PT-000001" in dashboard.text
 
 
 @pytest.mark.parametrize(
