@@ -331,16 +331,25 @@ def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
 
 
 def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:
-    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors)."""
+    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors).
+
+    Whatever the text, the only error is an :class:`InputError` of one line: a file
+    nested deeper than the TOML reader's recursion goes (``x = [[[…]]]`` 900 deep) is
+    one, not a ``RecursionError``.
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{shown}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(f"{shown}: not a limits file: its values are nested too deeply") from None
     tables = data.get("profiles")
     if not isinstance(tables, dict) or not tables:
         raise InputError(f"{shown}: no [profiles.NAME] tables")
     profiles = {}
     for name, table in tables.items():
+        if not isinstance(table, dict):
+            raise InputError(f"{shown}: profiles.{name} is not a table ([profiles.{name}])")
         try:
             profiles[name] = LimitsProfile.model_validate({"name": name, **table})
         except ValidationError as exc:

@@ -2,6 +2,7 @@
 500, on SQLite and PostgreSQL (a real server process on each)."""
 
 from datetime import UTC, datetime
+from importlib import resources
 from typing import Any
 
 import httpx
@@ -101,6 +102,44 @@ def test_a_run_whose_limits_profile_has_absurd_bounds_is_refused_and_the_reports
     dashboard = client.get("/", timeout=SAFETY_S)
     assert dashboard.status_code == 200, dashboard.text
     assert "PT-000001" in dashboard.text
+
+
+#: The shipped limits file, its first profile's offsets replaced by ``{OFFSETS}``.
+SHIPPED_WITH_OFFSETS = (
+    resources.files("station.domain.profiles")
+    .joinpath("limits.toml")
+    .read_text(encoding="utf-8")
+    .replace("offset_counts = { lower = 1841.0, upper = 2255.0 }", "offset_counts = {OFFSETS}", 1)
+)
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        ('[profiles.deep]\nversion = "1"\nx = ' + "[" * 900 + "]" * 900, "nested too deeply"),
+        ("[profiles]\nx = 1\n", "profiles.x is not a table"),
+        (
+            SHIPPED_WITH_OFFSETS.replace("{OFFSETS}", "{ lower = -1e308, upper = 1e308 }"),
+            "profile kxm52-production: offset_counts: Value error, lower -1e+308 outside",
+        ),
+    ],
+    ids=["nested-900-deep", "profile-not-a-table", "bounds-1e308"],
+)
+def test_an_unusable_what_if_file_is_422_with_one_line_naming_the_problem(
+    client: httpx.Client, station_key: str, content: str, words: str
+) -> None:
+    stored = client.post(
+        RUNS, json=make_record().model_dump(mode="json"), headers=_auth(station_key)
+    )
+    assert stored.is_success
+    upload = {"limits": ("candidate.toml", content.encode())}
+    answer = client.post(EOL, params={"format": "json"}, files=upload, timeout=SAFETY_S)
+    assert answer.status_code == 422, answer.text
+    detail = answer.json()["detail"]
+    assert detail.startswith("invalid request: body.limits: candidate.toml: ")
+    assert words in detail
+    assert "\n" not in detail
+    assert answer.json()["errors"][0]["loc"] == "body.limits"
 
 
 @pytest.mark.parametrize(

@@ -109,6 +109,8 @@ def test_bounds_contain_exactly_the_closed_interval(low: float, width: float, va
         (PROFILE.replace('version = "7"\n', ""), "profile line-a: version: Field required"),
         (PROFILE.replace("upper = 30.0", "upper = -1.0, lower = 2.0"), "verification_error_mg"),
         (PROFILE + "bogus = 1\n", "profile line-a: bogus"),
+        (PROFILE + "x = " + "[" * 900 + "]" * 900, "nested too deeply"),
+        ("[profiles]\nx = 1\n", "profiles.x is not a table"),
     ],
 )
 def test_bad_profile_files_name_the_problem(tmp_path: Path, content: str, message: str) -> None:
