@@ -35,6 +35,7 @@ from station.domain.record_bounds import (
     OFFSET_MAX_COUNTS,
     OFFSET_MIN_COUNTS,
     SENSITIVITY_MAX_COUNTS_PER_G,
+    Text,
 )
 from station.domain.records import (
     GYRO_MATRIX_MAX,
@@ -155,7 +156,7 @@ class LimitsProfile(BaseModel):
 
     name: Name
     version: Name
-    description: str = ""
+    description: Text = ""
     offset_counts: OffsetBounds
     sensitivity_counts_per_g: SensitivityBounds
     verification_error_mg: ErrorBounds

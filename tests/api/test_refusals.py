@@ -1,6 +1,7 @@
 """Nonsense is refused before it reaches SQL: 422 naming the field or parameter, never
 500, on SQLite and PostgreSQL (a real server process on each)."""
 
+from collections.abc import Callable
 from datetime import UTC, datetime
 from importlib import resources
 from typing import Any
@@ -102,6 +103,48 @@ def test_a_run_whose_limits_profile_has_absurd_bounds_is_refused_and_the_reports
     dashboard = client.get("/", timeout=SAFETY_S)
     assert dashboard.status_code == 200, dashboard.text
     assert "PT-000001" in dashboard.text
+
+
+def _failure_message(body: dict[str, Any], text: str) -> None:
+    body.update(verdict="fail", failures=[{"code": "offset", "message": text}])
+
+
+def _capture_reason(body: dict[str, Any], text: str) -> None:
+    body["poses"][0]["replaced"][0]["reason"] = text
+
+
+def _description(body: dict[str, Any], text: str) -> None:
+    profile = {**body["limits"]["profile"], "description": text}
+    body["limits"] = {**body["limits"], "profile": profile, "sha256": document_sha256(profile)}
+
+
+@pytest.mark.parametrize(
+    ("change", "text", "loc"),
+    [
+        (_failure_message, "offset x out of limits\n", "body.failures.0.message"),
+        (_capture_reason, "moved during capture\n", "body.poses.0.replaced.0.reason"),
+        (_description, "KXM52\x00production", "body.limits.profile"),
+    ],
+    ids=[
+        "failure-message-trailing-newline",
+        "capture-reason-trailing-newline",
+        "nul-in-description",
+    ],
+)
+def test_a_run_with_a_control_character_in_its_text_is_refused_naming_the_field(
+    client: httpx.Client,
+    station_key: str,
+    change: Callable[[dict[str, Any], str], None],
+    text: str,
+    loc: str,
+) -> None:
+    body = make_record().model_dump(mode="json")
+    change(body, text)
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    assert answer.json()["errors"][0]["loc"] == loc
+    assert "control characters" in answer.json()["detail"]
+    assert client.get(RUNS).json()["count"] == 0
 
 
 #: The shipped limits file, its first profile's offsets replaced by ``{OFFSETS}``.
