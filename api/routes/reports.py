@@ -188,7 +188,17 @@ async def get_eol_report(
 @router.post(
     "/reports/eol",
     response_class=Response,
-    responses={**_REPORT_ANSWERS, **problems(400, _400="the body is not multipart form data")},
+    responses={
+        **_REPORT_ANSWERS,
+        **problems(
+            400,
+            422,
+            _400="the body is not multipart form data",
+            _422="a parameter is invalid, or the limits file is not one (not UTF-8, not TOML, "
+            "nested too deeply, a profile that is not a table or a bound outside what its "
+            "quantity can take): `errors` names `body.limits` and says which",
+        ),
+    },
     summary="Report with what-if limits",
 )
 async def post_eol_what_if(

@@ -89,7 +89,8 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             422,
             _403="the API key belongs to another station",
             _422="invalid (each offending field named: a limits profile that does not hash to "
-            "its sha256 is one; a `started_at` or `finished_at` outside the years "
+            "its sha256, or holds a bound outside what its quantity can take, is one; a "
+            "`started_at` or `finished_at` outside the years "
             f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another), or the poses give other coefficients",
         ),
     },

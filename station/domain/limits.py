@@ -12,14 +12,38 @@ axis or pose) rather than free text.
 
 import math
 import tomllib
+from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Self
 
-from pydantic import BaseModel, ConfigDict, Field, JsonValue, ValidationError, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    JsonValue,
+    ValidationError,
+    model_validator,
+)
 
 from station.domain.errors import InputError
-from station.domain.records import Axis, FailureReason, LimitsRef, document_sha256
+from station.domain.record_bounds import (
+    ADC_SPAN,
+    ERROR_MAX_MG,
+    GYRO_RANGE_DPS,
+    OFFSET_MAX_COUNTS,
+    OFFSET_MIN_COUNTS,
+    SENSITIVITY_MAX_COUNTS_PER_G,
+    Text,
+)
+from station.domain.records import (
+    GYRO_MATRIX_MAX,
+    Axis,
+    FailureReason,
+    LimitsRef,
+    document_sha256,
+)
 from station.domain.unit_state import DEFAULT_RETEST_LIMIT
 
 DEFAULT_PROFILE = "kxm52-production"
@@ -56,43 +80,111 @@ class Bounds(BaseModel):
         return f"[{self.lower:g}, {self.upper:g}]"
 
 
+def _plausible(low: float, high: float, what: str, unit: str = "") -> Callable[[Bounds], Bounds]:
+    """A check that each side of a profile's bounds lies within ``low…high`` (``unit``),
+    the values the checked quantity can take (``what``), naming the side that does not."""
+
+    def check(bounds: Bounds) -> Bounds:
+        for side, value in (("lower", bounds.lower), ("upper", bounds.upper)):
+            if value is not None and not low <= value <= high:
+                raise ValueError(f"{side} {value:g} outside {what} {low:g}…{high:g}{unit}")
+        return bounds
+
+    return check
+
+
+OffsetBounds = Annotated[
+    Bounds,
+    AfterValidator(
+        _plausible(OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS, "a zero-g output's range", " counts")
+    ),
+]
+"""Zero-g output, counts: one ADC span beyond either rail (−4095…8190)."""
+SensitivityBounds = Annotated[
+    Bounds,
+    AfterValidator(
+        _plausible(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity's range", " counts/g")
+    ),
+]
+"""Sensitivity, counts/g: 0…4095 (more could not show ±1 g inside the ADC)."""
+ErrorBounds = Annotated[
+    Bounds, AfterValidator(_plausible(0, ERROR_MAX_MG, "an error's range", " mg"))
+]
+"""An error, mg: 0…1e8 (the largest a record may hold)."""
+NoiseBounds = Annotated[Bounds, AfterValidator(_plausible(0, ADC_SPAN, "the ADC span", " counts"))]
+"""A spread or residual of ADC readings, counts: 0…4095 (the ADC's span)."""
+GyroBiasBounds = Annotated[
+    Bounds,
+    AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s")),
+]
+"""A gyro bias, deg/s: ±655.36 (the protocol's rate field)."""
+FractionBounds = Annotated[Bounds, AfterValidator(_plausible(0, 1, "a fraction's range"))]
+"""A fraction (samples lost; a read-back's relative error, past 100 % no read-back): 0…1."""
+GyroScaleBounds = Annotated[
+    Bounds,
+    AfterValidator(
+        _plausible(-GYRO_MATRIX_MAX - 1, GYRO_MATRIX_MAX - 1, "the range of a stored K_ii − 1")
+    ),
+]
+"""K_ii − 1 of the gyro matrix: −3…1 (a stored K's entries lie within ±2)."""
+GyroMatrixBounds = Annotated[
+    Bounds,
+    AfterValidator(_plausible(-GYRO_MATRIX_MAX, GYRO_MATRIX_MAX, "the range of a stored K_ij")),
+]
+"""K_ij of the gyro matrix: ±2."""
+AngleBounds = Annotated[Bounds, AfterValidator(_plausible(0, 180, "an angle's range", "°"))]
+"""An angle between two directions, degrees: 0…180."""
+
 Name = Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$")]
 
 
 class LimitsProfile(BaseModel):
-    """The bounds one run is judged against."""
+    """The bounds one run is judged against.
+
+    Each bound lies within the values its quantity can take (``OffsetBounds`` and the
+    others above), from the hardware, as a run record's numbers do
+    (:mod:`station.domain.record_bounds`): counts within one ADC span beyond either rail,
+    spreads within the span, gyro rates within the protocol's field, fractions within
+    0…1, angles within 0…180°. A bound outside them checks nothing a bound at their edge
+    would not, and a huge finite one (1e300 counts) overflows the report's sums of
+    squares and capability; so a profile holding one is refused wherever it comes from:
+    a limits file, an uploaded what-if file (:func:`parse_profiles`) or a run's
+    submission (:func:`profile_of`), with the field and the range it must lie in.
+    """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     name: Name
     version: Name
-    description: str = ""
-    offset_counts: Bounds
-    sensitivity_counts_per_g: Bounds
-    verification_error_mg: Bounds
-    pose_noise_counts: Bounds
-    gyro_bias_dps: Bounds
-    link_loss: Bounds
-    writeback_relative_error: Bounds
+    description: Text = ""
+    offset_counts: OffsetBounds
+    sensitivity_counts_per_g: SensitivityBounds
+    verification_error_mg: ErrorBounds
+    pose_noise_counts: NoiseBounds
+    gyro_bias_dps: GyroBiasBounds
+    link_loss: FractionBounds
+    writeback_relative_error: FractionBounds
     retest_limit: Annotated[
         int | None,
         Field(ge=1, le=100, description="attempts per unit (aborts not counted) before rework"),
     ] = None
     gyro_scale_error: Annotated[
-        Bounds | None, Field(description="K_ii − 1 of the fitted gyro matrix; absent: unchecked")
+        GyroScaleBounds | None,
+        Field(description="K_ii − 1 of the fitted gyro matrix; absent: unchecked"),
     ] = None
     gyro_misalignment: Annotated[
-        Bounds | None, Field(description="K_ij (i ≠ j) of the gyro matrix; absent: unchecked")
+        GyroMatrixBounds | None,
+        Field(description="K_ij (i ≠ j) of the gyro matrix; absent: unchecked"),
     ] = None
     gyro_verification_deg: Annotated[
-        Bounds | None,
+        AngleBounds | None,
         Field(
             description="angle between the gravity change and the rotation the unit's own "
             "calibrated gyros integrate over the verification move, degrees; absent: unchecked"
         ),
     ] = None
     fit_residual_counts: Annotated[
-        Bounds | None,
+        NoiseBounds | None,
         Field(
             description="largest |studentised residual| of a least-squares fit's poses, counts; "
             "left out, the model's default (station.domain.calibration.consistency)"
@@ -240,16 +332,25 @@ def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
 
 
 def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:
-    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors)."""
+    """All profiles of the TOML ``text`` of a limits file (``shown``: its name in errors).
+
+    Whatever the text, the only error is an :class:`InputError` of one line: a file
+    nested deeper than the TOML reader's recursion goes (``x = [[[…]]]`` 900 deep) is
+    one, not a ``RecursionError``.
+    """
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{shown}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(f"{shown}: not a limits file: its values are nested too deeply") from None
     tables = data.get("profiles")
     if not isinstance(tables, dict) or not tables:
         raise InputError(f"{shown}: no [profiles.NAME] tables")
     profiles = {}
     for name, table in tables.items():
+        if not isinstance(table, dict):
+            raise InputError(f"{shown}: profiles.{name} is not a table ([profiles.{name}])")
         try:
             profiles[name] = LimitsProfile.model_validate({"name": name, **table})
         except ValidationError as exc:

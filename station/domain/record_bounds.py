@@ -115,13 +115,19 @@ Measure = Annotated[float, Field(ge=-MEASURE_MAX, le=MEASURE_MAX)]
 Probability = Annotated[float, Field(ge=0, le=1)]
 """A p-value or significance level."""
 
-_PRINTABLE = re.compile(r"^[^\x00-\x1f\x7f]*$")
+#: A control character: Unicode category Cc (C0 controls, NUL and line breaks among them,
+#: DEL, C1 controls). Searched for anywhere in a text: a ``^[^…]*$`` matched with
+#: ``re.match`` let a trailing newline through, since ``$`` matches before one.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 
 
 def printable(text: str) -> str:
-    """``text`` unchanged; ValueError if it holds a control character (NUL included: a
-    PostgreSQL text or JSON value cannot hold one)."""
-    if not _PRINTABLE.match(text):
+    """``text`` unchanged; ValueError if it holds a control character anywhere, a trailing
+    newline included (NUL included: a PostgreSQL text or JSON value cannot hold one).
+
+    The one check of every free text a record, a review or a limits profile holds.
+    """
+    if _CONTROL.search(text):
         raise ValueError("must not contain control characters")
     return text
 
@@ -133,7 +139,7 @@ M = TypeVar("M", bound=BaseModel)
 
 
 def _plain(value: object, where: str) -> None:
-    if isinstance(value, str) and not _PRINTABLE.match(value):
+    if isinstance(value, str) and _CONTROL.search(value):
         raise ValueError(f"{where or 'text'} must not contain control characters")
     if isinstance(value, float) and not -MEASURE_MAX <= value <= MEASURE_MAX:
         raise ValueError(f"{where or 'number'} {value:.6g} is not a number within ±{MEASURE_MAX:g}")

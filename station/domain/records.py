@@ -478,12 +478,22 @@ class GyroFitRecord(_Record):
     dwells: Annotated[GyroDwells, AfterValidator(plain_document)] | None = None
 
 
+def _not_blank(text: str) -> str:
+    """``text`` without the spaces around it; ValueError if nothing else is left."""
+    stripped = text.strip()
+    if not stripped:
+        raise ValueError("must not be blank")
+    return stripped
+
+
 Reason = Annotated[
     str,
-    StringConstraints(strip_whitespace=True, min_length=1, max_length=500),
+    StringConstraints(min_length=1, max_length=500),
     AfterValidator(printable),
+    AfterValidator(_not_blank),
 ]
-"""A person's reason for a decision: one line, not empty."""
+"""A person's reason for a decision: one line, not blank (the spaces around it dropped;
+a line break, leading or trailing, is refused like any control character)."""
 
 
 class HoldReview(_Record):

@@ -1,15 +1,22 @@
 """Nonsense is refused before it reaches SQL: 422 naming the field or parameter, never
 500, on SQLite and PostgreSQL (a real server process on each)."""
 
+from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
+from importlib import resources
+from typing import Any
 
 import httpx
 import pytest
 
+from station.domain.records import document_sha256
+from station.report.period import start_of_day
 from tests.db.records import make_record
 
 RUNS = "/api/v1/runs"
 EOL = "/api/v1/reports/eol"
+#: Seconds a report may take before a test gives up on it (not a bound it must meet).
+SAFETY_S = 120
 
 
 def _auth(key: str) -> dict[str, str]:
@@ -53,6 +60,129 @@ def test_a_poison_run_is_refused_naming_the_field_and_the_report_still_answers(
     report = client.get(EOL)
     assert report.status_code == 200, report.text
     assert report.json()["summary"]["runs"] == 1
+
+
+def _with_profile(body: dict[str, Any], field: str, bounds: dict[str, float | None]) -> None:
+    """Give the run of ``body`` its limits profile with ``field`` set to ``bounds``, hashed
+    as a station would hash it (so only the bounds themselves can be refused)."""
+    profile = {**body["limits"]["profile"], field: bounds}
+    body["limits"] = {**body["limits"], "profile": profile, "sha256": document_sha256(profile)}
+
+
+@pytest.mark.parametrize(
+    ("field", "bounds"),
+    [
+        ("offset_counts", {"lower": 1841.0, "upper": 1e300}),
+        ("pose_noise_counts", {"lower": None, "upper": 1e308}),
+        ("gyro_bias_dps", {"lower": -1e308, "upper": 10.0}),
+        ("verification_error_mg", {"lower": -1e200, "upper": 30.0}),
+    ],
+    ids=["offset-1e300", "pose-noise-1e308", "gyro-bias-minus-1e308", "verification-minus-1e200"],
+)
+def test_a_run_whose_limits_profile_has_absurd_bounds_is_refused_and_the_reports_answer(
+    client: httpx.Client, station_key: str, field: str, bounds: dict[str, float | None]
+) -> None:
+    today = start_of_day(datetime.now(UTC), "UTC")  # in the dashboard's range too
+    good = make_record(started_at=today)
+    assert client.post(
+        RUNS, json=good.model_dump(mode="json"), headers=_auth(station_key)
+    ).is_success
+    body = make_record(serial="PT-000002", started_at=today).model_dump(mode="json")
+    _with_profile(body, field, bounds)
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    error = answer.json()["errors"][0]
+    assert error["loc"] == "body.limits.profile"
+    assert field in error["msg"]
+    assert field in answer.json()["detail"]
+    for fmt in ("json", "csv", "html"):
+        # The first report starts the server's report processes: a generous safety net.
+        report = client.get(EOL, params={"format": fmt}, timeout=SAFETY_S)
+        assert report.status_code == 200, (fmt, report.text)
+    assert client.get(EOL, timeout=SAFETY_S).json()["summary"]["runs"] == 1
+    dashboard = client.get("/", timeout=SAFETY_S)
+    assert dashboard.status_code == 200, dashboard.text
+    assert "PT-000001" in dashboard.text
+
+
+def _failure_message(body: dict[str, Any], text: str) -> None:
+    body.update(verdict="fail", failures=[{"code": "offset", "message": text}])
+
+
+def _capture_reason(body: dict[str, Any], text: str) -> None:
+    body["poses"][0]["replaced"][0]["reason"] = text
+
+
+def _description(body: dict[str, Any], text: str) -> None:
+    profile = {**body["limits"]["profile"], "description": text}
+    body["limits"] = {**body["limits"], "profile": profile, "sha256": document_sha256(profile)}
+
+
+@pytest.mark.parametrize(
+    ("change", "text", "loc"),
+    [
+        (_failure_message, "offset x out of limits\n", "body.failures.0.message"),
+        (_capture_reason, "moved during capture\n", "body.poses.0.replaced.0.reason"),
+        (_description, "KXM52\x00production", "body.limits.profile"),
+    ],
+    ids=[
+        "failure-message-trailing-newline",
+        "capture-reason-trailing-newline",
+        "nul-in-description",
+    ],
+)
+def test_a_run_with_a_control_character_in_its_text_is_refused_naming_the_field(
+    client: httpx.Client,
+    station_key: str,
+    change: Callable[[dict[str, Any], str], None],
+    text: str,
+    loc: str,
+) -> None:
+    body = make_record().model_dump(mode="json")
+    change(body, text)
+    answer = client.post(RUNS, json=body, headers=_auth(station_key))
+    assert answer.status_code == 422, answer.text
+    assert answer.json()["errors"][0]["loc"] == loc
+    assert "control characters" in answer.json()["detail"]
+    assert client.get(RUNS).json()["count"] == 0
+
+
+#: The shipped limits file, its first profile's offsets replaced by ``{OFFSETS}``.
+SHIPPED_WITH_OFFSETS = (
+    resources.files("station.domain.profiles")
+    .joinpath("limits.toml")
+    .read_text(encoding="utf-8")
+    .replace("offset_counts = { lower = 1841.0, upper = 2255.0 }", "offset_counts = {OFFSETS}", 1)
+)
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        ('[profiles.deep]\nversion = "1"\nx = ' + "[" * 900 + "]" * 900, "nested too deeply"),
+        ("[profiles]\nx = 1\n", "profiles.x is not a table"),
+        (
+            SHIPPED_WITH_OFFSETS.replace("{OFFSETS}", "{ lower = -1e308, upper = 1e308 }"),
+            "profile kxm52-production: offset_counts: Value error, lower -1e+308 outside",
+        ),
+    ],
+    ids=["nested-900-deep", "profile-not-a-table", "bounds-1e308"],
+)
+def test_an_unusable_what_if_file_is_422_with_one_line_naming_the_problem(
+    client: httpx.Client, station_key: str, content: str, words: str
+) -> None:
+    stored = client.post(
+        RUNS, json=make_record().model_dump(mode="json"), headers=_auth(station_key)
+    )
+    assert stored.is_success
+    upload = {"limits": ("candidate.toml", content.encode())}
+    answer = client.post(EOL, params={"format": "json"}, files=upload, timeout=SAFETY_S)
+    assert answer.status_code == 422, answer.text
+    detail = answer.json()["detail"]
+    assert detail.startswith("invalid request: body.limits: candidate.toml: ")
+    assert words in detail
+    assert "\n" not in detail
+    assert answer.json()["errors"][0]["loc"] == "body.limits"
 
 
 @pytest.mark.parametrize(

@@ -8,7 +8,23 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from station.domain.errors import InputError
-from station.domain.limits import Bounds, check, load_profile, load_profiles
+from station.domain.limits import (
+    Bounds,
+    check,
+    load_profile,
+    load_profiles,
+    parse_profiles,
+    profile_of,
+)
+from station.domain.record_bounds import (
+    ADC_SPAN,
+    ERROR_MAX_MG,
+    GYRO_RANGE_DPS,
+    OFFSET_MAX_COUNTS,
+    OFFSET_MIN_COUNTS,
+    SENSITIVITY_MAX_COUNTS_PER_G,
+)
+from station.domain.records import LimitsRef, document_sha256
 from station.domain.sensor import (
     NOMINAL_OFFSET_COUNTS,
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
@@ -93,6 +109,8 @@ def test_bounds_contain_exactly_the_closed_interval(low: float, width: float, va
         (PROFILE.replace('version = "7"\n', ""), "profile line-a: version: Field required"),
         (PROFILE.replace("upper = 30.0", "upper = -1.0, lower = 2.0"), "verification_error_mg"),
         (PROFILE + "bogus = 1\n", "profile line-a: bogus"),
+        (PROFILE + "x = " + "[" * 900 + "]" * 900, "nested too deeply"),
+        ("[profiles]\nx = 1\n", "profiles.x is not a table"),
     ],
 )
 def test_bad_profile_files_name_the_problem(tmp_path: Path, content: str, message: str) -> None:
@@ -153,3 +171,69 @@ def test_the_whole_unit_profile_bounds_the_gyro_matrix() -> None:
     assert verification.message == "gyro verification 0.6 deg outside ≤ 0.25"
     assert profile.verification_error_mg.upper is not None
     assert profile.verification_error_mg.upper <= 5
+
+
+#: Each bounded setting of a profile and the values its quantity can take.
+PLAUSIBLE = {
+    "offset_counts": (OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS),
+    "sensitivity_counts_per_g": (0.0, SENSITIVITY_MAX_COUNTS_PER_G),
+    "verification_error_mg": (0.0, ERROR_MAX_MG),
+    "pose_noise_counts": (0.0, ADC_SPAN),
+    "gyro_bias_dps": (-GYRO_RANGE_DPS, GYRO_RANGE_DPS),
+    "link_loss": (0.0, 1.0),
+    "writeback_relative_error": (0.0, 1.0),
+    "gyro_scale_error": (-3.0, 1.0),
+    "gyro_misalignment": (-2.0, 2.0),
+    "gyro_verification_deg": (0.0, 180.0),
+    "fit_residual_counts": (0.0, ADC_SPAN),
+}
+
+
+def _carried(field: str, bounds: dict[str, float | None]) -> LimitsRef:
+    """The shipped profile with ``field`` set to ``bounds``, as a run carries it."""
+    document = {**load_profile().document, field: bounds}
+    return LimitsRef(
+        name="kxm52-production",
+        version="1",
+        sha256=document_sha256(document),
+        profile=document,
+    )
+
+
+@st.composite
+def _outside(draw: st.DrawFn) -> tuple[str, float]:
+    field = draw(st.sampled_from(sorted(PLAUSIBLE)))
+    low, high = PLAUSIBLE[field]
+    finite = {"allow_nan": False, "allow_infinity": False}
+    value = draw(
+        st.floats(min_value=high, exclude_min=True, **finite)
+        | st.floats(max_value=low, exclude_max=True, **finite)
+    )
+    return field, value
+
+
+@given(case=_outside(), side=st.sampled_from(["lower", "upper"]))
+def test_a_bound_outside_what_its_quantity_can_take_is_refused_from_a_run_and_a_file(
+    case: tuple[str, float], side: str
+) -> None:
+    field, value = case
+    bounds = {"lower": None, "upper": None, side: value}
+    with pytest.raises(InputError, match=f"limits.profile: {field}: .*{side} ") as carried:
+        profile_of(_carried(field, bounds))
+    assert "outside" in str(carried.value)
+    lines = [line for line in PROFILE.splitlines() if not line.startswith(f"{field} = ")]
+    text = "\n".join([*lines, f"{field} = {{ {side} = {value!r} }}"])
+    with pytest.raises(InputError, match=f"profile line-a: {field}: .*{side} "):
+        parse_profiles(text, "limits.toml")
+
+
+@given(field=st.sampled_from(sorted(PLAUSIBLE)), data=st.data())
+def test_bounds_within_what_their_quantity_can_take_are_kept(
+    field: str, data: st.DataObject
+) -> None:
+    low, high = PLAUSIBLE[field]
+    lower = data.draw(st.floats(low, high))
+    upper = data.draw(st.floats(lower, high))
+    profile = profile_of(_carried(field, {"lower": lower, "upper": upper}))
+    assert profile is not None
+    assert getattr(profile, field) == Bounds(lower=lower, upper=upper)
