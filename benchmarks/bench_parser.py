@@ -11,13 +11,12 @@ import random
 import time
 
 from station.device.protocol import (
-    DEFAULT_RATE_HZ,
-    MAX_RATE_HZ,
     FrameParser,
     FrameType,
     decode_samples,
     encode_sample,
 )
+from station.domain.constants import DEFAULT_RATE_HZ, MAX_RATE_HZ
 
 SAMPLES = 200_000
 REPEATS = 3

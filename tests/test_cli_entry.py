@@ -43,6 +43,66 @@ def test_one_line_answers_load_none_of_the_heavy_libraries(args: tuple[str, ...]
     assert heavy_imports(*args) == set()
 
 
+def _subcommands(group: str) -> list[str]:
+    """The subcommands of ``group``, as typed after ``calstation``; none for a command."""
+    module, attribute, _ = COMMANDS[group]
+    target = getattr(importlib.import_module(module), attribute)
+    if not isinstance(target, typer.Typer):
+        return []
+    return [
+        f"{group} {info.name or typer.main.get_command_name(info.callback.__name__)}"
+        for info in target.registered_commands
+        if info.callback is not None
+    ]
+
+
+SUBCOMMANDS = {name: _subcommands(name) for name in COMMANDS}
+#: Every command, group and subcommand, as typed after ``calstation``.
+EVERY_COMMAND = [name for group, subs in SUBCOMMANDS.items() for name in [group, *subs]]
+#: The ones that run (a group only lists its subcommands).
+LEAVES = [name for name in EVERY_COMMAND if not SUBCOMMANDS.get(name)]
+
+#: An argument each command refuses before it runs (exit status 2, a usage error).
+REFUSED = {
+    "run": ("--units", "x"),
+    "demo": ("--units", "x"),
+    "solve": ("poses.csv", "--model", "ten"),
+    "simulate": ("--rate", "x"),
+    "serve": ("--port", "0"),
+    "report": ("--units", "0"),
+    "review": ("PT000001", "--decision", "keep"),
+    "gyro fit": ("log.csv", "--alpha", "x"),
+    "gyro check": (),
+    "gyro simulate-centrifuge": ("--seed", "x"),
+    "db upgrade": ("--no-such-option",),
+    "db rebuild-report": ("--no-such-option",),
+    "keys create": ("--station", "not a name"),
+    "keys revoke": ("--lab", "not/a/name"),
+    "outbox list": ("--no-such-option",),
+    "outbox show": (),
+    "outbox resend": ("--all", "--no-such-option"),
+    "outbox send": ("RUN", "--api-key"),
+}
+
+
+def test_every_command_has_an_argument_it_refuses() -> None:
+    assert sorted(REFUSED) == sorted(LEAVES)
+
+
+@pytest.mark.parametrize("command", EVERY_COMMAND)
+def test_a_commands_help_loads_none_of_the_heavy_libraries(command: str) -> None:
+    assert heavy_imports(*command.split(), "--help") == set()
+
+
+@pytest.mark.parametrize("command", REFUSED)
+def test_a_refused_argument_loads_none_of_the_heavy_libraries(
+    command: str, run_cli: CliRunner
+) -> None:
+    args = (*command.split(), *REFUSED[command])
+    assert run_cli(*args).returncode == 2  # refused, as a usage error
+    assert heavy_imports(*args) == set()
+
+
 def test_version_prints_the_package_version(run_cli: CliRunner) -> None:
     result = run_cli("version")
     assert result.returncode == 0, result.stderr

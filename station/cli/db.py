@@ -2,29 +2,24 @@
 create|revoke --station ID|--lab ID|--quality ID`` and ``calstation review SERIAL``: the
 results database by hand."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
+from __future__ import annotations
+
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from pydantic import TypeAdapter, ValidationError
-from sqlalchemy import func, make_url, select
 
-from db import (
-    DatabaseSettings,
-    ReviewRefusedError,
-    open_database,
-    repository_transaction,
-    upgrade_database,
-)
-from db.models import Run
-from db.repository import KeyScope
-from db.rollups import lock_submissions, rebuild
 from station.cli.output import err, out
+from station.domain.constants import Identifier, ReviewDecision
 from station.domain.errors import InputError, validation_problem
-from station.domain.limits import load_profile
-from station.domain.quality.parameters import profile_bounds
-from station.domain.records import HoldReview, Identifier, ReviewDecision
+
+if TYPE_CHECKING:
+    from db.repository import KeyScope
 
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True
@@ -46,6 +41,8 @@ DatabaseUrlOption = Annotated[
 
 
 def _shown(url: str) -> str:
+    from sqlalchemy import make_url
+
     return make_url(url).render_as_string(hide_password=True)
 
 
@@ -65,6 +62,14 @@ def db_rebuild_report(
     The parameter roll-ups are binned against the profile's limits (default: the
     shipped default profile): run it when reports measure against other limits.
     """
+    from sqlalchemy import func, select
+
+    from db import DatabaseSettings, open_database
+    from db.models import Run
+    from db.rollups import lock_submissions, rebuild
+    from station.domain.limits import load_profile
+    from station.domain.quality.parameters import profile_bounds
+
     chosen = load_profile(limits, profile)
     url = database_url or DatabaseSettings.from_environment().url()
     database = open_database(url)
@@ -84,6 +89,8 @@ def db_rebuild_report(
 @db_app.command("upgrade")
 def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     """Migrate the database to the current schema (creating it if it is empty)."""
+    from db import DatabaseSettings, upgrade_database
+
     url = database_url or DatabaseSettings.from_environment().url()
     revision = upgrade_database(url)
     out.print(f"database {_shown(url)} at schema revision {revision}")
@@ -152,6 +159,8 @@ def keys_create(
 
     Only the key's hash is stored: it is shown this once.
     """
+    from db import repository_transaction
+
     holder, scope = _holder(station, lab, quality)
     with repository_transaction(database_url) as repository:
         key = repository.create_key(holder, scope)
@@ -168,6 +177,8 @@ def keys_revoke(
 ) -> None:
     """Revoke every API key of a station, a lab or a quality engineer (lost, replaced or
     retired)."""
+    from db import repository_transaction
+
     holder, scope = _holder(station, lab, quality)
     with repository_transaction(database_url) as repository:
         revoked = repository.revoke_keys(holder, scope)
@@ -189,6 +200,9 @@ def review_command(
 
     A unit sent to rework is refused at every station's scan until it is reviewed.
     """
+    from db import ReviewRefusedError, repository_transaction
+    from station.domain.records import HoldReview
+
     with repository_transaction(database_url) as repository:
         latest = repository.latest_for_serial(serial)
         if latest is None:

@@ -1,35 +1,31 @@
 """``calstation gyro``: fit the g-sensitivity error model, simulate the centrifuge test.
 
-matplotlib is imported inside ``fit --plot`` only, so that no other ``calstation``
-command pays for it at start-up.
+matplotlib is imported inside ``fit --plot`` only, so that ``fit`` without a plot does
+not pay for it either.
 """
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
+from __future__ import annotations
+
+import math
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 from pydantic import ValidationError
 from rich.table import Table
 
-from db import repository_transaction
 from station.cli.output import err, out, print_json
+from station.domain.constants import DEFAULT_ALPHA, DEFAULT_SENSE_AXES, PAPER_PPM_PER_G
 from station.domain.errors import InputError
-from station.domain.gyro.fit import DEFAULT_ALPHA, GyroFitReport, fit_log
-from station.domain.gyro.identifiability import check_identifiability
-from station.domain.gyro.log import GyroDwells, GyroLog, read_log, write_log
-from station.domain.gyro.simulate import (
-    DEFAULT_SENSE_AXES,
-    PAPER_PPM_PER_G,
-    CentrifugePlan,
-    Mount,
-    Noise,
-    paper_truth,
-    simulate_log,
-)
-from station.domain.records import GyroFitRecord
 from station.domain.sensor import AXES
+
+if TYPE_CHECKING:
+    from station.domain.gyro.fit import GyroFitReport
+    from station.domain.gyro.log import GyroLog
 
 app = typer.Typer(
     help="Gyros: fit the g-sensitivity error model, simulate the centrifuge test.",
@@ -43,7 +39,7 @@ def _triple(option: str, text: str) -> tuple[float, float, float]:
         values = [float(p) for p in parts]
     except ValueError:
         values = []
-    if len(values) != 3 or not all(np.isfinite(values)):
+    if len(values) != 3 or not all(map(math.isfinite, values)):
         raise InputError(f"{option}: expected three numbers separated by commas, got {text!r}")
     return values[0], values[1], values[2]
 
@@ -143,6 +139,9 @@ def fit(
 
     if not 0.0 < alpha < 1.0:
         raise InputError(f"--alpha: must lie between 0 and 1, got {alpha:g}")
+    from station.domain.gyro.fit import fit_log
+    from station.domain.gyro.log import read_log
+
     log = read_log(log_file)
     try:
         report = fit_log(log, alpha=alpha)
@@ -175,6 +174,9 @@ def check(
 
     Prints the findings; exits with status 2 when the form question cannot be answered.
     """
+    from station.domain.gyro.identifiability import check_identifiability
+    from station.domain.gyro.log import read_log
+
     log = read_log(log_file)
     try:
         report = check_identifiability(log)
@@ -232,6 +234,9 @@ def simulate_centrifuge(
         raise InputError("--noise-dps, --acc-noise-g: must not be negative")
     if samples_per_dwell < 1:
         raise InputError(f"--samples-per-dwell: must be at least 1, got {samples_per_dwell}")
+    from station.domain.gyro.log import write_log
+    from station.domain.gyro.simulate import CentrifugePlan, Mount, Noise, paper_truth, simulate_log
+
     truth = paper_truth(
         ppm_per_g=_triple("--ppm", ppm),
         sense_axes=_axes("--sense-axes", sense_axes),
@@ -258,6 +263,10 @@ def simulate_centrifuge(
 
 def _store_fit(serial: str, log_file: Path, report: GyroFitReport, log: GyroLog) -> None:
     """Keep ``report`` as the unit's gyro calibration (``GET /api/v1/units/SERIAL/gyro``)."""
+    from db import repository_transaction
+    from station.domain.gyro.log import GyroDwells
+    from station.domain.records import GyroFitRecord
+
     try:
         record = GyroFitRecord(
             serial=serial,

@@ -1,18 +1,23 @@
 """``calstation outbox``: what waits to be stored, what was set aside and why; resend it."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
+from __future__ import annotations
+
 import json
 from contextlib import suppress
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from station.cli.output import out
 from station.domain.errors import InputError
-from station.loop.config import load_config
-from station.results.outbox import Outbox
-from station.results.outbox_admin import Entry, entries, find, resend, send
-from station.results.storage import HttpStore
+
+if TYPE_CHECKING:
+    from station.results.outbox import Outbox
+    from station.results.outbox_admin import Entry
 
 outbox_app = typer.Typer(
     help="The station's outbox: list, show, resend and send the runs waiting or set aside.",
@@ -30,6 +35,9 @@ DataDirOption = Annotated[
 
 def _outbox(config_file: Path | None, data_dir: Path | None) -> Outbox:
     """The outbox of the station configured as ``calstation run`` would find it."""
+    from station.loop.config import load_config
+    from station.results.outbox import Outbox
+
     config = load_config(config_file, {"data_dir": data_dir})
     directory = config.outbox_dir
     if not directory.is_dir():
@@ -47,6 +55,8 @@ def _line(entry: Entry) -> str:
 @outbox_app.command("list")
 def list_command(config_file: ConfigOption = None, data_dir: DataDirOption = None) -> None:
     """Every run waiting, unreadable or refused, with the reason it was set aside."""
+    from station.results.outbox_admin import entries
+
     outbox = _outbox(config_file, data_dir)
     found = entries(outbox)
     for entry in found:
@@ -69,6 +79,8 @@ def show_command(
     data_dir: DataDirOption = None,
 ) -> None:
     """One run's record as stored in the outbox, and why it was set aside."""
+    from station.results.outbox_admin import find
+
     entry = find(_outbox(config_file, data_dir), run_id)
     out.print(f"{entry.state}: {entry.path}", markup=False)
     if entry.reason:
@@ -94,6 +106,8 @@ def resend_command(
     """Put set-aside runs back into the queue; the station sends them at its next sync."""
     if (run_id is None) == (not every):
         raise InputError("give one run id, or --all")
+    from station.results.outbox_admin import entries, find, resend
+
     outbox = _outbox(config_file, data_dir)
     if run_id is not None:
         entry = find(outbox, run_id)
@@ -134,6 +148,10 @@ def send_command(
     data_dir: DataDirOption = None,
 ) -> None:
     """Store one run now with the given key, waiting or set aside; the file goes once stored."""
+    from station.loop.config import load_config
+    from station.results.outbox_admin import find, send
+    from station.results.storage import HttpStore
+
     config = load_config(
         config_file, {"data_dir": data_dir, "server_url": server, "api_key": api_key}
     )

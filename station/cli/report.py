@@ -1,21 +1,17 @@
 """``calstation report``: the end-of-line report from the results database."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
 from pathlib import Path
 from typing import Annotated
 
 import typer
-from sqlalchemy.exc import OperationalError
 
-from db import DatabaseSettings, DatabaseUnavailableError, open_database
-from db.reports import eol_report
 from station.cli.db import DatabaseUrlOption
 from station.cli.output import err, out
+from station.domain.constants import FORMATS
 from station.domain.errors import CalstationError
-from station.domain.limits import load_profile
-from station.domain.quality.figures import ReportFilter
-from station.domain.quality.shifts import parse_shifts
-from station.report.period import parse_period, plant_zone
-from station.report.render import FORMATS, render
 
 
 def report(
@@ -70,6 +66,16 @@ def report(
     """End-of-line report: yields, failure Pareto, capability, control charts, ship/hold."""
     if format not in FORMATS:
         raise CalstationError(f"--format {format!r} is not one of {', '.join(FORMATS)}")
+    from sqlalchemy.exc import OperationalError
+
+    from db import DatabaseSettings, DatabaseUnavailableError, open_database
+    from db.reports import eol_report
+    from station.domain.limits import load_profile
+    from station.domain.quality.figures import ReportFilter
+    from station.domain.quality.shifts import parse_shifts
+    from station.report.period import parse_period, plant_zone
+    from station.report.render import render
+
     zone = plant_zone(timezone)
     starts = parse_shifts(shifts)
     start, end = parse_period(since, until, zone=zone)

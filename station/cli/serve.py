@@ -1,14 +1,13 @@
 """``calstation serve``: the results server (REST API) under uvicorn."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
 import copy
 import os
 from typing import Annotated, Any
 
 import typer
-import uvicorn
-
-from api.settings import ApiSettings
-from db import open_database
 
 #: Seconds a stopping server gives the requests still open before it cancels them: the
 #: line dashboard's event stream never ends by itself (``GET /api/v1/events``), and a
@@ -18,6 +17,8 @@ GRACEFUL_SHUTDOWN_S = 5
 
 def _log_config() -> dict[str, Any]:
     """Uvicorn's logging, plus one line per submitted run from the ``api`` loggers."""
+    import uvicorn.config
+
     config = copy.deepcopy(uvicorn.config.LOGGING_CONFIG)
     config["loggers"]["api"] = {"handlers": ["default"], "level": "INFO", "propagate": False}
     return config
@@ -37,6 +38,11 @@ def serve(
     ] = None,
 ) -> None:
     """Serve the results API (OpenAPI at /docs)."""
+    import uvicorn
+
+    from api.settings import ApiSettings
+    from db import open_database
+
     if database_url:
         os.environ["CALSTATION_DATABASE_URL"] = database_url
     # Migrate the embedded database (or check a server's schema) once, before the

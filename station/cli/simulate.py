@@ -5,6 +5,9 @@ input (see :mod:`station.simulator.control`) and answers each with one line. Whe
 standard input ends it keeps serving until interrupted or terminated.
 """
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
 import signal
 import sys
 import threading
@@ -16,12 +19,9 @@ import typer
 from pydantic import ValidationError
 
 from station.cli.output import out
-from station.device import DEFAULT_RATE_HZ, MAX_RATE_HZ
+from station.domain.constants import DEFAULT_RATE_HZ, MAX_RATE_HZ
 from station.domain.errors import InputError
-from station.domain.poses import POSES
-from station.simulator.control import ControlChannel
-from station.simulator.faults import Faults
-from station.simulator.putter import VirtualPutter
+from station.domain.faults import Faults
 
 
 def _address(listen: str) -> tuple[str, int]:
@@ -70,6 +70,10 @@ def simulate(
     ] = None,
 ) -> None:
     """Run a virtual putter that speaks the station's serial protocol."""
+    from station.domain.poses import POSES
+    from station.simulator.control import ControlChannel
+    from station.simulator.putter import VirtualPutter
+
     if pty == (listen is not None):
         raise InputError("give exactly one of --pty or --listen HOST:PORT")
     if not speed > 0:

@@ -1,26 +1,25 @@
 """``calstation solve FILE``: calibrate from a file of still-pose means."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
+from __future__ import annotations
+
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.table import Table
 
 from station.cli.output import out, print_json
-from station.cli.solve_stream import solve_stream
-from station.domain.calibration import (
-    MIN_DOF_SHOWN,
-    SENSITIVITY_CONVENTION,
-    CalibrationError,
-    Solution,
-    solve,
-)
+from station.domain.constants import STILL_WINDOW_S
 from station.domain.errors import InputError
-from station.domain.gyro.motion.stream import STILL_WINDOW_S
-from station.domain.limits import load_profile
-from station.domain.posefile import PoseFile, read_pose_file
 from station.domain.sensor import AXES
+
+if TYPE_CHECKING:
+    from station.domain.calibration import Solution
+    from station.domain.posefile import PoseFile
 
 
 class ModelChoice(StrEnum):
@@ -70,8 +69,14 @@ def solve_command(
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
     if stream:
+        from station.cli.solve_stream import solve_stream
+
         solve_stream(file, model.value, as_json=as_json, still_window_s=still_window)
         return
+    from station.domain.calibration import CalibrationError, solve
+    from station.domain.limits import load_profile
+    from station.domain.posefile import read_pose_file
+
     max_residual = load_profile(limits, profile).max_residual_counts
     pose_file = read_pose_file(file)
     try:
@@ -85,6 +90,8 @@ def solve_command(
 
 
 def _table(solution: Solution, pose_file: PoseFile) -> Table:
+    from station.domain.calibration import MIN_DOF_SHOWN, SENSITIVITY_CONVENTION
+
     cal, q = solution.calibration, solution.quality
     se = solution.standard_errors
     shown = se is not None and se.dof >= MIN_DOF_SHOWN

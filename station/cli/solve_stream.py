@@ -5,27 +5,35 @@ Still poses, accelerometer, gyro bias and gyro matrix K ([Tedaldi2014]_) by
 :mod:`station.domain.gyro.motion.stream_file`.
 """
 
-from pathlib import Path
+# Light to import (issue 28), as the command modules are: its work is imported when it runs.
 
-import numpy as np
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 from rich.table import Table
 
 from station.cli.output import out, print_json
-from station.domain.calibration import CalibrationError, Model
 from station.domain.errors import InputError
-from station.domain.gyro.motion import (
-    GyroMatrixError,
-    StreamCalibration,
-    StreamError,
-    calibrate_stream,
-    stream_thresholds,
-)
-from station.domain.gyro.motion.stream_file import read_stream_file
 from station.domain.sensor import AXES
+
+if TYPE_CHECKING:
+    from station.domain.calibration import Model
+    from station.domain.gyro.motion import StreamCalibration
 
 
 def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: float) -> None:
     """Calibrate the unit recorded in ``file`` and print the result."""
+    from station.domain.calibration import CalibrationError
+    from station.domain.gyro.motion import (
+        GyroMatrixError,
+        StreamError,
+        calibrate_stream,
+        stream_thresholds,
+    )
+    from station.domain.gyro.motion.stream_file import read_stream_file
+
     try:
         stream = read_stream_file(file)
         result = calibrate_stream(
@@ -43,6 +51,8 @@ def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: flo
 
 
 def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
+    import numpy as np
+
     cal, gyro = result.accel.calibration, result.gyro
     se = gyro.standard_errors
     table = Table(

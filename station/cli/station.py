@@ -1,27 +1,29 @@
 """``calstation run`` (the operator station) and ``calstation demo`` (the same, scripted)."""
 
+# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
+
+from __future__ import annotations
+
 import re
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from sqlalchemy.exc import SQLAlchemyError
 
-from db import repository_transaction
 from station.cli.output import err, out, print_json
+from station.domain.constants import MAX_SLOTS
 from station.domain.errors import CalstationError
-from station.domain.limits import LimitsProfile, load_profile
-from station.domain.records import RunRecord
-from station.loop.app import StationApp
-from station.loop.config import MAX_SLOTS, StationConfig, load_config
-from station.loop.demo import CablePuller, DemoUnit, ScriptedOperator, demo_serial
-from station.loop.fixture.app import FixtureApp
-from station.loop.fixture.demo import FixtureOperator
-from station.loop.keyboard import KeySource, TerminalKeys
-from station.loop.startup import check_port, prepare_data_dir
-from station.results.outbox import Outbox
-from station.results.outbox_files import summarise
-from station.results.storage import DatabaseStore, HttpStore, RunStore
+
+if TYPE_CHECKING:
+    from station.domain.limits import LimitsProfile
+    from station.domain.records import RunRecord
+    from station.loop.app import StationApp
+    from station.loop.config import StationConfig
+    from station.loop.demo import DemoUnit
+    from station.loop.fixture.app import FixtureApp
+    from station.loop.keyboard import KeySource
+    from station.results.storage import RunStore
 
 ConfigOption = Annotated[
     Path | None, typer.Option("--config", help="Station configuration (TOML).")
@@ -42,6 +44,8 @@ KeyOption = Annotated[
 
 
 def _store_opener(config: StationConfig) -> Any:
+    from station.results.storage import DatabaseStore, HttpStore
+
     def open_store() -> RunStore:
         if config.server_url:
             return HttpStore(config.server_url, config.api_key or "")
@@ -59,6 +63,9 @@ def _station(
     probe_port: bool = True,
 ) -> StationApp | FixtureApp:
     """The one-port station, or the fixture's when several slots are configured."""
+    from station.loop.app import StationApp
+    from station.loop.fixture.app import FixtureApp
+
     front_end = FixtureApp if config.slots else StationApp
     return front_end(
         config=config,
@@ -102,6 +109,11 @@ def run_command(
     units: Annotated[int | None, typer.Option(help="Stop after this many units.")] = None,
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
+    from station.domain.limits import load_profile
+    from station.loop.config import load_config
+    from station.loop.keyboard import TerminalKeys
+    from station.loop.startup import check_port, prepare_data_dir
+
     config = load_config(
         config_file,
         {
@@ -161,6 +173,12 @@ def demo_command(
     lot: LotOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
+    from station.domain.limits import load_profile
+    from station.loop.config import load_config
+    from station.loop.demo import CablePuller, ScriptedOperator
+    from station.loop.fixture.demo import FixtureOperator
+    from station.loop.startup import prepare_data_dir
+
     config = load_config(
         config_file,
         {
@@ -222,6 +240,13 @@ def _first_new_unit(config: StationConfig, seed: int) -> int:
     """The number of the demo's first unit: after every demo unit of ``seed`` the results
     database or the outbox already holds, so that a demo run again calibrates new units
     (a unit calibrated again and again would use up its retest limit)."""
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from db import repository_transaction
+    from station.loop.demo import demo_serial
+    from station.results.outbox import Outbox
+    from station.results.outbox_files import summarise
+
     prefix = demo_serial(seed, 0)[:-3]
     known = {s.serial for s in map(summarise, Outbox(config.outbox_dir).pending()) if s.serial}
     if not config.server_url:

@@ -34,7 +34,6 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.ports import open_port
 from station.device.protocol import (
     DEFAULT_BAUD,
-    DEFAULT_RATE_HZ,
     PROTOCOL_VERSION,
     RATE_STRUCT,
     ErrorCode,
@@ -46,6 +45,7 @@ from station.device.protocol import (
 )
 from station.device.stats import LinkCounters
 from station.domain.closing import Closing
+from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.samples import SampleBlock
 
 log = logging.getLogger(__name__)

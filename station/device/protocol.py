@@ -35,9 +35,6 @@ CRC_BYTES: Final = 2
 FRAME_OVERHEAD: Final = HEADER_BYTES + CRC_BYTES
 CRC_INIT: Final = 0xFFFF
 
-#: Largest sample rate the firmware accepts, samples/s.
-MAX_RATE_HZ: Final = 1000
-DEFAULT_RATE_HZ: Final = 500
 #: Largest rate of the calibrated stream: its 28-byte frames fill 230,400 baud at 822/s.
 MAX_CALIBRATED_RATE_HZ: Final = 800
 #: Baud rate of the link (8N1: 10 bits on the wire per byte).

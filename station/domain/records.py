@@ -30,6 +30,7 @@ from pydantic import (
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
+from station.domain.constants import IDENTIFIER_PATTERN, Identifier, ReviewDecision
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroDwells
 from station.domain.gyro.still import GyroStillSummary
@@ -54,6 +55,7 @@ from station.domain.samples import WindowSummary
 from station.domain.sensor import ADC_MAX, ADC_MIN, Axis
 
 __all__ = [
+    "IDENTIFIER_PATTERN",
     "SERIAL_PATTERN",
     "Axis",
     "Coefficients",
@@ -65,6 +67,7 @@ __all__ = [
     "GyroMove",
     "GyroSummary",
     "HoldReview",
+    "Identifier",
     "LimitsRef",
     "LinkStats",
     "Matrix3",
@@ -85,24 +88,16 @@ __all__ = [
 Verdict = Literal["pass", "fail"]
 #: Where a unit goes after a run: out of the door, back on a station, or to the repair bench.
 Disposition = Literal["ship", "retest", "rework"]
-#: What a quality review decides for a unit on hold: calibrate it again, or scrap it.
-ReviewDecision = Literal["retest", "scrap"]
 #: ``fit`` poses feed the calibration solve; ``verify`` poses only check its result.
 PoseRole = Literal["fit", "verify"]
 
 #: Largest count a database INTEGER column holds.
 _INT32_MAX = 2**31 - 1
 
-#: A station, operator or lot name (query filters use it too).
-IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
-
 #: A unit's serial number: letters, digits, ``.``, ``_``, ``-``; at most 64 characters.
 SERIAL_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._\-]{0,63}$"
 
 Serial = Annotated[str, StringConstraints(pattern=SERIAL_PATTERN)]
-
-Identifier = Annotated[str, StringConstraints(pattern=IDENTIFIER_PATTERN)]
-"""A station, operator, algorithm or limits-profile name."""
 
 Count = Annotated[int, Field(ge=0, le=_INT32_MAX)]
 

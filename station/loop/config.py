@@ -13,6 +13,7 @@ from urllib.parse import urlsplit
 from pydantic import Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
+from station.domain.constants import MAX_SLOTS
 from station.domain.errors import InputError, validation_problem
 from station.domain.quality.golden import GoldenUnit
 from station.domain.run_settings import RunSettings, shipped_plan
@@ -20,8 +21,6 @@ from station.results.storage import DatabaseUrl, DataDir, default_data_dir
 
 #: Serial numbers on the putters' labels: PT and six digits.
 SERIAL_PATTERN = r"^PT\d{6}$"
-#: Most slots a fixture holds (one USB serial port each).
-MAX_SLOTS = 8
 
 
 class StationConfig(BaseSettings):

@@ -9,7 +9,7 @@ import csv
 import io
 import json
 from collections.abc import Iterator, Mapping, Sequence
-from typing import Any, Literal, get_args
+from typing import Any
 
 from station.domain.quality.figures import EolReport, TrendFigures
 from station.report import html
@@ -26,8 +26,6 @@ from station.report.tables import (
     what_if_cells,
 )
 
-Format = Literal["text", "csv", "json", "html"]
-FORMATS: tuple[str, ...] = get_args(Format)
 MEDIA_TYPES: dict[str, str] = {
     "text": "text/plain; charset=utf-8",
     "csv": "text/csv; charset=utf-8",
@@ -289,7 +287,7 @@ def _what_if_text(report: EolReport) -> list[str]:
 
 
 def render(report: EolReport, format: str) -> str:
-    """The report in ``format`` (one of :data:`FORMATS`)."""
+    """The report in ``format`` (one of :data:`station.domain.constants.FORMATS`)."""
     renderers: dict[str, Any] = {
         "text": as_text,
         "csv": as_csv,

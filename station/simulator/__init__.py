@@ -8,8 +8,8 @@ Public surface::
         unit.truth.offset_counts
 """
 
+from station.domain.faults import Faults
 from station.simulator.clock import VirtualClock
-from station.simulator.faults import Faults
 from station.simulator.motion import Handling
 from station.simulator.putter import VirtualPutter
 from station.simulator.sensor import SensorTruth, Thermal

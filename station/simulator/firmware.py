@@ -7,7 +7,6 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import (
     MAX_CALIBRATED_RATE_HZ,
     MAX_ERROR_TEXT,
-    MAX_RATE_HZ,
     PAYLOAD_LENGTHS,
     RATE_STRUCT,
     ErrorCode,
@@ -16,6 +15,7 @@ from station.device.protocol import (
     StreamMode,
     encode_frame,
 )
+from station.domain.constants import MAX_RATE_HZ
 from station.simulator.stream import SampleStream
 
 _COMMANDS: Final = frozenset(

@@ -18,12 +18,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from station.device.messages import DeviceCalibration, Identity
-from station.device.protocol import DEFAULT_RATE_HZ, FrameParser, encode_text
+from station.device.protocol import FrameParser, encode_text
 from station.domain.closing import Closing
+from station.domain.constants import DEFAULT_RATE_HZ
+from station.domain.faults import Faults
 from station.domain.poses import Pose, pose
 from station.domain.samples import SampleBlock
 from station.simulator.clock import VirtualClock
-from station.simulator.faults import Faults
 from station.simulator.firmware import Firmware
 from station.simulator.motion import Handling, MotionModel
 from station.simulator.sensor import SensorTruth, Thermal

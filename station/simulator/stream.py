@@ -3,7 +3,7 @@
 The stream runs on the putter's :class:`~station.simulator.clock.VirtualClock`: at
 each tick it emits every sample due since the last one (at most :data:`MAX_CHUNK`),
 sensed from the motion, thermal and sensor models and damaged by the
-:class:`~station.simulator.faults.Faults` in force.
+:class:`~station.domain.faults.Faults` in force.
 """
 
 import math
@@ -14,17 +14,17 @@ import numpy as np
 from station.device.messages import DeviceCalibration
 from station.device.protocol import (
     CAL_SAMPLE_DTYPE,
-    DEFAULT_RATE_HZ,
     SAMPLE_DTYPE,
     FrameType,
     StreamMode,
     encode_frame,
 )
 from station.domain.arrays import FloatArray
+from station.domain.constants import DEFAULT_RATE_HZ
+from station.domain.faults import Faults
 from station.domain.samples import SampleBlock
 from station.domain.sensor import ADC_MAX, AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.simulator.clock import VirtualClock
-from station.simulator.faults import Faults
 from station.simulator.motion import MotionModel
 from station.simulator.sensor import SensorTruth, Thermal, accelerometer_counts, gyro_rates
 

@@ -10,11 +10,12 @@ The report is a pydantic model: ``to_dict()`` gives the JSON answer of
 ``calstation gyro fit --json`` and ``GyroFitReport.from_dict()`` reads it back.
 """
 
-from typing import Any, Final
+from typing import Any
 
 import numpy as np
 from pydantic import BaseModel
 
+from station.domain.constants import DEFAULT_ALPHA
 from station.domain.errors import InputError
 from station.domain.gyro.comparison import AxisComparison, compare_axis
 from station.domain.gyro.identifiability import (
@@ -28,8 +29,6 @@ from station.domain.gyro.log import GyroLog
 from station.domain.gyro.lsq import solve
 from station.domain.gyro.model import PPM, TERMS_PER_AXIS, GyroErrorModel, regressors, term_names
 from station.domain.sensor import AXES
-
-DEFAULT_ALPHA: Final = 0.01
 
 Vector = list[float | None]
 Matrix = list[list[float | None]]

@@ -18,16 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from station.domain.arrays import FloatArray
+from station.domain.constants import DEFAULT_SENSE_AXES, PAPER_PPM_PER_G
 from station.domain.gyro.log import GyroLog
 from station.domain.gyro.model import PPM, GyroErrorModel
 
 G0 = 9.80665  # m/s², standard gravity
 
-#: Paper's fitted g-sensitivity, X / Y / Z gyro, ppm/g ([Park2014]_ section 2.4).
-PAPER_PPM_PER_G = (581.0, 612.0, -613.0)
-#: Sense axis of each gyro (x → y, y → z, z → y): the paper's Z gyro saw acceleration on
-#: its sense axis in the mount whose X gyro did (its Fig. 8), so both sense along y.
-DEFAULT_SENSE_AXES = (1, 2, 1)
 DEFAULT_BIAS_DPS = (0.02, -0.015, 0.01)
 DEFAULT_SCALE = (
     (1.0 + 700e-6, 1.2e-3, -0.8e-3),

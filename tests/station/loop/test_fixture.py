@@ -18,6 +18,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from rich.console import Console
 
+from station.domain.faults import Faults
 from station.domain.limits import load_profile
 from station.domain.poses import pose
 from station.domain.quality.golden import GoldenUnit
@@ -28,7 +29,6 @@ from station.loop.fixture.plan import next_fixture_pose
 from station.loop.slot import SlotState
 from station.results.storage import DatabaseStore
 from station.run.phases import Phase
-from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 
 SPEED = 10.0

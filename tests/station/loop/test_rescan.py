@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from station.simulator.faults import Faults
+from station.domain.faults import Faults
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT, CliRunner
 from tests.station.loop.test_station_terminal import SPEED, Station

@@ -22,7 +22,7 @@ import pytest
 from sqlalchemy import make_url, text
 
 from db import Database, RunRepository, make_engine, open_database
-from station.simulator.faults import Faults
+from station.domain.faults import Faults
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from station.device import DeviceCalibration, PutterDriver
+from station.domain.faults import Faults
 from station.domain.limits import load_profile
 from station.domain.run_settings import RunSettings
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
-from station.simulator.faults import Faults
 from station.simulator.putter import VirtualPutter
 
 SERIAL = "PT000077"

@@ -26,14 +26,13 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration import GeometryLimits, Model, Solution, apply, solve
+from station.domain.constants import STILL_WINDOW_S
 from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
 from station.domain.samples import SampleBlock
 from station.domain.stillness import StillnessThresholds, StillSegment, still_segments
 
-#: Still window of a recorded stream, s: a hand-held pose is held one to a few seconds.
-STILL_WINDOW_S: Final = 1.0
 #: Windows judged per still window (the hop is the window over this).
 HOPS_PER_WINDOW: Final = 16
 #: Each still segment loses this fraction of a window at both ends: a window that reaches

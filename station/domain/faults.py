@@ -1,4 +1,6 @@
-"""Faults the virtual putter can be told to show, for testing the station's reactions."""
+"""Faults a putter can show, as the virtual putter is told to show them: for testing the
+station's reactions (:mod:`station.simulator`). Here, below the simulator, so that
+``calstation simulate --help`` lists them without loading the simulator's physics."""
 
 from pydantic import BaseModel, ConfigDict, Field
 

@@ -1,0 +1,53 @@
+"""Values the command line shows or checks before it runs anything, importable alone.
+
+Each belongs to a module of a heavier package or layer (named beside it), which imports
+it from here: one definition. They live here, at the bottom of the layers and beside
+nothing that imports numpy or scipy, so that ``calstation CMD --help`` and a refused
+argument answer without loading them (issue 28, ``tests/test_cli_entry.py``).
+"""
+
+from typing import Annotated, Final, Literal, get_args
+
+from pydantic import StringConstraints
+
+# The station's loop (station.loop.config).
+
+#: Most slots a fixture holds (one USB serial port each).
+MAX_SLOTS: Final = 8
+
+# The putter link (station.device.protocol).
+
+#: Largest sample rate the firmware accepts, samples/s.
+MAX_RATE_HZ: Final = 1000
+DEFAULT_RATE_HZ: Final = 500
+
+# The run record (station.domain.records).
+
+#: A station, operator or lot name (query filters use it too).
+IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
+
+Identifier = Annotated[str, StringConstraints(pattern=IDENTIFIER_PATTERN)]
+"""A station, operator, algorithm or limits-profile name."""
+
+#: What a quality review decides for a unit on hold: calibrate it again, or scrap it.
+ReviewDecision = Literal["retest", "scrap"]
+
+# The gyros (station.domain.gyro).
+
+#: Significance level of the error model's tests (station.domain.gyro.fit).
+DEFAULT_ALPHA: Final = 0.01
+#: Paper's fitted g-sensitivity, X / Y / Z gyro, ppm/g ([Park2014]_ section 2.4;
+#: station.domain.gyro.simulate).
+PAPER_PPM_PER_G = (581.0, 612.0, -613.0)
+#: Sense axis of each gyro (x → y, y → z, z → y): the paper's Z gyro saw acceleration on
+#: its sense axis in the mount whose X gyro did (its Fig. 8), so both sense along y.
+DEFAULT_SENSE_AXES = (1, 2, 1)
+#: Still window of a recorded stream, s: a hand-held pose is held one to a few seconds
+#: (station.domain.gyro.motion.stream).
+STILL_WINDOW_S: Final = 1.0
+
+# The end-of-line report (station.report.render).
+
+#: The formats the report is rendered in.
+Format = Literal["text", "csv", "json", "html"]
+FORMATS: tuple[str, ...] = get_args(Format)
