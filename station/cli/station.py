@@ -48,7 +48,7 @@ def _store_opener(config: StationConfig) -> Any:
 
     def open_store() -> RunStore:
         if config.server_url:
-            return HttpStore(config.server_url, config.api_key or "")
+            return HttpStore(config.server_url, config.api_key or "", station_id=config.station_id)
         return DatabaseStore(config.database_url)
 
     return open_store

@@ -150,7 +150,6 @@ class UnitLifecycle:
         self.slots = slots
         self.results = ResultsLink(
             outbox_dir=config.outbox_dir,
-            station_id=config.station_id,
             data_dir=config.data_dir.expanduser(),
             journal_files=[slot.journal_file for slot in slots],
             open_store=open_store,

@@ -120,13 +120,12 @@ class ResultsLink:
         self,
         *,
         outbox_dir: Path,
-        station_id: str,
         data_dir: Path,
         journal_files: Sequence[JournalFile],
         open_store: Callable[[], RunStore],
         say_line: Callable[[str], None],
     ) -> None:
-        self.outbox = Outbox(outbox_dir, station_id=station_id)
+        self.outbox = Outbox(outbox_dir)
         self._say_line = say_line
         self._sender = StoreWorker(open_store, "results-sync")
         self._reader = StoreWorker(open_store, "results-lookup")

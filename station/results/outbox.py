@@ -11,9 +11,9 @@ answer and the removal) is still stored once. Nothing in the outbox stops it:
   is retried with backoff (:mod:`station.results.backoff`) and the ones behind it go on;
 - the store saying the record itself is invalid (400, 409, 413, 422): it moves to
   ``refused/`` with the reason;
-- a record of another station (the station was renamed with runs still queued): this
-  station's key cannot store it, and the store's 403 would read as a bad key and stop
-  every run behind it, so it moves to ``refused/`` unsent, saying whose key stores it;
+- a record of another station (the station was renamed with runs still queued): the
+  store refuses it unsent (:class:`station.results.storage.HttpStore`), and it moves to
+  ``refused/`` saying whose key stores it;
 - a file that is not a readable run record: it moves to ``unreadable/`` with the
   reason (:mod:`station.results.outbox_files`);
 - the disk refusing the record's file (full, read-only): the record is kept in memory,
@@ -75,16 +75,8 @@ class SyncResult:
 class Outbox:
     """A directory of run records waiting to be stored."""
 
-    def __init__(
-        self,
-        directory: Path,
-        *,
-        station_id: str | None = None,
-        backoff: RecordBackoff | None = None,
-    ) -> None:
+    def __init__(self, directory: Path, *, backoff: RecordBackoff | None = None) -> None:
         self.directory = directory
-        #: The station whose key sends these records (None: any record is sent).
-        self.station_id = station_id
         self.refused_dir = directory / "refused"
         self.unreadable_dir = directory / "unreadable"
         self.backoff = backoff or RecordBackoff()
@@ -185,7 +177,7 @@ class Outbox:
         if not self.backoff.due(name):
             return
         try:
-            self._submit(store, record)
+            store.submit(record)
         except RecordFailedError as exc:
             wait = self.backoff.failed(name, str(exc))
             log.warning("%s; next try in %.0f s, the other runs go on", exc, wait)
@@ -209,16 +201,6 @@ class Outbox:
         done()
         self.backoff.forget(name)
         tally.stored += 1
-
-    def _submit(self, store: RunStore, record: RunRecord) -> None:
-        """Send ``record``; a record of another station is refused here, unsent."""
-        if self.station_id is not None and record.station_id != self.station_id:
-            raise SubmissionRefusedError(
-                f"run {record.run_id} was recorded by station {record.station_id}, and this "
-                f"station sends as {self.station_id}: only a key of {record.station_id} can "
-                f"store it (calstation outbox send {record.run_id} --api-key KEY)"
-            )
-        store.submit(record)
 
     def _path(self, record: RunRecord) -> Path:
         return self.directory / _name(record)

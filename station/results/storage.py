@@ -174,16 +174,23 @@ class DatabaseStore(Closing):
 
 
 class HttpStore(Closing):
-    """Submit runs to the results server's ``POST /api/v1/runs`` with a station API key."""
+    """Submit runs to the results server's ``POST /api/v1/runs`` with a station API key.
+
+    ``station_id``: the station the key belongs to. A run recorded under another id (the
+    station renamed with runs still queued) is refused here, unsent: the server would
+    answer 403, which reads as a bad key and would hold up every run behind it.
+    """
 
     def __init__(
         self,
         server_url: str,
         api_key: str,
         *,
+        station_id: str | None = None,
         timeout: float = 10.0,
         transport: httpx.BaseTransport | None = None,
     ) -> None:
+        self.station_id = station_id
         self.client = httpx.Client(
             base_url=server_url,
             headers={"Authorization": f"Bearer {api_key}"},
@@ -192,6 +199,12 @@ class HttpStore(Closing):
         )
 
     def submit(self, record: RunRecord) -> SubmitOutcome:
+        if self.station_id is not None and record.station_id != self.station_id:
+            raise SubmissionRefusedError(
+                f"run {record.run_id} was recorded by station {record.station_id}, and this "
+                f"station sends as {self.station_id}: only a key of {record.station_id} can "
+                f"store it (calstation outbox send {record.run_id} --api-key KEY)"
+            )
         try:
             response = self._post(record.model_dump(mode="json"))
         except httpx.HTTPError as exc:

@@ -114,7 +114,7 @@ def test_ports_on_the_command_line_replace_the_files_and_one_slot_is_the_one_por
     assert two.slot_journal_path(2).name == "journal-station-1-slot2.json"
 
 
-@pytest.mark.timeout(300)
+@pytest.mark.timeout(900)
 def test_a_stored_g_sensitivity_fit_is_applied_in_every_slot_as_on_one_port(
     run_cli: CliRunner, tmp_path: Path
 ) -> None:
@@ -130,7 +130,8 @@ def test_a_stored_g_sensitivity_fit_is_applied_in_every_slot_as_on_one_port(
             stored = run_cli("gyro", "fit", str(log), "--store", serial, env=env)
             assert stored.returncode == 0, stored.stderr
         args = ("demo", "--units", "2", "--slots", str(slots), "--profile", "whole-unit")
-        result = run_cli(*args, "--json", "--speed", "20", env=env, timeout=280)
+        # The demo's own speed: at 20× a starved loop (a busy machine) failed a unit.
+        result = run_cli(*args, "--json", "--speed", "10", env=env, timeout=400)
         assert result.returncode == 0, result.stderr
         units = json.loads(result.stdout)
         assert [u["verdict"] for u in units] == ["pass", "pass"], (slots, units)

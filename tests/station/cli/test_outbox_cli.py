@@ -98,12 +98,12 @@ def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
 ) -> None:
     """Issue 24 #3: a run queued under the station's former name used to get 403 (read as
     a bad key, "fix api_key") and stop every run behind it, forever."""
-    outbox = Outbox(tmp_path / "data" / "outbox", station_id=STATION)
+    outbox = Outbox(tmp_path / "data" / "outbox")
     former = make_record(serial="PT000010", station_id="line0-old")
     outbox.put(former)
     current = make_record(serial="PT000011", station_id=STATION)
     outbox.put(current)
-    with HttpStore(live_url, station_key) as store:
+    with HttpStore(live_url, station_key, station_id=STATION) as store:
         result = outbox.sync(store)
     assert (result.stored, result.refused, result.pending, result.error) == (1, 1, 0, None)
     listed = run_cli("outbox", "list", env=env(outbox))
