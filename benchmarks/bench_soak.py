@@ -134,12 +134,24 @@ class Station:
     mounted: bool = False
     runs: list[str] = field(default_factory=list)
     rescued: int = 0
+    #: Starts the station refused because its disk was full (it exits 2 and says so).
+    refused_starts: int = 0
     injected: int = 0
     log: list[str] = field(default_factory=list)
 
     @property
     def outbox(self) -> Path:
         return self.data / "outbox"
+
+
+#: The file that fills a station's disk while a disk-full fault lasts.
+FILLER = "filler"
+
+
+def _refused_full_disk(code: int, out: str, err: str) -> bool:
+    """Whether a demo refused to start, in one line, because its data disk was full."""
+    lines = err.strip().splitlines()
+    return code == 2 and not out.strip() and bool(lines) and "the disk is full" in lines[-1]
 
 
 @contextmanager
@@ -221,6 +233,13 @@ class Soak:
             injector.start()
         for station, process in processes:
             out, err = process.communicate(timeout=self.args.shift_timeout)
+            while _refused_full_disk(process.returncode, out, err):
+                # As the operator would: free the disk, start the station again.
+                station.refused_starts += 1
+                while (station.data / FILLER).exists():
+                    time.sleep(0.2)
+                process = self._demo(station, number, quiet)
+                out, err = process.communicate(timeout=self.args.shift_timeout)
             self._reported(station, process.returncode, out, err)
         done.set()
         if injector.is_alive():
@@ -330,7 +349,7 @@ class Soak:
     def _disk_full(self, station: Station) -> None:
         if not station.mounted:
             return
-        filler = station.data / "filler"
+        filler = station.data / FILLER
         with filler.open("ab", buffering=0) as handle, suppress(OSError):
             while True:
                 handle.write(b"\0" * 65536)
@@ -402,6 +421,7 @@ class Soak:
             "refused": refused,
             "unreadable (injected)": f"{unreadable} ({sum(s.injected for s in self.stations)})",
             "rescued from memory": sum(s.rescued for s in self.stations),
+            "starts refused (disk full)": sum(s.refused_starts for s in self.stations),
             "faults": dict(sorted(self.faults.items())),
             "cable pulls": sum(e.count("lost the unit") for s in self.stations for e in s.log),
             "answers 500": self.statuses[500],
