@@ -16,6 +16,7 @@ from station.cli.output import out
 from station.domain.errors import InputError
 
 if TYPE_CHECKING:
+    from station.loop.config import StationConfig
     from station.results.outbox import Outbox
     from station.results.outbox_admin import Entry
 
@@ -36,9 +37,14 @@ DataDirOption = Annotated[
 def _outbox(config_file: Path | None, data_dir: Path | None) -> Outbox:
     """The outbox of the station configured as ``calstation run`` would find it."""
     from station.loop.config import load_config
+
+    return _outbox_of(load_config(config_file, {"data_dir": data_dir}))
+
+
+def _outbox_of(config: StationConfig) -> Outbox:
+    """The outbox of the station ``config`` describes."""
     from station.results.outbox import Outbox
 
-    config = load_config(config_file, {"data_dir": data_dir})
     directory = config.outbox_dir
     if not directory.is_dir():
         raise InputError(f"no outbox at {directory} (is --data-dir right?)")
@@ -157,7 +163,7 @@ def send_command(
     )
     if not config.server_url:
         raise InputError("no results server: give --server URL or set server_url")
-    entry = find(_outbox(config_file, data_dir), run_id)
+    entry = find(_outbox_of(config), run_id)
     with HttpStore(config.server_url, api_key) as store:
         outcome = send(entry, store)
     said = "stored" if outcome.created else "already stored"
