@@ -1,28 +1,71 @@
 """Which way the putter lies, from its raw accelerometer counts.
 
 Before calibration only nominal scaling is known (offset 2048 counts, 819.2
-counts/g, [Song2006]_ Table 1), good to about 15° — ample to tell the named poses apart,
-which are 90° from each other. The operator is told which pose the station sees and
-how far it is from the one asked for.
+counts/g, [Song2006]_ Table 1). A unit at the datasheet's offset bounds (±207 counts,
+±0.25 g on every axis) reads up to ~27° from the pose it lies in on nominal offsets
+alone, more than the placement tolerance; refused there, a fixture's slot would wait
+for a pose it already holds. So the station judges a pose on what it knows of each
+axis' zero-g reading (:class:`ZeroG`): the datasheet's bounds until the axis is
+measured, then the measurement. In an axis pose the two level axes read their own
+offsets (off by the placement's tilt, a few degrees), so from the first capture on the
+doubt shrinks to the placement. A unit is refused a pose only when no offset within
+what is known explains the reading within the placement tolerance; the operator is told
+which pose the station sees and how far it is from the one asked for.
 """
 
-from dataclasses import dataclass
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Final
 
 import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.poses import POSES, Pose
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensor import (
+    NOMINAL_OFFSET_COUNTS,
+    NOMINAL_SENSITIVITY_COUNTS_PER_G,
+    OFFSET_SPREAD_COUNTS,
+)
 
 #: How far (degrees) the sensed gravity may be from a pose's and still count as it.
 POSE_TOLERANCE_DEG = 25.0
 
+#: How far from level (as a fraction of 1 g) an axis of a named pose may be and still
+#: read its own offset there: the axis poses' level axes are exactly level.
+_LEVEL: Final = 1e-6
 
-def gravity_direction(accel_counts: FloatArray) -> FloatArray:
+
+@dataclass(frozen=True)
+class ZeroG:
+    """Each axis' zero-g reading as known so far, and how far off it may be (counts)."""
+
+    offset: FloatArray = field(default_factory=lambda: np.full(3, NOMINAL_OFFSET_COUNTS))
+    doubt: FloatArray = field(default_factory=lambda: np.full(3, OFFSET_SPREAD_COUNTS))
+
+    @classmethod
+    def measured(cls, captured: Iterable[tuple[Pose, FloatArray]]) -> "ZeroG":
+        """Each axis' mean over the captured poses where it lies level, else the datasheet's.
+
+        ``captured`` pairs a taken pose with its mean counts (3,).
+        """
+        sums = np.zeros(3)
+        counts = np.zeros(3)
+        for pose, mean in captured:
+            level = np.abs(pose.gravity_body) < _LEVEL
+            sums += np.where(level, np.asarray(mean, dtype=np.float64), 0.0)
+            counts += level
+        known = counts > 0
+        nominal = cls()
+        return cls(
+            offset=np.where(known, sums / np.maximum(counts, 1), nominal.offset),
+            doubt=np.where(known, 0.0, nominal.doubt),
+        )
+
+
+def gravity_direction(accel_counts: FloatArray, zero_g: ZeroG | None = None) -> FloatArray:
     """Unit vector of the sensed gravity reaction (body axes) from mean raw counts (3,)."""
-    g = (
-        np.asarray(accel_counts, dtype=np.float64) - NOMINAL_OFFSET_COUNTS
-    ) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    offset = (zero_g or ZeroG()).offset
+    g = (np.asarray(accel_counts, dtype=np.float64) - offset) / NOMINAL_SENSITIVITY_COUNTS_PER_G
     norm = float(np.linalg.norm(g))
     return g / norm if norm > 0 else np.array([0.0, 0.0, 0.0])
 
@@ -34,22 +77,47 @@ def angle_deg(a: FloatArray, b: FloatArray) -> float:
 
 @dataclass(frozen=True)
 class Sensed:
-    """The pose nearest to the sensed gravity, and the angle to it."""
+    """The pose nearest to the sensed gravity, and the angle to it.
+
+    ``slack``: per axis, how far the direction may be off from the offsets' doubt
+    (in units of the sensed vector's length).
+    """
 
     direction: FloatArray
     nearest: Pose
     nearest_deg: float
+    slack: FloatArray = field(default_factory=lambda: np.zeros(3))
 
     def matches(self, pose: Pose, tolerance_deg: float = POSE_TOLERANCE_DEG) -> bool:
-        """Whether the unit lies in ``pose`` within the tolerance."""
-        return angle_deg(self.direction, pose.gravity_body) <= tolerance_deg
+        """Whether the unit may lie in ``pose`` within the tolerance.
+
+        The direction's part across the pose is first moved toward the pose by as much as
+        each axis' doubt allows: the smallest tilt the reading admits is judged.
+        """
+        target = pose.gravity_body
+        across = self.direction - float(self.direction @ target) * target
+        closest = self.direction - np.clip(across, -self.slack, self.slack)
+        norm = float(np.linalg.norm(closest))
+        return norm > 0 and angle_deg(closest / norm, target) <= tolerance_deg
 
 
-def sense(accel_counts: FloatArray, candidates: tuple[Pose, ...] | None = None) -> Sensed:
+def sense(
+    accel_counts: FloatArray,
+    candidates: tuple[Pose, ...] | None = None,
+    zero_g: ZeroG | None = None,
+) -> Sensed:
     """The named pose (of ``candidates``, default all) nearest to the mean counts."""
-    direction = gravity_direction(accel_counts)
+    known = zero_g or ZeroG()
+    g = (
+        np.asarray(accel_counts, dtype=np.float64) - known.offset
+    ) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    norm = float(np.linalg.norm(g))
+    if norm == 0:
+        direction, slack = np.zeros(3), np.zeros(3)
+    else:
+        direction, slack = g / norm, known.doubt / NOMINAL_SENSITIVITY_COUNTS_PER_G / norm
     pool = candidates if candidates is not None else tuple(POSES.values())
     # One product for every pose (the live view asks ~40 times a second).
     cosines = np.stack([p.gravity_body for p in pool]) @ direction
     best = int(np.argmax(cosines))
-    return Sensed(direction, pool[best], angle_deg(direction, pool[best].gravity_body))
+    return Sensed(direction, pool[best], angle_deg(direction, pool[best].gravity_body), slack)

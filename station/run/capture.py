@@ -17,8 +17,14 @@ import numpy as np
 from station.device import PutterDriver
 from station.domain.arrays import FloatArray as Array
 from station.domain.capture_budget import WindowPolicy
-from station.domain.orientation import Sensed, angle_deg, gravity_direction, sense
-from station.domain.poses import Pose
+from station.domain.orientation import (
+    Sensed,
+    ZeroG,
+    angle_deg,
+    gravity_direction,
+    sense,
+)
+from station.domain.poses import POSES, Pose
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
 from station.results.journal import RunJournal
@@ -150,7 +156,7 @@ class PoseCapture:
         self._recent = SampleBlock.concat((self._recent, block))[-LIVE_SAMPLES:]
         window = self._recent
         summary = window.summary()
-        sensed = sense(summary.accel_mean)
+        sensed = sense(summary.accel_mean, zero_g=self._zero_g())
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
         if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
             return Saturated(verdict)
@@ -183,7 +189,7 @@ class PoseCapture:
 
     def _acceptable(self, result: PoseResult, index: int, target: Pose) -> bool:
         """Whether the still window lies in ``target``, away from every pose taken."""
-        sensed = sense(result.summary.accel_mean)
+        sensed = sense(result.summary.accel_mean, zero_g=self._zero_g())
         close_to_earlier = any(
             angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
             for _, direction in self._captured_directions()
@@ -207,15 +213,32 @@ class PoseCapture:
                     f"already taken: pose {index + 1} is {pose_words(target.name)}",
                 )
                 return
+        if sensed.nearest.name == target.name:  # the right pose, too far tilted
+            self._messages.say(
+                "warn",
+                f"tilted: the putter lies {sensed.nearest_deg:.0f}° from "
+                f"{pose_words(target.name)} ({self.settings.pose_tolerance_deg:.0f}° allowed): "
+                "lay it flat in its cradle",
+            )
+            return
         self._messages.say(
             "warn",
             f"wrong pose: the putter lies {pose_words(sensed.nearest.name)}, "
             f"pose {index + 1} is {pose_words(target.name)}",
         )
 
-    def _captured_directions(self) -> list[tuple[int, Array]]:
-        """Sensed gravity direction of every pose taken, by pose index."""
+    def _captured_means(self) -> list[tuple[int, Array]]:
+        """Mean counts of every pose taken, by pose index."""
         return [
-            (i, gravity_direction(np.array(c.record.mean.as_tuple())))
+            (i, np.array(c.record.mean.as_tuple()))
             for i, c in sorted(self._journal.captures.items())
         ]
+
+    def _zero_g(self) -> ZeroG:
+        """Each axis' zero-g counts as the poses taken so far measured them."""
+        return ZeroG.measured((POSES[self._names[i]], mean) for i, mean in self._captured_means())
+
+    def _captured_directions(self) -> list[tuple[int, Array]]:
+        """Sensed gravity direction of every pose taken, by pose index."""
+        zero_g = self._zero_g()
+        return [(i, gravity_direction(mean, zero_g)) for i, mean in self._captured_means()]

@@ -43,7 +43,8 @@ class VirtualPutter(Closing):
     ``seed`` fixes the unit's parameters and its noise; ``serial`` is the serial
     number on its label; ``speed`` runs its clock faster than real time;
     ``noise_counts`` gives the accelerometer's white noise (counts rms) instead of the
-    typical :data:`~station.simulator.sensor.ACCEL_NOISE_COUNTS`.
+    typical :data:`~station.simulator.sensor.ACCEL_NOISE_COUNTS`; ``truth`` gives the
+    unit's sensor instead of drawing it from the seed.
     """
 
     def __init__(
@@ -58,11 +59,12 @@ class VirtualPutter(Closing):
         handling: Handling | None = None,
         thermal: Thermal | None = None,
         noise_counts: float | None = None,
+        truth: SensorTruth | None = None,
     ) -> None:
         encode_text(serial, 16)
         # One generator per stream of draws, each drawn in sample order (see SampleStream).
         truth_rng, motion_rng, *stream_rngs = np.random.default_rng(seed).spawn(7)
-        self._truth = SensorTruth.draw(truth_rng)
+        self._truth = truth or SensorTruth.draw(truth_rng)
         if noise_counts is not None:
             self._truth = replace(self._truth, noise_counts=noise_counts)
         self._label = serial

@@ -327,6 +327,37 @@ def test_the_fixture_goes_forward_and_turns_back_only_when_nothing_is_ahead(
 
 
 @pytest.mark.timeout(90)
+def test_the_fixture_stays_in_its_first_pose_until_every_slot_is_loaded(
+    make_fixture: Callable[[int], Fixture],
+) -> None:
+    fixture = make_fixture(2)
+    fixture.plug(1, "PT000301", seed=301)
+    fixture.plug(2, "PT000302", seed=302)
+    app = fixture.station(units=2)
+    fixture.keys = [*"PT000301\r"]
+    held: list[int | None] = []
+
+    def scan_slowly(app: FixtureApp) -> None:
+        # The operator scans slot 2 only after slot 1's unit has taken the first pose.
+        first = app.slots[0].run
+        if app.stage is Stage.SCAN and first is not None and first.journal.captures and not held:
+            held.append(app.fixture_pose)
+            fixture.keys.extend("PT000302\r")
+
+    fixture.on_tick = scan_slowly
+    fixture.serve(app)
+
+    lines = fixture.log.getvalue().splitlines()
+    assert held == [0]
+    loaded = lines.index("fixture loaded (slots 1, 2): turn it through the poses as asked")
+    turns = [i for i, line in enumerate(lines) if line.startswith("fixture: pose ")]
+    assert [lines[i].split(":")[1] for i in turns][:2] == [" pose 1 of 7", " pose 2 of 7"]
+    assert turns[1] > loaded  # not turned on while slot 2 was loaded
+    assert sum(lines[i].split(":")[1] == " pose 1 of 7" for i in turns) == 1  # never back
+    assert {v for v, _ in stored(fixture).values()} == {"pass"}
+
+
+@pytest.mark.timeout(90)
 def test_labels_scanned_during_a_cycle_fill_the_next_and_a_unit_in_the_wrong_slot_is_caught(
     make_fixture: Callable[[int], Fixture],
 ) -> None:

@@ -3,20 +3,25 @@
 import time
 import uuid
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from station.device import DeviceCalibration, PutterDriver
 from station.domain.faults import Faults
 from station.domain.limits import load_profile
+from station.domain.orientation import POSE_TOLERANCE_DEG, sense
+from station.domain.poses import POSES
 from station.domain.run_settings import RunSettings
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
 from station.simulator.putter import VirtualPutter
+from station.simulator.sensor import SensorTruth
 
 SERIAL = "PT000077"
 
@@ -31,9 +36,15 @@ class Bench:
         seed: int = 11,
         settings: RunSettings | None = None,
         noise_counts: float | None = None,
+        truth: SensorTruth | None = None,
     ) -> None:
         self.putter = VirtualPutter(
-            seed=seed, serial=SERIAL, speed=20.0, faults=faults, noise_counts=noise_counts
+            seed=seed,
+            serial=SERIAL,
+            speed=20.0,
+            faults=faults,
+            noise_counts=noise_counts,
+            truth=truth,
         )
         self.port = tmp / "putter"
         self.putter.serve_pty(self.port)
@@ -113,6 +124,53 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     for axis in record.gyro.still.axes:
         assert axis.slope_dps_per_g is not None
         assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
+
+
+def test_a_unit_at_the_datasheets_offset_bounds_is_taken_in_every_pose(tmp_path: Path) -> None:
+    # Offsets at the KXM52's bounds (±207 counts): on nominal offsets alone the unit reads
+    # more than the placement tolerance away from poses it lies in exactly, which once
+    # left a fixture's slot waiting for ever.
+    truth = replace(
+        SensorTruth.draw(np.random.default_rng(5)),
+        offset_counts=2048.0 + np.array([-205.0, 200.0, 205.0]),
+        sensitivity_counts_per_g=np.array([781.0, 790.0, 781.0]),
+    )
+    settings = RunSettings()
+    plan = (*settings.poses, settings.verification_pose)
+    nominal = [sense(truth.still_counts(POSES[name].gravity_body[None, :])[0]) for name in plan]
+    assert max(s.nearest_deg for s in nominal) > POSE_TOLERANCE_DEG  # the case at issue
+    b = Bench(tmp_path, truth=truth)
+    try:
+        b.drive(done)
+        assert b.run.record is not None
+        assert b.run.record.verdict == "pass", b.run.record.failures
+        refusals = [m.text for m in b.run.messages if m.text.startswith(("wrong pose", "tilted"))]
+        assert not refusals
+    finally:
+        b.close()
+
+
+def test_the_pose_asked_for_but_tilted_past_the_tolerance_is_refused_with_its_angle(
+    bench: Bench,
+) -> None:
+    bench.drive(lambda run: len(run.journal.captures) == 1)  # face up: x and z measured
+    tilted = POSES["face_down"].rotation * Rotation.from_euler("x", 33, degrees=True)
+    bench.putter.move_to(tilted, 1.0)
+    bench.moved_to = "face_down"  # the operator leaves it tilted
+
+    def told(run: UnitRun) -> bool:
+        return any(m.text.startswith("tilted:") for m in run.messages)
+
+    bench.drive(told)
+    said = next(m.text for m in bench.run.messages if m.text.startswith("tilted:"))
+    angle = float(said.split("lies ")[1].split("°")[0])
+    assert 28 <= angle <= 38, said
+    assert said.endswith("from face down (25° allowed): lay it flat in its cradle")
+    assert len(bench.run.journal.captures) == 1
+    bench.moved_to = None  # now laid flat
+    bench.drive(done)
+    assert bench.run.record is not None
+    assert bench.run.record.verdict == "pass", bench.run.record.failures
 
 
 def test_adaptive_capture_stores_how_many_samples_each_pose_used(tmp_path: Path) -> None:
