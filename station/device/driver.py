@@ -252,24 +252,32 @@ class PutterDriver(Closing):
         with self._command_lock:
             while not replies.empty():
                 replies.get_nowait()
-            for _ in range(self.retries + 1):
-                self._check_alive()
-                try:
-                    self._reader.write(frame)
-                except (serial.SerialException, OSError) as exc:
-                    self._link.fail(
-                        DeviceDisconnectedError(f"putter at {self._name}: write failed: {exc}")
-                    )
-                    self._check_alive()
-                reply = self._await_reply(command, expect)
-                if reply is not None:
-                    return reply
+            self._link.expect_reply(True)
+            try:
+                return self._send_awaiting(command, frame, expect)
+            finally:
+                self._link.expect_reply(False)
+
+    def _send_awaiting(self, command: FrameType, frame: bytes, expect: FrameType) -> Frame:
+        """Send ``frame`` until its reply comes, up to :attr:`retries` more times."""
+        for _ in range(self.retries + 1):
             self._check_alive()
-            tries = self.retries + 1
-            raise NoReplyError(
-                f"putter at {self._name} did not answer {command.name} within "
-                f"{self.reply_timeout:g} s ({tries} {'try' if tries == 1 else 'tries'})"
-            )
+            try:
+                self._reader.write(frame)
+            except (serial.SerialException, OSError) as exc:
+                self._link.fail(
+                    DeviceDisconnectedError(f"putter at {self._name}: write failed: {exc}")
+                )
+                self._check_alive()
+            reply = self._await_reply(command, expect)
+            if reply is not None:
+                return reply
+        self._check_alive()
+        tries = self.retries + 1
+        raise NoReplyError(
+            f"putter at {self._name} did not answer {command.name} within "
+            f"{self.reply_timeout:g} s ({tries} {'try' if tries == 1 else 'tries'})"
+        )
 
     def _await_reply(self, command: FrameType, expect: FrameType) -> Frame | None:
         deadline = time.monotonic() + self.reply_timeout

@@ -26,6 +26,15 @@ from station.domain.sensor import ADC_MAX
 
 log = logging.getLogger(__name__)
 
+#: A chunk smaller than this (bytes: ~100 sample frames) has the reader rest for
+#: :data:`PACE_S` before it reads again, so that the next read takes a batch. At the
+#: putter's 512 frames a second the port would otherwise wake the reader once per
+#: 20-byte frame, each wake costing some 30 times the frame's parsing (issue 28). A
+#: command waiting for its reply wakes it at once (:meth:`PutterLink.expect_reply`); a
+#: fast stream (a sped-up simulator) is never held back.
+PACE_BELOW_BYTES = 2048
+PACE_S = 0.05
+
 
 class PutterLink(Protocol):
     """Frames in, samples and replies out; the link's counters and its failure.
@@ -45,6 +54,8 @@ class PutterLink(Protocol):
         self._samples = 0
         self._lock = threading.Lock()
         self._failure: DeviceError | None = None
+        #: Set while a command waits for its reply: the reader does not rest then.
+        self._reply_due = threading.Event()
 
     @property
     def failure(self) -> DeviceError | None:
@@ -65,6 +76,13 @@ class PutterLink(Protocol):
                 bytes_discarded=parser.bytes_discarded,
                 buffer_overruns=self.raw.overruns + self.calibrated.overruns,
             )
+
+    def expect_reply(self, due: bool) -> None:
+        """A command was sent and waits for its reply (``due``), or has it."""
+        if due:
+            self._reply_due.set()
+        else:
+            self._reply_due.clear()
 
     def restart_sequence(self) -> None:
         """The unit is about to count its samples from 0 again."""
@@ -98,6 +116,8 @@ class PutterLink(Protocol):
         for frame in frames:
             if frame.type not in (FrameType.SAMPLE, FrameType.CAL_SAMPLE):
                 self.replies.put(frame)
+        if len(data) < PACE_BELOW_BYTES and not self.closing:
+            self._reply_due.wait(PACE_S)
 
     def connection_lost(self, exc: BaseException | None) -> None:
         """The reader thread ended: by :meth:`PutterDriver.close`, or the link failed."""

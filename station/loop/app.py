@@ -28,7 +28,7 @@ from station.loop.lifecycle import (
     WrongUnit,
     verdict_line,
 )
-from station.loop.live_loop import FrontEnd
+from station.loop.live_loop import TICK_S, FrontEnd
 from station.loop.prompt import (
     UNIT_KEYS,
     Label,
@@ -63,7 +63,7 @@ class StationApp(FrontEnd):
         keys: KeySource,
         console: Console,
         units: int | None = None,
-        tick_s: float = 0.01,
+        tick_s: float = TICK_S,
         probe_ports: bool = True,
     ) -> None:
         self.slot = Slot(1, config.port, JournalFile(config.journal_path))

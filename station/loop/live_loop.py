@@ -29,6 +29,9 @@ from station.results.storage import RunStore
 
 #: Seconds between screen refreshes.
 DRAW_EVERY_S = 0.1
+#: Seconds between the loop's passes: keys, units, outbox. Two passes a redraw keep
+#: keys and captures prompt to the eye; more only burn the station's CPU (issue 28).
+TICK_S = DRAW_EVERY_S / 2
 
 
 class FrontEnd(ABC):
@@ -48,7 +51,7 @@ class FrontEnd(ABC):
         keys: KeySource,
         console: Console,
         units: int | None = None,
-        tick_s: float = 0.01,
+        tick_s: float = TICK_S,
         probe_ports: bool = True,
     ) -> None:
         self.config = config

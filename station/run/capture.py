@@ -89,6 +89,9 @@ class PoseCapture:
         self._recent = SampleBlock.empty()
         self._still_samples = 0
         self._wrong_pose_said: str | None = None
+        #: What the poses taken tell of the offsets, and which captures told it.
+        self._zero_g_of: tuple[tuple[int, object], ...] | None = None
+        self._known_zero_g = ZeroG()
         #: Whether the unit moved since the last capture (before it has, it still lies
         #: in the pose just taken, which is no mistake).
         self._moved = False
@@ -155,9 +158,9 @@ class PoseCapture:
             return None
         self._recent = SampleBlock.concat((self._recent, block))[-LIVE_SAMPLES:]
         window = self._recent
-        summary = window.summary()
-        sensed = sense(summary.accel_mean, zero_g=self._zero_g())
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
+        summary = verdict.summary
+        sensed = sense(summary.accel_mean, zero_g=self._zero_g())
         if verdict.saturated_axes and not verdict.motion and len(window) == LIVE_SAMPLES:
             return Saturated(verdict)
         matches = sensed.matches(target, self.settings.pose_tolerance_deg)
@@ -235,8 +238,15 @@ class PoseCapture:
         ]
 
     def _zero_g(self) -> ZeroG:
-        """Each axis' zero-g counts as the poses taken so far measured them."""
-        return ZeroG.measured((POSES[self._names[i]], mean) for i, mean in self._captured_means())
+        """Each axis' zero-g counts as the poses taken so far measured them (worked out
+        again only when the captures change: the live view asks at every tick)."""
+        taken = tuple((i, c.captured_at) for i, c in self._journal.captures.items())
+        if taken != self._zero_g_of:
+            self._zero_g_of = taken
+            self._known_zero_g = ZeroG.measured(
+                (POSES[self._names[i]], mean) for i, mean in self._captured_means()
+            )
+        return self._known_zero_g
 
     def _captured_directions(self) -> list[tuple[int, Array]]:
         """Sensed gravity direction of every pose taken, by pose index."""

@@ -1,0 +1,134 @@
+"""The station's CPU per unit at real speed against its floor: parse, judge, solve.
+
+    python benchmarks/bench_station_cpu.py                 # 1 and 8 slots, one cycle at 1×
+    python benchmarks/bench_station_cpu.py --slots 1 --speed 2
+
+The **floor** is the work that follows the samples and nothing else, each part timed
+alone on this machine (best of several repeats): parsing every frame the unit streamed
+(its last captured sample's sequence number plus the unit-output check's 256 samples)
+through the station's own link in 4 KiB chunks, judging one 1,024-sample window per
+pose, and the solve. The **station** figure is what ``bench_throughput.py`` measures: the
+process's CPU while the real station serves the units at 1× (the one-port station for
+one slot, the fixture for several), minus the virtual putters' own threads, per unit.
+Everything else the station does (the live view, journal, outbox, database) is in the
+station figure and not in the floor; the issue's target is a ratio of 5 or less.
+"""
+
+import argparse
+import statistics
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from bench_throughput import POSES, Events, instrument, run_station
+
+from station.device.link import PutterLink
+from station.device.protocol import encode_sample
+from station.domain.calibration.solve import solve
+from station.domain.records import RunRecord
+from station.domain.run_settings import RunSettings
+from station.domain.stillness import judge_window
+from station.run.unit_output import UNIT_OUTPUT_SAMPLES
+
+#: Frames parsed to time the parser (a minute and a half of stream).
+PARSE_FRAMES = 51_200
+WINDOW = 1024
+CHUNK_BYTES = 4096
+
+
+def best_of(repeats: int, work: Callable[[], object]) -> float:
+    """The least CPU seconds ``work`` took over ``repeats`` runs."""
+    times = []
+    for _ in range(repeats):
+        start = time.process_time()
+        work()
+        times.append(time.process_time() - start)
+    return min(times)
+
+
+def parse_cost_per_frame() -> float:
+    """CPU seconds to parse one sample frame through :class:`PutterLink` in big chunks."""
+    frames = b"".join(
+        encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(PARSE_FRAMES)
+    )
+
+    def parse() -> None:
+        link = PutterLink("floor", PARSE_FRAMES)
+        for at in range(0, len(frames), CHUNK_BYTES):
+            link.data_received(frames[at : at + CHUNK_BYTES])
+
+    return best_of(5, parse) / PARSE_FRAMES
+
+
+def judge_and_solve_cost(record: RunRecord) -> float:
+    """CPU seconds to judge one window per pose and solve, on a stored unit's poses."""
+    link = PutterLink("floor", POSES * WINDOW)
+    link.data_received(
+        b"".join(
+            encode_sample(i, (2048, 2048, 2867), (1, 0, 0), 2500) for i in range(POSES * WINDOW)
+        )
+    )
+    block = link.raw.drain()
+    windows = [block[k * WINDOW : (k + 1) * WINDOW] for k in range(POSES)]
+    stillness = RunSettings().stillness
+    means = [p.mean.as_tuple() for p in record.poses if p.role == "fit"]
+
+    def work() -> None:
+        for window in windows:
+            judge_window(window, stillness)
+        solve(means)
+
+    return best_of(20, work)
+
+
+def measure(slots: int, speed: float) -> dict[str, float]:
+    """One cycle of ``slots`` units at ``speed``: floor and station CPU per unit."""
+    events = Events()
+    undo = instrument(events)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            cpu = time.process_time()
+            records = run_station(Path(tmp), slots, 1, "fixed", speed, ahead=False)
+            cpu = time.process_time() - cpu - events.putter_cpu_s
+    finally:
+        undo()
+    assert len(records) == slots
+    assert all(r.verdict == "pass" for r in records), [r.failures for r in records]
+    frames = statistics.mean(
+        units[0].captures[-1] + 1 + UNIT_OUTPUT_SAMPLES for units in events.units.values()
+    )
+    parse = parse_cost_per_frame() * frames
+    judge_solve = judge_and_solve_cost(records[0])
+    floor = parse + judge_solve
+    station = cpu / slots
+    return {
+        "frames": frames,
+        "parse": parse,
+        "judge_solve": judge_solve,
+        "floor": floor,
+        "station": station,
+        "ratio": station / floor,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--slots", type=int, nargs="+", default=[1, 8])
+    parser.add_argument("--speed", type=float, default=1.0, help="virtual clock (× real time)")
+    args = parser.parse_args()
+    print(f"station CPU per unit at {args.speed:g}×, one cycle per row")
+    print("| slots | frames per unit | parse | judge + solve | floor | station | × floor |")
+    print("|---|---|---|---|---|---|---|")
+    for slots in args.slots:
+        m = measure(slots, args.speed)
+        print(
+            f"| {slots} | {m['frames']:.0f} | {m['parse'] * 1e3:.1f} ms "
+            f"| {m['judge_solve'] * 1e3:.1f} ms | {m['floor'] * 1e3:.1f} ms "
+            f"| {m['station'] * 1e3:.0f} ms | {m['ratio']:.1f} |",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()
