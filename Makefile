@@ -16,7 +16,8 @@ demo: $(STAMP)  ## the main job on the embedded defaults
 	$(VENV)/bin/calstation demo
 
 test: $(STAMP)  ## the whole test suite, one worker per core (pytest -n 0 for one process)
-	$(PY) -m pytest -n auto
+	@start=$$(date +%s); $(PY) -m pytest -n auto; status=$$?; \
+	echo "make test: $$(( $$(date +%s) - start )) s wall, exit $$status"; exit $$status
 
 lint: $(STAMP)  ## ruff (lint and format check), strict mypy and the import contracts (layers)
 	$(VENV)/bin/ruff check .
