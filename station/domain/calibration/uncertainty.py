@@ -54,7 +54,8 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
 
 Combined standard uncertainty u_c = √Σu² (the terms are independent), expanded
 U = k·u_c with k = :data:`COVERAGE_FACTOR` (≈ 95 % for a normal distribution,
-[JCGM100]_ 6.2). Validated by Monte Carlo on the simulator (``docs/benchmarks.md``).
+[JCGM100]_ 6.2). Validated by Monte Carlo on the simulator
+(``benchmarks/bench_uncertainty.py``, ``docs/benchmarks.md``).
 
 Gyro bias (:func:`gyro_bias_uncertainty`): the mean over the still poses; Type A the
 within-pose noise σ/√(Σ N_i), or the poses' scatter s/√P where it exceeds that beyond
