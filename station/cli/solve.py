@@ -18,7 +18,7 @@ from station.domain.errors import InputError
 from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
-    from station.domain.calibration import Solution
+    from station.domain.calibration import Solution, Uncertainty
     from station.domain.posefile import PoseFile
 
 
@@ -73,7 +73,12 @@ def solve_command(
 
         solve_stream(file, model.value, as_json=as_json, still_window_s=still_window)
         return
-    from station.domain.calibration import CalibrationError, solve
+    from station.domain.calibration import (
+        CalibrationError,
+        Uncertainty,
+        accelerometer_budget,
+        solve,
+    )
     from station.domain.limits import load_profile
     from station.domain.posefile import read_pose_file
 
@@ -83,13 +88,15 @@ def solve_command(
         solution = solve(pose_file.poses, model.value, max_residual_counts=max_residual)
     except CalibrationError as exc:
         raise InputError(f"{pose_file.where(exc.pose)}: {exc}") from None
+    budget = accelerometer_budget(solution, pose_file.poses, pose_file.spread, pose_file.samples)
+    uncertainty = Uncertainty.of_budget(budget)
     if as_json:
-        print_json(solution.to_dict())
+        print_json(solution.to_dict() | {"uncertainty": uncertainty.to_dict()})
     else:
-        out.print(_table(solution, pose_file))
+        out.print(_table(solution, pose_file, uncertainty))
 
 
-def _table(solution: Solution, pose_file: PoseFile) -> Table:
+def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) -> Table:
     from station.domain.calibration import MIN_DOF_SHOWN, SENSITIVITY_CONVENTION
 
     cal, q = solution.calibration, solution.quality
@@ -102,19 +109,36 @@ def _table(solution: Solution, pose_file: PoseFile) -> Table:
     table.add_column("axis")
     table.add_column("offset (counts)", justify="right")
     table.add_column("sensitivity (counts/g)", justify="right")
+    table.add_column(f"U offset (k = {uncertainty.k:g})", justify="right")
+    table.add_column(f"U sensitivity (k = {uncertainty.k:g})", justify="right")
+    u_off, u_sens = uncertainty.offset, uncertainty.sensitivity
     for i, axis in enumerate(AXES):
         off = f"{cal.offset[i]:.4f}"
         sens = f"{cal.sensitivity[i]:.4f}"
         if shown and se is not None:
             off += f" ± {se.offset[i]:.4f}"
             sens += f" ± {se.sensitivity[i]:.4f}"
-        table.add_row(axis, off, sens)
+        table.add_row(
+            axis,
+            off,
+            sens,
+            "—" if u_off is None else f"± {u_off[i]:.4f}",
+            "—" if u_sens is None else f"± {u_sens[i]:.4f}",
+        )
     lines = [
         f"residual |g|−1: rms {q.residual_rms_mg:.3f} mg, max {q.residual_max_mg:.3f} mg",
         f"condition number {q.condition_number:.3g}, coverage {q.coverage:.3f}, "
         f"closest poses {q.closest_pair[0] + 1} and {q.closest_pair[1] + 1}, "
         f"{q.min_angle_deg:.1f}°",
     ]
+    noted = (
+        ""
+        if pose_file.spread is not None
+        else ("; the file gives no sx,sy,sz,n: each pose's noise taken as the sensor's")
+    )
+    lines.append(
+        f"U: expanded uncertainty, k = {uncertainty.k:g} (GUM budget, docs/calibration.md){noted}"
+    )
     if se is not None:
         lines.append(
             f"± 1-σ standard errors, {se.dof} degrees of freedom"

@@ -63,15 +63,23 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
     table.add_column("offset (counts)", justify="right")
     table.add_column("sensitivity (counts/g)", justify="right")
     table.add_column("gyro bias (deg/s)", justify="right")
+    u = result.uncertainty
     for i, axis in enumerate(AXES):
         table.add_row(
-            axis, f"{cal.offset[i]:.3f}", f"{cal.sensitivity[i]:.3f}", f"{result.bias_dps[i]:+.4f}"
+            axis,
+            _with_u(cal.offset[i], u.offset, i, 3),
+            _with_u(cal.sensitivity[i], u.sensitivity, i, 3),
+            _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
         )
     lines = [
         f"gyro K {axis}: "
         + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
         for i, axis in enumerate(AXES)
     ]
+    lines.append(
+        f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md); "
+        f"± of K: 1-σ standard errors (U = {u.k:g}σ)"
+    )
     lines += [
         f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg",
         f"moves: residual rms {gyro.residual_rms_deg:.3f}° with K, "
@@ -80,3 +88,13 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
     lines += [f"move {u.index} unusable: {u.reason}" for u in gyro.unusable]
     table.caption = "\n".join(lines)
     return table
+
+
+def _with_u(value: float, u: object, i: int, digits: int, *, sign: bool = False) -> str:
+    """``value ± U`` with ``digits`` decimals (no ± when there is no U)."""
+    import numpy as np
+
+    shown = f"{value:+.{digits}f}" if sign else f"{value:.{digits}f}"
+    if not isinstance(u, np.ndarray):
+        return shown
+    return f"{shown} ± {float(u[i]):.{digits}f}"

@@ -11,7 +11,14 @@ import numpy as np
 
 from station import __version__
 from station.domain.arrays import FloatArray as Array
-from station.domain.calibration import Solution, apply
+from station.domain.calibration import (
+    COVERAGE_FACTOR,
+    Solution,
+    Uncertainty,
+    accelerometer_budget,
+    apply,
+    gyro_bias_uncertainty,
+)
 from station.domain.gyro import summarize_still_poses
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
@@ -26,6 +33,7 @@ from station.domain.records import (
     QualityMetrics,
     ReplacedCapture,
     RunRecord,
+    UncertaintyRecord,
     Vector3,
     Verdict,
 )
@@ -126,6 +134,44 @@ def pose_records(
     )
 
 
+def uncertainty_record(
+    captures: Mapping[int, Capture],
+    fit_count: int,
+    solution: Solution | None,
+    gyro_matrix: GyroMatrixRecord | None = None,
+) -> UncertaintyRecord | None:
+    """The expanded uncertainties of the run's coefficients
+    (:mod:`station.domain.calibration.uncertainty`): the accelerometer's from the fit
+    poses' means, spreads and sample counts and the verification pose, the gyro bias's
+    from the fit poses' gyro means, the gyro matrix's from its fit (None: no solution)."""
+    if solution is None or any(i not in captures for i in range(fit_count)):
+        return None
+    fit = [captures[i] for i in range(fit_count)]
+    verify = captures.get(fit_count)
+    budget = accelerometer_budget(
+        solution,
+        fit_means(captures, fit_count),
+        np.array([c.record.std.as_tuple() for c in fit]),
+        np.array([c.record.sample_count for c in fit]),
+        verification=None if verify is None else np.array(verify.record.mean.as_tuple()),
+        verification_spread=None if verify is None else np.array(verify.record.std.as_tuple()),
+        verification_samples=None if verify is None else verify.record.sample_count,
+    )
+    uncertainty = Uncertainty.of_budget(budget)
+    gyro_means = [c.record.gyro_mean for c in fit]
+    bias = None
+    if all(m is not None for m in gyro_means):
+        bias = gyro_bias_uncertainty(
+            np.array([m.as_tuple() for m in gyro_means if m is not None]),
+            np.array([c.gyro_std.as_tuple() for c in fit]),
+            np.array([c.record.sample_count for c in fit]),
+        )
+    matrix = None
+    if gyro_matrix is not None and gyro_matrix.standard_errors is not None:
+        matrix = COVERAGE_FACTOR * np.array(gyro_matrix.standard_errors)
+    return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+
+
 def quality_metrics(solution: Solution, verification_error_mg: float | None) -> QualityMetrics:
     """The record's quality part, with the fit poses the solve left out as inconsistent."""
     q = solution.quality
@@ -186,5 +232,8 @@ def run_record(
         quality=quality,
         gyro=gyro,
         gyro_matrix=gyro_matrix,
+        uncertainty=uncertainty_record(
+            journal.captures, len(settings.poses), solution, gyro_matrix
+        ),
         poses=poses,
     )

@@ -55,6 +55,17 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert np.allclose(gyro["bias_dps"], imu.gyro_bias_dps, atol=0.01)
     assert len(gyro["residual_deg"]) == 11
     assert gyro["unusable_moves"] == []
+    # One shape for the uncertainties, every coefficient measured: the gyro's too.
+    u = data["uncertainty"]
+    assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}
+    assert u["k"] == 2
+    np.testing.assert_allclose(np.array(u["gyro_matrix"]), 2 * se)
+    assert len(u["gyro_bias_dps"]) == 3
+    # The truth within ±U (the recording's units are the simulator's own, exact here).
+    error = np.abs(np.array(gyro["bias_dps"]) - imu.gyro_bias_dps)
+    assert (error <= np.array(u["gyro_bias_dps"]) * 2.5).all()
+    offset_error = np.abs([data["offset"][a] - imu.offset_counts[i] for i, a in enumerate("xyz")])
+    assert (offset_error <= 2.5 * np.array([u["offset"][a] for a in "xyz"])).all()
 
 
 def test_lost_samples_make_a_move_unusable_and_say_so(
