@@ -22,7 +22,9 @@ from sqlalchemy import (
     RowMapping,
     Select,
     and_,
+    case,
     func,
+    literal,
     or_,
     select,
     text,
@@ -66,6 +68,7 @@ from station.domain.quality.figures import (
     ControlChart,
     EolReport,
     Histogram,
+    NearLimits,
     ParameterStats,
     ParetoEntry,
     ReportFilter,
@@ -141,6 +144,33 @@ class ReportQueries:
             session.execute(text("SET LOCAL work_mem = '256MB'"))
 
     # -- helpers -----------------------------------------------------------------------
+
+    def near_limits(self, bounds: FamilyBounds) -> NearLimits:
+        """The passing runs in range whose offset or sensitivity lies within its expanded
+        uncertainty U (``runs.uncertainty``) of a bound of ``bounds``: accepted by the
+        simple rule, refused by the guarded one. One counting statement."""
+        edges: list[ColumnElement[bool]] = []
+        for family in ("offset", "sensitivity"):
+            lower, upper = bounds.get(family, (None, None))
+            for axis in "xyz":
+                value = getattr(Run, f"{family}_{axis}")
+                u = Run.uncertainty[(family, axis)].as_float()
+                if lower is not None:
+                    edges.append(value - u < lower)
+                if upper is not None:
+                    edges.append(value + u > upper)
+        edge = or_(*edges) if edges else literal(False)
+        # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
+        carried = Run.uncertainty["k"].as_float().is_not(None)
+        where = [*self.conditions(), Run.verdict == "pass", carried]
+        row = self.session.execute(
+            select(
+                func.count(),
+                func.coalesce(func.sum(case((edge, 1), else_=0)), 0),
+                func.count(func.distinct(case((edge, Run.serial), else_=None))),
+            ).where(*where)
+        ).one()
+        return NearLimits(runs_passed=int(row[0]), within_u=int(row[1]), units=int(row[2]))
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
         """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
@@ -772,4 +802,5 @@ def eol_report(
         units_offset=unit_offset,
         units_limit=unit_limit,
         what_if=what_if,
+        near_limits=None if bounds is None else queries.near_limits(bounds),
     )

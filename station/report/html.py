@@ -27,6 +27,7 @@ from station.report.tables import (
     WHAT_IF_HEADER,
     capability_cells,
     listed,
+    near_limits_line,
     parameter_cells,
     summary_cells,
     what_if_cells,
@@ -65,6 +66,7 @@ _env.globals.update(
     what_if_cells=what_if_cells,
     capability_header=CAPABILITY_HEADER,
     capability_cells=capability_cells,
+    near_limits_line=near_limits_line,
 )
 # The macros of the base template, for every template and every template it includes
 # (Jinja's template modules expose their macros as attributes it does not declare).

@@ -21,6 +21,7 @@ from station.report.tables import (
     WHAT_IF_HEADER,
     capability_cells,
     listed,
+    near_limits_line,
     parameter_cells,
     summary_cells,
     what_if_cells,
@@ -132,6 +133,10 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
         for stats in what_if["parameters"]:
             for key in ("lower", "upper", "count", "cp", "cpk", "out_of_limits", "marginal"):
                 yield ("what_if", f"parameter:{stats['name']}", key, stats[key])
+    near = doc.get("near_limits")
+    if near is not None:
+        for key, value in near.items():
+            yield ("near_limits", "", key, value)
     yield ("units", "", "total", doc["units_total"])
     yield ("units", "", "listed", doc["units_listed"])
     yield ("units", "", "held", doc["units_held"])
@@ -223,7 +228,7 @@ def as_text(report: EolReport) -> str:
         "",
         f"Parameters against {report.bounds_source}",
         *_table(PARAMETER_HEADER, parameter_cells(report)),
-        "",
+        *([near_limits_line(report), ""] if report.near_limits is not None else [""]),
         "Control charts (I-MR, limits from every run in range)",
         *_table(
             ["coefficient", "n", "mean", "MR-bar", "LCL", "UCL", "MR UCL"],

@@ -125,3 +125,15 @@ def capability_cells(report: EolReport) -> list[list[str]]:
         ]
         for p in w.parameters
     ]
+
+
+def near_limits_line(report: EolReport) -> str:
+    """The passing runs accepted within one U of a limit, in words (text and HTML)."""
+    near = report.near_limits
+    if near is None:
+        return ""
+    return (
+        f"Accepted within one U of a limit: {near.within_u} of {near.runs_passed} passing runs "
+        f"with uncertainties ({near.units} units): an offset or sensitivity whose value ± U "
+        "reaches past a limit (guarded acceptance, w = U, would refuse them)"
+    )

@@ -198,9 +198,11 @@ def run_record(
     gyro: GyroSummary | None,
     poses: tuple[PoseRecord, ...],
     gyro_matrix: GyroMatrixRecord | None = None,
+    uncertainty: UncertaintyRecord | None = None,
 ) -> RunRecord:
     """The record of the finished run, as it goes to the outbox: where its unit goes
-    (``disposition``) and whether it was the station's ``golden`` unit included."""
+    (``disposition``), whether it was the station's ``golden`` unit, the coefficients'
+    ``uncertainty`` (:func:`uncertainty_record`) and the profile's decision rule included."""
     coefficients = quality = None
     if solution is not None:
         cal = solution.calibration.to_dict()
@@ -232,8 +234,7 @@ def run_record(
         quality=quality,
         gyro=gyro,
         gyro_matrix=gyro_matrix,
-        uncertainty=uncertainty_record(
-            journal.captures, len(settings.poses), solution, gyro_matrix
-        ),
+        uncertainty=uncertainty,
+        decision_rule=profile.rule,
         poses=poses,
     )

@@ -195,6 +195,15 @@ class WhatIf(_FigurePart):
     fail_to_pass: int = Field(description="runs that failed and would pass")
 
 
+class NearLimits(_FigurePart):
+    """Passing runs accepted within one expanded uncertainty U of a limit (ILAC-G8): an
+    offset or a sensitivity whose value ± U reaches past a bound of the report's limits."""
+
+    runs_passed: int = Field(description="passing runs in range that carry uncertainties")
+    within_u: int = Field(description="of those, runs with a coefficient within U of a limit")
+    units: int = Field(description="units with such a passing run in range")
+
+
 class EolReport(_FigurePart):
     """The end-of-line report over ``filter``."""
 
@@ -232,4 +241,8 @@ class EolReport(_FigurePart):
     units_limit: int | None = Field(None, description="the most units a page of the list holds")
     what_if: WhatIf | None = Field(
         None, description="the runs re-judged against a candidate limits profile, when given"
+    )
+    near_limits: NearLimits | None = Field(
+        None,
+        description="passing runs accepted within one U of a limit (None: no limits to judge)",
     )

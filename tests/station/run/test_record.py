@@ -85,3 +85,5 @@ def test_a_clock_stepped_back_never_ends_a_run_before_it_began() -> None:
         poses=pose_records(journal.captures, None),
     )
     assert record.finished_at == started
+    # The verdict records the rule that judged it: the profile's, simple by default.
+    assert record.decision_rule == "simple"

@@ -113,6 +113,7 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     for axis in record.gyro.still.axes:
         assert axis.slope_dps_per_g is not None
         assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
+    assert record.decision_rule == "simple"  # the shipped profile names no rule
     # Every coefficient carries its expanded uncertainty; the six-pose run has no K.
     assert record.uncertainty is not None
     shape = record.uncertainty.to_json()
