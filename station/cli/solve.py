@@ -29,6 +29,28 @@ class ModelChoice(StrEnum):
     nine = "nine"
 
 
+class AccelUnitsChoice(StrEnum):
+    """What a stream's accelerometer columns are in."""
+
+    counts = "counts"
+    g = "g"
+    ms2 = "m/s2"
+
+
+class GyroUnitsChoice(StrEnum):
+    """What a stream's gyro columns are in."""
+
+    dps = "dps"
+    rads = "rads"
+
+
+class TimeUnitsChoice(StrEnum):
+    """What a stream's time column is in."""
+
+    s = "s"
+    ms = "ms"
+
+
 def solve_command(
     file: Annotated[
         Path,
@@ -66,13 +88,51 @@ def solve_command(
         float,
         typer.Option(help="With --stream: seconds a still window lasts.", min=0.01),
     ] = STILL_WINDOW_S,
+    accel_units: Annotated[
+        AccelUnitsChoice,
+        typer.Option(
+            help="With --stream: the accelerometer columns in ADC counts (zero 2048, 819.2 "
+            "counts/g), in g or in m/s²."
+        ),
+    ] = AccelUnitsChoice.counts,
+    gyro_units: Annotated[
+        GyroUnitsChoice,
+        typer.Option(help="With --stream: the gyro columns in deg/s or rad/s."),
+    ] = GyroUnitsChoice.dps,
+    time_units: Annotated[
+        TimeUnitsChoice,
+        typer.Option(help="With --stream: the time column in seconds or milliseconds."),
+    ] = TimeUnitsChoice.s,
+    rate: Annotated[
+        float | None,
+        typer.Option(
+            help="With --stream: the sample rate, samples/s (the time column is then ignored)."
+        ),
+    ] = None,
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
+    declared = (
+        accel_units is not AccelUnitsChoice.counts
+        or gyro_units is not GyroUnitsChoice.dps
+        or time_units is not TimeUnitsChoice.s
+        or rate is not None
+    )
     if stream:
         from station.cli.solve_stream import solve_stream
+        from station.domain.gyro.motion.errors import StreamError
+        from station.domain.gyro.motion.stream_units import StreamUnits
 
-        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window)
+        try:
+            units = StreamUnits(accel_units.value, gyro_units.value, time_units.value, rate)
+        except StreamError as exc:
+            raise InputError(f"--rate: {exc}") from None
+        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window, units=units)
         return
+    if declared:
+        raise InputError(
+            "--accel-units, --gyro-units, --time-units and --rate describe a raw stream: "
+            "use them with --stream"
+        )
     from station.domain.calibration import (
         CalibrationError,
         Uncertainty,

@@ -21,10 +21,19 @@ from station.domain.sensor import AXES
 if TYPE_CHECKING:
     from station.domain.calibration import Model
     from station.domain.gyro.motion import StreamCalibration
+    from station.domain.gyro.motion.stream_units import StreamUnits
 
 
-def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: float) -> None:
-    """Calibrate the unit recorded in ``file`` and print the result."""
+def solve_stream(
+    file: Path,
+    model: Model,
+    *,
+    as_json: bool,
+    still_window_s: float,
+    units: StreamUnits | None = None,
+) -> None:
+    """Calibrate the unit recorded in ``file`` (its columns in ``units``: the station's
+    own by default) and print the result."""
     from station.domain.calibration import CalibrationError
     from station.domain.gyro.motion import (
         GyroMatrixError,
@@ -33,9 +42,12 @@ def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: flo
         stream_thresholds,
     )
     from station.domain.gyro.motion.stream_file import read_stream_file
+    from station.domain.gyro.motion.stream_units import StreamUnits, check_units, convert
 
+    declared = units or StreamUnits()
     try:
-        stream = read_stream_file(file)
+        stream = convert(read_stream_file(file), declared)
+        check_units(stream, declared)
         result = calibrate_stream(
             stream, model, thresholds=stream_thresholds(stream.rate_hz, still_window_s)
         )
