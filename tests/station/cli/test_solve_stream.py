@@ -224,3 +224,17 @@ def test_units_are_for_streams_and_a_rate_must_be_one(run_cli: CliRunner, tmp_pa
     rate = _refused(run_cli, poses, "--rate", "0")
     assert "--rate" in rate
     assert "not a positive rate" in rate
+
+
+def test_no_still_pose_found_says_why_in_the_operators_terms(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    # A MEMS gyro with a 2 deg/s bias on y (common): every window "turns" at the
+    # stillness judge's 1 deg/s limit, so no pose is still; the refusal says so.
+    _, rows = recorded
+    biased = rows.copy()
+    biased[:, 5] += 2.0
+    line = _refused(run_cli, _write(tmp_path / "biased.csv", biased))
+    assert "0 still poses found, the nine-parameter model needs 9" in line
+    assert "windows not still: most often gyro y turning" in line
+    assert "a gyro bias above the stillness limit" in line

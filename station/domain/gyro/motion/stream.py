@@ -41,7 +41,12 @@ from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
 from station.domain.samples import SampleBlock
-from station.domain.stillness import StillnessThresholds, StillSegment, still_segments
+from station.domain.stillness import (
+    StillnessThresholds,
+    StillSegment,
+    still_segments,
+    why_not_still,
+)
 
 #: Windows judged per still window (the hop is the window over this).
 HOPS_PER_WINDOW: Final = 16
@@ -168,9 +173,11 @@ def calibrate_stream(
     ]
     needed = MIN_POSES[model]
     if len(stills) < needed:
+        why = why_not_still(stream.block(), limits)
         raise StreamError(
             f"stream: {len(stills)} still poses found, the {model}-parameter model needs "
             f"{needed} (still window {limits.window_samples} samples)"
+            + (f"; windows not still: {why}" if why else "")
         )
     means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
     spreads = np.array([stream.accel_counts[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
