@@ -430,3 +430,11 @@ def test_the_report_counts_units_accepted_within_one_u_of_a_limit(session: Sessi
     for shown in (render(report, "text"), render(report, "html")):
         assert "Accepted within one U of a limit: 2 of 4 passing runs" in shown
     assert ("near_limits", "", "within_u", 2) in list(rows(report))
+    # The decision risks of each coefficient, from its spread and the runs' mean U/k.
+    risks = {r.name: r for r in near.risks}
+    assert set(risks) == {f"{f}_{a}" for f in ("offset", "sensitivity") for a in "xyz"}
+    assert risks["offset_y"].u == pytest.approx((1.0 + 0.4 + 1.0 + 0.1) / 4 / 2)  # U/k
+    for r in near.risks:
+        assert 0.0 <= r.guarded_false_accept <= r.simple_false_accept + 1e-12
+        assert r.guarded_false_reject >= r.simple_false_reject - 1e-12
+    assert "guarded: false accept" in render(report, "text")
