@@ -4,10 +4,12 @@ Pure functions of the run's journal, solution and verdict, so that
 :class:`station.run.unit_run.UnitRun` only decides *when* a record is made.
 """
 
+import logging
 from collections.abc import Mapping
 from datetime import UTC, datetime
 
 import numpy as np
+from pydantic import ValidationError
 
 from station import __version__
 from station.domain.arrays import FloatArray as Array
@@ -42,6 +44,8 @@ from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 
 ALGORITHM = "autocal-eq10"
+
+log = logging.getLogger(__name__)
 
 
 def now() -> datetime:
@@ -169,7 +173,14 @@ def uncertainty_record(
     matrix = None
     if gyro_matrix is not None and gyro_matrix.standard_errors is not None:
         matrix = COVERAGE_FACTOR * np.array(gyro_matrix.standard_errors)
-    return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+    try:
+        return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+    except ValidationError as exc:
+        # An uncertainty beyond what a record holds (a non-finite one, or more than the
+        # ADC's span) says the coefficients mean nothing, which the verdict's checks say
+        # too; the run is recorded without it rather than lost.
+        log.warning("no uncertainty recorded: %s", exc.errors()[0]["msg"])
+        return None
 
 
 def quality_metrics(solution: Solution, verification_error_mg: float | None) -> QualityMetrics:
