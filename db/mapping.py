@@ -45,6 +45,8 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         else None,
         "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
         "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
+        "uncertainty": record.uncertainty.to_json() if record.uncertainty else None,
+        "decision_rule": record.decision_rule,
         "record_sha256": record_sha256,
     }
 
@@ -109,6 +111,8 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         "purpose": run.purpose,
         "gyro": run.gyro,
         "gyro_matrix": run.gyro_matrix,
+        "uncertainty": run.uncertainty,
+        "decision_rule": run.decision_rule,
         "failures": [
             {
                 "code": f.code,

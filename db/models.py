@@ -47,6 +47,7 @@ class Run(Base):
         CheckConstraint("model IN ('six', 'nine')", name="model"),
         CheckConstraint("disposition IN ('ship', 'retest', 'rework')", name="disposition"),
         CheckConstraint("purpose IN ('golden')", name="purpose"),
+        CheckConstraint("decision_rule IN ('simple', 'guarded')", name="decision_rule"),
         Index("ix_runs_serial_started_at", "serial", "started_at", "id"),
         Index("ix_runs_station_id_started_at", "station_id", "started_at", "id"),
         Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
@@ -92,6 +93,11 @@ class Run(Base):
     #: The gyro matrix K fitted from the moves (whole-unit runs), as
     #: :class:`station.domain.records.GyroMatrixRecord`'s JSON; None otherwise.
     gyro_matrix: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
+    #: Expanded uncertainties of the coefficients, as
+    #: :class:`station.domain.records.UncertaintyRecord`'s JSON; None on older runs.
+    uncertainty: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
+    #: The decision rule that judged the run; None on older runs (simple acceptance).
+    decision_rule: Mapped[str | None] = mapped_column(String(8))
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
 

@@ -22,7 +22,9 @@ from sqlalchemy import (
     RowMapping,
     Select,
     and_,
+    case,
     func,
+    literal,
     or_,
     select,
     text,
@@ -49,6 +51,7 @@ from db.rollups import (
 )
 from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
 from db.what_if import rejudged
+from station.domain.calibration.uncertainty import COVERAGE_FACTOR
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import (
     D2,
@@ -63,9 +66,11 @@ from station.domain.quality.control import moving_range_sigma, western_electric
 from station.domain.quality.days import day_number, is_utc, midnight, plant_days
 from station.domain.quality.figures import (
     ChartPoint,
+    CoefficientRisk,
     ControlChart,
     EolReport,
     Histogram,
+    NearLimits,
     ParameterStats,
     ParetoEntry,
     ReportFilter,
@@ -83,6 +88,7 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
+from station.domain.quality.risk import decision_risks
 from station.domain.quality.shifts import plant_shifts, shift_name
 from station.domain.records import LimitsRef
 
@@ -141,6 +147,45 @@ class ReportQueries:
             session.execute(text("SET LOCAL work_mem = '256MB'"))
 
     # -- helpers -----------------------------------------------------------------------
+
+    def near_limits(
+        self, bounds: FamilyBounds, parameters: Sequence[ParameterStats] | None = None
+    ) -> NearLimits:
+        """The passing runs in range whose offset or sensitivity lies within its expanded
+        uncertainty U (``runs.uncertainty``) of a bound of ``bounds``: accepted by the
+        simple rule, refused by the guarded one. One counting statement."""
+        edges: list[ColumnElement[bool]] = []
+        standard: list[Any] = []  # the mean U/k of each coefficient
+        for family in ("offset", "sensitivity"):
+            lower, upper = bounds.get(family, (None, None))
+            for axis in "xyz":
+                value = getattr(Run, f"{family}_{axis}")
+                u = Run.uncertainty[(family, axis)].as_float()
+                standard.append(func.avg(u / Run.uncertainty["k"].as_float()))
+                if lower is not None:
+                    edges.append(value - u < lower)
+                if upper is not None:
+                    edges.append(value + u > upper)
+        edge = or_(*edges) if edges else literal(False)
+        # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
+        carried = Run.uncertainty["k"].as_float().is_not(None)
+        where = [*self.conditions(), Run.verdict == "pass", carried]
+        row = self.session.execute(
+            select(
+                func.count(),
+                func.coalesce(func.sum(case((edge, 1), else_=0)), 0),
+                func.count(func.distinct(case((edge, Run.serial), else_=None))),
+                *standard,
+            ).where(*where)
+        ).one()
+        names = [f"{family}_{axis}" for family in ("offset", "sensitivity") for axis in "xyz"]
+        means = {name: value for name, value in zip(names, row[3:], strict=True)}
+        return NearLimits(
+            runs_passed=int(row[0]),
+            within_u=int(row[1]),
+            units=int(row[2]),
+            risks=[] if parameters is None else _risks(parameters, means),
+        )
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
         """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
@@ -322,6 +367,34 @@ class ReportQueries:
             .offset(offset or None)
         )
         return list(self.session.execute(stmt).all())
+
+
+def _risks(
+    parameters: Sequence[ParameterStats], u_means: Mapping[str, float | None]
+) -> list[CoefficientRisk]:
+    """Each coefficient's global decision risks under both rules (:mod:`station.domain.
+    quality.risk`), from its spread in range and the runs' mean standard uncertainty."""
+    risks = []
+    for stats in parameters:
+        u = u_means.get(stats.name)
+        if u is None or stats.mean is None or stats.std is None:
+            continue
+        u = float(u)
+        simple = decision_risks(stats.mean, stats.std, u, stats.lower, stats.upper)
+        guarded = decision_risks(
+            stats.mean, stats.std, u, stats.lower, stats.upper, guard=COVERAGE_FACTOR * u
+        )
+        risks.append(
+            CoefficientRisk(
+                name=stats.name,
+                u=u,
+                simple_false_accept=simple.false_accept,
+                simple_false_reject=simple.false_reject,
+                guarded_false_accept=guarded.false_accept,
+                guarded_false_reject=guarded.false_reject,
+            )
+        )
+    return risks
 
 
 def split_days(
@@ -772,4 +845,5 @@ def eol_report(
         units_offset=unit_offset,
         units_limit=unit_limit,
         what_if=what_if,
+        near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
     )

@@ -118,13 +118,13 @@ class RunPage:
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
-    A record without a lot, a disposition, a purpose, a gyro matrix, its limits profile or
-    excluded poses is hashed without the field, as before the field existed, so a retry
-    from an older station matches the run it stored.
+    A record without a lot, a disposition, a purpose, a gyro matrix, uncertainties, a
+    decision rule, its limits profile or excluded poses is hashed without the field, as
+    before the field existed, so a retry from an older station matches the run it stored.
     """
     unset: dict[str, Any] = {
         name: True
-        for name in ("lot", "disposition", "purpose", "gyro_matrix")
+        for name in ("lot", "disposition", "purpose", "gyro_matrix", "uncertainty", "decision_rule")
         if getattr(record, name) is None
     }
     if record.limits.profile is None:

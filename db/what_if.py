@@ -1,7 +1,9 @@
 """What-if limits: the runs of a report re-judged against a candidate limits profile.
 
 Nothing is written: each run's stored values (pose noise, coefficients, verification
-error, gyro bias) and stored failures are read a page at a time and judged again by
+error, gyro bias, the coefficients' uncertainties, so a candidate with the guarded
+decision rule can be compared with the simple one) and stored failures are read a page
+at a time and judged again by
 :func:`station.domain.judging.rejudge`, the station's own checks. What the report needs is
 counted on the way: the runs that pass, the units whose first run on the line is in
 range (the report's cohort) with their first and final passes — a unit's latest run may
@@ -48,6 +50,25 @@ def _triple(row: Row[Any], prefix: str, source: str = "") -> tuple[float, float,
     return (float(values[0]), float(values[1]), float(values[2]))
 
 
+def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, float, float]]:
+    """A stored run's U of its offsets, sensitivities and gyro biases (a candidate profile
+    with the guarded rule judges by them; a run stored without them, by its values)."""
+    if not document:
+        return {}
+    xyz = {
+        code: tuple(float(document[key][a]) for a in "xyz")
+        for code, key in (("offset", "offset"), ("sensitivity", "sensitivity"))
+        if key in document
+    }
+    bias = document.get("gyro_bias_dps")
+    triples: dict[str, tuple[float, float, float]] = {
+        code: (v[0], v[1], v[2]) for code, v in xyz.items()
+    }
+    if bias is not None:
+        triples["gyro_bias"] = (float(bias[0]), float(bias[1]), float(bias[2]))
+    return triples
+
+
 def _judged(
     session: Session, where: Sequence[ColumnElement[bool]], candidate: LimitsProfile
 ) -> Iterator[tuple[Row[Any], bool, list[FailureReason]]]:
@@ -62,6 +83,7 @@ def _judged(
         Run.operator_id,
         *(getattr(Run, f"{k}_{a}") for k in ("offset", "sensitivity") for a in "xyz"),
         Run.verification_error_mg,
+        Run.uncertainty,
         *(getattr(RunFacts, f"gyro_bias_{a}") for a in "xyz"),
         RunFacts.line_first,
         RunFacts.line_latest,
@@ -124,6 +146,7 @@ def _judged(
                 sensitivity=_triple(row, "sensitivity"),
                 verification=None if error is None or verify is None else (verify, error),
                 gyro_bias=_triple(row, "gyro_bias"),
+                uncertainty=_uncertainty(row.uncertainty),
             )
             yield row, row.verdict == "pass", rejudge(failures.get(row.id, []), candidate, measured)
         after = (rows[-1].started_at, rows[-1].id)

@@ -18,7 +18,7 @@ from station.domain.errors import InputError
 from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
-    from station.domain.calibration import Solution
+    from station.domain.calibration import Solution, Uncertainty
     from station.domain.posefile import PoseFile
 
 
@@ -27,6 +27,28 @@ class ModelChoice(StrEnum):
 
     six = "six"
     nine = "nine"
+
+
+class AccelUnitsChoice(StrEnum):
+    """What a stream's accelerometer columns are in."""
+
+    counts = "counts"
+    g = "g"
+    ms2 = "m/s2"
+
+
+class GyroUnitsChoice(StrEnum):
+    """What a stream's gyro columns are in."""
+
+    dps = "dps"
+    rads = "rads"
+
+
+class TimeUnitsChoice(StrEnum):
+    """What a stream's time column is in."""
+
+    s = "s"
+    ms = "ms"
 
 
 def solve_command(
@@ -66,14 +88,57 @@ def solve_command(
         float,
         typer.Option(help="With --stream: seconds a still window lasts.", min=0.01),
     ] = STILL_WINDOW_S,
+    accel_units: Annotated[
+        AccelUnitsChoice,
+        typer.Option(
+            help="With --stream: the accelerometer columns in ADC counts (zero 2048, 819.2 "
+            "counts/g), in g or in m/s²."
+        ),
+    ] = AccelUnitsChoice.counts,
+    gyro_units: Annotated[
+        GyroUnitsChoice,
+        typer.Option(help="With --stream: the gyro columns in deg/s or rad/s."),
+    ] = GyroUnitsChoice.dps,
+    time_units: Annotated[
+        TimeUnitsChoice,
+        typer.Option(help="With --stream: the time column in seconds or milliseconds."),
+    ] = TimeUnitsChoice.s,
+    rate: Annotated[
+        float | None,
+        typer.Option(
+            help="With --stream: the sample rate, samples/s (the time column is then ignored)."
+        ),
+    ] = None,
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
+    declared = (
+        accel_units is not AccelUnitsChoice.counts
+        or gyro_units is not GyroUnitsChoice.dps
+        or time_units is not TimeUnitsChoice.s
+        or rate is not None
+    )
     if stream:
         from station.cli.solve_stream import solve_stream
+        from station.domain.gyro.motion.errors import StreamError
+        from station.domain.gyro.motion.stream_units import StreamUnits
 
-        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window)
+        try:
+            units = StreamUnits(accel_units.value, gyro_units.value, time_units.value, rate)
+        except StreamError as exc:
+            raise InputError(f"--rate: {exc}") from None
+        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window, units=units)
         return
-    from station.domain.calibration import CalibrationError, solve
+    if declared:
+        raise InputError(
+            "--accel-units, --gyro-units, --time-units and --rate describe a raw stream: "
+            "use them with --stream"
+        )
+    from station.domain.calibration import (
+        CalibrationError,
+        Uncertainty,
+        accelerometer_budget,
+        solve,
+    )
     from station.domain.limits import load_profile
     from station.domain.posefile import read_pose_file
 
@@ -83,13 +148,15 @@ def solve_command(
         solution = solve(pose_file.poses, model.value, max_residual_counts=max_residual)
     except CalibrationError as exc:
         raise InputError(f"{pose_file.where(exc.pose)}: {exc}") from None
+    budget = accelerometer_budget(solution, pose_file.poses, pose_file.spread, pose_file.samples)
+    uncertainty = Uncertainty.of_budget(budget)
     if as_json:
-        print_json(solution.to_dict())
+        print_json(solution.to_dict() | {"uncertainty": uncertainty.to_dict()})
     else:
-        out.print(_table(solution, pose_file))
+        out.print(_table(solution, pose_file, uncertainty))
 
 
-def _table(solution: Solution, pose_file: PoseFile) -> Table:
+def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) -> Table:
     from station.domain.calibration import MIN_DOF_SHOWN, SENSITIVITY_CONVENTION
 
     cal, q = solution.calibration, solution.quality
@@ -102,19 +169,36 @@ def _table(solution: Solution, pose_file: PoseFile) -> Table:
     table.add_column("axis")
     table.add_column("offset (counts)", justify="right")
     table.add_column("sensitivity (counts/g)", justify="right")
+    table.add_column(f"U offset (k = {uncertainty.k:g})", justify="right")
+    table.add_column(f"U sensitivity (k = {uncertainty.k:g})", justify="right")
+    u_off, u_sens = uncertainty.offset, uncertainty.sensitivity
     for i, axis in enumerate(AXES):
         off = f"{cal.offset[i]:.4f}"
         sens = f"{cal.sensitivity[i]:.4f}"
         if shown and se is not None:
             off += f" ± {se.offset[i]:.4f}"
             sens += f" ± {se.sensitivity[i]:.4f}"
-        table.add_row(axis, off, sens)
+        table.add_row(
+            axis,
+            off,
+            sens,
+            "—" if u_off is None else f"± {u_off[i]:.4f}",
+            "—" if u_sens is None else f"± {u_sens[i]:.4f}",
+        )
     lines = [
         f"residual |g|−1: rms {q.residual_rms_mg:.3f} mg, max {q.residual_max_mg:.3f} mg",
         f"condition number {q.condition_number:.3g}, coverage {q.coverage:.3f}, "
         f"closest poses {q.closest_pair[0] + 1} and {q.closest_pair[1] + 1}, "
         f"{q.min_angle_deg:.1f}°",
     ]
+    noted = (
+        ""
+        if pose_file.spread is not None
+        else ("; the file gives no sx,sy,sz,n: each pose's noise taken as the sensor's")
+    )
+    lines.append(
+        f"U: expanded uncertainty, k = {uncertainty.k:g} (GUM budget, docs/calibration.md){noted}"
+    )
     if se is not None:
         lines.append(
             f"± 1-σ standard errors, {se.dof} degrees of freedom"

@@ -21,10 +21,19 @@ from station.domain.sensor import AXES
 if TYPE_CHECKING:
     from station.domain.calibration import Model
     from station.domain.gyro.motion import StreamCalibration
+    from station.domain.gyro.motion.stream_units import StreamUnits
 
 
-def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: float) -> None:
-    """Calibrate the unit recorded in ``file`` and print the result."""
+def solve_stream(
+    file: Path,
+    model: Model,
+    *,
+    as_json: bool,
+    still_window_s: float,
+    units: StreamUnits | None = None,
+) -> None:
+    """Calibrate the unit recorded in ``file`` (its columns in ``units``: the station's
+    own by default) and print the result."""
     from station.domain.calibration import CalibrationError
     from station.domain.gyro.motion import (
         GyroMatrixError,
@@ -33,9 +42,12 @@ def solve_stream(file: Path, model: Model, *, as_json: bool, still_window_s: flo
         stream_thresholds,
     )
     from station.domain.gyro.motion.stream_file import read_stream_file
+    from station.domain.gyro.motion.stream_units import StreamUnits, check_units, convert
 
+    declared = units or StreamUnits()
     try:
-        stream = read_stream_file(file)
+        stream = convert(read_stream_file(file), declared)
+        check_units(stream, declared)
         result = calibrate_stream(
             stream, model, thresholds=stream_thresholds(stream.rate_hz, still_window_s)
         )
@@ -63,15 +75,23 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
     table.add_column("offset (counts)", justify="right")
     table.add_column("sensitivity (counts/g)", justify="right")
     table.add_column("gyro bias (deg/s)", justify="right")
+    u = result.uncertainty
     for i, axis in enumerate(AXES):
         table.add_row(
-            axis, f"{cal.offset[i]:.3f}", f"{cal.sensitivity[i]:.3f}", f"{result.bias_dps[i]:+.4f}"
+            axis,
+            _with_u(cal.offset[i], u.offset, i, 3),
+            _with_u(cal.sensitivity[i], u.sensitivity, i, 3),
+            _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
         )
     lines = [
         f"gyro K {axis}: "
         + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
         for i, axis in enumerate(AXES)
     ]
+    lines.append(
+        f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md); "
+        f"± of K: 1-σ standard errors (U = {u.k:g}σ)"
+    )
     lines += [
         f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg",
         f"moves: residual rms {gyro.residual_rms_deg:.3f}° with K, "
@@ -80,3 +100,13 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
     lines += [f"move {u.index} unusable: {u.reason}" for u in gyro.unusable]
     table.caption = "\n".join(lines)
     return table
+
+
+def _with_u(value: float, u: object, i: int, digits: int, *, sign: bool = False) -> str:
+    """``value ± U`` with ``digits`` decimals (no ± when there is no U)."""
+    import numpy as np
+
+    shown = f"{value:+.{digits}f}" if sign else f"{value:.{digits}f}"
+    if not isinstance(u, np.ndarray):
+        return shown
+    return f"{shown} ± {float(u[i]):.{digits}f}"

@@ -33,7 +33,9 @@ class Measured:
     ``pose_noise``: per pose index, the standard deviation of its samples per axis
     (counts); ``link_loss``: per pose index, the fraction of samples lost; ``offset``,
     ``sensitivity``: the solved coefficients; ``verification``: the verification pose's
-    index and its error (mg); ``gyro_bias``: deg/s.
+    index and its error (mg); ``gyro_bias``: deg/s; ``uncertainty``: the expanded
+    uncertainty U of each axis' ``offset``, ``sensitivity`` and ``gyro_bias`` (keys as the
+    fields'), which a profile's guarded decision rule judges with.
     """
 
     pose_noise: Mapping[int, Triple] = field(default_factory=dict)
@@ -42,6 +44,7 @@ class Measured:
     sensitivity: Triple | None = None
     verification: tuple[int, float] | None = None
     gyro_bias: Triple | None = None
+    uncertainty: Mapping[str, Triple] = field(default_factory=dict)
 
 
 def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReason]:
@@ -52,15 +55,31 @@ def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReas
             reasons.append(check(profile, "pose_noise", std, axis=axis, pose=i))
         if i in measured.link_loss:
             reasons.append(check(profile, "link_loss", measured.link_loss[i], pose=i))
+    u = measured.uncertainty
     for code, values in (("offset", measured.offset), ("sensitivity", measured.sensitivity)):
-        for axis, value in zip(AXES, values or (), strict=False):
-            reasons.append(check(profile, code, value, axis=axis))
+        for i, (axis, value) in enumerate(zip(AXES, values or (), strict=False)):
+            reasons.append(check(profile, code, value, axis=axis, uncertainty=_u(u, code, i)))
     if measured.verification is not None:
         pose, error = measured.verification
         reasons.append(check(profile, "verification_error", error, pose=pose))
-    for axis, bias in zip(AXES, measured.gyro_bias or (), strict=False):
-        reasons.append(check(profile, "gyro_bias", bias, axis=axis))
+    for i, (axis, bias) in enumerate(zip(AXES, measured.gyro_bias or (), strict=False)):
+        reasons.append(
+            check(profile, "gyro_bias", bias, axis=axis, uncertainty=_u(u, "gyro_bias", i))
+        )
     return [r for r in reasons if r is not None]
+
+
+def _u(uncertainty: Mapping[str, Triple], code: str, axis: int) -> float | None:
+    values = uncertainty.get(code)
+    return None if values is None else values[axis]
+
+
+def uncertainty_of(
+    offset: Triple | None, sensitivity: Triple | None, gyro_bias: Triple | None
+) -> dict[str, Triple]:
+    """:attr:`Measured.uncertainty` from the U of each coefficient family (None: unknown)."""
+    families = (("offset", offset), ("sensitivity", sensitivity), ("gyro_bias", gyro_bias))
+    return {code: values for code, values in families if values is not None}
 
 
 def verdict_failures(
@@ -94,6 +113,7 @@ def rejudge(
         sensitivity=measured.sensitivity,
         verification=measured.verification,
         gyro_bias=measured.gyro_bias,
+        uncertainty=measured.uncertainty,
     )
     found = [f for f in stored if f.code not in REJUDGED]
     return verdict_failures(found, limit_checks(profile, measured))

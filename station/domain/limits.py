@@ -40,6 +40,7 @@ from station.domain.record_bounds import (
 from station.domain.records import (
     GYRO_MATRIX_MAX,
     Axis,
+    DecisionRule,
     FailureReason,
     LimitsRef,
     document_sha256,
@@ -70,6 +71,19 @@ class Bounds(BaseModel):
         low = self.lower if self.lower is not None else -float("inf")
         high = self.upper if self.upper is not None else float("inf")
         return low <= value <= high
+
+    def guarded(self, value: float, u: float) -> bool:
+        """Whether ``value ± u`` lies within the bounds: guarded acceptance with a guard
+        band w = u on each side (ILAC-G8:09/2019 4.2.2, JCGM 106:2012 8.3.3)."""
+        low = self.lower if self.lower is not None else -float("inf")
+        high = self.upper if self.upper is not None else float("inf")
+        return low + u <= value <= high - u
+
+    def margin(self, value: float) -> float:
+        """How far ``value`` lies inside the nearer bound (negative: outside)."""
+        low = self.lower if self.lower is not None else -float("inf")
+        high = self.upper if self.upper is not None else float("inf")
+        return min(value - low, high - value)
 
     def describe(self) -> str:
         """``[a, b]``, ``≤ b`` or ``≥ a``."""
@@ -183,6 +197,14 @@ class LimitsProfile(BaseModel):
             "calibrated gyros integrate over the verification move, degrees; absent: unchecked"
         ),
     ] = None
+    decision_rule: Annotated[
+        DecisionRule | None,
+        Field(
+            description="how a coefficient and its expanded uncertainty U are judged: simple "
+            "acceptance (the value within the limits; the default) or guarded acceptance with "
+            "a guard band w = U (the value ± U within the limits), ILAC-G8:09/2019"
+        ),
+    ] = None
     fit_residual_counts: Annotated[
         NoiseBounds | None,
         Field(
@@ -195,6 +217,11 @@ class LimitsProfile(BaseModel):
     def max_residual_counts(self) -> float | None:
         """The fit's residual limit, counts (``None``: the calibration's default)."""
         return None if self.fit_residual_counts is None else self.fit_residual_counts.upper
+
+    @property
+    def rule(self) -> DecisionRule:
+        """The decision rule the profile judges by (``simple`` when it names none)."""
+        return self.decision_rule or "simple"
 
     @property
     def attempts_allowed(self) -> int:
@@ -231,6 +258,7 @@ class LimitsProfile(BaseModel):
 #: they are not part of its hash.
 _OPTIONAL = (
     "retest_limit",
+    "decision_rule",
     "fit_residual_counts",
     "gyro_scale_error",
     "gyro_misalignment",
@@ -293,20 +321,32 @@ def check(
     *,
     axis: Axis | None = None,
     pose: int | None = None,
+    uncertainty: float | None = None,
 ) -> FailureReason | None:
-    """Compare ``measured`` with the profile's bounds for ``code``.
+    """Compare ``measured`` with the profile's bounds for ``code``, by the profile's
+    decision rule: ``simple``, within the bounds; ``guarded``, with the value's expanded
+    ``uncertainty`` U (when known) as a guard band, ``measured ± U`` within them.
 
-    Returns ``None`` when within bounds (or when the profile sets no bounds for an
-    optional check), else the failure reason.
+    Returns ``None`` when accepted (or when the profile sets no bounds for an optional
+    check), else the failure reason.
     """
     bounds: Bounds | None = getattr(profile, CHECKS[code])
-    if bounds is None or bounds.contains(measured):
+    if bounds is None:
         return None
     where = "".join([f" {axis}" if axis else "", f" (pose {pose + 1})" if pose is not None else ""])
     unit = f" {UNITS[code]}" if UNITS[code] else ""
+    if bounds.contains(measured):
+        if profile.rule == "simple" or uncertainty is None or bounds.guarded(measured, uncertainty):
+            return None
+        outcome = (
+            f"within {bounds.describe()} but less than its U = {uncertainty:.3g}{unit} inside "
+            "(guarded acceptance, w = U)"
+        )
+    else:
+        outcome = f"outside {bounds.describe()}"
     return FailureReason(
         code=code,
-        message=f"{code.replace('_', ' ')}{where} {measured:.6g}{unit} outside {bounds.describe()}",
+        message=f"{code.replace('_', ' ')}{where} {measured:.6g}{unit} {outcome}",
         measured=measured if math.isfinite(measured) else None,
         lower=bounds.lower,
         upper=bounds.upper,

@@ -1,6 +1,9 @@
 """Reading pose files: CSV with a header holding ``ax,ay,az``, one still pose a row.
 
-Other columns are ignored; blank lines are skipped. Every problem is reported as an
+Optional columns ``sx,sy,sz`` (each pose's sample standard deviation, counts) and ``n``
+(its sample count) feed the uncertainty budget's pose noise; without them the budget
+assumes the sensor's (:mod:`station.domain.calibration.uncertainty`). Other columns are
+ignored; blank lines are skipped. Every problem is reported as an
 :class:`station.domain.errors.InputError` naming the file and, where one applies, the line.
 """
 
@@ -14,15 +17,20 @@ from station.domain.arrays import FloatArray
 from station.domain.errors import InputError
 
 COLUMNS = ("ax", "ay", "az")
+#: Optional: each pose's sample standard deviation per axis (counts) and sample count.
+SPREAD_COLUMNS = ("sx", "sy", "sz", "n")
 
 
 @dataclass(frozen=True, eq=False)
 class PoseFile:
-    """Pose means (N, 3) counts and the file line each came from."""
+    """Pose means (N, 3) counts and the file line each came from; with the optional
+    columns, each pose's sample spread (N, 3) counts and sample count (N,)."""
 
     path: Path
     poses: FloatArray
     lines: tuple[int, ...]
+    spread: FloatArray | None = None
+    samples: FloatArray | None = None
 
     def where(self, pose: int | None) -> str:
         """``FILE:LINE`` of a pose (0-based index), or ``FILE`` for the whole set."""
@@ -54,7 +62,15 @@ def read_pose_file(path: Path) -> PoseFile:
             f"{path}:{reader.line_num}: header lacks column(s) {','.join(missing)} "
             f"(found: {','.join(names)})"
         )
-    index = [names.index(c) for c in COLUMNS]
+    present = [c for c in SPREAD_COLUMNS if c in names]
+    if present and len(present) < len(SPREAD_COLUMNS):
+        lacking = ",".join(c for c in SPREAD_COLUMNS if c not in names)
+        raise InputError(
+            f"{path}:{reader.line_num}: header has {','.join(present)} but lacks {lacking}: "
+            "a pose's spread needs sx,sy,sz and its sample count n"
+        )
+    columns = COLUMNS + (SPREAD_COLUMNS if present else ())
+    index = [names.index(c) for c in columns]
 
     rows: list[list[float]] = []
     lines: list[int] = []
@@ -62,17 +78,31 @@ def read_pose_file(path: Path) -> PoseFile:
         if not any(cell.strip() for cell in row):
             continue
         values = []
-        for column, i in zip(COLUMNS, index, strict=True):
+        for column, i in zip(columns, index, strict=True):
             cell = row[i].strip() if i < len(row) else ""
             try:
-                values.append(float(cell))
+                value = float(cell)
             except ValueError:
                 shown = repr(cell) if cell else "an empty cell"
                 raise InputError(
                     f"{path}:{reader.line_num}: column {column}: {shown} is not a number"
                 ) from None
+            if column in SPREAD_COLUMNS and not (0.0 <= value < float("inf")):
+                raise InputError(
+                    f"{path}:{reader.line_num}: column {column}: {cell} is not a spread "
+                    "or count (a finite number ≥ 0)"
+                )
+            if column == "n" and (value < 1 or value != int(value)):
+                raise InputError(
+                    f"{path}:{reader.line_num}: column n: {cell} is not a sample count "
+                    "(a whole number ≥ 1)"
+                )
+            values.append(value)
         rows.append(values)
         lines.append(reader.line_num)
     if not rows:
         raise InputError(f"{path}: no pose rows after the header")
-    return PoseFile(path, np.array(rows, dtype=np.float64), tuple(lines))
+    table = np.array(rows, dtype=np.float64)
+    if not present:
+        return PoseFile(path, table, tuple(lines))
+    return PoseFile(path, table[:, :3], tuple(lines), table[:, 3:6], table[:, 6])

@@ -24,7 +24,9 @@ from pydantic import (
     ConfigDict,
     Field,
     JsonValue,
+    SerializerFunctionWrapHandler,
     StringConstraints,
+    model_serializer,
     model_validator,
 )
 
@@ -90,6 +92,10 @@ Verdict = Literal["pass", "fail"]
 Disposition = Literal["ship", "retest", "rework"]
 #: ``fit`` poses feed the calibration solve; ``verify`` poses only check its result.
 PoseRole = Literal["fit", "verify"]
+#: How a value and its uncertainty are judged against a limit (ILAC-G8:09/2019, JCGM
+#: 106:2012): ``simple`` acceptance (the value within the limits), or ``guarded``
+#: acceptance with a guard band w = U (the value ± U within the limits).
+DecisionRule = Literal["simple", "guarded"]
 
 #: Largest count a database INTEGER column holds.
 _INT32_MAX = 2**31 - 1
@@ -344,6 +350,44 @@ class GyroMatrixRecord(_Record):
     verification_deg: AngleDeg | None = None
 
 
+_GyroSpreadValue = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
+_MatrixSpread = Annotated[float, Field(ge=0, le=2 * GYRO_MATRIX_MAX)]
+_SpreadRow = tuple[_MatrixSpread, _MatrixSpread, _MatrixSpread]
+
+
+class UncertaintyRecord(_Record):
+    """Expanded uncertainties U = k·u_c of the run's coefficients ([JCGM100]_), in the
+    sensor's units (:mod:`station.domain.calibration.uncertainty`): offsets in counts,
+    sensitivities in counts/g, gyro biases in deg/s, the gyro matrix K as a fraction. A
+    coefficient the run did not measure is left out (None)."""
+
+    k: Annotated[float, Field(gt=0, le=10, description="coverage factor (2: about 95 %)")]
+    offset: Annotated[Spread3 | None, Field(description="U of each offset, counts")] = None
+    sensitivity: Annotated[Spread3 | None, Field(description="U of each sensitivity, counts/g")] = (
+        None
+    )
+    gyro_bias_dps: Annotated[
+        tuple[_GyroSpreadValue, _GyroSpreadValue, _GyroSpreadValue] | None,
+        Field(description="U of each gyro's bias, deg/s"),
+    ] = None
+    gyro_matrix: Annotated[
+        tuple[_SpreadRow, _SpreadRow, _SpreadRow] | None,
+        Field(description="U of each element of the gyro matrix K"),
+    ] = None
+
+    @model_serializer(mode="wrap")
+    def _measured_only(self, handler: SerializerFunctionWrapHandler) -> dict[str, object]:
+        """Unmeasured coefficients are left out of the shape, not given as null."""
+        document: dict[str, object] = handler(self)
+        return {key: value for key, value in document.items() if value is not None}
+
+    def to_json(self) -> dict[str, JsonValue]:
+        """The one shape: ``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z},
+        "gyro_bias_dps": [3], "gyro_matrix": [[3×3]]}``, unmeasured keys left out."""
+        document: dict[str, JsonValue] = self.model_dump(mode="json")
+        return document
+
+
 def document_sha256(document: Mapping[str, JsonValue]) -> str:
     """SHA-256 of a JSON document's canonical text (sorted keys, no whitespace, ASCII):
     a limits profile's identity (:attr:`station.domain.limits.LimitsProfile.sha256`)."""
@@ -411,6 +455,12 @@ class _RunHeader(_Record):
     gyro: GyroSummary | None = None
     #: The gyro matrix K fitted from the moves (whole-unit runs); None otherwise.
     gyro_matrix: GyroMatrixRecord | None = None
+    #: Expanded uncertainties of the coefficients; None on runs without coefficients and
+    #: records from before.
+    uncertainty: UncertaintyRecord | None = None
+    #: The decision rule that judged the run (ILAC-G8): ``simple`` acceptance or
+    #: ``guarded`` (guard band w = U); None on records from before (they were simple).
+    decision_rule: DecisionRule | None = None
 
     @model_validator(mode="after")
     def _consistent_outcome(self) -> Self:

@@ -20,6 +20,8 @@ windows starting every ``hop_samples`` rows of a whole stream and merges the sti
 that overlap into still segments (the poses of a recorded calibration).
 """
 
+import re
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -190,3 +192,47 @@ def still_segments(block: SampleBlock, limits: StillnessThresholds) -> list[Stil
         else:
             segments.append(StillSegment(start, start + width))
     return segments
+
+
+#: A refused window's reason without its numbers: what kind of refusal it is.
+_NUMBERS = re.compile(r"[-+]?\d[\d.]*%?")
+#: What each kind of refusal, in most windows of a recording, says about it.
+_HINTS = (
+    ("turning", "a gyro bias above the stillness limit, or gyro units not deg/s?"),
+    (
+        "at the ADC rail",
+        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
+        "counts/g)? declare --accel-units",
+    ),
+    (
+        "is not 1 g",
+        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
+        "counts/g)? declare --accel-units",
+    ),
+    ("spread", "more noise than the stillness limits allow, or the unit never held still?"),
+)
+
+
+def why_not_still(block: SampleBlock, limits: StillnessThresholds) -> str:
+    """Why the windows of a recording were refused, in words: how many, the commonest
+    reason (with one window's numbers) and, when that reason refused most of them, what
+    it likely means. Empty when every window was still (or there is none)."""
+    width, hop = limits.window_samples, limits.hop_samples
+    kinds: Counter[str] = Counter()
+    example: dict[str, str] = {}
+    windows = 0
+    for start in range(0, len(block) - width + 1, hop):
+        windows += 1
+        for reason in judge_window(block[start : start + width], limits).reasons:
+            kind = _NUMBERS.sub("#", reason)
+            kinds[kind] += 1
+            example.setdefault(kind, reason)
+    if not kinds:
+        return ""
+    kind, count = kinds.most_common(1)[0]
+    words = f"most often {example[kind]} ({count} of {windows} windows)"
+    if count >= 0.9 * windows:
+        hint = next((h for key, h in _HINTS if key in kind), None)
+        if hint is not None:
+            words += f": {hint}"
+    return words

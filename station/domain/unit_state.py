@@ -39,6 +39,7 @@ from station.domain.records import (
     RunRecord,
     RunSummary,
     StoredRun,
+    UncertaintyRecord,
     Vector3,
     Verdict,
 )
@@ -132,6 +133,13 @@ class HeldCalibration(_UnitPart):
     gyro_matrix: Annotated[
         GyroMatrixRecord | None,
         Field(description="the gyro matrix K and bias written (whole-unit runs; None: none)"),
+    ] = None
+    uncertainty: Annotated[
+        UncertaintyRecord | None,
+        Field(
+            description="expanded uncertainties (k = 2) of the coefficients written, the "
+            "sensor's units (None: the run recorded none)"
+        ),
     ] = None
 
 
@@ -230,6 +238,7 @@ def _held(writer: Run) -> HeldCalibration | None:
         matrix=cal.matrix,
         quality=writer.quality,
         gyro_matrix=writer.gyro_matrix,
+        uncertainty=writer.uncertainty,
     )
 
 

@@ -23,11 +23,14 @@ from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
     CAPABILITY_HEADER,
     PARAMETER_HEADER,
+    RISK_HEADER,
     SUMMARY_HEADER,
     WHAT_IF_HEADER,
     capability_cells,
     listed,
+    near_limits_line,
     parameter_cells,
+    risk_cells,
     summary_cells,
     what_if_cells,
 )
@@ -65,6 +68,9 @@ _env.globals.update(
     what_if_cells=what_if_cells,
     capability_header=CAPABILITY_HEADER,
     capability_cells=capability_cells,
+    near_limits_line=near_limits_line,
+    risk_header=RISK_HEADER,
+    risk_cells=risk_cells,
 )
 # The macros of the base template, for every template and every template it includes
 # (Jinja's template modules expose their macros as attributes it does not declare).

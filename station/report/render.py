@@ -17,11 +17,14 @@ from station.report.formatting import moment, number, percent
 from station.report.tables import (
     CAPABILITY_HEADER,
     PARAMETER_HEADER,
+    RISK_HEADER,
     SUMMARY_HEADER,
     WHAT_IF_HEADER,
     capability_cells,
     listed,
+    near_limits_line,
     parameter_cells,
+    risk_cells,
     summary_cells,
     what_if_cells,
 )
@@ -132,6 +135,15 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
         for stats in what_if["parameters"]:
             for key in ("lower", "upper", "count", "cp", "cpk", "out_of_limits", "marginal"):
                 yield ("what_if", f"parameter:{stats['name']}", key, stats[key])
+    near = doc.get("near_limits")
+    if near is not None:
+        for key, value in near.items():
+            if key != "risks":
+                yield ("near_limits", "", key, value)
+        for risk in near["risks"]:
+            for key, value in risk.items():
+                if key != "name":
+                    yield ("near_limits", f"risk:{risk['name']}", key, value)
     yield ("units", "", "total", doc["units_total"])
     yield ("units", "", "listed", doc["units_listed"])
     yield ("units", "", "held", doc["units_held"])
@@ -223,6 +235,12 @@ def as_text(report: EolReport) -> str:
         "",
         f"Parameters against {report.bounds_source}",
         *_table(PARAMETER_HEADER, parameter_cells(report)),
+        *([near_limits_line(report)] if report.near_limits is not None else []),
+        *(
+            _table(RISK_HEADER, risk_cells(report))
+            if report.near_limits is not None and report.near_limits.risks
+            else []
+        ),
         "",
         "Control charts (I-MR, limits from every run in range)",
         *_table(

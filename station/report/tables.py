@@ -125,3 +125,44 @@ def capability_cells(report: EolReport) -> list[list[str]]:
         ]
         for p in w.parameters
     ]
+
+
+def near_limits_line(report: EolReport) -> str:
+    """The passing runs accepted within one U of a limit, in words (text and HTML)."""
+    near = report.near_limits
+    if near is None:
+        return ""
+    return (
+        f"Accepted within one U of a limit: {near.within_u} of {near.runs_passed} passing runs "
+        f"with uncertainties ({near.units} units): an offset or sensitivity whose value ± U "
+        "reaches past a limit (guarded acceptance, w = U, would refuse them)"
+    )
+
+
+#: The decision risks' table: per coefficient, both rules (JCGM 106 global risks).
+RISK_HEADER = [
+    "coefficient",
+    "u (U/k)",
+    "simple: false accept",
+    "simple: false reject",
+    "guarded: false accept",
+    "guarded: false reject",
+]
+
+
+def risk_cells(report: EolReport) -> list[list[str]]:
+    """The rows of :data:`RISK_HEADER`, one per coefficient with an uncertainty."""
+    near = report.near_limits
+    if near is None:
+        return []
+    return [
+        [
+            r.name,
+            number(r.u),
+            percent(r.simple_false_accept),
+            percent(r.simple_false_reject),
+            percent(r.guarded_false_accept),
+            percent(r.guarded_false_reject),
+        ]
+        for r in near.risks
+    ]

@@ -4,14 +4,23 @@ Pure functions of the run's journal, solution and verdict, so that
 :class:`station.run.unit_run.UnitRun` only decides *when* a record is made.
 """
 
+import logging
 from collections.abc import Mapping
 from datetime import UTC, datetime
 
 import numpy as np
+from pydantic import ValidationError
 
 from station import __version__
 from station.domain.arrays import FloatArray as Array
-from station.domain.calibration import Solution, apply
+from station.domain.calibration import (
+    COVERAGE_FACTOR,
+    Solution,
+    Uncertainty,
+    accelerometer_budget,
+    apply,
+    gyro_bias_uncertainty,
+)
 from station.domain.gyro import summarize_still_poses
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
@@ -26,6 +35,7 @@ from station.domain.records import (
     QualityMetrics,
     ReplacedCapture,
     RunRecord,
+    UncertaintyRecord,
     Vector3,
     Verdict,
 )
@@ -34,6 +44,8 @@ from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 
 ALGORITHM = "autocal-eq10"
+
+log = logging.getLogger(__name__)
 
 
 def now() -> datetime:
@@ -126,6 +138,51 @@ def pose_records(
     )
 
 
+def uncertainty_record(
+    captures: Mapping[int, Capture],
+    fit_count: int,
+    solution: Solution | None,
+    gyro_matrix: GyroMatrixRecord | None = None,
+) -> UncertaintyRecord | None:
+    """The expanded uncertainties of the run's coefficients
+    (:mod:`station.domain.calibration.uncertainty`): the accelerometer's from the fit
+    poses' means, spreads and sample counts and the verification pose, the gyro bias's
+    from the fit poses' gyro means, the gyro matrix's from its fit (None: no solution)."""
+    if solution is None or any(i not in captures for i in range(fit_count)):
+        return None
+    fit = [captures[i] for i in range(fit_count)]
+    verify = captures.get(fit_count)
+    budget = accelerometer_budget(
+        solution,
+        fit_means(captures, fit_count),
+        np.array([c.record.std.as_tuple() for c in fit]),
+        np.array([c.record.sample_count for c in fit]),
+        verification=None if verify is None else np.array(verify.record.mean.as_tuple()),
+        verification_spread=None if verify is None else np.array(verify.record.std.as_tuple()),
+        verification_samples=None if verify is None else verify.record.sample_count,
+    )
+    uncertainty = Uncertainty.of_budget(budget)
+    gyro_means = [c.record.gyro_mean for c in fit]
+    bias = None
+    if all(m is not None for m in gyro_means):
+        bias = gyro_bias_uncertainty(
+            np.array([m.as_tuple() for m in gyro_means if m is not None]),
+            np.array([c.gyro_std.as_tuple() for c in fit]),
+            np.array([c.record.sample_count for c in fit]),
+        )
+    matrix = None
+    if gyro_matrix is not None and gyro_matrix.standard_errors is not None:
+        matrix = COVERAGE_FACTOR * np.array(gyro_matrix.standard_errors)
+    try:
+        return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+    except ValidationError as exc:
+        # An uncertainty beyond what a record holds (a non-finite one, or more than the
+        # ADC's span) says the coefficients mean nothing, which the verdict's checks say
+        # too; the run is recorded without it rather than lost.
+        log.warning("no uncertainty recorded: %s", exc.errors()[0]["msg"])
+        return None
+
+
 def quality_metrics(solution: Solution, verification_error_mg: float | None) -> QualityMetrics:
     """The record's quality part, with the fit poses the solve left out as inconsistent."""
     q = solution.quality
@@ -152,9 +209,11 @@ def run_record(
     gyro: GyroSummary | None,
     poses: tuple[PoseRecord, ...],
     gyro_matrix: GyroMatrixRecord | None = None,
+    uncertainty: UncertaintyRecord | None = None,
 ) -> RunRecord:
     """The record of the finished run, as it goes to the outbox: where its unit goes
-    (``disposition``) and whether it was the station's ``golden`` unit included."""
+    (``disposition``), whether it was the station's ``golden`` unit, the coefficients'
+    ``uncertainty`` (:func:`uncertainty_record`) and the profile's decision rule included."""
     coefficients = quality = None
     if solution is not None:
         cal = solution.calibration.to_dict()
@@ -186,5 +245,7 @@ def run_record(
         quality=quality,
         gyro=gyro,
         gyro_matrix=gyro_matrix,
+        uncertainty=uncertainty,
+        decision_rule=profile.rule,
         poses=poses,
     )

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.domain.calibration import CalibrationError, Solution, apply
-from station.domain.judging import Measured, limit_checks, verdict_failures
+from station.domain.judging import Measured, limit_checks, uncertainty_of, verdict_failures
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
     Disposition,
@@ -29,6 +29,7 @@ from station.domain.records import (
     GyroSummary,
     PoseRecord,
     RunRecord,
+    UncertaintyRecord,
     Verdict,
 )
 from station.domain.run_settings import RunSettings
@@ -161,10 +162,11 @@ def conclude(
     for reason in gyro_checks:
         failures.add(reason)
     error = _verification_error_mg(captures, solution, fit_count)
+    uncertainty = record.uncertainty_record(captures, fit_count, solution, gyro_matrix)
     if failures.aborted:
         reasons, error = list(failures.found), None
     else:
-        measured = _measured(captures, solution, fit_count, error, gyro)
+        measured = _measured(captures, solution, fit_count, error, gyro, uncertainty)
         reasons = verdict_failures(failures.found, limit_checks(profile, measured))
     if not store:
         return Conclusion(error, None)
@@ -182,6 +184,7 @@ def conclude(
         gyro=gyro,
         poses=record.pose_records(captures, evidence),
         gyro_matrix=gyro_matrix,
+        uncertainty=uncertainty,
     )
     return Conclusion(error, run)
 
@@ -202,9 +205,12 @@ def _measured(
     fit_count: int,
     verification_error_mg: float | None,
     gyro: GyroSummary | None,
+    uncertainty: UncertaintyRecord | None = None,
 ) -> Measured:
-    """What the limits judge, from the poses taken, the solve and the gyro summary."""
+    """What the limits judge, from the poses taken, the solve, the gyro summary and the
+    coefficients' uncertainties."""
     calibration = solution.calibration if solution is not None else None
+    u = uncertainty
     return Measured(
         pose_noise={i: c.record.std.as_tuple() for i, c in captures.items()},
         link_loss={i: c.loss_fraction for i, c in captures.items()},
@@ -212,6 +218,11 @@ def _measured(
         sensitivity=None if calibration is None else _triple(calibration.sensitivity),
         verification=None if verification_error_mg is None else (fit_count, verification_error_mg),
         gyro_bias=None if gyro is None else gyro.bias.as_tuple(),
+        uncertainty=uncertainty_of(
+            None if u is None or u.offset is None else u.offset.as_tuple(),
+            None if u is None or u.sensitivity is None else u.sensitivity.as_tuple(),
+            None if u is None or u.gyro_bias_dps is None else u.gyro_bias_dps,
+        ),
     )
 
 

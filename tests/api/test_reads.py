@@ -49,6 +49,26 @@ def test_a_unit_shows_its_latest_run(client: httpx.Client, database: Database) -
     assert history["data"][0]["failures"][0]["code"] == "sensitivity_out_of_range"
 
 
+def test_a_unit_holds_the_uncertainty_of_its_coefficients(
+    client: httpx.Client, database: Database
+) -> None:
+    shape = {
+        "k": 2.0,
+        "offset": {"x": 0.06, "y": 0.07, "z": 0.08},
+        "sensitivity": {"x": 0.3, "y": 0.2, "z": 0.25},
+        "gyro_bias_dps": [0.004, 0.005, 0.006],
+    }
+    older = make_record(started_at=T0)  # a record from before: no uncertainty
+    record = make_record(started_at=T0 + timedelta(hours=1), uncertainty=shape)
+    _store(database, older)
+    assert client.get(f"/api/v1/units/{older.serial}").json()["holds"]["uncertainty"] is None
+    _store(database, record)
+    unit = client.get(f"/api/v1/units/{record.serial}").json()
+    assert unit["holds"]["uncertainty"] == shape  # no gyro matrix measured: no key
+    run = client.get(f"/api/v1/runs/{record.run_id}").json()
+    assert run["uncertainty"] == shape
+
+
 def test_a_failing_unit_shows_its_failure_reasons(client: httpx.Client, database: Database) -> None:
     record = make_record(verdict="fail")
     _store(database, record)

@@ -104,6 +104,28 @@ def test_a_certificate_lists_the_earlier_runs(client: httpx.Client, retested: li
     assert 'class="fail">fail<' in earlier
 
 
+def test_a_certificate_prints_each_coefficient_with_its_uncertainty_and_k(
+    client: httpx.Client, database: Database
+) -> None:
+    shape = {
+        "k": 2.0,
+        "offset": {"x": 0.0612, "y": 0.0713, "z": 0.0814},
+        "sensitivity": {"x": 0.312, "y": 0.213, "z": 0.254},
+        "gyro_bias_dps": [0.00412, 0.00513, 0.00614],
+    }
+    _store(database, make_record(serial="U9", uncertainty=shape), make_record(serial="U8"))
+    page = client.get("/api/v1/units/U9/certificate").text
+    coefficients = page.split("<h2>Coefficients</h2>")[1].split("<h2>Limits</h2>")[0]
+    for value in ("0.0612", "0.0713", "0.0814", "0.312", "0.213", "0.254"):
+        assert f" ± {value}</td>" in coefficients
+    assert "coverage factor k = 2 " in coefficients
+    gyro = page.split("<h2>Gyro</h2>")[1]
+    assert " ± 0.00412</td>" in gyro
+    older = client.get("/api/v1/units/U8/certificate").text
+    assert " ± " not in older.split("<h2>Coefficients</h2>")[1].split("<h2>Limits</h2>")[0]
+    assert "No uncertainty recorded for this run." in older
+
+
 def test_an_unknown_serial_is_a_404_page_and_a_malformed_one_a_422(
     client: httpx.Client,
 ) -> None:

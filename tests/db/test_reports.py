@@ -15,6 +15,7 @@ from db.rollups import rebuild
 from station.domain.limits import load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import profile_bounds
+from station.report.render import render, rows
 from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 
@@ -379,3 +380,61 @@ def test_the_trends_pose_noise_capability_is_that_of_every_pose(
     [shift] = report.shift_trend
     assert day.cpk["pose_noise_x"] == pytest.approx(noise.cpk, rel=1e-9)
     assert shift.cpk["pose_noise_x"] == pytest.approx(noise.cpk, rel=1e-9)
+
+
+def _u(offset: float, sensitivity: float) -> dict[str, object]:
+    return {
+        "k": 2.0,
+        "offset": {"x": offset, "y": offset, "z": offset},
+        "sensitivity": {"x": sensitivity, "y": sensitivity, "z": sensitivity},
+    }
+
+
+def test_the_report_counts_units_accepted_within_one_u_of_a_limit(session: Session) -> None:
+    profile = load_profile()
+    high = profile.offset_counts.upper
+    low = profile.sensitivity_counts_per_g.lower
+    assert high is not None
+    assert low is not None
+    repository = RunRepository(session)
+    runs = [  # serial, verdict, offset x, sensitivity x, uncertainty
+        ("U1", "pass", high - 0.5, 815.0, _u(1.0, 0.3)),  # offset within U of the upper
+        ("U1", "pass", high - 0.5, 815.0, _u(0.4, 0.3)),  # retest: U smaller, inside
+        ("U2", "pass", 2050.0, 815.0, _u(1.0, 0.3)),  # far from every limit
+        ("U3", "pass", high - 0.5, 815.0, None),  # no uncertainty recorded: not judged
+        ("U4", "pass", 2050.0, low + 0.2, _u(0.1, 0.3)),  # sensitivity within U of lower
+        ("U5", "fail", high + 5.0, 815.0, _u(1.0, 0.3)),  # refused anyway: not counted
+    ]
+    for minute, (serial, verdict, offset_x, sens_x, u) in enumerate(runs):
+        failures = (
+            [{"code": "offset", "message": "offset x out of limits", "axis": "x"}]
+            if verdict == "fail"
+            else []
+        )
+        repository.submit(
+            make_record(
+                serial=serial,
+                verdict=verdict,
+                started_at=T0 + timedelta(minutes=minute),
+                offset=(offset_x, 2041.2, 1960.5),
+                sensitivity=(sens_x, 815.66, 820.17),
+                failures=failures,
+                **({"uncertainty": u} if u is not None else {}),
+            )
+        )
+    session.commit()
+    report = eol_report(session, ReportFilter())
+    near = report.near_limits
+    assert near is not None
+    assert (near.runs_passed, near.within_u, near.units) == (4, 2, 2)
+    for shown in (render(report, "text"), render(report, "html")):
+        assert "Accepted within one U of a limit: 2 of 4 passing runs" in shown
+    assert ("near_limits", "", "within_u", 2) in list(rows(report))
+    # The decision risks of each coefficient, from its spread and the runs' mean U/k.
+    risks = {r.name: r for r in near.risks}
+    assert set(risks) == {f"{f}_{a}" for f in ("offset", "sensitivity") for a in "xyz"}
+    assert risks["offset_y"].u == pytest.approx((1.0 + 0.4 + 1.0 + 0.1) / 4 / 2)  # U/k
+    for r in near.risks:
+        assert 0.0 <= r.guarded_false_accept <= r.simple_false_accept + 1e-12
+        assert r.guarded_false_reject >= r.simple_false_reject - 1e-12
+    assert "guarded: false accept" in render(report, "text")

@@ -9,6 +9,8 @@ Public surface::
     solve_consistent(...)      least squares that leaves out one inconsistent pose
     solve_classic(plus, minus) the ±1 g baseline, eqs. 2 and 3
     apply(calibration, raw)    counts → g
+    accelerometer_budget(...)  the GUM budget of a solve's coefficients (U, k = 2)
+    gyro_bias_uncertainty(...) U of the gyro bias from the still poses
 
 .. [Song2006] C.-M. Song, "Autocalibration Method of Three-axis Micromachined
    Accelerometers", 2006.
@@ -46,13 +48,22 @@ from station.domain.calibration.solution import (
     Solution,
 )
 from station.domain.calibration.solve import solve
+from station.domain.calibration.uncertainty import (
+    COVERAGE_FACTOR,
+    AccelerometerBudget,
+    Uncertainty,
+    accelerometer_budget,
+    gyro_bias_uncertainty,
+)
 
 __all__ = [
+    "COVERAGE_FACTOR",
     "DEFAULT_RESIDUAL_LIMIT_COUNTS",
     "MAX_CONDITION",
     "MIN_DOF_SHOWN",
     "SENSITIVITY_CONVENTION",
     "UNKNOWNS",
+    "AccelerometerBudget",
     "BeyondDatasheetError",
     "Calibration",
     "CalibrationError",
@@ -72,8 +83,11 @@ __all__ = [
     "RailValueError",
     "Solution",
     "TooFewPosesError",
+    "Uncertainty",
+    "accelerometer_budget",
     "apply",
     "coverage",
+    "gyro_bias_uncertainty",
     "pair_angles_deg",
     "residual_limit",
     "solve",

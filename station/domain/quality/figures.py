@@ -195,6 +195,33 @@ class WhatIf(_FigurePart):
     fail_to_pass: int = Field(description="runs that failed and would pass")
 
 
+class CoefficientRisk(_FigurePart):
+    """Global decision risks of one coefficient (JCGM 106:2012 9.5), as fractions of all
+    units, from the process's spread and the mean standard uncertainty of measurement."""
+
+    name: str
+    u: float = Field(description="mean standard uncertainty U/k of the runs that carry one")
+    simple_false_accept: float
+    simple_false_reject: float
+    guarded_false_accept: float = Field(description="with a guard band w = U")
+    guarded_false_reject: float
+
+
+class NearLimits(_FigurePart):
+    """Passing runs accepted within one expanded uncertainty U of a limit (ILAC-G8): an
+    offset or a sensitivity whose value ± U reaches past a bound of the report's limits;
+    and the estimated false-accept and false-reject rates of each rule."""
+
+    runs_passed: int = Field(description="passing runs in range that carry uncertainties")
+    within_u: int = Field(description="of those, runs with a coefficient within U of a limit")
+    units: int = Field(description="units with such a passing run in range")
+    risks: list[CoefficientRisk] = Field(
+        default_factory=list,
+        description="per coefficient, the global false-accept and false-reject rates under "
+        "simple and guarded acceptance (normal process and measurement error)",
+    )
+
+
 class EolReport(_FigurePart):
     """The end-of-line report over ``filter``."""
 
@@ -232,4 +259,8 @@ class EolReport(_FigurePart):
     units_limit: int | None = Field(None, description="the most units a page of the list holds")
     what_if: WhatIf | None = Field(
         None, description="the runs re-judged against a candidate limits profile, when given"
+    )
+    near_limits: NearLimits | None = Field(
+        None,
+        description="passing runs accepted within one U of a limit (None: no limits to judge)",
     )

@@ -40,6 +40,30 @@ def test_json_contract_on_the_paper_example(run_cli: CliRunner) -> None:
     )
 
 
+def test_json_carries_the_expanded_uncertainty_of_each_coefficient(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    paper = json.loads(run_cli("solve", str(PAPER_CSV), "--json").stdout)["uncertainty"]
+    assert set(paper) == {"k", "offset", "sensitivity"}  # no gyro in a pose file
+    assert paper["k"] == 2
+    assert all(paper["offset"][a] > 0 and paper["sensitivity"][a] > 0 for a in "xyz")
+    # The file's own spreads and sample counts replace the sensor's assumed noise: a
+    # quieter, longer capture gives no larger U, and a noisy short one a larger one.
+    lines = PAPER_CSV.read_text().splitlines()
+    quiet, noisy = tmp_path / "quiet.csv", tmp_path / "noisy.csv"
+    quiet.write_text(
+        "\n".join([lines[0] + ",sx,sy,sz,n"] + [f"{r},0.6,0.6,0.6,4096" for r in lines[1:]])
+    )
+    noisy.write_text(
+        "\n".join([lines[0] + ",sx,sy,sz,n"] + [f"{r},30,30,30,16" for r in lines[1:]])
+    )
+    low = json.loads(run_cli("solve", str(quiet), "--json").stdout)["uncertainty"]
+    high = json.loads(run_cli("solve", str(noisy), "--json").stdout)["uncertainty"]
+    for key in ("offset", "sensitivity"):
+        for a in "xyz":
+            assert low[key][a] <= paper[key][a] < high[key][a]
+
+
 def test_readable_table(run_cli: CliRunner) -> None:
     result = run_cli("solve", str(PAPER_CSV))
     assert result.returncode == 0, result.stderr
@@ -68,6 +92,9 @@ def test_nine_model_on_a_generated_file(run_cli: CliRunner, tmp_path: Path) -> N
         ("", "the file is empty"),
         ("x,y,z\n1,2,3\n", ":1: header lacks column(s) ax,ay,az"),
         ("ax,ay,az\n2031,1999,1143\n2048,abc,1925\n", ":3: column ay: 'abc' is not a number"),
+        ("ax,ay,az,sx,sy\n2031,1999,1143,1,1\n", "lacks sz,n: a pose's spread needs sx,sy,sz"),
+        ("ax,ay,az,sx,sy,sz,n\n2031,1999,1143,1,1,1,0.5\n", ":2: column n: 0.5 is not a sample"),
+        ("ax,ay,az,sx,sy,sz,n\n2031,1999,1143,-1,1,1,9\n", ":2: column sx: -1 is not a spread"),
         ("ax,ay,az\n2031,1999\n", ":2: column az: an empty cell is not a number"),
         ("ax,ay,az\n", "no pose rows after the header"),
         (

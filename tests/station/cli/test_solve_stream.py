@@ -55,6 +55,17 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert np.allclose(gyro["bias_dps"], imu.gyro_bias_dps, atol=0.01)
     assert len(gyro["residual_deg"]) == 11
     assert gyro["unusable_moves"] == []
+    # One shape for the uncertainties, every coefficient measured: the gyro's too.
+    u = data["uncertainty"]
+    assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}
+    assert u["k"] == 2
+    np.testing.assert_allclose(np.array(u["gyro_matrix"]), 2 * se)
+    assert len(u["gyro_bias_dps"]) == 3
+    # The truth within ±U (the recording's units are the simulator's own, exact here).
+    error = np.abs(np.array(gyro["bias_dps"]) - imu.gyro_bias_dps)
+    assert (error <= np.array(u["gyro_bias_dps"]) * 2.5).all()
+    offset_error = np.abs([data["offset"][a] - imu.offset_counts[i] for i, a in enumerate("xyz")])
+    assert (offset_error <= 2.5 * np.array([u["offset"][a] for a in "xyz"])).all()
 
 
 def test_lost_samples_make_a_move_unusable_and_say_so(
@@ -132,3 +143,98 @@ def test_too_few_stills_are_refused(
     path = _write(tmp_path / "short.csv", rows[: 8 * still_n + 7 * move_n])
     line = _refused(run_cli, path, "--model", "nine")
     assert "8 still poses found, the nine-parameter model needs 9" in line
+
+
+def _solved(run_cli: CliRunner, path: Path, *options: str) -> dict[str, object]:
+    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json", *options)
+    assert result.returncode == 0, result.stderr
+    data: dict[str, object] = json.loads(result.stdout)
+    return data
+
+
+def _refused(run_cli: CliRunner, path: Path, *options: str) -> str:
+    result = run_cli("solve", str(path), "--stream", "--model", "nine", *options)
+    assert result.returncode == 2
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    return lines[0]
+
+
+def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    _, rows = recorded
+    reference = _solved(run_cli, _write(tmp_path / "counts.csv", rows))
+    in_g = rows.copy()
+    in_g[:, 1:4] = (rows[:, 1:4] - 2048.0) / 819.2
+    in_ms2 = in_g.copy()
+    in_ms2[:, 1:4] *= 9.80665
+    in_rads = rows.copy()
+    in_rads[:, 4:7] = np.radians(rows[:, 4:7])
+    in_ms = rows.copy()
+    in_ms[:, 0] *= 1000.0
+    cases = [
+        (
+            "g.csv",
+            in_g,
+            ("--accel-units", "g"),
+            "at rest: g? use --accel-units g",
+        ),
+        (
+            "ms2.csv",
+            in_ms2,
+            ("--accel-units", "m/s2"),
+            "at rest: m/s²? use --accel-units m/s2",
+        ),
+        ("rads.csv", in_rads, ("--gyro-units", "rads"), "rad/s? use --gyro-units rads"),
+        ("ms.csv", in_ms, ("--time-units", "ms"), "milliseconds? use --time-units ms"),
+        ("rate.csv", in_ms, ("--rate", "200"), "milliseconds? use --time-units ms"),
+    ]
+    for name, table, declared, refusal in cases:
+        path = _write(tmp_path / name, table)
+        assert refusal in _refused(run_cli, path), name
+        data = _solved(run_cli, path, *declared)
+        for key in ("offset", "sensitivity"):
+            got, want = data[key], reference[key]
+            assert isinstance(got, dict)
+            assert isinstance(want, dict)
+            for axis in "xyz":
+                assert got[axis] == pytest.approx(want[axis], rel=1e-9), (name, key, axis)
+        gyro, want_gyro = data["gyro"], reference["gyro"]
+        assert isinstance(gyro, dict)
+        assert isinstance(want_gyro, dict)
+        np.testing.assert_allclose(gyro["scale_matrix"], want_gyro["scale_matrix"], atol=1e-6)
+
+
+def test_units_are_for_streams_and_a_rate_must_be_one(run_cli: CliRunner, tmp_path: Path) -> None:
+    poses = tmp_path / "poses.csv"
+    poses.write_text("ax,ay,az\n2031,1999,1143\n")
+    result = run_cli("solve", str(poses), "--accel-units", "g")
+    assert result.returncode == 2
+    assert (
+        result.stderr.strip().splitlines()
+        == [
+            "calstation: --accel-units, --gyro-units, --time-units and --rate describe a raw "
+            "stream: use them with --stream"
+        ]
+        or "use them with --stream" in result.stderr.strip()
+    )
+    assert len(result.stderr.strip().splitlines()) == 1
+    rate = _refused(run_cli, poses, "--rate", "0")
+    assert "--rate" in rate
+    assert "not a positive rate" in rate
+
+
+def test_no_still_pose_found_says_why_in_the_operators_terms(
+    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    # A MEMS gyro with a 2 deg/s bias on y (common): every window "turns" at the
+    # stillness judge's 1 deg/s limit, so no pose is still; the refusal says so.
+    _, rows = recorded
+    biased = rows.copy()
+    biased[:, 5] += 2.0
+    line = _refused(run_cli, _write(tmp_path / "biased.csv", biased))
+    assert "0 still poses found, the nine-parameter model needs 9" in line
+    assert "windows not still: most often gyro y turning" in line
+    assert "a gyro bias above the stillness limit" in line

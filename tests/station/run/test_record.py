@@ -9,13 +9,19 @@ import numpy as np
 from station.device import LinkCounters
 from station.domain.calibration import solve
 from station.domain.limits import load_profile
-from station.domain.records import FailureReason
+from station.domain.records import FailureReason, PoseRecord, Vector3
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
-from station.results.journal import RunJournal
+from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
-from station.run.record import capture_of, pose_records, quality_metrics, run_record
-from station.simulator.recording import pose_means, spread_directions
+from station.run.record import (
+    capture_of,
+    pose_records,
+    quality_metrics,
+    run_record,
+    uncertainty_record,
+)
+from station.simulator.recording import pose_means, six_directions, spread_directions
 from station.simulator.sensor import SensorTruth
 
 
@@ -85,3 +91,40 @@ def test_a_clock_stepped_back_never_ends_a_run_before_it_began() -> None:
         poses=pose_records(journal.captures, None),
     )
     assert record.finished_at == started
+    # The verdict records the rule that judged it: the profile's, simple by default.
+    assert record.decision_rule == "simple"
+
+
+def _captures(poses: np.ndarray, spread: float, count: int) -> dict[int, Capture]:
+    return {
+        i: Capture(
+            record=PoseRecord(
+                index=i,
+                name=f"p{i}",
+                mean=Vector3.of(mean),
+                std=Vector3.of([spread] * 3),
+                sample_count=count,
+                gyro_mean=Vector3.of([0.1, -0.2, 0.05]),
+            ),
+            gyro_std=Vector3.of([0.08] * 3),
+            captured_at=datetime.now(UTC),
+            duration_s=2.0,
+            loss_fraction=0.0,
+        )
+        for i, mean in enumerate(poses)
+    }
+
+
+def test_the_record_carries_the_budget_or_none_when_it_is_beyond_what_a_record_holds() -> None:
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(33))
+    poses = unit.still_counts(six_directions())
+    solution = solve(poses)
+    quiet = uncertainty_record(_captures(poses, 1.0, 1024), 6, solution)
+    assert quiet is not None
+    assert set(quiet.to_json()) == {"k", "offset", "sensitivity", "gyro_bias_dps"}
+    assert quiet.offset is not None
+    assert max(quiet.offset.as_tuple()) < 0.2
+    # A spread of 4000 counts in one sample a pose: U far beyond the ADC's span, which no
+    # record holds; the run is recorded without it rather than lost.
+    assert uncertainty_record(_captures(poses, 4000.0, 1), 6, solution) is None
+    assert uncertainty_record(_captures(poses, 1.0, 1024), 6, None) is None

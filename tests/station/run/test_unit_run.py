@@ -124,6 +124,21 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     for axis in record.gyro.still.axes:
         assert axis.slope_dps_per_g is not None
         assert max(abs(v) for v in axis.slope_dps_per_g) < 0.1
+    assert record.decision_rule == "simple"  # the shipped profile names no rule
+    # Every coefficient carries its expanded uncertainty; the six-pose run has no K.
+    assert record.uncertainty is not None
+    shape = record.uncertainty.to_json()
+    assert set(shape) == {"k", "offset", "sensitivity", "gyro_bias_dps"}
+    assert shape["k"] == 2.0
+    u = record.uncertainty
+    assert u.offset is not None
+    assert u.sensitivity is not None
+    assert u.gyro_bias_dps is not None
+    # 1024 samples of ~1 count noise: the offsets to a few hundredths of a count; the
+    # sensitivities carry the six-parameter model's unmodelled cross-axis (~0.1-0.5).
+    assert all(0.0 < v < 0.2 for v in u.offset.as_tuple())
+    assert all(0.0 < v < 1.5 for v in u.sensitivity.as_tuple())
+    assert all(0.0 < v < 0.05 for v in u.gyro_bias_dps)
 
 
 def test_a_unit_at_the_datasheets_offset_bounds_is_taken_in_every_pose(tmp_path: Path) -> None:

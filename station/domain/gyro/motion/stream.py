@@ -25,13 +25,28 @@ from typing import Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.calibration import GeometryLimits, Model, Solution, apply, solve
+from station.domain.calibration import (
+    COVERAGE_FACTOR,
+    GeometryLimits,
+    Model,
+    Solution,
+    Uncertainty,
+    accelerometer_budget,
+    apply,
+    gyro_bias_uncertainty,
+    solve,
+)
 from station.domain.constants import STILL_WINDOW_S
 from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
 from station.domain.samples import SampleBlock
-from station.domain.stillness import StillnessThresholds, StillSegment, still_segments
+from station.domain.stillness import (
+    StillnessThresholds,
+    StillSegment,
+    still_segments,
+    why_not_still,
+)
 
 #: Windows judged per still window (the hop is the window over this).
 HOPS_PER_WINDOW: Final = 16
@@ -95,6 +110,8 @@ class StreamCalibration:
         bias_dps: shape (3,), mean gyro rate over all still samples, deg/s.
         moves: the moves between consecutive stills.
         gyro: K fitted from the moves.
+        uncertainty: expanded uncertainties (k = 2) of the accelerometer's coefficients,
+            the gyro bias and K (:mod:`station.domain.calibration.uncertainty`).
     """
 
     stills: list[StillSegment]
@@ -103,12 +120,14 @@ class StreamCalibration:
     bias_dps: FloatArray
     moves: list[Move]
     gyro: GyroMatrixFit
+    uncertainty: Uncertainty
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro``."""
         payload = self.accel.to_dict()
         payload["poses"] = len(self.stills)
         payload["gyro"] = self.gyro.to_dict()
+        payload["uncertainty"] = self.uncertainty.to_dict()
         return payload
 
 
@@ -154,11 +173,15 @@ def calibrate_stream(
     ]
     needed = MIN_POSES[model]
     if len(stills) < needed:
+        why = why_not_still(stream.block(), limits)
         raise StreamError(
             f"stream: {len(stills)} still poses found, the {model}-parameter model needs "
             f"{needed} (still window {limits.window_samples} samples)"
+            + (f"; windows not still: {why}" if why else "")
         )
     means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
+    spreads = np.array([stream.accel_counts[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
+    samples = np.array([len(s) for s in stills])
     accel = solve(means, model, _geometry(model, len(means)))
     g = apply(accel.calibration, means)
     gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
@@ -173,11 +196,21 @@ def calibrate_stream(
         )
         for i, (a, b) in enumerate(pairwise(stills))
     ]
+    gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves)
+    gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
+    gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
+    uncertainty = Uncertainty.of_budget(
+        accelerometer_budget(accel, means, spreads, samples)
+    ).with_gyro(
+        gyro_bias_uncertainty(gyro_means, gyro_spreads, samples),
+        COVERAGE_FACTOR * gyro.standard_errors,
+    )
     return StreamCalibration(
         stills=stills,
         accel=accel,
         gravity=gravity,
         bias_dps=bias,
         moves=moves,
-        gyro=fit_gyro_matrix(moves, bias, min_moves=min_moves),
+        gyro=gyro,
+        uncertainty=uncertainty,
     )

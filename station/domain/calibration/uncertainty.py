@@ -1,0 +1,497 @@
+"""The uncertainty budget of every calibration coefficient ([JCGM100]_, the GUM).
+
+Measurand: the offset o_j (counts) and sensitivity s_j (counts/g) of each accelerometer
+axis at the conditions of the run, as the model defines them ([Song2006]_ eq. 5:
+``s = 1/diag(C)``; for the nine-parameter model C is upper-triangular, x the reference
+axis), and each gyro's bias b_j (deg/s) and gyro matrix K ([Tedaldi2014]_).
+
+Model of the measurement. Every fitted still pose i sees 1 g::
+
+    r_i(θ, a) = |C(θ)·(a_i − o)| − 1 = 0,        θ = (o, s) or (o, C_upper)
+
+the fit solves it for θ in least squares (exactly, with six poses and eq. 10). To first
+order a change δa of the pose means moves the coefficients by ([JCGM100]_ 5.1.2, the law
+of propagation of uncertainty, through the fit's Jacobian J = ∂r/∂θ)::
+
+    δθ = −J⁺ · δr,      δr_i = (Cᵀ n_i)ᵀ · δa_i,      n_i = C(a_i − o)/|C(a_i − o)|
+
+so an independent uncertainty u(a_ij) of each pose mean gives the variances
+``diag(G J⁺ W J⁺ᵀ Gᵀ)``, W = diag((Cᵀn_i)ᵀ Σ_i (Cᵀn_i)), G = ∂(o, s)/∂θ.
+
+The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
+
+``pose_noise``
+    Type A: the spread of each pose's samples over the √ of their count,
+    σ²_ij/N_i, less the quantisation's 1/12 LSB² that the spread already holds when the
+    noise dithers the ADC (σ ≥ ½ LSB). Without the spread (a file of means only) the
+    sensor's :data:`DEFAULT_SAMPLE_NOISE_COUNTS` over :data:`SAMPLES_PER_POSE` samples.
+``quantisation``
+    Type B: the ADC's rounding, rectangular of width 1 LSB, LSB/√12 per sample; it
+    averages down as 1/√N when the noise dithers it, not at all when σ < ½ LSB (then the
+    mean is rounded as much as one sample).
+``model``
+    Type B: what the six-parameter model cannot represent. The KXM52-1050's cross-axis
+    sensitivity, :data:`CROSS_AXIS_BOUND` (2 %, datasheet, [Song2006]_ Table 1), as a
+    coupling matrix with each off-diagonal term rectangular in ±2 %; propagated by Monte
+    Carlo ([JCGM101]_) over :data:`MODEL_DRAWS` seeded draws, each pose moved to
+    ``o + diag(s)(I + M)·u_i`` and refitted (the coupling enters |g| in second order on
+    the axis poses, so a first-order propagation would call it zero, and one-sided: it
+    only ever raises the sensitivities there). The symmetric 95 % interval of the
+    refitted coefficients' change, bias included ([JCGM101]_ 7.7), over k is the term.
+    The nine-parameter model represents the coupling: zero.
+``fit``
+    Type A, the evidence of the fit. With redundant poses (N > p): when the residuals'
+    variance σ̂² = Σr²/(N − p) exceeds what the pose noise and quantisation explain
+    beyond the χ² 95 % point, the excess times (JᵀJ)⁻¹; for the six-parameter model it
+    is the same unmodelled effect as ``model``, so the larger of the two counts, once.
+    A verification pose (held out of the fit) whose misfit |r_v| exceeds k times its
+    predicted standard deviation scales ``model`` and ``fit`` by |r_v|/(k·u(r_v)).
+``tilt``
+    Zero by construction, listed because a metrologist asks: the autocalibration uses
+    only |g| = 1 at each pose, so the fixture's tilt does not enter ([Song2006]_); it
+    enters the classic ±1 g method as s·(1 − cos θ) (:mod:`~.classic`), which no run
+    uses.
+
+Combined standard uncertainty u_c = √Σu² (the terms are independent), expanded
+U = k·u_c with k = :data:`COVERAGE_FACTOR` (≈ 95 % for a normal distribution,
+[JCGM100]_ 6.2). Validated by Monte Carlo on the simulator
+(``benchmarks/bench_uncertainty.py``, ``docs/benchmarks.md``).
+
+Gyro bias (:func:`gyro_bias_uncertainty`): the mean over the still poses; Type A the
+within-pose noise σ/√(Σ N_i), or the poses' scatter s/√P where it exceeds that beyond
+the χ² 95 % point (the scatter would also carry a g-dependent bias, which [Park2014]_
+says a still unit has none of, or drift), plus the report's quantisation, 0.02 deg/s/√12
+per sample. Gyro matrix: the fit's own standard errors ([Tedaldi2014]_).
+
+.. [JCGM100] JCGM 100:2008, Evaluation of measurement data — Guide to the expression of
+   uncertainty in measurement (GUM).
+.. [JCGM101] JCGM 101:2008, Supplement 1 to the GUM — Propagation of distributions using
+   a Monte Carlo method.
+.. [Park2014] A Study on the G-Sensitivity Error of MEMS Vibratory Gyroscopes, 2014.
+.. [Tedaldi2014] D. Tedaldi, A. Pretto, E. Menegatti, "A robust and easy to implement
+   method for IMU calibration without external equipments", ICRA 2014.
+"""
+
+from dataclasses import dataclass, field
+from typing import Final
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from station.domain.arrays import FloatArray
+from station.domain.calibration.model import Model
+from station.domain.calibration.residual import UPPER
+from station.domain.calibration.solution import Solution
+from station.domain.sensor import CROSS_AXIS_TYPICAL, GYRO_DPS_PER_LSB, SAMPLES_PER_POSE
+
+#: Coverage factor of every expanded uncertainty ([JCGM100]_ 6.2.1).
+COVERAGE_FACTOR: Final = 2.0
+#: One ADC count (the ADS7829's LSB); quantisation is rectangular over it.
+ADC_LSB_COUNTS: Final = 1.0
+#: The unmodelled cross-axis coupling of the six-parameter model: the KXM52-1050
+#: datasheet's typical cross-axis sensitivity, 2 % ([Song2006]_ Table 1).
+CROSS_AXIS_BOUND: Final = CROSS_AXIS_TYPICAL
+#: A pose's sample noise when the file gives means only: the KXM52 at the stream's
+#: bandwidth, ~2 counts RMS (``limits.toml``, pose_noise_counts).
+DEFAULT_SAMPLE_NOISE_COUNTS: Final = 2.0
+#: Seeded draws of the coupling matrix that propagate the model term (JCGM 101).
+MODEL_DRAWS: Final = 256
+#: Gauss–Newton iterations of each draw's refit (its steps shrink ~100× each).
+_REFITS: Final = 6
+#: The budget's terms, in the order they are listed.
+TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "tilt")
+_CHI2_QUANTILE: Final = 0.95
+#: The coverage probability k = 2 stands for ([JCGM100]_ 6.2.2).
+_COVERAGE_PROBABILITY: Final = 0.95
+
+
+@dataclass(frozen=True, eq=False)
+class AccelerometerBudget:
+    """Standard uncertainties of the accelerometer's coefficients, term by term.
+
+    Attributes:
+        terms: each of :data:`TERMS` → shape (6,): offset x, y, z (counts) and
+            sensitivity x, y, z (counts/g), standard uncertainties.
+        k: the coverage factor of :attr:`expanded`.
+        verification_ratio: |r_v|/(k·u(r_v)) of the verification pose (``None`` without
+            one); above 1 it scaled the ``model`` and ``fit`` terms.
+    """
+
+    terms: dict[str, FloatArray]
+    k: float = COVERAGE_FACTOR
+    verification_ratio: float | None = None
+
+    @property
+    def combined(self) -> FloatArray:
+        """Shape (6,), the combined standard uncertainty u_c = √Σ u²."""
+        total = np.zeros(6)
+        for values in self.terms.values():
+            total = total + values**2
+        return np.asarray(np.sqrt(total), dtype=np.float64)
+
+    @property
+    def expanded(self) -> FloatArray:
+        """Shape (6,), U = k·u_c."""
+        return np.asarray(self.k * self.combined, dtype=np.float64)
+
+    @property
+    def offset(self) -> FloatArray:
+        """Shape (3,), expanded uncertainty of the offsets, counts."""
+        return self.expanded[:3]
+
+    @property
+    def sensitivity(self) -> FloatArray:
+        """Shape (3,), expanded uncertainty of the sensitivities, counts/g."""
+        return self.expanded[3:]
+
+
+@dataclass(frozen=True, eq=False)
+class Uncertainty:
+    """Expanded uncertainties (k = :attr:`k`) of a run's coefficients, the sensor's units.
+
+    A coefficient the run has not measured is ``None`` (and absent from :meth:`to_dict`).
+    """
+
+    k: float = COVERAGE_FACTOR
+    offset: FloatArray | None = None
+    sensitivity: FloatArray | None = None
+    gyro_bias_dps: FloatArray | None = None
+    gyro_matrix: FloatArray | None = field(default=None)
+
+    def to_dict(self) -> dict[str, object]:
+        """``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z}, "gyro_bias_dps": [3],
+        "gyro_matrix": [[3×3]]}``, keys of unmeasured coefficients left out."""
+        out: dict[str, object] = {"k": self.k}
+        if self.offset is not None:
+            out["offset"] = _xyz(self.offset)
+        if self.sensitivity is not None:
+            out["sensitivity"] = _xyz(self.sensitivity)
+        if self.gyro_bias_dps is not None:
+            out["gyro_bias_dps"] = [float(v) for v in self.gyro_bias_dps]
+        if self.gyro_matrix is not None:
+            out["gyro_matrix"] = [[float(v) for v in row] for row in self.gyro_matrix]
+        return out
+
+    @classmethod
+    def of_budget(cls, budget: AccelerometerBudget) -> "Uncertainty":
+        """The accelerometer's part."""
+        return cls(k=budget.k, offset=budget.offset, sensitivity=budget.sensitivity)
+
+    def with_gyro(
+        self, bias_dps: FloatArray | None, matrix: FloatArray | None = None
+    ) -> "Uncertainty":
+        """The same with the gyros' expanded uncertainties added."""
+        return Uncertainty(self.k, self.offset, self.sensitivity, bias_dps, matrix)
+
+
+def accelerometer_budget(
+    solution: Solution,
+    poses: ArrayLike,
+    spread: ArrayLike | None = None,
+    samples: ArrayLike | None = None,
+    *,
+    verification: ArrayLike | None = None,
+    verification_spread: ArrayLike | None = None,
+    verification_samples: int | None = None,
+    cross_axis_bound: float = CROSS_AXIS_BOUND,
+    k: float = COVERAGE_FACTOR,
+) -> AccelerometerBudget:
+    """The budget of ``solution``'s coefficients (module docstring).
+
+    Args:
+        solution: the solve of ``poses``.
+        poses: shape (N, 3), the mean counts the solve was given (excluded poses too).
+        spread: shape (N, 3), each pose's sample standard deviation, counts (``None``:
+            :data:`DEFAULT_SAMPLE_NOISE_COUNTS`).
+        samples: shape (N,), samples per pose (``None``: :data:`SAMPLES_PER_POSE`).
+        verification: shape (3,), the verification pose's mean counts, if one was held out.
+        verification_spread, verification_samples: its spread and sample count.
+        cross_axis_bound: the unmodelled coupling's half-width (six-parameter model).
+        k: the coverage factor.
+    """
+    a_all = np.asarray(poses, dtype=np.float64)
+    n_all = len(a_all)
+    keep = np.setdiff1d(np.arange(n_all), np.asarray(solution.excluded, dtype=np.int64))
+    a = a_all[keep]
+    var_noise, var_quant = _pose_variances(spread, samples, n_all)
+    var_noise, var_quant = var_noise[keep], var_quant[keep]
+
+    cal = solution.calibration
+    model = cal.model
+    theta = _pack(cal.offset, cal.matrix, model)
+    jac, dr_da, n = _jacobians(theta, a, model)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    pinv = np.linalg.pinv(jac / scale) / scale[:, None]  # J⁺, p × N
+    g = _output_jacobian(theta, model)  # 6 × p
+    gp = g @ pinv  # 6 × N: δy = −gp · δr
+
+    w_noise = np.einsum("ij,ij->i", dr_da**2, var_noise)
+    w_quant = np.einsum("ij,ij->i", dr_da**2, var_quant)
+    terms = {
+        "pose_noise": np.sqrt(gp**2 @ w_noise),
+        "quantisation": np.sqrt(gp**2 @ w_quant),
+        "model": np.zeros(6),
+        "fit": np.zeros(6),
+        "tilt": np.zeros(6),
+    }
+    model_rv: FloatArray | None = None
+    u_dir: FloatArray | None = None
+    if verification is not None:
+        av = np.asarray(verification, dtype=np.float64)
+        offset, c = _unpack(theta, model)
+        gv = c @ (av - offset)
+        u_dir = gv / np.linalg.norm(gv)
+    if model == "six" and cross_axis_bound > 0:
+        terms["model"], model_rv = _model_term(theta, n, g, cross_axis_bound, u_dir)
+
+    # The evidence of the residuals (redundant fits only).
+    rows, p = jac.shape
+    if rows > p:
+        offset, c = _unpack(theta, model)
+        residual = np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
+        sigma2 = float(residual @ residual) / (rows - p)
+        expected = float(np.mean(w_noise + w_quant))
+        from scipy.stats import chi2
+
+        if sigma2 > expected * chi2.ppf(_CHI2_QUANTILE, rows - p) / (rows - p):
+            cov = np.linalg.pinv((jac / scale).T @ (jac / scale)) / np.outer(scale, scale)
+            terms["fit"] = np.sqrt(
+                np.clip(np.einsum("ij,jk,ik->i", g, cov, g), 0.0, None) * (sigma2 - expected)
+            )
+        if model == "six":
+            worst = np.maximum(terms["model"], terms["fit"])
+            terms["model"], terms["fit"] = worst, np.zeros(6)
+
+    ratio: float | None = None
+    if verification is not None and u_dir is not None:
+        ratio = _verification_ratio(
+            theta,
+            model,
+            np.asarray(verification, dtype=np.float64),
+            verification_spread,
+            verification_samples,
+            pinv,
+            w_noise + w_quant,
+            model_rv,
+            k,
+        )
+        if ratio > 1.0:
+            terms["model"] = terms["model"] * ratio
+            terms["fit"] = terms["fit"] * ratio
+    return AccelerometerBudget(
+        terms={name: np.asarray(terms[name], dtype=np.float64) for name in TERMS},
+        k=k,
+        verification_ratio=ratio,
+    )
+
+
+def gyro_bias_uncertainty(
+    pose_means_dps: ArrayLike,
+    spread_dps: ArrayLike | None = None,
+    samples: ArrayLike | None = None,
+    k: float = COVERAGE_FACTOR,
+) -> FloatArray:
+    """Expanded uncertainty (3,) of the gyro bias, the mean of the still poses' means (P, 3).
+
+    Type A: the pooled within-pose noise σ/√ΣN_i (``spread_dps`` (P, 3) and ``samples``
+    (P,) when known), or the poses' scatter s/√P where it exceeds that beyond the χ²
+    95 % point (a bias that moves between poses); without spreads the scatter. Type B: the report's
+    quantisation :data:`~station.domain.sensor.GYRO_DPS_PER_LSB`/√12 per sample, averaged
+    as the accelerometer's (module docstring).
+    """
+    means = np.asarray(pose_means_dps, dtype=np.float64)
+    p = len(means)
+    if p < 1:
+        raise ValueError("the gyro bias needs at least one still pose")
+    scatter = np.std(means, axis=0, ddof=1) / np.sqrt(p) if p > 1 else np.zeros(3)
+    counts = (
+        np.full(p, float(SAMPLES_PER_POSE))
+        if samples is None
+        else np.asarray(samples, dtype=np.float64)
+    )
+    total = float(np.sum(counts))
+    lsb2 = GYRO_DPS_PER_LSB**2 / 12.0
+    if spread_dps is None:
+        within = np.zeros(3)
+        quant = np.full(3, np.sqrt(lsb2 / total))
+    else:
+        sd = np.asarray(spread_dps, dtype=np.float64)
+        dithered = sd >= GYRO_DPS_PER_LSB / 2
+        noise2 = np.where(dithered, np.clip(sd**2 - lsb2, 0.0, None), sd**2)
+        within = np.sqrt(np.sum(noise2 * counts[:, None], axis=0)) / total
+        per_pose_q = np.where(dithered, lsb2 / counts[:, None], lsb2)
+        quant = np.sqrt(np.sum(per_pose_q, axis=0)) / p
+    type_a = within
+    if p > 1:
+        from scipy.stats import chi2
+
+        beyond = scatter**2 > within**2 * chi2.ppf(_CHI2_QUANTILE, p - 1) / (p - 1)
+        type_a = np.where(beyond, scatter, within)
+    u = np.sqrt(type_a**2 + quant**2)
+    return np.asarray(k * u, dtype=np.float64)
+
+
+def _pose_variances(
+    spread: ArrayLike | None, samples: ArrayLike | None, n: int
+) -> tuple[FloatArray, FloatArray]:
+    """Per pose and axis (N, 3): variance of the mean from noise, and from quantisation."""
+    counts = (
+        np.full(n, float(SAMPLES_PER_POSE))
+        if samples is None
+        else np.asarray(samples, dtype=np.float64).reshape(n)
+    )
+    sd = (
+        np.full((n, 3), DEFAULT_SAMPLE_NOISE_COUNTS)
+        if spread is None
+        else np.asarray(spread, dtype=np.float64).reshape(n, 3)
+    )
+    lsb2 = ADC_LSB_COUNTS**2 / 12.0
+    dithered = sd >= ADC_LSB_COUNTS / 2
+    noise = np.where(dithered, np.clip(sd**2 - lsb2, 0.0, None), sd**2) / counts[:, None]
+    quant = np.where(dithered, lsb2 / counts[:, None], lsb2)
+    return np.asarray(noise, dtype=np.float64), np.asarray(quant, dtype=np.float64)
+
+
+def _pack(offset: FloatArray, matrix: FloatArray, model: Model) -> FloatArray:
+    """θ in counts: (o, s) for six, (o, C_upper) in g/count for nine."""
+    tail = 1.0 / np.diag(matrix) if model == "six" else matrix[UPPER]
+    return np.concatenate([offset, tail])
+
+
+def _unpack(theta: FloatArray, model: Model) -> tuple[FloatArray, FloatArray]:
+    if model == "six":
+        return theta[:3], np.diag(1.0 / theta[3:6])
+    c = np.zeros((3, 3))
+    c[UPPER] = theta[3:9]
+    return theta[:3], c
+
+
+def _jacobians(theta: FloatArray, a: FloatArray, model: Model) -> tuple[FloatArray, ...]:
+    """J = ∂r/∂θ (N, p), ∂r_i/∂a_i (N, 3) and the unit calibrated gravity n (N, 3)."""
+    offset, c = _unpack(theta, model)
+    d = a - offset
+    gvec = d @ c.T
+    n = gvec / np.linalg.norm(gvec, axis=1, keepdims=True)
+    dr_da = n @ c
+    if model == "six":
+        s = theta[3:6]
+        tail = -n * d / s**2
+    else:
+        tail = n[:, UPPER[0]] * d[:, UPPER[1]]
+    return np.hstack([-dr_da, tail]), dr_da, n
+
+
+def _output_jacobian(theta: FloatArray, model: Model) -> FloatArray:
+    """G = ∂(o, s)/∂θ, shape (6, p)."""
+    if model == "six":
+        return np.eye(6)
+    g = np.zeros((6, 9))
+    g[:3, :3] = np.eye(3)
+    for axis, column in enumerate((3, 6, 8)):  # C_00, C_11, C_22 in θ
+        g[3 + axis, column] = -1.0 / theta[column] ** 2
+    return g
+
+
+def _residuals(theta: FloatArray, a: FloatArray) -> FloatArray:
+    """Six-parameter residuals for K parameter sets θ (K, 6) and poses a (K, N, 3)."""
+    g = (a - theta[:, None, :3]) / theta[:, None, 3:6]
+    return np.asarray(np.linalg.norm(g, axis=2) - 1.0, dtype=np.float64)
+
+
+def _refit(theta: FloatArray, poses: FloatArray) -> FloatArray:
+    """Six-parameter Gauss–Newton fits (K, 6) of K pose sets (K, N, 3), from θ."""
+    thetas = np.repeat(theta[None, :], len(poses), axis=0)
+    for _ in range(_REFITS):
+        d = poses - thetas[:, None, :3]
+        s = thetas[:, None, 3:6]
+        g = d / s
+        norm = np.linalg.norm(g, axis=2, keepdims=True)
+        n = g / norm
+        jac = np.concatenate([-n / s, -n * g / s], axis=2)  # (K, N, 6)
+        normal = np.einsum("kni,knj->kij", jac, jac)
+        rhs = np.einsum("kni,kn->ki", jac, norm[..., 0] - 1.0)
+        thetas = thetas - (np.linalg.pinv(normal) @ rhs[..., None])[..., 0]
+    return thetas
+
+
+def _couplings(bound: float) -> FloatArray:
+    """:data:`MODEL_DRAWS` coupling matrices (K, 3, 3), off-diagonal rectangular ±bound;
+    the same draws every time (a budget is a function of its inputs)."""
+    rng = np.random.default_rng(20080901)
+    m = rng.uniform(-bound, bound, (MODEL_DRAWS, 3, 3))
+    m[:, np.arange(3), np.arange(3)] = 0.0
+    return m
+
+
+def _model_term(
+    theta: FloatArray,
+    n: FloatArray,
+    g: FloatArray,
+    bound: float,
+    verification_dir: FloatArray | None,
+) -> tuple[FloatArray, FloatArray | None]:
+    """The model term (6,) and, with a verification pose, the misfit (K,) the coupling
+    leaves on it.
+
+    For each drawn coupling M the poses ``o + diag(s)(I + M)·n_i`` along the fitted
+    directions n_i are refitted with the six-parameter model (Gauss–Newton from the fit);
+    the change of the coefficients is what M does to them. The fitted
+    directions carry the unit's own coupling too, so on poses aligned with the axes to
+    better than ~1° (where the coupling acts in second order only) the term is
+    conservative by up to ~2×; on poses a hand or a jig tilts by a few degrees it is not
+    (``docs/benchmarks.md``).
+    """
+    offset, s = theta[:3], theta[3:6]
+    m = _couplings(bound)
+    coupled = np.eye(3) + m  # (K, 3, 3)
+    moved = offset + np.einsum("kij,nj->kni", coupled, n) * s  # (K, N, 3)
+    thetas = _refit(theta, moved)
+    shift = (thetas - theta) @ g.T
+    solved = np.all(np.isfinite(shift), axis=1) & np.all(thetas[:, 3:] > 0, axis=1)
+    if not np.any(solved):  # no draw refits: the coupling's own bound on every coefficient
+        return np.asarray(np.concatenate([s, s]) * bound, dtype=np.float64), None
+    shift, thetas, coupled = shift[solved], thetas[solved], coupled[solved]
+    # JCGM 101 7.7: the symmetric 95 % interval of the (biased: one-sided on the axis
+    # poses) changes, as the standard uncertainty that k turns back into it.
+    term = np.quantile(np.abs(shift), _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR
+    if verification_dir is None:
+        return np.asarray(term, dtype=np.float64), None
+    av = offset + np.einsum("kij,j->ki", coupled, verification_dir) * s
+    rv = _residuals(thetas, av[:, None, :])[:, 0]
+    return np.asarray(term, dtype=np.float64), np.asarray(rv, dtype=np.float64)
+
+
+def _verification_ratio(
+    theta: FloatArray,
+    model: Model,
+    av: FloatArray,
+    spread: ArrayLike | None,
+    samples: int | None,
+    pinv: FloatArray,
+    w_fit: FloatArray,
+    model_rv: FloatArray | None,
+    k: float,
+) -> float:
+    """|r_v| over k times its predicted standard deviation: the fit's noise through θ,
+    the verification pose's own noise, and the model's misfit."""
+    offset, c = _unpack(theta, model)
+    gv = c @ (av - offset)
+    rv = float(np.linalg.norm(gv) - 1.0)
+    jv, dv, _ = _jacobians(theta, av[None, :], model)
+    # δr_v = J_v δθ + dv δa_v with δθ = −J⁺ δr: the fit poses' noise reaches it through θ.
+    reach = (jv @ pinv)[0]  # ∂r_v/∂r_fit
+    var_fit = float(reach**2 @ w_fit)
+    var_n, var_q = _pose_variances(
+        None if spread is None else np.asarray(spread, dtype=np.float64).reshape(1, 3),
+        None if samples is None else np.array([samples]),
+        1,
+    )
+    var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
+    var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
+    predicted = np.sqrt(var_fit + var_own + var_model)
+    return float(abs(rv) / (k * predicted)) if predicted > 0 else float("inf")
+
+
+def _xyz(values: FloatArray) -> dict[str, float]:
+    return {"x": float(values[0]), "y": float(values[1]), "z": float(values[2])}

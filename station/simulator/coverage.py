@@ -1,0 +1,132 @@
+"""Monte Carlo check of the uncertainty budget ([JCGM101]_): simulated units with known
+truth, run through each profile's poses, solve and budget; does the truth lie within ±U?
+
+Each unit is drawn as the line meets them (:meth:`SensorTruth.draw`: datasheet spreads,
+2 % cross-axis coupling, 1 count noise), at the reference temperature (its truth is
+defined there). Each of the profile's poses (``RunSettings``: the six of [Song2006]_ and
+the verification pose, or the whole unit's twelve) is a window of ``window_samples``
+samples, rounded by the ADC; the jig places each pose off its nominal direction by up to
+``tilt_deg`` (uniform, about a random axis). The pose means, spreads and counts go to
+:func:`station.domain.calibration.solve` and
+:func:`station.domain.calibration.uncertainty.accelerometer_budget` exactly as a run's
+do, the gyro pose means to :func:`~station.domain.calibration.uncertainty.gyro_bias_uncertainty`.
+
+The truth compared with: the offsets, and the sensitivities as the model defines them
+(six: each axis' own counts/g, ``diag(S)``; nine: ``1/diag(C)`` of the upper-triangular
+C with ``C = Q·S⁻¹``), and the gyro biases.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from station.domain.arrays import FloatArray
+from station.domain.calibration import CalibrationError, Model, solve
+from station.domain.calibration.uncertainty import accelerometer_budget, gyro_bias_uncertainty
+from station.domain.poses import POSES
+from station.domain.run_settings import RunSettings, shipped_plan
+from station.domain.sensor import ADC_MAX, ADC_MIN, GYRO_DPS_PER_LSB
+from station.simulator.sensor import SensorTruth
+
+#: The coefficient groups a coverage is counted over.
+GROUPS = ("offset", "sensitivity", "gyro_bias")
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """Per group, how many coefficients were checked and how many lay within ±U; and the
+    units the solve refused (they carry no coefficient)."""
+
+    checked: dict[str, int]
+    inside: dict[str, int]
+    refused: int
+    mean_ratio: dict[str, float]
+
+    def fraction(self, group: str | None = None) -> float:
+        """Fraction within ±U of one group, or of all (``None``)."""
+        groups = GROUPS if group is None else (group,)
+        checked = sum(self.checked[g] for g in groups)
+        return sum(self.inside[g] for g in groups) / checked if checked else float("nan")
+
+
+def settings_of(profile: str) -> RunSettings:
+    """The run settings a station uses under ``profile`` (its shipped plan, if any)."""
+    return RunSettings(**(shipped_plan(profile) or {}))
+
+
+def true_sensitivity(truth: SensorTruth, model: Model) -> FloatArray:
+    """The sensitivities as ``model`` defines them (module docstring)."""
+    if model == "six":
+        return truth.sensitivity_counts_per_g
+    r = np.linalg.qr(np.linalg.inv(truth.counts_per_g))[1]
+    return np.asarray(1.0 / np.abs(np.diag(r)), dtype=np.float64)
+
+
+def tilted(directions: FloatArray, tilt_deg: float, rng: np.random.Generator) -> FloatArray:
+    """Each direction (N, 3) turned by up to ``tilt_deg`` about a random perpendicular axis."""
+    if tilt_deg == 0.0:
+        return directions
+    out = np.empty_like(directions)
+    for i, u in enumerate(directions):
+        w = np.cross(u, rng.standard_normal(3))
+        w /= np.linalg.norm(w)
+        angle = np.radians(rng.uniform(0.0, tilt_deg))
+        out[i] = Rotation.from_rotvec(angle * w).apply(u)
+    return out
+
+
+def simulate_coverage(
+    profile: str, units: int, rng: np.random.Generator, tilt_deg: float = 0.0
+) -> Coverage:
+    """Run ``units`` simulated units under ``profile``; count the truths within ±U."""
+    settings = settings_of(profile)
+    names = (*settings.poses, settings.verification_pose)
+    nominal = np.array([POSES[name].gravity_body for name in names])
+    samples = settings.stillness.window_samples
+    model: Model = settings.model
+    checked = dict.fromkeys(GROUPS, 0)
+    inside = dict.fromkeys(GROUPS, 0)
+    ratio_sum = dict.fromkeys(GROUPS, 0.0)
+    refused = 0
+    fit = len(settings.poses)
+    for _ in range(units):
+        truth = SensorTruth.draw(rng)
+        directions = tilted(nominal, tilt_deg, rng)
+        clean = truth.still_counts(directions)  # (P, 3)
+        raw = clean[:, None, :] + rng.normal(0.0, truth.noise_counts, (len(names), samples, 3))
+        counts = np.clip(np.rint(raw), ADC_MIN, ADC_MAX)
+        means, spread = counts.mean(axis=1), counts.std(axis=1, ddof=1)
+        rates = truth.gyro_bias_dps + rng.normal(
+            0.0, truth.gyro_noise_dps, (len(names), samples, 3)
+        )
+        rates = np.rint(rates / GYRO_DPS_PER_LSB) * GYRO_DPS_PER_LSB
+        try:
+            solution = solve(means[:fit], model)
+        except CalibrationError:
+            refused += 1
+            continue
+        budget = accelerometer_budget(
+            solution,
+            means[:fit],
+            spread[:fit],
+            np.full(fit, samples),
+            verification=means[fit],
+            verification_spread=spread[fit],
+            verification_samples=samples,
+        )
+        gyro_u = gyro_bias_uncertainty(
+            rates.mean(axis=1), rates.std(axis=1, ddof=1), np.full(len(names), samples)
+        )
+        cal = solution.calibration
+        for group, estimate, true, u in (
+            ("offset", cal.offset, truth.offset_counts, budget.offset),
+            ("sensitivity", cal.sensitivity, true_sensitivity(truth, model), budget.sensitivity),
+            ("gyro_bias", rates.mean(axis=(0, 1)), truth.gyro_bias_dps, gyro_u),
+        ):
+            error = np.abs(estimate - true)
+            checked[group] += 3
+            inside[group] += int(np.sum(error <= u))
+            ratio_sum[group] += float(np.sum(error / u))
+    mean_ratio = {g: ratio_sum[g] / checked[g] if checked[g] else float("nan") for g in GROUPS}
+    return Coverage(checked, inside, refused, mean_ratio)

@@ -1,0 +1,227 @@
+"""The uncertainty budget against brute force: the propagation against re-solving noisy
+poses, the Jacobian against finite differences, and the terms' scaling laws."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from station.domain.calibration import solve, solve_paper_batch
+from station.domain.calibration.uncertainty import (
+    COVERAGE_FACTOR,
+    TERMS,
+    Uncertainty,
+    _jacobians,
+    _pack,
+    _unpack,
+    accelerometer_budget,
+    gyro_bias_uncertainty,
+)
+from station.simulator.recording import six_directions, spread_directions
+from station.simulator.sensor import SensorTruth
+from tests.station.domain.calibration.strategies import rotations, seeds, true_units
+
+noise = st.floats(0.6, 8.0)
+
+
+@st.composite
+def jig_rotations(draw: st.DrawFn) -> Rotation:
+    """A jig's misplacement of the six axis poses: up to 15° about any axis (the
+    six-pose fit of a coupled unit needs poses near the sensor's axes to be well
+    conditioned)."""
+    axis = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+    if np.linalg.norm(axis) < 0.1:
+        axis = np.array([0.0, 0.0, 1.0])
+    angle = np.radians(draw(st.floats(0.0, 15.0)))
+    return Rotation.from_rotvec(angle * axis / np.linalg.norm(axis))
+
+
+sample_counts = st.integers(64, 4096)
+
+
+@settings(max_examples=15, deadline=None)
+@given(unit=true_units(), rotation=jig_rotations(), seed=seeds, sigma=noise, count=sample_counts)
+def test_the_pose_noise_term_is_the_spread_of_re_solved_noisy_poses(  # type: ignore[no-untyped-def]
+    unit, rotation, seed, sigma, count
+) -> None:
+    # GUM's first-order propagation against brute force: 4000 noisy copies of the poses
+    # (noise σ/√N per pose mean), each solved; their spread is what the term predicts.
+    rng = np.random.default_rng(seed)
+    directions = rotation.apply(six_directions())
+    clean = unit.still_counts(directions)
+    sd = sigma / np.sqrt(count)
+    spread = np.full((6, 3), sigma)
+    budget = accelerometer_budget(
+        solve(clean), clean, spread, np.full(6, count), cross_axis_bound=0.0
+    )
+    noisy = clean + rng.normal(0.0, sd, (4000, *clean.shape))
+    batch = solve_paper_batch(noisy)
+    assert np.all(batch.outcome == 0)
+    draws = np.hstack([batch.offset, batch.sensitivity])
+    # The spread holds the quantisation's 1/12 LSB², which its own term lists: together
+    # they are the noise of a pose mean, σ/√N.
+    predicted = np.sqrt(budget.terms["pose_noise"] ** 2 + budget.terms["quantisation"] ** 2)
+    empirical = draws.std(axis=0, ddof=1)
+    # 4000 draws: a σ estimate's standard error is 1.1 %; ±8 % is 7 of them, and the
+    # first-order propagation is exact to far better than that at this noise.
+    np.testing.assert_allclose(empirical, predicted, rtol=0.08)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    unit=true_units(cross_axis=0.02), rotation=rotations(), model=st.sampled_from(["six", "nine"])
+)
+def test_the_jacobian_is_the_residual_s_derivative(unit, rotation, model) -> None:  # type: ignore[no-untyped-def]
+    poses = unit.still_counts(rotation.apply(spread_directions(12)))
+    cal = solve(poses, model).calibration
+    theta = _pack(cal.offset, cal.matrix, model)
+
+    def residual(t: np.ndarray, a: np.ndarray) -> np.ndarray:
+        offset, c = _unpack(t, model)
+        return np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
+
+    jac, dr_da, _ = _jacobians(theta, poses, model)
+    for j in range(len(theta)):
+        step = 1e-6 * max(abs(theta[j]), 1e-3)
+        up, down = theta.copy(), theta.copy()
+        up[j] += step
+        down[j] -= step
+        numeric = (residual(up, poses) - residual(down, poses)) / (2 * step)
+        scale = float(np.max(np.abs(numeric)))
+        np.testing.assert_allclose(jac[:, j], numeric, rtol=1e-5, atol=1e-6 * scale)
+    for axis in range(3):
+        up_a, down_a = poses.copy(), poses.copy()
+        up_a[:, axis] += 1e-3
+        down_a[:, axis] -= 1e-3
+        numeric = (residual(theta, up_a) - residual(theta, down_a)) / 2e-3
+        np.testing.assert_allclose(dr_da[:, axis], numeric, rtol=1e-5, atol=1e-10)
+
+
+@settings(max_examples=25, deadline=None)
+@given(unit=true_units(), rotation=jig_rotations(), sigma=noise, count=sample_counts)
+def test_the_noise_term_scales_as_sigma_over_root_n(unit, rotation, sigma, count) -> None:  # type: ignore[no-untyped-def]
+    poses = unit.still_counts(rotation.apply(six_directions()))
+    solution = solve(poses)
+
+    def term(s: float, n: int) -> np.ndarray:
+        budget = accelerometer_budget(solution, poses, np.full((6, 3), s), np.full(6, n))
+        return budget.terms["pose_noise"]
+
+    lsb2 = 1.0 / 12.0
+    ratio = np.sqrt((4 * sigma**2 - lsb2) / (sigma**2 - lsb2))  # the 1/12 LSB² taken out
+    np.testing.assert_allclose(term(2 * sigma, count), ratio * term(sigma, count), rtol=1e-9)
+    np.testing.assert_allclose(term(sigma, 4 * count), term(sigma, count) / 2, rtol=1e-9)
+
+
+@settings(max_examples=25, deadline=None)
+@given(unit=true_units(), rotation=jig_rotations(), count=sample_counts)
+def test_quantisation_does_not_average_down_without_dither(unit, rotation, count) -> None:  # type: ignore[no-untyped-def]
+    poses = unit.still_counts(rotation.apply(six_directions()))
+    solution = solve(poses)
+    quiet = np.full((6, 3), 0.2)  # below ½ LSB: every sample rounds the same way
+
+    def quantisation(n: int) -> np.ndarray:
+        return accelerometer_budget(solution, poses, quiet, np.full(6, n)).terms["quantisation"]
+
+    np.testing.assert_allclose(quantisation(count), quantisation(4 * count), rtol=1e-12)
+    dithered = accelerometer_budget(solution, poses, np.full((6, 3), 2.0), np.full(6, count))
+    assert np.all(dithered.terms["quantisation"] < quantisation(count))
+
+
+@settings(max_examples=20, deadline=None)
+@given(unit=true_units(cross_axis=0.02), rotation=jig_rotations(), bound=st.floats(0.005, 0.05))
+def test_the_model_term_grows_with_the_unmodelled_coupling(unit, rotation, bound) -> None:  # type: ignore[no-untyped-def]
+    poses = unit.still_counts(rotation.apply(six_directions()))
+    six = solve(poses)
+    none = accelerometer_budget(six, poses, cross_axis_bound=0.0).terms["model"]
+    some = accelerometer_budget(six, poses, cross_axis_bound=bound).terms["model"]
+    more = accelerometer_budget(six, poses, cross_axis_bound=2 * bound).terms["model"]
+    np.testing.assert_array_equal(none, 0.0)
+    assert np.all(more[3:] > some[3:])
+    # The nine-parameter model represents the coupling: no model term.
+    twelve = unit.still_counts(rotation.apply(spread_directions(12)))
+    nine = accelerometer_budget(solve(twelve, "nine"), twelve, cross_axis_bound=bound)
+    np.testing.assert_array_equal(nine.terms["model"], 0.0)
+
+
+def test_a_verification_pose_far_off_scales_the_model_term() -> None:
+    rng = np.random.default_rng(7)
+    unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
+    poses = unit.still_counts(six_directions())
+    solution = solve(poses)
+    direction = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+    good = unit.still_counts(direction[None, :])[0] + rng.normal(0, 0.03, 3)
+    bad = unit.offset_counts + 1.1 * (good - unit.offset_counts)  # reads 1.1 g: 100 mg off
+    calm = accelerometer_budget(solution, poses, verification=good)
+    alarmed = accelerometer_budget(solution, poses, verification=bad)
+    assert calm.verification_ratio is not None
+    assert calm.verification_ratio < 1.0
+    np.testing.assert_allclose(
+        calm.terms["model"], accelerometer_budget(solution, poses).terms["model"]
+    )
+    assert alarmed.verification_ratio is not None
+    assert alarmed.verification_ratio > 1.0
+    np.testing.assert_allclose(
+        alarmed.terms["model"], calm.terms["model"] * alarmed.verification_ratio
+    )
+
+
+def test_redundant_residuals_beyond_the_noise_add_a_fit_term() -> None:
+    rng = np.random.default_rng(11)
+    unit = SensorTruth.draw_accelerometer(rng)
+    poses = unit.still_counts(spread_directions(12))
+    spread, count = np.full((12, 3), 1.0), np.full(12, 1024)
+    honest = poses + rng.normal(0.0, 1.0 / 32, poses.shape)
+    shaken = poses + rng.normal(0.0, 1.0, poses.shape)  # 32× what the spreads say
+    quiet = accelerometer_budget(solve(honest, "nine"), honest, spread, count)
+    loud = accelerometer_budget(solve(shaken, "nine"), shaken, spread, count)
+    np.testing.assert_array_equal(quiet.terms["fit"], 0.0)
+    assert np.all(loud.terms["fit"] > 5 * loud.terms["pose_noise"])
+
+
+def test_expanded_is_k_times_the_root_sum_of_squares() -> None:
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(3), cross_axis=0.02)
+    poses = unit.still_counts(six_directions())
+    budget = accelerometer_budget(solve(poses), poses)
+    assert tuple(budget.terms) == TERMS
+    total = np.sqrt(sum(values**2 for values in budget.terms.values()))
+    np.testing.assert_allclose(budget.expanded, COVERAGE_FACTOR * total)
+    np.testing.assert_array_equal(budget.terms["tilt"], 0.0)
+
+
+def test_the_shape_leaves_out_what_was_not_measured() -> None:
+    accel = Uncertainty(offset=np.ones(3), sensitivity=np.full(3, 2.0))
+    assert accel.to_dict() == {
+        "k": 2.0,
+        "offset": {"x": 1.0, "y": 1.0, "z": 1.0},
+        "sensitivity": {"x": 2.0, "y": 2.0, "z": 2.0},
+    }
+    whole = accel.with_gyro(np.full(3, 0.01), np.full((3, 3), 0.002)).to_dict()
+    assert whole["gyro_bias_dps"] == [0.01] * 3
+    assert whole["gyro_matrix"] == [[0.002] * 3] * 3
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    bias=st.lists(st.floats(-5, 5), min_size=3, max_size=3),
+    sigma=st.floats(0.05, 1.0),
+    poses=st.integers(2, 20),
+    count=sample_counts,
+    seed=seeds,
+)
+def test_the_gyro_bias_uncertainty_follows_the_noise(bias, sigma, poses, count, seed) -> None:  # type: ignore[no-untyped-def]
+    rng = np.random.default_rng(seed)
+    means = np.array(bias) + rng.normal(0.0, sigma / np.sqrt(count), (poses, 3))
+    u = gyro_bias_uncertainty(means, np.full((poses, 3), sigma), np.full(poses, count))
+    within = sigma / np.sqrt(poses * count)
+    assert np.all(u >= COVERAGE_FACTOR * within * 0.99)
+    # A pose whose bias is 50σ of a pose mean off: the scatter takes over.
+    means[0] += 50 * sigma / np.sqrt(count)
+    moved = gyro_bias_uncertainty(means, np.full((poses, 3), sigma), np.full(poses, count))
+    assert np.all(moved > u)
+
+
+def test_the_gyro_bias_needs_a_pose() -> None:
+    with pytest.raises(ValueError, match="at least one still pose"):
+        gyro_bias_uncertainty(np.zeros((0, 3)))
