@@ -4,10 +4,11 @@ import logging
 from typing import Annotated
 from uuid import UUID
 
-from fastapi import APIRouter, HTTPException, Query, Response, status
+from fastapi import APIRouter, HTTPException, Query, Request, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
 from api.errors import invalid
+from api.metrics import get_metrics, refuse
 from api.responses import json_response, problems
 from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
@@ -95,9 +96,12 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
         ),
     },
 )
-async def submit_run(record: RunRecord, station: StationDep, repository: RepositoryDep) -> Response:
+async def submit_run(
+    record: RunRecord, station: StationDep, repository: RepositoryDep, request: Request
+) -> Response:
     """Store a station's run; a retry of a stored run returns it (200) unchanged."""
     if record.station_id != station:
+        refuse(request, "wrong_station")
         raise HTTPException(
             status.HTTP_403_FORBIDDEN,
             f"this API key belongs to station {station}, the run to {record.station_id}",
@@ -105,20 +109,25 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
     for field, moment in (("started_at", record.started_at), ("finished_at", record.finished_at)):
         why = implausible_run_time(moment)
         if why is not None:
+            refuse(request, "implausible_time")
             raise invalid(("body", field), why)
     try:
         profile_of(record.limits)
     except InputError as exc:
+        refuse(request, "limits_profile")
         raise invalid(("body", "limits", "profile"), str(exc)) from None
     try:
         check_coefficients(record)
     except CalibrationMismatchError as exc:
+        refuse(request, "calibration_mismatch")
         log.warning(
             "run %s serial=%s station=%s refused: %s", record.run_id, record.serial, station, exc
         )
         raise
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
+    if outcome.created:  # committed: a retry of a stored run is not counted again
+        get_metrics(request).runs_stored.labels(station, record.verdict).inc()
     log.info(
         "run %s serial=%s station=%s verdict=%s %s",
         record.run_id,
