@@ -46,6 +46,11 @@ class StationConfig(BaseSettings):
     run: RunSettings = RunSettings()
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
+    #: The TCP port the station serves its Prometheus metrics on while it runs
+    #: (:mod:`station.loop.metrics`, ``docs/metrics.md``); None: no metrics served.
+    metrics_port: int | None = Field(None, ge=1, le=65535)
+    #: The address those metrics are served on (all interfaces: the plant's Prometheus).
+    metrics_host: str = "0.0.0.0"
 
     @model_validator(mode="before")
     @classmethod
