@@ -14,6 +14,7 @@ from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
+from station.domain.constants import PART_NUMBER_PATTERN
 from station.domain.errors import InputError
 from station.domain.limits import profile_of
 from station.domain.record_bounds import RUN_YEARS, implausible_run_time
@@ -44,6 +45,9 @@ async def list_runs(
     lot: Annotated[
         str | None, Query(pattern=IDENTIFIER_PATTERN, description="the unit's production lot")
     ] = None,
+    part_number: Annotated[
+        str | None, Query(pattern=PART_NUMBER_PATTERN, description="the unit's product")
+    ] = None,
     verdict: Verdict | None = None,
     since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
     until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
@@ -55,6 +59,7 @@ async def list_runs(
         serial=serial,
         station_id=station_id,
         lot=lot,
+        part_number=part_number,
         verdict=verdict,
         since=since,
         until=until,
