@@ -33,6 +33,13 @@ OperatorOption = Annotated[str | None, typer.Option("--operator", help="Operator
 LotOption = Annotated[
     str | None, typer.Option("--lot", help="Production lot of the units (recorded on each run).")
 ]
+PartNumberOption = Annotated[
+    str | None,
+    typer.Option(
+        "--part-number",
+        help="The product calibrated (its sensor, limits and plan; default DIXX-A12).",
+    ),
+]
 LimitsOption = Annotated[Path | None, typer.Option("--limits", help="Limits profiles file (TOML).")]
 ProfileOption = Annotated[str | None, typer.Option("--profile", help="Limits profile name.")]
 ServerOption = Annotated[
@@ -102,6 +109,7 @@ def run_command(
     station: StationOption = None,
     operator: OperatorOption = None,
     lot: LotOption = None,
+    part_number: PartNumberOption = None,
     limits: LimitsOption = None,
     profile: ProfileOption = None,
     server: ServerOption = None,
@@ -121,6 +129,7 @@ def run_command(
             "station_id": station,
             "operator_id": operator,
             "lot": lot,
+            "part_number": part_number,
             "limits_file": limits,
             "limits_profile": profile,
             "server_url": server,
@@ -171,11 +180,12 @@ def demo_command(
     station: StationOption = None,
     operator: OperatorOption = None,
     lot: LotOption = None,
+    part_number: PartNumberOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     from station.domain.limits import load_profile
     from station.loop.config import load_config
-    from station.loop.demo import CablePuller, ScriptedOperator
+    from station.loop.demo import CablePuller, ScriptedOperator, demo_sensor
     from station.loop.fixture.demo import FixtureOperator
     from station.loop.startup import prepare_data_dir
 
@@ -186,8 +196,10 @@ def demo_command(
             "operator_id": operator or "demo-operator",
             "lot": lot or "demo-lot",
             "limits_profile": profile,
+            "part_number": part_number,
         },
     )
+    sensor = demo_sensor(config.product)
     prepare_data_dir(config.data_dir)
     first = _first_new_unit(config, seed)
     cables = CablePuller(rate=pull_cables, seed=seed)
@@ -197,14 +209,26 @@ def demo_command(
         port = demo_dir / "putter"
         config = config.model_copy(update={"port": str(port), "slots": ()})
         operator_script = ScriptedOperator(
-            units=units, port=port, seed=seed, speed=speed, first=first, cables=cables
+            units=units,
+            port=port,
+            seed=seed,
+            speed=speed,
+            first=first,
+            cables=cables,
+            sensor=sensor,
         )
         where = f"each plugged into {port} in turn and moved through the poses"
     else:
         ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
         config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
         operator_script = FixtureOperator(
-            units=units, ports=ports, seed=seed, speed=speed, first=first, cables=cables
+            units=units,
+            ports=ports,
+            seed=seed,
+            speed=speed,
+            first=first,
+            cables=cables,
+            sensor=sensor,
         )
         where = (
             f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"

@@ -47,6 +47,11 @@ class SensorSpec(BaseModel):
     range_g: Annotated[float, Field(gt=0, le=200)]
     gyro_dps_per_lsb: Annotated[float, Field(gt=0, le=1)]
     sample_rate_hz: Annotated[int, Field(ge=1, le=MAX_RATE_HZ)]
+    #: Datasheet spreads a unit's zero g (± g) and sensitivity (± fraction) lie within.
+    zero_g_spread_g: Annotated[float, Field(ge=0, le=1)] = 0.25
+    sensitivity_tolerance: Annotated[float, Field(ge=0, lt=1)] = 0.05
+    #: White noise of a reading, g rms.
+    noise_g: Annotated[float, Field(ge=0, le=1)] = 0.0012
 
     @property
     def adc_max(self) -> int:

@@ -116,3 +116,34 @@ def test_the_demo_calibrates_the_whole_unit_with_its_profile(
     assert np.abs(np.diag(k) - 1).max() < 0.02
     assert not np.allclose(k, np.eye(3), atol=1e-3)
     assert "verification move: turn the putter face up" in result.stderr
+
+
+def test_a_demo_of_a_product_records_its_part_number(run_cli: CliRunner, tmp_path: Path) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("demo", "--units", "1", "--json", "--speed", "20", "--part-number", "DIXX-A12")
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    [unit] = json.loads(result.stdout)
+    with sqlite3.connect(tmp_path / "calstation.sqlite3") as db:
+        stored = db.execute("select serial, part_number from runs").fetchall()
+    assert stored == [(unit["serial"], "DIXX-A12")]
+
+
+@pytest.mark.parametrize(
+    ("part_number", "line"),
+    [
+        ("DIXX-Z9", "unknown part number 'DIXX-Z9'; known: DIXX-A12, DIXX-D16"),
+        ("DIXX-D16", "demo: DIXX-D16's 16-bit accelerometer is not calibrated by this station"),
+        ("dixx a12", "unknown part number 'dixx a12'"),
+    ],
+)
+def test_a_demo_of_a_product_it_cannot_run_is_one_line_and_exit_2(
+    run_cli: CliRunner, tmp_path: Path, part_number: str, line: str
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    result = run_cli("demo", "--units", "1", "--part-number", part_number, env=env, timeout=60)
+    assert result.returncode == 2
+    [said] = result.stderr.strip().splitlines()
+    assert said.startswith(f"calstation: error: {line}"), said

@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from station.domain import sensor
@@ -10,6 +11,7 @@ from station.domain.errors import InputError
 from station.domain.limits import load_profiles
 from station.domain.products import Label, LabelFormat, load_products, parse_products
 from station.loop.config import load_config
+from station.simulator.sensor import ACCEL_NOISE_COUNTS, SensorTruth, accelerometer_counts
 
 SHIPPED = load_products()
 
@@ -30,6 +32,31 @@ def test_the_putters_product_is_the_sensor_the_calibration_assumes() -> None:
     assert a12.zero_g_counts == sensor.NOMINAL_OFFSET_COUNTS
     assert a12.counts_per_g == sensor.NOMINAL_SENSITIVITY_COUNTS_PER_G
     assert a12.gyro_dps_per_lsb == sensor.GYRO_DPS_PER_LSB
+    assert a12.zero_g_spread_g * a12.counts_per_g == pytest.approx(sensor.OFFSET_SPREAD_COUNTS)
+    assert a12.sensitivity_tolerance == sensor.SENSITIVITY_TOLERANCE
+    assert a12.noise_g * a12.counts_per_g == pytest.approx(ACCEL_NOISE_COUNTS)
+
+
+def test_a_virtual_putter_follows_its_products_sensor() -> None:
+    rng = np.random.default_rng(7)
+    for part_number in SHIPPED.products:
+        spec = SHIPPED.get(part_number).sensor
+        truths = [SensorTruth.draw(rng, spec) for _ in range(50)]
+        offsets = np.array([t.offset_counts for t in truths])
+        sensitivities = np.array([t.sensitivity_counts_per_g for t in truths])
+        spread = spec.zero_g_spread_g * spec.counts_per_g
+        assert np.abs(offsets - spec.zero_g_counts).max() <= spread
+        assert np.abs(sensitivities / spec.counts_per_g - 1).max() <= spec.sensitivity_tolerance
+        assert {t.adc_max for t in truths} == {spec.adc_max}
+        # A unit lying face up reads one g on z above its zero g, inside its ADC.
+        counts = accelerometer_counts(
+            truths[0], np.array([[0.0, 0.0, 1.0]] * 200), np.full(200, 25.0), rng
+        )
+        assert counts.min() >= 0
+        assert counts.max() <= spec.adc_max
+        assert counts.mean(axis=0)[2] - truths[0].offset_counts[2] == pytest.approx(
+            spec.counts_per_g, rel=0.1
+        )
 
 
 def test_a_product_judged_by_another_sensors_limits_is_refused_in_one_line() -> None:
