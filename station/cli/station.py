@@ -33,6 +33,10 @@ OperatorOption = Annotated[str | None, typer.Option("--operator", help="Operator
 LotOption = Annotated[
     str | None, typer.Option("--lot", help="Production lot of the units (recorded on each run).")
 ]
+LanguageOption = Annotated[
+    str | None,
+    typer.Option("--language", help="The operator's language: en, ko or zh.", show_default=False),
+]
 PartNumberOption = Annotated[
     str | None,
     typer.Option(
@@ -70,8 +74,11 @@ def _station(
     probe_port: bool = True,
 ) -> StationApp | FixtureApp:
     """The one-port station, or the fixture's when several slots are configured."""
+    from station.domain.i18n import set_language
     from station.loop.app import StationApp
     from station.loop.fixture.app import FixtureApp
+
+    set_language(config.language)  # the operator's lines, for this process
 
     front_end = FixtureApp if config.slots else StationApp
     return front_end(
@@ -110,6 +117,7 @@ def run_command(
     operator: OperatorOption = None,
     lot: LotOption = None,
     part_number: PartNumberOption = None,
+    language: LanguageOption = None,
     limits: LimitsOption = None,
     profile: ProfileOption = None,
     server: ServerOption = None,
@@ -130,6 +138,7 @@ def run_command(
             "operator_id": operator,
             "lot": lot,
             "part_number": part_number,
+            "language": language,
             "limits_file": limits,
             "limits_profile": profile,
             "server_url": server,
@@ -181,6 +190,7 @@ def demo_command(
     operator: OperatorOption = None,
     lot: LotOption = None,
     part_number: PartNumberOption = None,
+    language: LanguageOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     from station.domain.limits import load_profile
@@ -197,6 +207,7 @@ def demo_command(
             "lot": lot or "demo-lot",
             "limits_profile": profile,
             "part_number": part_number,
+            "language": language,
         },
     )
     sensor = demo_sensor(config.product)

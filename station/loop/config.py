@@ -15,6 +15,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
 from station.domain.constants import DEFAULT_PART_NUMBER, MAX_SLOTS, PART_NUMBER_PATTERN
 from station.domain.errors import InputError, validation_problem
+from station.domain.i18n import Language
 from station.domain.limits import load_profile
 from station.domain.products import LabelFormat, Product, Products, load_products
 from station.domain.quality.golden import GoldenUnit
@@ -56,6 +57,9 @@ class StationConfig(BaseSettings):
     run: RunSettings = RunSettings()
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
+    #: The operator's language (``CALSTATION_LANGUAGE``, ``--language``): the station's
+    #: lines from the catalogues of ``station/domain/locale`` (``station.domain.i18n``).
+    language: Language = "en"
     #: The TCP port the station serves its Prometheus metrics on while it runs
     #: (:mod:`station.loop.metrics`, ``docs/metrics.md``); None: no metrics served.
     metrics_port: int | None = Field(None, ge=1, le=65535)

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import sqlite3
 from pathlib import Path
 
@@ -147,3 +148,18 @@ def test_a_demo_of_a_product_it_cannot_run_is_one_line_and_exit_2(
     assert result.returncode == 2
     [said] = result.stderr.strip().splitlines()
     assert said.startswith(f"calstation: error: {line}"), said
+
+
+def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_path: Path) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path), "CALSTATION_LANGUAGE": "zh"}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("demo", "--units", "1", "--speed", "20", "--language", "ko")  # the flag wins
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    assert re.search(r"PT\d{6}: 교정 시작 \(실행 [0-9a-f-]{36}\)", result.stderr)
+    assert "측정 완료" in result.stderr
+    assert "calibration started" not in result.stderr
+    refused = run_cli("demo", "--units", "1", "--language", "fr", env=env, timeout=60)
+    assert refused.returncode == 2
+    [said] = refused.stderr.strip().splitlines()
+    assert said.startswith("calstation: error: station configuration: language: ")
