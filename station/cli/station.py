@@ -125,6 +125,7 @@ def run_command(
     units: Annotated[int | None, typer.Option(help="Stop after this many units.")] = None,
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
+    from station.domain.errors import InputError
     from station.domain.limits import load_profile
     from station.loop.config import load_config
     from station.loop.keyboard import TerminalKeys
@@ -145,6 +146,9 @@ def run_command(
             "api_key": api_key,
         },
     )
+    why = config.product.not_calibrated()
+    if why is not None:
+        raise InputError(f"run: {why}")
     limits_profile = load_profile(config.limits_file, config.limits_profile)
     prepare_data_dir(config.data_dir)
     if not config.slots:

@@ -27,6 +27,7 @@ from station.domain.errors import InputError, validation_problem
 from station.domain.limits import LimitsProfile
 from station.domain.record_bounds import WIRE_COUNTS_MAX
 from station.domain.run_settings import shipped_plan
+from station.domain.sensor import ADC_MAX
 
 
 class SensorSpec(BaseModel):
@@ -126,6 +127,17 @@ class Product(BaseModel):
             raise InputError(
                 f"{where}: its sensor contradicts limits profile {profile.name}: {why}"
             )
+
+    def not_calibrated(self) -> str | None:
+        """Why the station cannot calibrate this product yet (None: it can): its capture,
+        solve and records read the 12-bit ADC's counts, 0…4095, so far."""
+        s = self.sensor
+        if s.adc_max == ADC_MAX:
+            return None
+        return (
+            f"{self.part_number}'s {s.adc_bits}-bit accelerometer is not calibrated by this "
+            f"station yet (it reads 0…{ADC_MAX} counts)"
+        )
 
     @property
     def run_plan(self) -> str:

@@ -15,7 +15,6 @@ from typing import Any
 
 from station.domain.errors import InputError
 from station.domain.products import Product, SensorSpec
-from station.domain.sensor import ADC_MAX
 from station.simulator.putter import VirtualPutter
 
 #: Simulated seconds an operator takes to turn the putter into the next pose.
@@ -44,14 +43,12 @@ def demo_sensor(product: Product) -> SensorSpec:
     """The sensor the demo's virtual putters of ``product`` are built with; a product
     whose accelerometer is not read through a 12-bit ADC is refused in one line: the
     station's capture, solve and records read the 12-bit ADC's counts (0…4095) so far."""
-    spec = product.sensor
-    if spec.adc_max != ADC_MAX:
+    why = product.not_calibrated()
+    if why is not None:
         raise InputError(
-            f"demo: {product.part_number}'s {spec.adc_bits}-bit accelerometer is not "
-            f"calibrated by this station yet (it reads 0…{ADC_MAX} counts): its virtual "
-            "putters exist (station.simulator), its runs do not"
+            f"demo: {why}: its virtual putters exist (station.simulator), its runs do not"
         )
-    return spec
+    return product.sensor
 
 
 def demo_serial(seed: int, number: int) -> str:

@@ -163,3 +163,18 @@ def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_
     assert refused.returncode == 2
     [said] = refused.stderr.strip().splitlines()
     assert said.startswith("calstation: error: station configuration: language: ")
+
+
+def test_a_station_set_to_a_product_it_cannot_calibrate_stops_in_one_line(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("run", "--port", str(tmp_path / "putter"), "--part-number", "DIXX-D16")
+    result = run_cli(*args, env=env, timeout=60)
+    assert result.returncode == 2
+    [said] = result.stderr.strip().splitlines()
+    assert said == (
+        "calstation: error: run: DIXX-D16's 16-bit accelerometer is not calibrated by this "
+        "station yet (it reads 0…4095 counts)"
+    )
