@@ -79,7 +79,7 @@ class ServerMetrics:
         self.runs_stored = Counter(
             "calstation_runs_stored",
             "Runs stored (once each: a retried submission is not counted again)",
-            ["station", "verdict"],
+            ["station", "verdict", "part_number"],
             registry=r,
         )
         self.submissions_refused = Counter(

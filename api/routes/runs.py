@@ -132,7 +132,8 @@ async def submit_run(
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
     if outcome.created:  # committed: a retry of a stored run is not counted again
-        get_metrics(request).runs_stored.labels(station, record.verdict).inc()
+        stored = get_metrics(request).runs_stored
+        stored.labels(station, record.verdict, record.part_number).inc()
     log.info(
         "run %s serial=%s station=%s verdict=%s %s",
         record.run_id,

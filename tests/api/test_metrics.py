@@ -46,7 +46,7 @@ def test_stored_runs_refusals_and_requests_are_counted(
     with serving(database_url) as base, httpx.Client(base_url=base, timeout=30) as client:
         passed = make_record(serial="PT-100001")
         failed = make_record(serial="PT-100002", verdict="fail", coefficients=None, quality=None)
-        other = make_record(serial="PT-100003", station_id="line1-st2")
+        other = make_record(serial="PT-100003", station_id="line1-st2", part_number="DIXX-D16")
         for record, key in ((passed, st1), (failed, st1), (other, st2)):
             body = record.model_dump(mode="json")
             assert client.post(RUNS, json=body, headers=key).status_code == 201
@@ -68,9 +68,10 @@ def test_stored_runs_refusals_and_requests_are_counted(
         samples = scrape(client)
 
     stored = "calstation_runs_stored_total"
-    assert value(samples, stored, station="line1-st1", verdict="pass") == 1
-    assert value(samples, stored, station="line1-st1", verdict="fail") == 1
-    assert value(samples, stored, station="line1-st2", verdict="pass") == 1
+    a12, d16 = {"part_number": "DIXX-A12"}, {"part_number": "DIXX-D16"}
+    assert value(samples, stored, station="line1-st1", verdict="pass", **a12) == 1
+    assert value(samples, stored, station="line1-st1", verdict="fail", **a12) == 1
+    assert value(samples, stored, station="line1-st2", verdict="pass", **d16) == 1
     assert sum(v for (name, _), v in samples.items() if name == stored) == 3
 
     refused = "calstation_run_submissions_refused_total"
@@ -123,7 +124,14 @@ def test_a_report_counts_in_the_report_pool_and_every_worker_is_added_up(
 
     for samples in scrapes:
         assert (
-            value(samples, "calstation_runs_stored_total", station="line1-st1", verdict="pass") == 6
+            value(
+                samples,
+                "calstation_runs_stored_total",
+                station="line1-st1",
+                verdict="pass",
+                part_number="DIXX-A12",
+            )
+            == 6
         )
         assert value(samples, "calstation_report_pool_processes") == 2  # one per worker
         assert value(samples, "calstation_report_pool_busy") == 0
