@@ -12,6 +12,7 @@ from sqlalchemy.orm import configure_mappers
 from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
+from api.metrics import install_metrics
 from api.report_pool import ReportPool
 from api.responses import json_problems, problems
 from api.routes import events, gyro, health, reports, reviews, runs, unit_pages, units
@@ -58,6 +59,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             processes=settings.report_pool_size,
             wait_s=settings.report_wait_s,
             timeout_s=settings.read_timeout_s,
+            metrics=server_metrics,
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)
@@ -114,4 +116,6 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     app.include_router(v1)
     app.include_router(reports.dashboard, dependencies=reads)
     app.include_router(unit_pages.router, dependencies=reads, responses=keyed)
+    # Last: its middleware is the outermost, so it sees every answer (a 413 too).
+    server_metrics = install_metrics(app)
     return app

@@ -26,6 +26,7 @@ from sqlalchemy import Engine
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
+from api.metrics import ServerMetrics
 from db import DatabaseUnavailableError, RunRepository, make_engine
 from db.timeouts import is_statement_timeout
 from station.domain.errors import CalstationError
@@ -85,10 +86,21 @@ def _in_transaction(
 
 
 class ReportPool:
-    """``processes`` report processes on the database at ``url``."""
+    """``processes`` report processes on the database at ``url``; ``metrics`` shows how
+    busy they are (processes, busy, waiting, refused)."""
 
-    def __init__(self, url: str, *, processes: int, wait_s: float, timeout_s: float) -> None:
+    def __init__(
+        self,
+        url: str,
+        *,
+        processes: int,
+        wait_s: float,
+        timeout_s: float,
+        metrics: ServerMetrics,
+    ) -> None:
         self.wait_s = wait_s
+        self._metrics = metrics
+        metrics.report_processes.set(processes)
         self._free = asyncio.Semaphore(processes)
         self._executor = ProcessPoolExecutor(
             processes,
@@ -101,19 +113,27 @@ class ReportPool:
         self, work: Callable[Concatenate[RunRepository, P], T], *args: P.args, **kwargs: P.kwargs
     ) -> T:
         """``work(repository, *args)`` in a report process; ``work`` is a module's function."""
+        metrics = self._metrics
+        metrics.report_waiting.inc()
         try:
             async with asyncio.timeout(self.wait_s):
                 await self._free.acquire()
         except TimeoutError:
+            metrics.reports_busy_refused.inc()
             raise ReportsBusyError(
                 f"every report connection stayed busy for {self.wait_s:g} s: retry later"
             ) from None
+        finally:
+            metrics.report_waiting.dec()
+        metrics.report_busy.inc()
         try:
             future = self._executor.submit(partial(_in_transaction, work, *args, **kwargs))
             return await asyncio.wrap_future(future)
         finally:
+            metrics.report_busy.dec()
             self._free.release()
 
     def close(self) -> None:
         """Stop the report processes (a report still running ends on its own)."""
         self._executor.shutdown(wait=False, cancel_futures=True)
+        self._metrics.report_processes.set(0)

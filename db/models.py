@@ -53,6 +53,7 @@ class Run(Base):
         Index("ix_runs_verdict_started_at", "verdict", "started_at", "id"),
         Index("ix_runs_started_at", "started_at", "id"),
         Index("ix_runs_lot_started_at", "lot", "started_at", "id"),
+        Index("ix_runs_part_number_started_at", "part_number", "started_at", "id"),
     )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
@@ -62,6 +63,8 @@ class Run(Base):
     operator_id: Mapped[str] = mapped_column(String(NAME))
     #: The unit's production lot, when the station knows it.
     lot: Mapped[str | None] = mapped_column(String(NAME))
+    #: The unit's product (runs from before products: DIXX-A12, migration 0014).
+    part_number: Mapped[str] = mapped_column(String(NAME))
     started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     finished_at: Mapped[datetime] = mapped_column(UtcDateTime())
     received_at: Mapped[datetime] = mapped_column(UtcDateTime())

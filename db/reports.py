@@ -98,6 +98,9 @@ CHART_POINTS = 200
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 DAY = timedelta(days=1)
+#: Bounds of an open range read from the runs themselves (a product's report).
+FIRST = datetime(1, 1, 1, tzinfo=UTC)
+LAST = datetime(9999, 12, 31, tzinfo=UTC)
 #: The last moment before an exclusive end.
 EPSILON = timedelta(microseconds=1)
 
@@ -112,6 +115,8 @@ def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
         where.append(columns.operator_id == filter.operator_id)
     if filter.lot is not None:
         where.append(columns.lot == filter.lot)
+    if filter.part_number is not None:  # runs only: the roll-ups have no product
+        where.append(columns.part_number == filter.part_number)
     return where
 
 
@@ -139,6 +144,10 @@ class ReportQueries:
         self.filter = filter
         self.dialect = session.get_bind().dialect.name
         self.days, self.edges = split_days(filter.since, filter.until)
+        if filter.part_number is not None:
+            # The roll-ups are kept per station, operator and lot, not per product: a
+            # product's report adds up its runs themselves, the whole range as one edge.
+            self.days, self.edges = None, [(filter.since or FIRST, filter.until or LAST)]
         if self.dialect == "postgresql":
             # The raw statements are scans with long expressions: compiling them (JIT)
             # cost seconds and saved nothing; their sorts and hashes spill to disk with
@@ -577,7 +586,7 @@ def _chart_limits(
     are ordered and differenced in SQL.
     """
     f = queries.filter
-    narrowed = f.station_id is not None or f.operator_id is not None or f.lot is not None
+    narrowed = any(v is not None for v in (f.station_id, f.operator_id, f.lot, f.part_number))
     if narrowed or not all(name in stats for name in COEFFICIENTS):
         row = chart_limits(queries.session, queries.conditions())._mapping
         return _ChartLimits(

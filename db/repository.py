@@ -40,6 +40,7 @@ from db.models import (
 )
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
+from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import CalstationError, InputError
 from station.domain.records import (
     GyroFitRecord,
@@ -100,6 +101,7 @@ class RunQuery:
     serial: str | None = None
     station_id: str | None = None
     lot: str | None = None
+    part_number: str | None = None
     verdict: Verdict | None = None
     since: datetime | None = None
     until: datetime | None = None
@@ -119,14 +121,17 @@ def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
     A record without a lot, a disposition, a purpose, a gyro matrix, uncertainties, a
-    decision rule, its limits profile or excluded poses is hashed without the field, as
-    before the field existed, so a retry from an older station matches the run it stored.
+    decision rule, its limits profile or excluded poses, or of the default product, is
+    hashed without the field, as before the field existed, so a retry from an older
+    station matches the run it stored.
     """
     unset: dict[str, Any] = {
         name: True
         for name in ("lot", "disposition", "purpose", "gyro_matrix", "uncertainty", "decision_rule")
         if getattr(record, name) is None
     }
+    if record.part_number == DEFAULT_PART_NUMBER:  # every run before products existed
+        unset["part_number"] = True
     if record.limits.profile is None:
         unset["limits"] = {"profile"}
     if record.quality is not None and record.quality.excluded_poses is None:
@@ -265,6 +270,8 @@ class RunRepository:
             stmt = stmt.where(Run.station_id == query.station_id)
         if query.lot is not None:
             stmt = stmt.where(Run.lot == query.lot)
+        if query.part_number is not None:
+            stmt = stmt.where(Run.part_number == query.part_number)
         if query.verdict is not None:
             stmt = stmt.where(Run.verdict == query.verdict)
         if query.since is not None:

@@ -21,7 +21,7 @@ COMPOSE = REPO_ROOT / "docker-compose.yml"
 @pytest.fixture(scope="module")
 def services() -> dict[str, Any]:
     document = yaml.safe_load(COMPOSE.read_text())
-    assert set(document["services"]) == {"db", "migrate", "api"}
+    assert set(document["services"]) == {"db", "migrate", "api", "prometheus"}
     assert "pgdata" in document["volumes"]
     services: dict[str, Any] = document["services"]
     return services
@@ -147,3 +147,23 @@ def test_both_app_services_build_the_image_of_the_dockerfile(services: dict[str,
     for package in ("station", "api", "db"):
         assert f"COPY {package} ./{package}" in dockerfile
     assert Path(REPO_ROOT / ".dockerignore").is_file()
+
+
+def test_prometheus_scrapes_the_api_with_the_files_in_the_repository(
+    services: dict[str, Any],
+) -> None:
+    prometheus = services["prometheus"]
+    mounted = {}
+    for volume in prometheus["volumes"]:
+        source, target, *_ = volume.split(":")
+        if source.startswith("./"):
+            assert (REPO_ROOT / source).is_file(), source
+            mounted[target] = REPO_ROOT / source
+    config = yaml.safe_load(mounted["/etc/prometheus/prometheus.yml"].read_text())
+    assert config["rule_files"] == ["/etc/prometheus/alerts.yml"]
+    assert "/etc/prometheus/alerts.yml" in mounted
+    server = next(j for j in config["scrape_configs"] if j["job_name"] == "calstation-server")
+    api_port = services["api"]["ports"][0].split(":")[-1]
+    assert server["static_configs"][0]["targets"] == [f"api:{api_port}"]
+    assert server["metrics_path"] == "/metrics"
+    assert prometheus["depends_on"]["api"]["condition"] == "service_healthy"

@@ -122,6 +122,9 @@ class Period:
     station: Annotated[Name | None, Blank, Query(description="only this station")] = None
     operator: Annotated[Name | None, Blank, Query(description="only this operator")] = None
     lot: Annotated[Name | None, Blank, Query(description="only this production lot")] = None
+    part_number: Annotated[
+        Name | None, Blank, Query(description="only this product (its part number)")
+    ] = None
 
     def filter(self, zone: str) -> ReportFilter:
         """The filter, or a 422 naming the bound that is wrong."""
@@ -141,6 +144,7 @@ class Period:
             station_id=self.station,
             operator_id=self.operator,
             lot=self.lot,
+            part_number=self.part_number,
         )
 
 

@@ -4,15 +4,17 @@ import logging
 from typing import Annotated
 from uuid import UUID
 
-from fastapi import APIRouter, HTTPException, Query, Response, status
+from fastapi import APIRouter, HTTPException, Query, Request, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
 from api.errors import invalid
+from api.metrics import get_metrics, refuse
 from api.responses import json_response, problems
 from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients
 from db import RunQuery
 from db.repository import MAX_PAGE
+from station.domain.constants import PART_NUMBER_PATTERN
 from station.domain.errors import InputError
 from station.domain.limits import profile_of
 from station.domain.record_bounds import RUN_YEARS, implausible_run_time
@@ -43,6 +45,9 @@ async def list_runs(
     lot: Annotated[
         str | None, Query(pattern=IDENTIFIER_PATTERN, description="the unit's production lot")
     ] = None,
+    part_number: Annotated[
+        str | None, Query(pattern=PART_NUMBER_PATTERN, description="the unit's product")
+    ] = None,
     verdict: Verdict | None = None,
     since: Annotated[UtcDatetime | None, Query(description="started at or after")] = None,
     until: Annotated[UtcDatetime | None, Query(description="started before")] = None,
@@ -54,6 +59,7 @@ async def list_runs(
         serial=serial,
         station_id=station_id,
         lot=lot,
+        part_number=part_number,
         verdict=verdict,
         since=since,
         until=until,
@@ -95,9 +101,12 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
         ),
     },
 )
-async def submit_run(record: RunRecord, station: StationDep, repository: RepositoryDep) -> Response:
+async def submit_run(
+    record: RunRecord, station: StationDep, repository: RepositoryDep, request: Request
+) -> Response:
     """Store a station's run; a retry of a stored run returns it (200) unchanged."""
     if record.station_id != station:
+        refuse(request, "wrong_station")
         raise HTTPException(
             status.HTTP_403_FORBIDDEN,
             f"this API key belongs to station {station}, the run to {record.station_id}",
@@ -105,20 +114,26 @@ async def submit_run(record: RunRecord, station: StationDep, repository: Reposit
     for field, moment in (("started_at", record.started_at), ("finished_at", record.finished_at)):
         why = implausible_run_time(moment)
         if why is not None:
+            refuse(request, "implausible_time")
             raise invalid(("body", field), why)
     try:
         profile_of(record.limits)
     except InputError as exc:
+        refuse(request, "limits_profile")
         raise invalid(("body", "limits", "profile"), str(exc)) from None
     try:
         check_coefficients(record)
     except CalibrationMismatchError as exc:
+        refuse(request, "calibration_mismatch")
         log.warning(
             "run %s serial=%s station=%s refused: %s", record.run_id, record.serial, station, exc
         )
         raise
     async with repository.session.begin():
         outcome = await repository.run(lambda r: r.submit(record))
+    if outcome.created:  # committed: a retry of a stored run is not counted again
+        stored = get_metrics(request).runs_stored
+        stored.labels(station, record.verdict, record.part_number).inc()
     log.info(
         "run %s serial=%s station=%s verdict=%s %s",
         record.run_id,

@@ -23,6 +23,9 @@ def report(
     station: Annotated[str | None, typer.Option(help="Only this station.")] = None,
     operator: Annotated[str | None, typer.Option(help="Only this operator.")] = None,
     lot: Annotated[str | None, typer.Option(help="Only this production lot.")] = None,
+    part_number: Annotated[
+        str | None, typer.Option("--part-number", help="Only this product (part number).")
+    ] = None,
     format: Annotated[
         str, typer.Option("--format", help=f"One of: {', '.join(FORMATS)}.")
     ] = "text",
@@ -85,6 +88,7 @@ def report(
         station_id=station,
         operator_id=operator,
         lot=lot,
+        part_number=part_number,
     )
     profile = None if limits is None else load_profile(limits)
     url = database_url or DatabaseSettings.from_environment().url()

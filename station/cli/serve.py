@@ -5,6 +5,7 @@
 
 import copy
 import os
+import tempfile
 from typing import Annotated, Any
 
 import typer
@@ -48,14 +49,19 @@ def serve(
     # Migrate the embedded database (or check a server's schema) once, before the
     # workers start, so they never race on it and a bad URL fails here in one line.
     open_database(ApiSettings.from_environment().url()).dispose()
-    uvicorn.run(
-        "api.main:create_app",
-        factory=True,
-        host=host,
-        port=port,
-        workers=workers,
-        log_config=_log_config(),
-        log_level="info",
-        access_log=False,
-        timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S,
-    )
+    with tempfile.TemporaryDirectory(prefix="calstation-metrics-") as metrics_dir:
+        # Several workers: each counts into files here, and whichever answers /metrics
+        # adds them all up (prometheus-client's multiprocess mode, api/metrics.py).
+        if workers > 1:
+            os.environ.setdefault("PROMETHEUS_MULTIPROC_DIR", metrics_dir)
+        uvicorn.run(
+            "api.main:create_app",
+            factory=True,
+            host=host,
+            port=port,
+            workers=workers,
+            log_config=_log_config(),
+            log_level="info",
+            access_log=False,
+            timeout_graceful_shutdown=GRACEFUL_SHUTDOWN_S,
+        )

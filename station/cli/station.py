@@ -33,6 +33,17 @@ OperatorOption = Annotated[str | None, typer.Option("--operator", help="Operator
 LotOption = Annotated[
     str | None, typer.Option("--lot", help="Production lot of the units (recorded on each run).")
 ]
+LanguageOption = Annotated[
+    str | None,
+    typer.Option("--language", help="The operator's language: en, ko or zh.", show_default=False),
+]
+PartNumberOption = Annotated[
+    str | None,
+    typer.Option(
+        "--part-number",
+        help="The product calibrated (its sensor, limits and plan; default DIXX-A12).",
+    ),
+]
 LimitsOption = Annotated[Path | None, typer.Option("--limits", help="Limits profiles file (TOML).")]
 ProfileOption = Annotated[str | None, typer.Option("--profile", help="Limits profile name.")]
 ServerOption = Annotated[
@@ -63,8 +74,11 @@ def _station(
     probe_port: bool = True,
 ) -> StationApp | FixtureApp:
     """The one-port station, or the fixture's when several slots are configured."""
+    from station.domain.i18n import set_language
     from station.loop.app import StationApp
     from station.loop.fixture.app import FixtureApp
+
+    set_language(config.language)  # the operator's lines, for this process
 
     front_end = FixtureApp if config.slots else StationApp
     return front_end(
@@ -102,6 +116,8 @@ def run_command(
     station: StationOption = None,
     operator: OperatorOption = None,
     lot: LotOption = None,
+    part_number: PartNumberOption = None,
+    language: LanguageOption = None,
     limits: LimitsOption = None,
     profile: ProfileOption = None,
     server: ServerOption = None,
@@ -109,6 +125,7 @@ def run_command(
     units: Annotated[int | None, typer.Option(help="Stop after this many units.")] = None,
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
+    from station.domain.errors import InputError
     from station.domain.limits import load_profile
     from station.loop.config import load_config
     from station.loop.keyboard import TerminalKeys
@@ -121,12 +138,17 @@ def run_command(
             "station_id": station,
             "operator_id": operator,
             "lot": lot,
+            "part_number": part_number,
+            "language": language,
             "limits_file": limits,
             "limits_profile": profile,
             "server_url": server,
             "api_key": api_key,
         },
     )
+    why = config.product.not_calibrated()
+    if why is not None:
+        raise InputError(f"run: {why}")
     limits_profile = load_profile(config.limits_file, config.limits_profile)
     prepare_data_dir(config.data_dir)
     if not config.slots:
@@ -171,11 +193,13 @@ def demo_command(
     station: StationOption = None,
     operator: OperatorOption = None,
     lot: LotOption = None,
+    part_number: PartNumberOption = None,
+    language: LanguageOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     from station.domain.limits import load_profile
     from station.loop.config import load_config
-    from station.loop.demo import CablePuller, ScriptedOperator
+    from station.loop.demo import CablePuller, ScriptedOperator, demo_sensor
     from station.loop.fixture.demo import FixtureOperator
     from station.loop.startup import prepare_data_dir
 
@@ -186,8 +210,11 @@ def demo_command(
             "operator_id": operator or "demo-operator",
             "lot": lot or "demo-lot",
             "limits_profile": profile,
+            "part_number": part_number,
+            "language": language,
         },
     )
+    sensor = demo_sensor(config.product)
     prepare_data_dir(config.data_dir)
     first = _first_new_unit(config, seed)
     cables = CablePuller(rate=pull_cables, seed=seed)
@@ -197,14 +224,26 @@ def demo_command(
         port = demo_dir / "putter"
         config = config.model_copy(update={"port": str(port), "slots": ()})
         operator_script = ScriptedOperator(
-            units=units, port=port, seed=seed, speed=speed, first=first, cables=cables
+            units=units,
+            port=port,
+            seed=seed,
+            speed=speed,
+            first=first,
+            cables=cables,
+            sensor=sensor,
         )
         where = f"each plugged into {port} in turn and moved through the poses"
     else:
         ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
         config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
         operator_script = FixtureOperator(
-            units=units, ports=ports, seed=seed, speed=speed, first=first, cables=cables
+            units=units,
+            ports=ports,
+            seed=seed,
+            speed=speed,
+            first=first,
+            cables=cables,
+            sensor=sensor,
         )
         where = (
             f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"

@@ -29,6 +29,16 @@ IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
 Identifier = Annotated[str, StringConstraints(pattern=IDENTIFIER_PATTERN)]
 """A station, operator, algorithm or limits-profile name."""
 
+#: A product's part number (station.domain.products): letters, digits and ``-._``.
+PART_NUMBER_PATTERN = r"^[A-Z0-9][A-Z0-9._\-]{0,31}$"
+
+PartNumber = Annotated[str, StringConstraints(pattern=PART_NUMBER_PATTERN)]
+"""A product's part number (``DIXX-A12``)."""
+
+#: The product of every run from before products existed (migration 0014), and of a
+#: station configured with none: the putter with the KXM52 behind a 12-bit ADC.
+DEFAULT_PART_NUMBER: Final = "DIXX-A12"
+
 #: What a quality review decides for a unit on hold: calibrate it again, or scrap it.
 ReviewDecision = Literal["retest", "scrap"]
 

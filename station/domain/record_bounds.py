@@ -18,10 +18,15 @@ from typing import Annotated, Final, TypeVar
 
 from pydantic import AfterValidator, BaseModel, Field, StringConstraints
 
-from station.domain.sensor import ADC_MAX, ADC_MIN, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.sensor import ADC_MIN, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 
-#: The ADC's span, counts: no spread of readings within 0…4095 exceeds it.
-ADC_SPAN: Final = float(ADC_MAX - ADC_MIN)
+#: The widest accelerometer reading any product's sensor sends, counts: the protocol's
+#: u16 field (docs/protocol.md), which a 16-bit sensor fills (``station.domain.products``).
+WIRE_COUNTS_MAX: Final = 65535
+
+#: The widest ADC span of the products' sensors, counts: no spread of readings within
+#: 0…65535 exceeds it (0…4095 for the 12-bit ADC the pose means are bounded by today).
+ADC_SPAN: Final = float(WIRE_COUNTS_MAX)
 
 #: Largest gyro rate the putter can report, deg/s: the protocol's int16 rate field at
 #: 0.02 deg/s per LSB (docs/protocol.md), 32768 × 0.02 = 655.36 deg/s. A mean of
@@ -33,22 +38,25 @@ GYRO_SPAN_DPS: Final = 2 * GYRO_RANGE_DPS
 TEMPERATURE_RANGE_C: Final = 32768 * TEMP_C_PER_LSB
 
 #: A zero-g output (offset) lies within one ADC span beyond either rail: the centre of
-#: the ellipsoid through poses that are all inside 0…4095 and cover both sides of each
+#: the ellipsoid through poses that are all inside 0…65535 and cover both sides of each
 #: axis cannot lie further out.
 OFFSET_MIN_COUNTS: Final = ADC_MIN - ADC_SPAN
-OFFSET_MAX_COUNTS: Final = ADC_MAX + ADC_SPAN
+OFFSET_MAX_COUNTS: Final = WIRE_COUNTS_MAX + ADC_SPAN
 
 #: Sensitivity, counts/g: positive, and at most the whole ADC span per g (a sensor reading
-#: more could not show +1 g and −1 g inside the converter's range; nominal 819.2).
+#: more could not show +1 g and −1 g inside the converter's range; nominal 819.2 for the
+#: 12-bit KXM52, 8192 for the 16-bit digital sensor).
 SENSITIVITY_MAX_COUNTS_PER_G: Final = ADC_SPAN
 
 #: A counts-to-g matrix entry, g/count: at most 1 (a sensor whose ±2 g range spanned four
 #: counts; nominal 1/819.2 ≈ 0.0012).
 MATRIX_MAX_G_PER_COUNT: Final = 1.0
 
-#: An error or residual, mg. With the bounds above, a calibrated reading is at most
-#: 3 × 1 g/count × (offset − raw ≤ 8190 counts) ≈ 24,570 g per axis, √3 × that ≈ 42,600 g
-#: in magnitude: 4.3e7 mg. 1e8 mg keeps every record computed from in-range counts valid.
+#: An error or residual, mg. A record's pose means lie within the 12-bit ADC's 0…4095
+#: (``station.domain.records.Counts3``), so an offset computed from them lies within
+#: −4095…8190 and a calibrated reading is at most 3 × 1 g/count × (offset − raw ≤ 8190
+#: counts) ≈ 24,570 g per axis, √3 × that ≈ 42,600 g in magnitude: 4.3e7 mg. 1e8 mg keeps
+#: every record computed from in-range counts valid.
 ERROR_MAX_MG: Final = 1e8
 
 #: The solve's condition number of a fit the station accepts is at most

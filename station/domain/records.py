@@ -32,7 +32,13 @@ from pydantic import (
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
-from station.domain.constants import IDENTIFIER_PATTERN, Identifier, ReviewDecision
+from station.domain.constants import (
+    DEFAULT_PART_NUMBER,
+    IDENTIFIER_PATTERN,
+    Identifier,
+    PartNumber,
+    ReviewDecision,
+)
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroDwells
 from station.domain.gyro.still import GyroStillSummary
@@ -437,6 +443,9 @@ class _RunHeader(_Record):
     operator_id: Identifier
     #: The unit's production lot, when the station was told it (``calstation run --lot``).
     lot: Identifier | None = None
+    #: The unit's product (``station.domain.products``); records from before products
+    #: existed were all of the default one.
+    part_number: PartNumber = DEFAULT_PART_NUMBER
     started_at: UtcDatetime
     finished_at: UtcDatetime
     software_version: Identifier

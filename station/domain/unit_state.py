@@ -157,6 +157,7 @@ class UnitAttempt(_UnitPart):
     station_id: str
     operator_id: str
     lot: Annotated[str | None, Field(description="the unit's production lot, if known")]
+    part_number: Annotated[str, Field(description="the unit's product (its part number)")]
     software_version: str
     model: Model
     limits: LimitsRef
@@ -253,6 +254,7 @@ def _attempt(run: Run) -> UnitAttempt:
         station_id=run.station_id,
         operator_id=run.operator_id,
         lot=run.lot,
+        part_number=run.part_number,
         software_version=run.software_version,
         model=run.model,
         limits=run.limits,

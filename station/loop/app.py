@@ -14,6 +14,7 @@ from collections.abc import Callable
 from rich.console import Console, Group, RenderableType
 
 from station.device import DeviceError, PutterDriver
+from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
@@ -267,7 +268,13 @@ class StationApp(FrontEnd):
             return
         self.prompt.note = self.prompt.note if keep_note else None
         self.prompt.state = State.UNIT
-        self._say_line(f"{serial}: calibration started (run {started.journal.run_id})")
+        self._say_line(
+            tr(
+                "{serial}: calibration started (run {run_id})",
+                serial=serial,
+                run_id=started.journal.run_id,
+            )
+        )
 
     def _finish_unit(self) -> None:
         serial = self.slot.serial

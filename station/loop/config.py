@@ -13,8 +13,11 @@ from urllib.parse import urlsplit
 from pydantic import Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 
-from station.domain.constants import MAX_SLOTS
+from station.domain.constants import DEFAULT_PART_NUMBER, MAX_SLOTS, PART_NUMBER_PATTERN
 from station.domain.errors import InputError, validation_problem
+from station.domain.i18n import Language
+from station.domain.limits import load_profile
+from station.domain.products import LabelFormat, Product, Products, load_products
 from station.domain.quality.golden import GoldenUnit
 from station.domain.run_settings import RunSettings, shipped_plan
 from station.results.storage import DatabaseUrl, DataDir, default_data_dir
@@ -39,6 +42,14 @@ class StationConfig(BaseSettings):
     limits_file: Path | None = None
     limits_profile: str | None = None
     serial_pattern: str = SERIAL_PATTERN
+    #: The product this station calibrates (``station.domain.products``): its limits
+    #: profile and run plan unless ``limits_profile`` names another. None: DIXX-A12.
+    part_number: str | None = Field(None, pattern=PART_NUMBER_PATTERN)
+    #: The plant's own products (TOML); None: the shipped ``products.toml``.
+    products_file: Path | None = None
+    #: How a scanned label reads (``[label]``: pattern, prefix, suffix); None: the label
+    #: is the bare serial number (``serial_pattern``).
+    label: LabelFormat | None = None
     data_dir: DataDir = default_data_dir()
     database_url: DatabaseUrl | None = None
     server_url: str | None = None
@@ -46,6 +57,14 @@ class StationConfig(BaseSettings):
     run: RunSettings = RunSettings()
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
+    #: The operator's language (``CALSTATION_LANGUAGE``, ``--language``): the station's
+    #: lines from the catalogues of ``station/domain/locale`` (``station.domain.i18n``).
+    language: Language = "en"
+    #: The TCP port the station serves its Prometheus metrics on while it runs
+    #: (:mod:`station.loop.metrics`, ``docs/metrics.md``); None: no metrics served.
+    metrics_port: int | None = Field(None, ge=1, le=65535)
+    #: The address those metrics are served on (all interfaces: the plant's Prometheus).
+    metrics_host: str = "0.0.0.0"
 
     @model_validator(mode="before")
     @classmethod
@@ -53,11 +72,33 @@ class StationConfig(BaseSettings):
         """The shipped run plan of the limits profile, under the configured ``[run]`` keys."""
         if not isinstance(data, dict):
             return data
-        plan = shipped_plan(data.get("limits_profile"))
+        if data.get("part_number") and not data.get("limits_profile"):
+            product = _products_of(data).get(str(data["part_number"]))
+            data = {**data, "limits_profile": product.limits_profile}
+            plan = shipped_plan(product.run_plan)
+        else:
+            plan = shipped_plan(data.get("limits_profile"))
         run = data.get("run", {})
         if plan is None or not isinstance(run, dict):
             return data
         return {**data, "run": {**plan, **run}}
+
+    @model_validator(mode="after")
+    def _product_fits_its_limits(self) -> Self:
+        product = self.product
+        limits = load_profile(self.limits_file, self.limits_profile)
+        why = product.contradiction(limits)
+        if why is not None:
+            raise ValueError(
+                f"product {product.part_number}: its sensor contradicts limits profile "
+                f"{limits.name}: {why}"
+            )
+        return self
+
+    @property
+    def product(self) -> Product:
+        """The product this station calibrates."""
+        return load_products(self.products_file).get(self.part_number or DEFAULT_PART_NUMBER)
 
     @field_validator("serial_pattern")
     @classmethod
@@ -122,6 +163,12 @@ class StationConfig(BaseSettings):
     def outbox_dir(self) -> Path:
         """Where finished runs wait to be stored."""
         return self.data_dir.expanduser() / "outbox"
+
+
+def _products_of(data: dict[str, Any]) -> Products:
+    """The products the raw configuration ``data`` names (its file, or the shipped)."""
+    products_file = data.get("products_file")
+    return load_products(Path(products_file) if products_file else None)
 
 
 def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from station.domain.errors import InputError
+from station.domain.products import Product, SensorSpec
 from station.simulator.putter import VirtualPutter
 
 #: Simulated seconds an operator takes to turn the putter into the next pose.
@@ -35,6 +37,18 @@ class DemoUnit:
             "sensitivity": dict(zip("xyz", map(float, t.sensitivity_counts_per_g), strict=True)),
             "gyro_matrix": t.gyro_matrix.tolist(),
         }
+
+
+def demo_sensor(product: Product) -> SensorSpec:
+    """The sensor the demo's virtual putters of ``product`` are built with; a product
+    whose accelerometer is not read through a 12-bit ADC is refused in one line: the
+    station's capture, solve and records read the 12-bit ADC's counts (0…4095) so far."""
+    why = product.not_calibrated()
+    if why is not None:
+        raise InputError(
+            f"demo: {why}: its virtual putters exist (station.simulator), its runs do not"
+        )
+    return product.sensor
 
 
 def demo_serial(seed: int, number: int) -> str:
@@ -95,6 +109,8 @@ class ScriptedOperator:
     #: units (:func:`demo_serial`), as a line does.
     first: int = 1
     cables: CablePuller = field(default_factory=CablePuller)
+    #: The sensor of the product the virtual putters are (default: the putter's).
+    sensor: SensorSpec | None = None
     station: Any = None
     done: list[DemoUnit] = field(default_factory=list)
     _current: DemoUnit | None = None
@@ -128,7 +144,9 @@ class ScriptedOperator:
     def _next_unit(self) -> str:
         number = self.first + len(self.done)
         serial = demo_serial(self.seed, number)
-        putter = VirtualPutter(seed=self.seed * 1000 + number, serial=serial, speed=self.speed)
+        putter = VirtualPutter(
+            seed=self.seed * 1000 + number, serial=serial, speed=self.speed, sensor=self.sensor
+        )
         self.port.parent.mkdir(parents=True, exist_ok=True)
         putter.serve_pty(self.port)
         self._current = DemoUnit(serial, putter)

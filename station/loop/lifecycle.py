@@ -34,6 +34,7 @@ from datetime import UTC, datetime
 from station import __version__
 from station.device import DeviceError, SerialNumberMismatchError
 from station.domain.limits import LimitsProfile
+from station.domain.products import Label
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.results_link import ResultsLink, UnitLookup
@@ -42,7 +43,7 @@ from station.loop.slot import Slot, SlotState
 from station.loop.unit_history import ScanAction, ScanDecision, UnitHistory
 from station.results.journal import DiscardedJournal, RunJournal
 from station.results.storage import RunStore
-from station.run.operator_text import not_a_serial, port_problem
+from station.run.operator_text import not_a_label, not_a_serial, other_product, port_problem
 from station.run.record import ALGORITHM
 from station.run.unit_run import UnitRun, open_unit
 from station.run.verdict import Purpose
@@ -120,14 +121,16 @@ def verdict_line(record: RunRecord) -> str:
     return f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "") + then
 
 
-def _new_journal(config: StationConfig, serial: str) -> RunJournal:
-    """The journal of a new run of ``serial`` on the station ``config`` describes."""
+def _new_journal(config: StationConfig, label: Label, part_number: str) -> RunJournal:
+    """The journal of a new run of the unit ``label`` names (its lot, else the
+    station's) on the station ``config`` describes."""
     return RunJournal(
         run_id=uuid.uuid4(),
-        serial=serial,
+        serial=label.serial,
         station_id=config.station_id,
         operator_id=config.operator_id,
-        lot=config.lot,
+        lot=label.lot or config.lot,
+        part_number=part_number,
         started_at=datetime.now(UTC),
         poses=(*config.run.poses, config.run.verification_pose),
     )
@@ -159,6 +162,10 @@ class UnitLifecycle:
         self.checks = ShiftChecks(config.golden, config.data_dir.expanduser(), config.station_id)
         #: Every run recorded since the station started, in order.
         self.records: list[RunRecord] = []
+        #: The product the station calibrates.
+        self.product = config.product
+        #: The label of each unit scanned and not yet started, by serial.
+        self._labels: dict[str, Label] = {}
 
     @property
     def versions(self) -> str:
@@ -193,16 +200,41 @@ class UnitLifecycle:
             return Said(gate.said)
         if gate.golden:  # calibrated at every check: no re-scan question, no retest limit
             return self.look_up(text, golden=True)
-        refused = not_a_serial(text, self.config.serial_pattern)
-        if refused is not None:
-            return Said(refused)
+        label = self.read_label(text)
+        if isinstance(label, Said):
+            return label
+        text = label.serial
         elsewhere = next((s for s in self.slots if s.serial == text and s is not slot), None)
         if elsewhere is not None:
             return Said(
                 f"{text} is in {elsewhere.name} already: scan the unit in {slot.name} "
                 f"(Enter: leave {slot.name} empty)"
             )
+        self._labels[text] = label
         return self.look_up(text)
+
+    def read_label(self, text: str) -> Label | Said:
+        """The label scanned (the station's label pattern, else a bare serial number),
+        or why it is refused: not a label, or another product's."""
+        form = self.config.label
+        if form is None:
+            refused = not_a_serial(text, self.config.serial_pattern)
+            return Said(refused) if refused is not None else Label(serial=text)
+        label = form.read(text)
+        if label is None:
+            return Said(not_a_label(text, form.pattern))
+        refused = not_a_serial(label.serial, self.config.serial_pattern)
+        if refused is not None:
+            return Said(refused)
+        ours = self.product.part_number
+        if label.part_number is not None and label.part_number != ours:
+            return Said(other_product(label.serial, label.part_number, ours))
+        return label
+
+    def label_refused(self, text: str) -> str | None:
+        """Why a label scanned ahead is refused (None: it is read)."""
+        label = self.read_label(text)
+        return label.text if isinstance(label, Said) else None
 
     def look_up(self, serial: str, *, golden: bool = False) -> Looking:
         """Ask the store about ``serial`` beside the loop (its stored fit too, when the
@@ -217,7 +249,7 @@ class UnitLifecycle:
             return None
         if looking.golden:
             return Scanned(looking.serial, known, ScanDecision(ScanAction.START))
-        decision = known.history.at_scan(self.profile.attempts_allowed)
+        decision = known.history.at_scan(self.profile.attempts_allowed, self.product.part_number)
         return Scanned(looking.serial, known, decision)
 
     def start(
@@ -239,7 +271,8 @@ class UnitLifecycle:
         except DeviceError as exc:
             return Unreachable(port_problem(exc))
         if journal is None:
-            journal = _new_journal(self.config, serial)
+            label = self._labels.pop(serial, None) or Label(serial=serial)
+            journal = _new_journal(self.config, label, self.product.part_number)
             # A disk that refuses does not stop the unit: the journal owes the write and
             # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             slot.journal_file.save(journal)

@@ -17,6 +17,7 @@ from rich.console import Console, RenderableType
 from rich.live import Live
 from rich.text import Text
 
+from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
@@ -85,6 +86,7 @@ class FrontEnd(ABC):
     def serve(self) -> list[RunRecord]:
         """Serve units until the keys end, ``quit`` is typed or ``units`` are done."""
         self._say_line(f"calstation {self.lifecycle.versions}{self._title()}")
+        stop_metrics = self._serve_metrics()
         self.lifecycle.open_results()
         for line in [*self._port_lines(), *self.lifecycle.checks.lines()]:
             self._say_line(line)
@@ -98,7 +100,26 @@ class FrontEnd(ABC):
         finally:
             self.lifecycle.close()
             self.rescued = self.results.rescue()
+            stop_metrics()
         return self.records
+
+    def _serve_metrics(self) -> Callable[[], None]:
+        """Serve the station's metrics on its ``metrics_port``, if it has one; returns
+        what stops them."""
+        port = self.config.metrics_port
+        if port is None:
+            return lambda: None
+        from station.loop.metrics import serve_metrics  # prometheus-client only when asked
+
+        try:
+            stop = serve_metrics(self, port, self.config.metrics_host)
+        except OSError as exc:
+            raise InputError(
+                f"metrics_port {port}: cannot listen on {self.config.metrics_host}:{port} "
+                f"({exc.strerror or exc})"
+            ) from None
+        self._say_line(f"metrics: http://{self.config.metrics_host}:{port}/metrics")
+        return stop
 
     def _stop(self) -> None:
         """``quit`` or Ctrl-D: stop, unless runs are only in memory. Then one more sync is

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
+from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.records import HoldReview, RunRecord, RunSummary
 from station.domain.unit_state import UnitCalibration
 from station.results.storage import RunStore, StoreError
@@ -103,14 +104,24 @@ class UnitHistory:
             return self.runs
         return tuple(r for r in self.runs if r.started_at > released[-1])
 
-    def at_scan(self, attempts_allowed: int) -> ScanDecision:
+    def at_scan(
+        self, attempts_allowed: int, part_number: str = DEFAULT_PART_NUMBER
+    ) -> ScanDecision:
         """Start, ask first (it passed already), or refuse (scrapped, sent to rework and
-        not released, no attempts left)."""
+        not released, no attempts left, calibrated as another product than
+        ``part_number``, the station's)."""
         note = (
             f"history of {self.serial} unavailable ({self.unavailable}): going on"
             if self.unavailable
             else None
         )
+        if self.runs and self.runs[-1].part_number != part_number:
+            text = (
+                f"{self.serial} was calibrated as {self.runs[-1].part_number}, scanned as "
+                f"{part_number}: set it aside for its own product's station; nothing was "
+                "recorded"
+            )
+            return ScanDecision(ScanAction.REFUSE, text, note)
         decided = self.decided
         if decided is not None and decided.decision == "scrap":
             text = (

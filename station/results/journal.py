@@ -20,6 +20,7 @@ from uuid import UUID
 
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 
+from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import InputError, validation_problem
 from station.domain.poses import POSES
 from station.domain.records import PoseRecord, ReplacedCapture, Vector3
@@ -53,6 +54,8 @@ class RunJournal(BaseModel):
     station_id: str
     operator_id: str
     lot: str | None = None
+    #: The unit's product (journals from before products: the default one).
+    part_number: str = DEFAULT_PART_NUMBER
     started_at: datetime
     poses: tuple[str, ...]
     captures: dict[int, Capture] = {}

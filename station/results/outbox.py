@@ -125,6 +125,14 @@ class Outbox:
         """How many runs wait to be stored (on disk and in memory)."""
         return len(self.pending()) + len(self.unwritten)
 
+    def oldest_age_s(self, now: float) -> float:
+        """Seconds the oldest waiting run has waited at ``now`` (``time.time()``; 0 when
+        none waits): its file's age, or its finish for a run the disk refused."""
+        written = [mtime_ns / 1e9 for mtime_ns, _ in map(_age, self.pending()) if mtime_ns]
+        kept = [record.finished_at.timestamp() for record in list(self.unwritten)]
+        since = min(written + kept, default=now)
+        return max(0.0, now - since)
+
     def set_aside(self) -> tuple[int, int]:
         """How many files were set aside: (unreadable, refused)."""
         return _count(self.unreadable_dir), _count(self.refused_dir)

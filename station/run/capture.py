@@ -17,6 +17,7 @@ import numpy as np
 from station.device import PutterDriver
 from station.domain.arrays import FloatArray as Array
 from station.domain.capture_budget import WindowPolicy
+from station.domain.i18n import tr
 from station.domain.orientation import (
     Sensed,
     ZeroG,
@@ -173,7 +174,8 @@ class PoseCapture:
         else:
             if was_capturing and matches:
                 name = pose_words(target.name)
-                self._messages.say("warn", f"moved during capture of {name}: hold the putter still")
+                said = tr("moved during capture of {pose}: hold the putter still", pose=name)
+                self._messages.say("warn", said)
             elif self.live.progress >= 0.05 and self.live.matches:  # not the settling
                 refused = MOVED_EARLY
             self._still_samples = 0
@@ -212,22 +214,36 @@ class PoseCapture:
             if angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg:
                 self._messages.say(
                     "warn",
-                    f"too close to pose {j + 1} ({pose_words(self._names[j])}), "
-                    f"already taken: pose {index + 1} is {pose_words(target.name)}",
+                    tr(
+                        "too close to pose {taken} ({taken_pose}), already taken: "
+                        "pose {number} is {pose}",
+                        taken=j + 1,
+                        taken_pose=pose_words(self._names[j]),
+                        number=index + 1,
+                        pose=pose_words(target.name),
+                    ),
                 )
                 return
         if sensed.nearest.name == target.name:  # the right pose, too far tilted
             self._messages.say(
                 "warn",
-                f"tilted: the putter lies {sensed.nearest_deg:.0f}° from "
-                f"{pose_words(target.name)} ({self.settings.pose_tolerance_deg:.0f}° allowed): "
-                "lay it flat in its cradle",
+                tr(
+                    "tilted: the putter lies {angle}° from {pose} ({allowed}° allowed): "
+                    "lay it flat in its cradle",
+                    angle=f"{sensed.nearest_deg:.0f}",
+                    pose=pose_words(target.name),
+                    allowed=f"{self.settings.pose_tolerance_deg:.0f}",
+                ),
             )
             return
         self._messages.say(
             "warn",
-            f"wrong pose: the putter lies {pose_words(sensed.nearest.name)}, "
-            f"pose {index + 1} is {pose_words(target.name)}",
+            tr(
+                "wrong pose: the putter lies {lies}, pose {number} is {pose}",
+                lies=pose_words(sensed.nearest.name),
+                number=index + 1,
+                pose=pose_words(target.name),
+            ),
         )
 
     def _captured_means(self) -> list[tuple[int, Array]]:

@@ -40,6 +40,19 @@ def not_a_serial(text: str, pattern: str) -> str | None:
     return f"{text!r} is not a serial number (expected {pattern})"
 
 
+def not_a_label(text: str, pattern: str) -> str:
+    """A scanned line the station's label pattern does not read."""
+    return f"{text!r} is not a label this station reads (expected {pattern})"
+
+
+def other_product(serial: str, part_number: str, ours: str) -> str:
+    """A unit of another product than the station calibrates."""
+    return (
+        f"{serial} is a {part_number}; this station calibrates {ours}: set it aside, "
+        "nothing was recorded"
+    )
+
+
 def wrong_unit(reported: str, expected: str) -> str:
     """Another unit came back on the cable than the one being calibrated."""
     return f"{reported} plugged in, {expected} expected: plug {expected} back in, or abort"

@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 
 from station.device import DeviceError, PutterDriver, SerialNumberMismatchError
+from station.domain.i18n import tr
 from station.run.messages import MessageLog
 from station.run.operator_text import port_problem, wrong_unit
 
@@ -30,7 +31,10 @@ class Reconnect:
         """Say the unit is gone, close its link, and try again in a moment."""
         self._messages.say(
             "error",
-            f"lost the unit ({port_problem(exc)}): plug it back in, the poses taken are kept",
+            tr(
+                "lost the unit ({problem}): plug it back in, the poses taken are kept",
+                problem=port_problem(exc),
+            ),
             topic="link",
         )
         driver.close()
@@ -52,5 +56,5 @@ class Reconnect:
             return None
         self.wrong_unit = None
         self._messages.unsay("link")
-        self._messages.say("info", "the unit is back: carry on")
+        self._messages.say("info", tr("the unit is back: carry on"))
         return driver

@@ -229,6 +229,7 @@ def run_record(
         station_id=journal.station_id,
         operator_id=journal.operator_id,
         lot=journal.lot,
+        part_number=journal.part_number,
         started_at=journal.started_at,
         # A wall clock stepped back during the run (NTP, a technician) must not make
         # a run that ends before it began: it ends no earlier than it started.

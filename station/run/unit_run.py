@@ -30,6 +30,7 @@ from station.device import (
 from station.domain.arrays import FloatArray
 from station.domain.calibration import CalibrationError, Solution, solve
 from station.domain.gyro.motion import GyroMatrixError
+from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile, check
 from station.domain.poses import Pose, pose
 from station.domain.records import PoseRecord, PoseRole, RunRecord
@@ -173,11 +174,16 @@ class UnitRun:
             return
         name = pose_words(self.sequence[index].name)
         if index not in self.journal.captures:
-            refusal = f"pose {index + 1} ({name}) is not taken yet: nothing to redo"
+            refusal = tr(
+                "pose {number} ({pose}) is not taken yet: nothing to redo",
+                number=index + 1,
+                pose=name,
+            )
             self.messages.say("warn", refusal)
             return
         if self.phase not in REDO_ALLOWED:
-            self.messages.say("warn", "too late to redo a pose: the coefficients are being written")
+            said = tr("too late to redo a pose: the coefficients are being written")
+            self.messages.say("warn", said)
             return
         capture = self.journal.captures.pop(index)
         replaced = record.replaced_capture(capture, "redone by the operator")
@@ -186,7 +192,8 @@ class UnitRun:
         self.solution = None
         self.index = self.journal.next_pose
         self._restart_capture()
-        self.messages.say("info", f"pose {index + 1} ({name}) will be taken again")
+        said = tr("pose {number} ({pose}) will be taken again", number=index + 1, pose=name)
+        self.messages.say("info", said)
 
     def abort(self) -> RunRecord | None:
         """Stop this unit. With poses taken, the run is recorded as failed ("aborted")."""
@@ -251,7 +258,8 @@ class UnitRun:
         self.journal_file.save(self.journal)
         if self._gyro is not None:
             self._gyro.recorder.captured(index, result)
-        self.messages.say("info", f"pose {index + 1} ({pose_words(target.name)}) captured")
+        said = tr("pose {number} ({pose}) captured", number=index + 1, pose=pose_words(target.name))
+        self.messages.say("info", said)
         self.index = self.journal.next_pose
         if self.index >= self.fit_count and self.solution is None:
             self._solve()
@@ -276,7 +284,7 @@ class UnitRun:
             self._finish(store=True)
             return
         self._go(Phase.POSE)
-        self.messages.say("info", "calibration solved: now the verification pose")
+        self.messages.say("info", tr("calibration solved: now the verification pose"))
 
     def _write_back(self) -> None:
         self._go(Phase.WRITE_BACK)
@@ -297,7 +305,7 @@ class UnitRun:
         self._unit_output = UnitOutputCheck(keep_streaming=self._gyro is not None)
         self._go(Phase.UNIT_OUTPUT)
         self.messages.say(
-            "info", "coefficients written and read back: checking the unit's own output"
+            "info", tr("coefficients written and read back: checking the unit's own output")
         )
 
     def _step_unit_output(self) -> None:

@@ -23,6 +23,7 @@ from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.faults import Faults
 from station.domain.poses import Pose, pose
+from station.domain.products import SensorSpec
 from station.domain.samples import SampleBlock
 from station.simulator.clock import VirtualClock
 from station.simulator.firmware import Firmware
@@ -43,8 +44,9 @@ class VirtualPutter(Closing):
     ``seed`` fixes the unit's parameters and its noise; ``serial`` is the serial
     number on its label; ``speed`` runs its clock faster than real time;
     ``noise_counts`` gives the accelerometer's white noise (counts rms) instead of the
-    typical :data:`~station.simulator.sensor.ACCEL_NOISE_COUNTS`; ``truth`` gives the
-    unit's sensor instead of drawing it from the seed.
+    typical :data:`~station.simulator.sensor.ACCEL_NOISE_COUNTS`; ``sensor``: the
+    product's sensor it is built with (default: the putter's, DIXX-A12); ``truth`` gives
+    the unit's sensor parameters instead of drawing them from the seed.
     """
 
     def __init__(
@@ -59,12 +61,13 @@ class VirtualPutter(Closing):
         handling: Handling | None = None,
         thermal: Thermal | None = None,
         noise_counts: float | None = None,
+        sensor: SensorSpec | None = None,
         truth: SensorTruth | None = None,
     ) -> None:
         encode_text(serial, 16)
         # One generator per stream of draws, each drawn in sample order (see SampleStream).
         truth_rng, motion_rng, *stream_rngs = np.random.default_rng(seed).spawn(7)
-        self._truth = truth or SensorTruth.draw(truth_rng)
+        self._truth = truth or SensorTruth.draw(truth_rng, sensor)
         if noise_counts is not None:
             self._truth = replace(self._truth, noise_counts=noise_counts)
         self._label = serial

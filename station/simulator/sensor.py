@@ -25,6 +25,7 @@ from typing import Any, Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
+from station.domain.products import SensorSpec
 from station.domain.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -63,6 +64,9 @@ class SensorTruth:
     gyro_misalignment: FloatArray
     gyro_g_sensitivity_per_g: FloatArray
     gyro_noise_dps: float
+    #: The largest count the unit's ADC gives (the putter's 12-bit one unless its
+    #: product's sensor says otherwise, :meth:`draw`).
+    adc_max: int = ADC_MAX
 
     @property
     def matrix(self) -> FloatArray:
@@ -142,19 +146,33 @@ class SensorTruth:
         return cls.accelerometer(offset, np.diag(s) @ (np.eye(3) + coupling))
 
     @classmethod
-    def draw(cls, rng: np.random.Generator) -> "SensorTruth":
-        """A unit as the line meets them: every parameter within its datasheet spread."""
+    def draw(cls, rng: np.random.Generator, spec: SensorSpec | None = None) -> "SensorTruth":
+        """A unit as the line meets them: every parameter within its datasheet spread;
+        ``spec``: a product's sensor (:mod:`station.domain.products`; default the putter's
+        KXM52 behind the 12-bit ADC), its accelerometer's nominal values, spreads, noise
+        and ADC range."""
         cross = np.eye(3) + rng.uniform(-CROSS_AXIS_TYPICAL, CROSS_AXIS_TYPICAL, (3, 3)) * (
             1 - np.eye(3)
         )
         misalignment = rng.uniform(-0.005, 0.005, (3, 3)) * (1 - np.eye(3))
+        if spec is None:
+            zero_g, per_g, spread = NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G, None
+            tolerance, noise, adc_max = SENSITIVITY_TOLERANCE, ACCEL_NOISE_COUNTS, ADC_MAX
+        else:
+            zero_g, per_g = spec.zero_g_counts, spec.counts_per_g
+            spread = spec.zero_g_spread_g * per_g
+            tolerance, noise, adc_max = (
+                spec.sensitivity_tolerance,
+                spec.noise_g * per_g,
+                spec.adc_max,
+            )
+        spread = OFFSET_SPREAD_COUNTS if spread is None else spread
         return cls(
-            offset_counts=NOMINAL_OFFSET_COUNTS
-            + rng.uniform(-OFFSET_SPREAD_COUNTS, OFFSET_SPREAD_COUNTS, 3),
-            sensitivity_counts_per_g=NOMINAL_SENSITIVITY_COUNTS_PER_G
-            * (1 + rng.uniform(-SENSITIVITY_TOLERANCE, SENSITIVITY_TOLERANCE, 3)),
+            offset_counts=zero_g + rng.uniform(-spread, spread, 3),
+            sensitivity_counts_per_g=per_g * (1 + rng.uniform(-tolerance, tolerance, 3)),
             cross_axis=cross,
-            noise_counts=ACCEL_NOISE_COUNTS,
+            noise_counts=noise,
+            adc_max=adc_max,
             # ±100 mV over 60 °C is ±2 counts/°C at worst; typical units drift far less.
             offset_tempco_counts_per_c=rng.uniform(-0.5, 0.5, 3),
             # ±3 % over 60 °C at worst: ±0.05 %/°C; typical a fifth of it.
@@ -204,7 +222,7 @@ def accelerometer_counts(
         + (force_g @ truth.cross_axis.T) * sensitivity
         + rng.normal(0.0, truth.noise_counts, force_g.shape)
     )
-    return np.asarray(np.clip(np.rint(analog), ADC_MIN, ADC_MAX), dtype=np.float64)
+    return np.asarray(np.clip(np.rint(analog), ADC_MIN, truth.adc_max), dtype=np.float64)
 
 
 def gyro_rates(

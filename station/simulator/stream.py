@@ -23,7 +23,7 @@ from station.domain.arrays import FloatArray
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.faults import Faults
 from station.domain.samples import SampleBlock
-from station.domain.sensor import ADC_MAX, AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.sensor import AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 from station.simulator.clock import VirtualClock
 from station.simulator.motion import MotionModel
 from station.simulator.sensor import SensorTruth, Thermal, accelerometer_counts, gyro_rates
@@ -105,7 +105,7 @@ class SampleStream:
         temperature = self.thermal.at(t)
         acc = accelerometer_counts(self.truth, kin.force_g, temperature, self._accel_rng)
         if self.faults.saturate_axis is not None:
-            acc[:, AXES.index(self.faults.saturate_axis)] = ADC_MAX
+            acc[:, AXES.index(self.faults.saturate_axis)] = self.truth.adc_max
         gyro = gyro_rates(self.truth, kin.rate_dps, kin.force_g, self._gyro_rng)
         return acc, _int16(gyro, GYRO_DPS_PER_LSB), _int16(temperature, TEMP_C_PER_LSB)
 

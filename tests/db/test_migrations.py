@@ -108,6 +108,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
             del row["gyro_matrix"]  # a column of revision 0008
             del row["excluded_poses"]  # a column of revision 0010
             del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
+            del row["part_number"]  # a column of revision 0014
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), failure_rows(pk, record))
@@ -177,7 +178,8 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             del row["purpose"]  # a column of revision 0009
             del row["gyro_matrix"]
             del row["excluded_poses"]
-            del row["uncertainty"], row["decision_rule"]
+            del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
+            del row["part_number"]  # a column of revision 0014
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), failure_rows(pk, record))
         upgrade(engine)
@@ -246,6 +248,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
                 del row["gyro_matrix"]  # a column of revision 0008
                 del row["excluded_poses"]  # a column of revision 0010
                 del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
+                del row["part_number"]  # a column of revision 0014
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

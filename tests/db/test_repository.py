@@ -182,10 +182,14 @@ def test_a_record_without_a_lot_disposition_or_purpose_hashes_as_before_those_ex
     del document["limits"]["profile"], document["quality"]["excluded_poses"]
     del document["gyro_matrix"]  # nor a gyro matrix (whole-unit runs)
     del document["uncertainty"], document["decision_rule"]  # nor these (revision 0013)
+    del document["part_number"]  # nor a product (every run was DIXX-A12's)
     before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
     assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
     assert record_sha256(make_record(lot="L1")) != record_sha256(record)
     assert record_sha256(make_record(disposition="ship")) != record_sha256(record)
     assert record_sha256(make_record(purpose="golden")) != record_sha256(record)
     assert record_sha256(make_record(decision_rule="simple")) != record_sha256(record)
+    assert record_sha256(make_record(limits=reference_only, part_number="DIXX-D16")) != (
+        record_sha256(record)
+    )
     assert record_sha256(make_record()) != record_sha256(record)  # with its profile

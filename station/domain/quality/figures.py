@@ -21,13 +21,14 @@ class _FigurePart(BaseModel):
 
 class ReportFilter(_FigurePart):
     """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time),
-    and only this station, operator or production lot when given."""
+    and only this station, operator, production lot or product when given."""
 
     since: AwareDatetime | None = None
     until: AwareDatetime | None = None
     station_id: str | None = None
     operator_id: str | None = None
     lot: str | None = None
+    part_number: str | None = None
 
 
 class Summary(_FigurePart):

@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import sqlite3
 from pathlib import Path
 
@@ -116,3 +117,64 @@ def test_the_demo_calibrates_the_whole_unit_with_its_profile(
     assert np.abs(np.diag(k) - 1).max() < 0.02
     assert not np.allclose(k, np.eye(3), atol=1e-3)
     assert "verification move: turn the putter face up" in result.stderr
+
+
+def test_a_demo_of_a_product_records_its_part_number(run_cli: CliRunner, tmp_path: Path) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("demo", "--units", "1", "--json", "--speed", "20", "--part-number", "DIXX-A12")
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    [unit] = json.loads(result.stdout)
+    with sqlite3.connect(tmp_path / "calstation.sqlite3") as db:
+        stored = db.execute("select serial, part_number from runs").fetchall()
+    assert stored == [(unit["serial"], "DIXX-A12")]
+
+
+@pytest.mark.parametrize(
+    ("part_number", "line"),
+    [
+        ("DIXX-Z9", "unknown part number 'DIXX-Z9'; known: DIXX-A12, DIXX-D16"),
+        ("DIXX-D16", "demo: DIXX-D16's 16-bit accelerometer is not calibrated by this station"),
+        ("dixx a12", "unknown part number 'dixx a12'"),
+    ],
+)
+def test_a_demo_of_a_product_it_cannot_run_is_one_line_and_exit_2(
+    run_cli: CliRunner, tmp_path: Path, part_number: str, line: str
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    result = run_cli("demo", "--units", "1", "--part-number", part_number, env=env, timeout=60)
+    assert result.returncode == 2
+    [said] = result.stderr.strip().splitlines()
+    assert said.startswith(f"calstation: error: {line}"), said
+
+
+def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_path: Path) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path), "CALSTATION_LANGUAGE": "zh"}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("demo", "--units", "1", "--speed", "20", "--language", "ko")  # the flag wins
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    assert re.search(r"PT\d{6}: 교정 시작 \(실행 [0-9a-f-]{36}\)", result.stderr)
+    assert "측정 완료" in result.stderr
+    assert "calibration started" not in result.stderr
+    refused = run_cli("demo", "--units", "1", "--language", "fr", env=env, timeout=60)
+    assert refused.returncode == 2
+    [said] = refused.stderr.strip().splitlines()
+    assert said.startswith("calstation: error: station configuration: language: ")
+
+
+def test_a_station_set_to_a_product_it_cannot_calibrate_stops_in_one_line(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    env.pop("CALSTATION_DATABASE_URL", None)
+    args = ("run", "--port", str(tmp_path / "putter"), "--part-number", "DIXX-D16")
+    result = run_cli(*args, env=env, timeout=60)
+    assert result.returncode == 2
+    [said] = result.stderr.strip().splitlines()
+    assert said == (
+        "calstation: error: run: DIXX-D16's 16-bit accelerometer is not calibrated by this "
+        "station yet (it reads 0…4095 counts)"
+    )

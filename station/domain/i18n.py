@@ -1,0 +1,56 @@
+"""The operator's language: gettext catalogues of the lines the station says (en, ko, zh).
+
+The catalogues are ``station/domain/locale/LANG/LC_MESSAGES/calstation.po`` (Babel's
+gettext format, extracted from the sources with ``pybabel extract``, see
+``docs/station.md``); English is the sources' own text. :func:`set_language` chooses the
+process's language once, at start (``language`` in the station's configuration,
+``CALSTATION_LANGUAGE``, ``--language``); :func:`tr` translates a message and fills its
+``{placeholders}`` afterwards, so a translation may put them in its own order. Babel is
+imported only when a language other than English is chosen.
+"""
+
+import gettext
+import io
+from importlib import resources
+from typing import Final, Literal, get_args
+
+Language = Literal["en", "ko", "zh"]
+#: The shipped languages: English (the sources), Korean, Simplified Chinese.
+LANGUAGES: Final[tuple[str, ...]] = get_args(Language)
+#: The catalogues' gettext domain.
+DOMAIN: Final = "calstation"
+
+_translations: gettext.NullTranslations = gettext.NullTranslations()
+
+
+def catalogue_text(language: str) -> str:
+    """The ``.po`` catalogue of ``language`` as shipped."""
+    path = resources.files("station.domain").joinpath(
+        "locale", language, "LC_MESSAGES", f"{DOMAIN}.po"
+    )
+    return path.read_text(encoding="utf-8")
+
+
+def _compiled(language: str) -> gettext.GNUTranslations:
+    """``language``'s catalogue compiled in memory (Babel's reader and writer)."""
+    from babel.messages.mofile import write_mo
+    from babel.messages.pofile import read_po
+
+    catalog = read_po(io.StringIO(catalogue_text(language)), locale=language, domain=DOMAIN)
+    compiled = io.BytesIO()
+    write_mo(compiled, catalog)
+    compiled.seek(0)
+    return gettext.GNUTranslations(compiled)
+
+
+def set_language(language: str) -> None:
+    """Say the operator's lines in ``language`` from now on (one of :data:`LANGUAGES`)."""
+    global _translations
+    if language not in LANGUAGES:
+        raise ValueError(f"unknown language {language!r}; shipped: {', '.join(LANGUAGES)}")
+    _translations = gettext.NullTranslations() if language == "en" else _compiled(language)
+
+
+def tr(message: str, **values: object) -> str:
+    """``message`` in the operator's language, its ``{placeholders}`` filled."""
+    return _translations.gettext(message).format(**values)

@@ -1,0 +1,79 @@
+"""Products over the API: every run names its part number; the run list, the unit's
+answer and the end-of-line report carry it and filter by it."""
+
+from datetime import timedelta
+
+import httpx
+
+from db import Database, RunRepository
+from tests.db.records import T0, make_record
+
+RANGE = {"from": "2026-11-01T00:00Z", "to": "2026-11-04T00:00Z"}
+
+
+def _store(database: Database) -> None:
+    with database.session() as session:
+        repository = RunRepository(session)
+        for i, (part, verdict) in enumerate(
+            [("DIXX-A12", "pass"), ("DIXX-D16", "pass"), ("DIXX-D16", "fail")]
+        ):
+            extra = {"coefficients": None, "quality": None} if verdict == "fail" else {}
+            repository.submit(
+                make_record(
+                    serial=f"PT-00010{i}",
+                    part_number=part,
+                    verdict=verdict,
+                    started_at=T0 + timedelta(minutes=i),
+                    **extra,
+                )
+            )
+        # A record that names no product (an older station's) is the first product's.
+        older = make_record(serial="PT-000109", started_at=T0 + timedelta(minutes=9))
+        document = older.model_dump(mode="json")
+        del document["part_number"]
+        repository.submit(type(older).model_validate(document))
+        session.commit()
+
+
+def test_the_run_list_and_the_unit_carry_and_filter_the_part_number(
+    client: httpx.Client, database: Database
+) -> None:
+    _store(database)
+    runs = client.get("/api/v1/runs", params={"part_number": "DIXX-D16"}).json()["data"]
+    assert sorted((r["serial"], r["part_number"]) for r in runs) == [
+        ("PT-000101", "DIXX-D16"),
+        ("PT-000102", "DIXX-D16"),
+    ]
+    every = client.get("/api/v1/runs").json()["data"]
+    assert {r["serial"]: r["part_number"] for r in every}["PT-000109"] == "DIXX-A12"
+    unit = client.get("/api/v1/units/PT-000101").json()
+    assert unit["latest"]["part_number"] == "DIXX-D16"
+    assert client.get("/api/v1/runs/" + runs[0]["run_id"]).json()["part_number"] == "DIXX-D16"
+    refused = client.get("/api/v1/runs", params={"part_number": "no such part"})
+    assert refused.status_code == 422
+
+
+def test_the_eol_report_of_one_product(client: httpx.Client, database: Database) -> None:
+    _store(database)
+    d16 = client.get("/api/v1/reports/eol", params={**RANGE, "part_number": "DIXX-D16"}).json()
+    assert d16["filter"]["part_number"] == "DIXX-D16"
+    assert (d16["summary"]["runs"], d16["summary"]["runs_passed"]) == (2, 1)
+    a12 = client.get("/api/v1/reports/eol", params={**RANGE, "part_number": "DIXX-A12"}).json()
+    assert (a12["summary"]["runs"], a12["summary"]["runs_passed"]) == (2, 2)
+    line = client.get("/api/v1/reports/eol", params=RANGE).json()
+    assert line["summary"]["runs"] == 4
+    # Without a range too: the product's runs are read from the runs themselves.
+    open_range = client.get("/api/v1/reports/eol", params={"part_number": "DIXX-D16"}).json()
+    assert open_range["summary"]["runs"] == 2
+
+
+def test_a_submitted_run_keeps_its_product_and_a_retry_is_the_same_run(
+    client: httpx.Client, station_key: str
+) -> None:
+    record = make_record(serial="PT-000201", part_number="DIXX-D16")
+    headers = {"Authorization": f"Bearer {station_key}"}
+    body = record.model_dump(mode="json")
+    assert client.post("/api/v1/runs", json=body, headers=headers).status_code == 201
+    assert client.post("/api/v1/runs", json=body, headers=headers).status_code == 200
+    other = {**body, "part_number": "DIXX-A12"}
+    assert client.post("/api/v1/runs", json=other, headers=headers).status_code == 409

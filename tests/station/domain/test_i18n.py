@@ -1,0 +1,70 @@
+"""The operator's language: every line the station says through the catalogues has a
+translation in each shipped language, with the same placeholders, and the template is
+what the sources say."""
+
+import io
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from babel.messages.extract import extract_from_dir
+from babel.messages.pofile import read_po
+
+from station.domain import i18n
+from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr
+
+ROOT = Path(__file__).resolve().parents[3]
+TEMPLATE = ROOT / "station" / "domain" / "locale" / "calstation.pot"
+PLACEHOLDER = re.compile(r"\{(\w+)\}")
+
+
+@pytest.fixture(autouse=True)
+def english_after() -> Iterator[None]:
+    yield
+    set_language("en")
+
+
+def _template_ids() -> set[str]:
+    return {m.id for m in read_po(io.StringIO(TEMPLATE.read_text(encoding="utf-8"))) if m.id}
+
+
+def test_the_template_holds_every_line_the_sources_translate() -> None:
+    said = {
+        message
+        for folder in ("station/run", "station/loop")
+        for _, _, message, _, _ in extract_from_dir(
+            ROOT / folder, keywords={"tr": None}, comment_tags=()
+        )
+    }
+    assert said == _template_ids()
+    assert len(said) >= 12
+
+
+@pytest.mark.parametrize("language", [lang for lang in LANGUAGES if lang != "en"])
+def test_every_message_has_a_translation_with_the_same_placeholders(language: str) -> None:
+    catalogue = read_po(io.StringIO(catalogue_text(language)), locale=language)
+    translated = {m.id: m.string for m in catalogue if m.id}
+    assert set(translated) == _template_ids()
+    for msgid, text in translated.items():
+        assert text, f"{language}: no translation of {msgid!r}"
+        assert text != msgid, f"{language}: {msgid!r} left in English"
+        assert sorted(PLACEHOLDER.findall(text)) == sorted(PLACEHOLDER.findall(msgid)), msgid
+    assert not any(m.fuzzy for m in catalogue if m.id)
+
+
+def test_a_line_in_korean_and_chinese_keeps_its_values() -> None:
+    line = "pose {number} ({pose}) captured"
+    assert tr(line, number=3, pose="toe up") == "pose 3 (toe up) captured"
+    set_language("ko")
+    assert tr(line, number=3, pose="toe up") == "자세 3(toe up) 측정 완료"
+    set_language("zh")
+    assert tr(line, number=3, pose="toe up") == "姿态 3（toe up）已采集"
+    set_language("en")
+    assert tr(line, number=3, pose="toe up") == "pose 3 (toe up) captured"
+
+
+def test_an_unknown_language_is_refused() -> None:
+    with pytest.raises(ValueError, match="unknown language 'fr'; shipped: en, ko, zh"):
+        set_language("fr")
+    assert isinstance(i18n.LANGUAGES, tuple)
