@@ -9,6 +9,7 @@ import numpy as np
 from station.device import LinkCounters
 from station.domain.calibration import solve
 from station.domain.limits import load_profile
+from station.domain.record_bounds import ADC_SPAN
 from station.domain.records import FailureReason, PoseRecord, Vector3
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
@@ -124,7 +125,7 @@ def test_the_record_carries_the_budget_or_none_when_it_is_beyond_what_a_record_h
     assert set(quiet.to_json()) == {"k", "offset", "sensitivity", "gyro_bias_dps"}
     assert quiet.offset is not None
     assert max(quiet.offset.as_tuple()) < 0.2
-    # A spread of 4000 counts in one sample a pose: U far beyond the ADC's span, which no
-    # record holds; the run is recorded without it rather than lost.
-    assert uncertainty_record(_captures(poses, 4000.0, 1), 6, solution) is None
+    # A spread of nearly the widest ADC's span in one sample a pose: U beyond that span,
+    # which no record holds; the run is recorded without it rather than lost.
+    assert uncertainty_record(_captures(poses, 0.9 * ADC_SPAN, 1), 6, solution) is None
     assert uncertainty_record(_captures(poses, 1.0, 1024), 6, None) is None
