@@ -373,6 +373,7 @@ def certificate_run(
 async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
     repository: ReaderDep,
+    zone: PlantZoneDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile and the unit's earlier runs; a failure report
@@ -384,7 +385,7 @@ async def get_certificate(
     stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
     profile = stored.get(run.limits.sha256)
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier))
+    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone))
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

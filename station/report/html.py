@@ -45,7 +45,8 @@ _env.filters.update(
     percent=formatting.percent,
     number=formatting.number,
     seconds=formatting.seconds,
-    moment=formatting.moment,
+    # A moment names its zone on every page: the plant's, which each page is given.
+    moment=lambda value, zone: formatting.moment(value, zone),
     field=formatting.field,
 )
 _env.globals.update(
@@ -175,6 +176,7 @@ def certificate_page(
     issued_at: datetime,
     gyro_fit: GyroFitRecord | None = None,
     earlier: Sequence[RunSummary] = (),
+    zone: str = "UTC",
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -182,7 +184,7 @@ def certificate_page(
 
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
-    stations), which the page says.
+    stations), which the page says. Times are in the plant's ``zone``, as on the unit's page.
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
     """
@@ -199,6 +201,7 @@ def certificate_page(
         issued_at=issued_at,
         gyro_fit=gyro_fit,
         earlier=earlier,
+        zone=zone,
         document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
     )

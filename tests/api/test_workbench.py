@@ -1,0 +1,84 @@
+"""The quality engineer's pages agree with themselves (issue 27): one time zone per page,
+a filtered report that counts the units it lists, failure reasons as stored, forms that
+answer pages, definitions that hold across pages; on a server in the plant's zone
+(Europe/Berlin), on both backends."""
+
+import re
+from collections.abc import Iterator
+from datetime import UTC, datetime, timedelta
+from zoneinfo import ZoneInfo
+
+import httpx
+import pytest
+
+from db import Database, RunRepository
+from station.domain.records import RunRecord
+from tests.db.records import T0, make_record
+from tests.servers import serving
+
+ZONE = "Europe/Berlin"
+
+
+@pytest.fixture(scope="module")
+def plant_url(migrated_database: Database, database_url: str) -> Iterator[str]:
+    """A server whose plant is in Berlin (CET in November: UTC+1)."""
+    with serving(database_url, plant_timezone=ZONE) as base:
+        yield base
+
+
+@pytest.fixture
+def plant(database: Database, plant_url: str) -> Iterator[httpx.Client]:
+    """A client of the plant's server; the database is emptied after the test."""
+    with httpx.Client(base_url=plant_url, timeout=30) as client:
+        yield client
+
+
+def store(database: Database, *records: RunRecord) -> None:
+    with database.session() as session:
+        repository = RunRepository(session)
+        for record in records:
+            repository.submit(record)
+        session.commit()
+
+
+def _times(html: str) -> list[str]:
+    """Every moment printed to the second on a page, with its zone's abbreviation."""
+    return re.findall(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d [A-Z]+", html)
+
+
+def test_every_page_prints_times_in_the_plants_zone(
+    plant: httpx.Client, database: Database
+) -> None:
+    now = datetime.now(UTC).replace(microsecond=0)
+    store(
+        database,
+        make_record(serial="U1", verdict="fail", started_at=T0),
+        make_record(serial="U1", started_at=T0 + timedelta(minutes=5)),
+        make_record(serial="U2", verdict="fail", started_at=now - timedelta(minutes=2)),
+    )
+    unit = plant.get("/units/U1").text
+    certificate = plant.get("/api/v1/units/U1/certificate").text
+    failure = plant.get("/api/v1/units/U2/certificate").text
+    report = plant.get(
+        "/api/v1/reports/eol", params={"format": "html", "list": "all", "from": "2026-11-02"}
+    ).text
+    dashboard = plant.get("/").text
+    # 08:00 UTC is 09:00 CET: the unit page, its certificate and the report's list agree
+    assert "2026-11-02 09:00:00 CET" in unit
+    assert "2026-11-02 09:05:00 CET" in certificate  # the run certified
+    assert "2026-11-02 09:00:00 CET" in certificate  # its earlier run
+    assert "2026-11-02 09:05:00 CET" in report.split('<table class="units">')[1]
+    local = (now - timedelta(minutes=2)).astimezone(ZoneInfo(ZONE))
+    stamp = local.strftime("%Y-%m-%d %H:%M:%S %Z")
+    assert stamp in failure
+    assert stamp in dashboard.split('<table class="units">')[1]
+    for name, page in {
+        "unit": unit,
+        "certificate": certificate,
+        "failure report": failure,
+        "report": report,
+        "dashboard": dashboard,
+    }.items():
+        printed = _times(page)
+        assert printed, name
+        assert {t.rsplit(" ", 1)[1] for t in printed} <= {"CET", "CEST"}, (name, printed)
