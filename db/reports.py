@@ -28,7 +28,7 @@ from sqlalchemy import (
     text,
     union_all,
 )
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, aliased
 
 from db.chart_queries import chart_limits, first_moving_ranges, latest_chart_points
 from db.limits_profiles import stored_profiles
@@ -284,39 +284,39 @@ class ReportQueries:
 
     # -- units -------------------------------------------------------------------------
 
-    def _latest(self, held: bool) -> list[ColumnElement[bool]]:
-        """The units' latest runs in range (``held``: only those that failed)."""
-        where: list[ColumnElement[bool]] = [RunFacts.line_latest.is_(True), *self.conditions()]
-        return [*where, Run.verdict == "fail"] if held else where
-
-    def held_units(self) -> int:
-        """How many units' latest run is in range and failed (they are held)."""
-        stmt = (
-            select(func.count())
-            .select_from(Run)
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._latest(True))
-        )
-        return int(self.session.execute(stmt).scalar_one())
+    def _selected(self, held: bool) -> list[ColumnElement[bool]]:
+        """The units the report counts, by their first run on the line: that run is in
+        range and matches the filter (``held``: and the unit's latest run, wherever and
+        whenever it was, failed). The yield table counts the same units."""
+        where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions()]
+        return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
     def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
-        """The units whose latest run is in range (``held``: and failed), with that run,
-        their run count and its first failure code, newest first; ``offset`` skips the
-        newest (a page)."""
+        """The units the yield table counts (``held``: those on hold), newest first run
+        first, each with its latest run (wherever and whenever it was), run count and
+        that run's first failure code; ``offset`` skips the newest (a page)."""
+        latest = aliased(Run, name="latest")
+        latest_facts = aliased(RunFacts, name="latest_facts")
         columns: list[Any] = [
-            Run.id,
+            latest.id,
             Run.serial,
-            Run.verdict,
-            Run.started_at,
-            Run.station_id,
-            Run.operator_id,
+            RunFacts.line_final_pass.label("shipped"),
+            latest.verdict,
+            latest.started_at,
+            latest.station_id,
+            latest.operator_id,
             RunFacts.unit_runs.label("runs"),
-            RunFacts.first_failure.label("code"),
+            latest_facts.first_failure.label("code"),
         ]
         stmt = (
             select(*columns)
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._latest(held))
+            .join(latest, latest.serial == Run.serial)
+            .join(
+                latest_facts,
+                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
+            )
+            .where(*self._selected(held))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
             .offset(offset or None)
@@ -733,7 +733,7 @@ def eol_report(
     units = [
         UnitVerdict(
             serial=row.serial,
-            disposition="ship" if row.verdict == "pass" else "hold",
+            disposition="ship" if row.shipped else "hold",
             verdict=row.verdict,
             runs=row.runs,
             last_started_at=row.started_at,
@@ -766,8 +766,8 @@ def eol_report(
         parameters=parameters,
         control_charts=_charts(limits, points),
         units=units,
-        units_total=_total(counts, "listed"),
-        units_held=queries.held_units() if held_only else None,
+        units_total=line.units,
+        units_held=line.units - line.final_pass,
         units_listed="held" if held_only else "all",
         units_offset=unit_offset,
         units_limit=unit_limit,

@@ -82,3 +82,54 @@ def test_every_page_prints_times_in_the_plants_zone(
         printed = _times(page)
         assert printed, name
         assert {t.rsplit(" ", 1)[1] for t in printed} <= {"CET", "CEST"}, (name, printed)
+
+
+ST1, ST2 = "line1-st1", "line1-st2"
+DAY = timedelta(days=1)
+
+
+def _filtered_history(database: Database) -> None:
+    """Units whose first run is in the period at line1-st1 (A, B, C, F) beside units whose
+    latest run is there but whose first is not (D: first at st2; E: first the day before),
+    and units whose latest run is elsewhere (A) or after the period (B, F)."""
+    hour = timedelta(hours=1)
+    store(
+        database,
+        make_record(serial="A", station_id=ST1, verdict="fail", started_at=T0),
+        make_record(serial="A", station_id=ST2, started_at=T0 + hour / 6),
+        make_record(serial="B", station_id=ST1, verdict="fail", started_at=T0 + hour),
+        make_record(serial="B", station_id=ST1, verdict="fail", started_at=T0 + DAY),
+        make_record(serial="C", station_id=ST1, started_at=T0 + 2 * hour),
+        make_record(serial="D", station_id=ST2, verdict="fail", started_at=T0),
+        make_record(serial="D", station_id=ST1, started_at=T0 + 3 * hour),
+        make_record(serial="E", station_id=ST1, verdict="fail", started_at=T0 - DAY),
+        make_record(serial="E", station_id=ST1, verdict="fail", started_at=T0 + 5 * hour),
+        make_record(serial="F", station_id=ST1, started_at=T0 + 4 * hour),
+        make_record(serial="F", station_id=ST2, verdict="fail", started_at=T0 + DAY),
+    )
+
+
+def test_a_filtered_report_lists_the_units_its_yield_table_counts(
+    plant: httpx.Client, database: Database
+) -> None:
+    _filtered_history(database)
+    period = {"from": "2026-11-02", "to": "2026-11-03", "station": ST1}
+    everything = plant.get("/api/v1/reports/eol", params={**period, "list": "all"}).json()
+    held = plant.get("/api/v1/reports/eol", params={**period, "list": "held"}).json()
+    summary = everything["summary"]
+    listed = {u["serial"] for u in everything["units"]}
+    on_hold = {u["serial"] for u in held["units"]}
+    assert listed == {"A", "B", "C", "F"}
+    assert on_hold == {"B", "F"}
+    assert (summary["units_tested"], summary["units_failed"]) == (len(listed), len(on_hold))
+    assert (everything["units_total"], held["units_held"]) == (len(listed), len(on_hold))
+    # each row is the unit's latest run, even when it is elsewhere or after the period
+    rows = {u["serial"]: u for u in everything["units"]}
+    assert (rows["A"]["station_id"], rows["A"]["disposition"]) == (ST2, "ship")
+    assert (rows["F"]["station_id"], rows["F"]["disposition"]) == (ST2, "hold")
+    assert rows["B"]["last_started_at"].startswith("2026-11-03")
+    page = plant.get("/api/v1/reports/eol", params={**period, "format": "html"}).text
+    rule = page.split('class="definition units-rule">')[1].split("</p>")[0]
+    for words in ("first run", f"station {ST1}", "latest run"):
+        assert words in rule
+    assert f"of {len(on_hold)} held" in page

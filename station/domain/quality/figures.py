@@ -220,13 +220,16 @@ class EolReport(_FigurePart):
     control_charts: list[ControlChart]
     units: list[UnitVerdict]
     units_total: int = Field(
-        description="units whose latest run is in range (the list may be cut to the latest)"
+        description="units the yield table counts: their first run on the line is in range "
+        "and matches the filter (the list may be cut to the latest)"
     )
     units_listed: Literal["all", "held"] = Field(
         "all", description="which units the list holds: all, or the held ones (latest run failed)"
     )
     units_held: int | None = Field(
-        None, description="held units (latest run in range failed), when the list holds them"
+        None,
+        description="of those units, the held ones: their latest run (wherever and whenever "
+        "it was) failed; the yield table's failed units",
     )
     units_offset: int = Field(0, description="units before this page of the list, newest first")
     units_limit: int | None = Field(None, description="the most units a page of the list holds")
