@@ -48,6 +48,7 @@ _env.filters.update(
     # A moment names its zone on every page: the plant's, which each page is given.
     moment=lambda value, zone: formatting.moment(value, zone),
     field=formatting.field,
+    reason=formatting.reason,
 )
 _env.globals.update(
     version=__version__,

@@ -133,3 +133,33 @@ def test_a_filtered_report_lists_the_units_its_yield_table_counts(
     for words in ("first run", f"station {ST1}", "latest run"):
         assert words in rule
     assert f"of {len(on_hold)} held" in page
+
+
+#: Pose noise over its one-sided limit, as the station words and records it.
+POSE_NOISE = {
+    "code": "pose_noise",
+    "message": "pose noise x (pose 3) 8.59057 counts",
+    "measured": 8.59057,
+    "upper": 8.0,
+    "axis": "x",
+    "pose": 3,
+}
+
+
+def test_failure_reasons_read_as_the_station_stored_them(
+    plant: httpx.Client, database: Database
+) -> None:
+    store(
+        database,
+        make_record(serial="N1", verdict="fail", failures=[POSE_NOISE], started_at=T0),
+        make_record(serial="N1", started_at=T0 + timedelta(minutes=3)),
+    )
+    unit = plant.get("/units/N1").text
+    certificate = plant.get("/api/v1/units/N1/certificate").text
+    earlier = certificate.split("<h2>Earlier runs</h2>")[1]
+    shown = "pose noise x (pose 3) 8.59057 counts (measured 8.59057, limit ≤ 8)"
+    assert shown in unit
+    assert shown in earlier
+    for page in (unit, earlier):
+        assert "(– …" not in page
+        assert "pose_noise " not in page  # not a bare code
