@@ -29,7 +29,7 @@ from pydantic import BeforeValidator
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from api.deps import ReaderDep, ReadersDep, ReportPoolDep
-from api.errors import invalid
+from api.errors import answers_pages, invalid
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
@@ -147,7 +147,16 @@ class Period:
 PeriodDep = Annotated[Period, Depends()]
 
 
+#: A refused request for the report as HTML is answered with a page saying why (422).
+REPORT_TITLE = "End-of-line report"
+_REFUSED_PAGE = {
+    "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+    "description": "a parameter is invalid: JSON (`errors` names each), or, when the "
+    "report was asked for as HTML, a page saying why in one line with the form to "
+    "correct it",
+}
 _REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
+    422: {**problems(422)[422], **_REFUSED_PAGE},
     200: {
         "model": EolReport,
         "content": {
@@ -167,6 +176,7 @@ PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page o
 
 
 @router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
+@answers_pages(REPORT_TITLE, "json")
 async def get_eol_report(
     repository: ReportPoolDep,
     period: PeriodDep,
@@ -190,17 +200,19 @@ async def get_eol_report(
     response_class=Response,
     responses={
         **_REPORT_ANSWERS,
-        **problems(
-            400,
-            422,
-            _400="the body is not multipart form data",
-            _422="a parameter is invalid, or the limits file is not one (not UTF-8, not TOML, "
-            "nested too deeply, a profile that is not a table or a bound outside what its "
-            "quantity can take): `errors` names `body.limits` and says which",
-        ),
+        **problems(400, _400="the body is not multipart form data"),
+        422: {
+            **problems(422)[422],
+            **_REFUSED_PAGE,
+            "description": "a parameter is invalid, or the limits file is not one (not UTF-8, "
+            "not TOML, nested too deeply, a profile that is not a table or a bound outside "
+            "what its quantity can take): `errors` names `body.limits` and says which; as "
+            "HTML (the default format) a page saying why in one line",
+        },
     },
     summary="Report with what-if limits",
 )
+@answers_pages(REPORT_TITLE, "html")
 async def post_eol_what_if(
     repository: ReportPoolDep,
     period: PeriodDep,

@@ -166,6 +166,12 @@ def unit_page(runs: Sequence[RunSummary], generated_at: datetime, zone: str = "U
     )
 
 
+def problem_page(title: str, message: str, form: dict[str, str] | None = None) -> str:
+    """The page of a request a page could not answer: ``message``, one line, says why;
+    ``form``: the report's filter fields as they were sent, to correct them."""
+    return _env.get_template("problem.html").render(title=title, message=message, form=form)
+
+
 def not_found_page(message: str) -> str:
     """The page of a name nothing is stored under: ``message`` says which."""
     return _env.get_template("not_found.html").render(message=message)

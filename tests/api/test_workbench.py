@@ -3,6 +3,7 @@ a filtered report that counts the units it lists, failure reasons as stored, for
 answer pages, definitions that hold across pages; on a server in the plant's zone
 (Europe/Berlin), on both backends."""
 
+import html
 import re
 from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
@@ -163,3 +164,65 @@ def test_failure_reasons_read_as_the_station_stored_them(
     for page in (unit, earlier):
         assert "(– …" not in page
         assert "pose_noise " not in page  # not a bare code
+
+
+def _problem(answer: httpx.Response) -> str:
+    """The one-line message of a refused page, after checking it is a page."""
+    assert answer.status_code == 422
+    assert answer.headers["content-type"].startswith("text/html")
+    found = re.search(r'<p id="problem" class="problem">([^<]*)</p>', answer.text)
+    assert found is not None, answer.text
+    assert "\n" not in found[1].strip()
+    return html.unescape(found[1])
+
+
+def test_a_bad_filter_on_a_page_answers_a_page_and_json_stays_json(
+    plant: httpx.Client,
+) -> None:
+    report = "/api/v1/reports/eol"
+    typed = _problem(plant.get(report, params={"format": "html", "from": "14.11.2026"}))
+    assert "from '14.11.2026' is not an ISO date" in typed
+    assert "write 2026-11-14" in typed
+    # the form comes back with what was typed, to correct it
+    answer = plant.get(report, params={"format": "html", "from": "14.11.2026", "lot": "L7"})
+    assert 'name="from" type="date" value="14.11.2026"' in answer.text
+    assert 'name="lot" value="L7"' in answer.text
+    assert "units" in _problem(plant.get(report, params={"format": "html", "units": "0"}))
+    order = _problem(
+        plant.get(report, params={"format": "html", "from": "2026-11-03", "to": "2026-11-02"})
+    )
+    assert "is not before to" in order
+    # the JSON answers are unchanged: 422 naming the field
+    for params in ({"from": "14.11.2026"}, {"format": "json", "from": "14.11.2026"}):
+        data = plant.get(report, params=params)
+        assert data.status_code == 422
+        assert data.json()["errors"][0]["loc"] == "query.from"
+    # a what-if file that is not one: the form's page (HTML by default), or JSON asked for
+    bad = {"limits": ("bad.toml", b"[profiles.x]\noffset = 3")}
+    assert "bad.toml" in _problem(plant.post(report, files=bad))
+    as_json = plant.post(report, params={"format": "json"}, files=bad)
+    assert as_json.json()["errors"][0]["loc"] == "body.limits"
+
+
+def test_the_report_form_picks_dates_and_says_when_no_run_matches(
+    plant: httpx.Client, database: Database
+) -> None:
+    store(database, make_record(serial="M1", started_at=T0))
+    report = "/api/v1/reports/eol"
+    page = plant.get(report, params={"format": "html"}).text
+    assert '<input name="from" type="date" value=""' in page
+    assert "placeholder" not in page.split('<form class="filters"')[1].split("</form>")[0]
+    assert 'id="no-runs"' not in page
+    assert "<svg" in page
+    for params in ({"station": "no-such-station"}, {"from": "2030-01-01"}):
+        empty = plant.get(report, params={"format": "html", **params})
+        assert empty.status_code == 200
+        assert 'id="no-runs"' in empty.text
+        assert "No runs match" in empty.text
+        assert "<svg" not in empty.text  # no empty charts
+    assert (
+        "station no-such-station"
+        in plant.get(report, params={"format": "html", "station": "no-such-station"}).text.split(
+            'id="no-runs"'
+        )[1]
+    )
