@@ -10,11 +10,12 @@ profiles: a few dozen) and applies the capability formulas of
 :mod:`station.domain.quality.capability`.
 """
 
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime, time, timedelta
 from typing import Any, NamedTuple
+from zoneinfo import ZoneInfo
 
 from sqlalchemy import (
     ColumnElement,
@@ -32,7 +33,7 @@ from sqlalchemy.orm import Session, aliased
 
 from db.chart_queries import chart_limits, first_moving_ranges, latest_chart_points
 from db.limits_profiles import stored_profiles
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.rollups import (
     COUNT_VALUES,
     FAILURE_VALUES,
@@ -42,6 +43,7 @@ from db.rollups import (
     PARAMETER_VALUES,
     PRODUCTION,
     TREND_COUNT_VALUES,
+    aborted,
     count_contributions,
     failure_contributions,
     parameter_contributions,
@@ -85,6 +87,7 @@ from station.domain.quality.parameters import (
 )
 from station.domain.quality.shifts import plant_shifts, shift_name
 from station.domain.records import LimitsRef
+from station.domain.unit_state import ABORTED
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
@@ -316,12 +319,39 @@ class ReportQueries:
                 latest_facts,
                 and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
             )
-            .where(*self._selected(held))
+            .where(*self._selected(held), ~aborted(latest.id))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
             .offset(offset or None)
         )
-        return list(self.session.execute(stmt).all())
+        return [row for row in self.session.execute(stmt)]
+
+    def abort_only_units(self) -> list[Row[str, datetime]]:
+        """The units the filter selects (first run on the line among its runs) whose
+        every run is an operator's abort, never attempted: the station and start of each
+        one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
+        walk over the runs."""
+        latest = aliased(Run, name="latest")
+        latest_facts = aliased(RunFacts, name="latest_facts")
+        stmt = (
+            select(Run.station_id, Run.started_at)
+            .distinct()
+            .select_from(RunFailure)
+            .join(Run, Run.id == RunFailure.run_pk)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .join(latest, latest.serial == Run.serial)
+            .join(
+                latest_facts,
+                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
+            )
+            .where(
+                RunFailure.code == ABORTED,
+                RunFacts.line_first.is_(True),
+                *self.conditions(),
+                aborted(latest.id),
+            )
+        )
+        return [row for row in self.session.execute(stmt)]
 
 
 def split_days(
@@ -352,7 +382,9 @@ def _ratio(part: float, whole: float) -> float | None:
 
 @dataclass(frozen=True)
 class _Counts:
-    """What a summary is computed from (one station, or the line)."""
+    """What a summary is computed from (one station, or the line): ``units`` without
+    the units that were never attempted (only aborts), ``aborted`` the runs the operator
+    aborted (no attempts)."""
 
     runs: int
     runs_passed: int
@@ -361,20 +393,26 @@ class _Counts:
     final_pass: int
     seconds: float | None
     poses: int
+    aborted: int = 0
+    abort_only: int = 0
 
 
 def _total(rows: Sequence[Row[Any]], column: str) -> int:
     return sum(int(row._mapping[column]) for row in rows)
 
 
-def _counts(rows: Sequence[Row[Any]]) -> _Counts:
+def _counts(rows: Sequence[Row[Any]], aborted: int = 0, abort_only: int = 0) -> _Counts:
     """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of their days):
     a unit counts where its first run on the line is, so a station's units are those
-    whose first attempt was there, and the stations' rows add up to the line's."""
+    whose first attempt was there, and the stations' rows add up to the line's.
+    ``aborted``: the rows' aborted runs; ``abort_only``: their units with nothing but
+    aborts, which are no units tested."""
     return _Counts(
+        aborted=aborted,
+        abort_only=abort_only,
         runs=_total(rows, "runs"),
         runs_passed=_total(rows, "runs_passed"),
-        units=_total(rows, "line_units"),
+        units=_total(rows, "line_units") - abort_only,
         first_pass=_total(rows, "line_first_pass"),
         final_pass=_total(rows, "line_final_pass"),
         seconds=_total(rows, "duration_ms") / 1000 if rows else None,
@@ -383,9 +421,12 @@ def _counts(rows: Sequence[Row[Any]]) -> _Counts:
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    retests = n.runs - n.units
+    # An abort is no attempt: not a retest (a unit's first run aborted and retested
+    # after the range would make it -1: never below none).
+    retests = max(0, n.runs - n.aborted - n.units)
     seconds = n.seconds
     return Summary(
+        aborted_runs=n.aborted,
         runs=n.runs,
         runs_passed=n.runs_passed,
         units_tested=n.units,
@@ -398,12 +439,19 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         retests=retests,
         retest_rate=_ratio(retests, n.units),
         hours=hours,
-        units_per_hour=_ratio(n.units, hours) if hours else None,
+        units_per_hour=units_per_hour(n.units, seconds),
         cycle_time_per_run_s=_ratio(seconds, n.runs) if seconds is not None else None,
         cycle_time_per_unit_s=_ratio(seconds, n.units) if seconds is not None else None,
         cycle_time_per_pose_s=_ratio(seconds, n.poses) if seconds is not None else None,
         poses=n.poses,
     )
+
+
+def units_per_hour(units: int, station_seconds: float | None) -> float | None:
+    """Units per hour of station time (``station_seconds``, Σ finish − start of the
+    runs): 3600 / seconds per unit, on the same basis as the cycle times beside it, the
+    same for any page over the same runs (the dashboard's, the report's)."""
+    return _ratio(3600 * units, station_seconds) if station_seconds else None
 
 
 def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
@@ -423,11 +471,24 @@ class _FailingRow(NamedTuple):
     runs: int
 
 
+def _aborted(rows: Sequence[Row[Any]]) -> dict[str, int]:
+    """Aborted runs per station, from :meth:`ReportQueries.first_failures`'s rows."""
+    counts: dict[str, int] = defaultdict(int)
+    for row in rows:
+        if row.code == ABORTED:
+            counts[row.station_id] += int(row.runs)
+    return counts
+
+
 def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
+    """Failing runs by first failure reason; an operator's abort is no failure of the
+    unit and no category here (the summary counts aborts apart)."""
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     for row in rows:
+        if row.code == ABORTED:
+            continue
         code, station, operator, n = row.code, row.station_id, row.operator_id, int(row.runs)
         counts[code] += n
         stations[code][station] += n
@@ -626,7 +687,7 @@ def _what_if(
         current,
         runs=judged.runs,
         runs_passed=judged.runs_passed,
-        units=judged.units,
+        units=judged.units - current.abort_only,
         first_pass=judged.first_pass,
         final_pass=judged.final_pass,
     )
@@ -648,9 +709,11 @@ def _trend(
     bounds: FamilyBounds | None,
     zone: str,
     shifts: Sequence[time],
+    unattempted: Sequence[datetime] = (),
 ) -> tuple[list[TrendDay], list[TrendShift]]:
     """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times).
+    over their shifts when the plant has ``shifts`` (start times); ``unattempted``: the
+    first runs of the units with nothing but aborts, which no period counts as units.
 
     In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
     another zone one scan numbers each run with its day and its shift together.
@@ -670,14 +733,20 @@ def _trend(
         parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
         return queries.daily_counts(key), parameters
 
+    local = ZoneInfo(zone)
+    per_day = Counter(day_number(at.astimezone(local).date()) for at in unattempted)
+    per_shift = Counter(
+        i for at in unattempted for i, p in enumerate(periods) if p.start <= at < p.end
+    )
     if is_utc(zone):
-        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
+        by_day = PeriodSums.of_rows(*sums(since, None), bounds).without(per_day)
         if not periods:
             return trend_days(days, by_day), []
         by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift)
+        return trend_days(days, by_day), trend_shifts(periods, by_shift.without(per_shift))
     if not periods:
-        return trend_days(days, PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)), []
+        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
+        return trend_days(days, by_day.without(per_day)), []
     # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
     # runs of the first shift before its midnight, which no listed day shows.
     before = days[0] - timedelta(days=1)
@@ -686,7 +755,9 @@ def _trend(
     rows = sums(min(since, periods[0].start), key)
     by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
     by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
-    return trend_days(days, by_day), trend_shifts(periods, by_shift)
+    return trend_days(days, by_day.without(per_day)), trend_shifts(
+        periods, by_shift.without(per_shift)
+    )
 
 
 def eol_report(
@@ -745,9 +816,14 @@ def eol_report(
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     points = latest_chart_points(session, queries.conditions(), chart_points)
-    line = _counts(counts)
+    failures = queries.first_failures()
+    aborts = _aborted(failures)
+    unattempted = queries.abort_only_units() if aborts else []
+    abort_only = Counter(station for station, _ in unattempted)
+    line = _counts(counts, sum(aborts.values()), len(unattempted))
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
-    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
+    starts = [started_at for _, started_at in unattempted]
+    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
@@ -755,14 +831,19 @@ def eol_report(
         limits_profiles=used,
         summary=_summary(line, hours),
         stations=[
-            StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
+            StationSummary(
+                station_id=station,
+                summary=_summary(
+                    _counts(rows_, aborts.get(station, 0), abort_only.get(station, 0)), hours
+                ),
+            )
             for station, rows_ in sorted(by_station.items())
         ],
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
         shift_trend=shift_trend,
-        pareto=_pareto(queries.first_failures()),
+        pareto=_pareto(failures),
         parameters=parameters,
         control_charts=_charts(limits, points),
         units=units,

@@ -14,7 +14,7 @@ import pytest
 
 from db import Database, RunRepository
 from station.domain.records import RunRecord
-from tests.db.records import T0, make_record
+from tests.db.records import OUTCOMES, T0, make_record
 from tests.servers import serving
 
 ZONE = "Europe/Berlin"
@@ -226,3 +226,50 @@ def test_the_report_form_picks_dates_and_says_when_no_run_matches(
             'id="no-runs"'
         )[1]
     )
+
+
+def _cells(page: str, table: str, row: str) -> dict[str, str]:
+    """The cells of the row named ``row`` of ``<table class="{table}">``, by header."""
+    body = page.split(f'<table class="{table}">')[1].split("</table>")[0]
+    header = re.findall(r"<th>([^<]*)</th>", body)
+    for cells in re.findall(r"<tr>((?:<td[^>]*>.*?</td>)+)</tr>", body):
+        values = re.findall(r"<td[^>]*>(.*?)</td>", cells)
+        if values[0] == row:
+            return dict(zip(header, values, strict=True))
+    raise AssertionError(f"no row {row} in {table}")
+
+
+def test_aborts_are_no_failures_retests_or_holds_and_units_per_hour_agree(
+    plant: httpx.Client, database: Database
+) -> None:
+    now = datetime.now(UTC)
+    midnight = datetime.combine(now.astimezone(ZoneInfo(ZONE)).date(), datetime.min.time())
+    start = max(midnight.replace(tzinfo=ZoneInfo(ZONE)), now - timedelta(minutes=5))
+    at = [start + timedelta(seconds=10 * i) for i in range(6)]
+    store(
+        database,
+        make_record(serial="P1", started_at=at[0]),
+        make_record(serial="P2", started_at=at[1], **OUTCOMES["aborted"]),
+        make_record(serial="P2", started_at=at[2]),
+        make_record(serial="P3", started_at=at[3], **OUTCOMES["aborted"]),
+        make_record(serial="P4", verdict="fail", started_at=at[4]),
+    )
+    today = {"from": midnight.date().isoformat()}
+    report = plant.get("/api/v1/reports/eol", params={**today, "list": "all"}).json()
+    s = report["summary"]
+    # P3 was never attempted; P2's abort is no retest; no abort in the Pareto
+    assert (s["runs"], s["aborted_runs"], s["retests"]) == (5, 2, 0)
+    assert (s["units_tested"], s["units_failed"]) == (3, 1)
+    assert [e["code"] for e in report["pareto"]] == ["sensitivity_out_of_range"]
+    assert {u["serial"] for u in report["units"]} == {"P1", "P2", "P4"}
+    dashboard = plant.get("/").text
+    held = dashboard.split('<table class="held">')[1].split("</table>")[0]
+    assert "/units/P4" in held
+    assert "/units/P3" not in held
+    # units per hour: per hour of station time (95 s a run), the same on both pages
+    assert s["units_per_hour"] == pytest.approx(3600 * 3 / (5 * 95))
+    tile = re.search(r'<b id="units-per-hour">([^<]*)</b>', dashboard)
+    assert tile is not None
+    page = plant.get("/api/v1/reports/eol", params={**today, "format": "html"}).text
+    assert tile[1] == _cells(page, "summary", "all")["units/h"]
+    assert _cells(dashboard, "summary", "all")["units/h"] == tile[1]

@@ -38,7 +38,8 @@ def test_counts_and_yields_over_the_range(session: Session) -> None:
     assert s.final_yield == pytest.approx(3 / 5)
     assert (s.retests, s.retest_rate) == (2, pytest.approx(2 / 5))
     assert s.hours == pytest.approx(2.0)
-    assert s.units_per_hour == pytest.approx(5 / 2)
+    # per hour of station time, as the cycle times: 3600 / (7 runs' time / 5 units)
+    assert s.units_per_hour == pytest.approx(3600 * 5 / (7 * RUN_SECONDS))
     assert s.cycle_time_per_run_s == pytest.approx(RUN_SECONDS)
     assert s.cycle_time_per_unit_s == pytest.approx(7 * RUN_SECONDS / 5)
     assert s.poses == 7 * POSES_PER_RUN

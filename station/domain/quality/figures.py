@@ -43,17 +43,29 @@ class Summary(_FigurePart):
 
     runs: int
     runs_passed: int
-    units_tested: int = Field(description="units whose first run is in range")
+    units_tested: int = Field(
+        description="units whose first run is in range, those with nothing but operator "
+        "aborts aside"
+    )
     units_passed: int = Field(description="units whose latest run passed")
     units_failed: int
     first_pass_units: int = Field(description="units whose first run passed")
     report_yield: float | None = Field(description="run yield: passing runs / runs")
     first_pass_yield: float | None = Field(description="units whose first run passed / units")
     final_yield: float | None = Field(description="units whose latest run passed / units")
-    retests: int = Field(description="runs that are not a unit's first")
+    retests: int = Field(
+        description="runs that are not a unit's first, operator aborts aside (no attempts)"
+    )
     retest_rate: float | None = Field(description="retests / units")
+    aborted_runs: int = Field(
+        0,
+        description="runs the operator aborted: no attempt, no failure of the unit (not in "
+        "the Pareto, not retests); a unit with nothing but aborts is no unit tested",
+    )
     hours: float | None = Field(description="length of the range, hours")
-    units_per_hour: float | None
+    units_per_hour: float | None = Field(
+        description="units per hour of station time: 3600 / cycle_time_per_unit_s"
+    )
     cycle_time_per_run_s: float | None
     cycle_time_per_unit_s: float | None = Field(description="station time / units")
     cycle_time_per_pose_s: float | None = Field(description="station time / poses")
