@@ -31,7 +31,12 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import Session, aliased
 
-from db.chart_queries import chart_limits, first_moving_ranges, latest_chart_points
+from db.chart_queries import (
+    chart_limits,
+    first_moving_ranges,
+    latest_chart_points,
+    latest_values,
+)
 from db.limits_profiles import stored_profiles
 from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.rollups import (
@@ -54,10 +59,13 @@ from db.what_if import rejudged
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import (
     D2,
+    capability_warning,
     cp,
     cpk,
+    data_bins,
     histogram_bins,
     individuals_limits,
+    observed_ppm,
     shifted_moments,
     tolerance,
 )
@@ -66,6 +74,7 @@ from station.domain.quality.days import day_number, is_utc, midnight, plant_days
 from station.domain.quality.figures import (
     ChartPoint,
     ControlChart,
+    Distribution,
     EolReport,
     Histogram,
     ParameterStats,
@@ -91,6 +100,8 @@ from station.domain.unit_state import ABORTED
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
+#: The latest runs in range whose values the histograms draw (bins from the data).
+HISTOGRAM_RUNS = 1000
 
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
@@ -520,6 +531,8 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
         if row is not None and count
         else (None, None)
     )
+    out = 0 if row is None else int(row["outside"])
+    capability = cpk(mean, std, lower, upper)
     return ParameterStats(
         name=spec.name,
         family=spec.family,
@@ -532,14 +545,32 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
         min=None if row is None else float(row["min"]),
         max=None if row is None else float(row["max"]),
         cp=cp(std, lower, upper),
-        cpk=cpk(mean, std, lower, upper),
-        out_of_limits=0 if row is None else int(row["outside"]),
+        cpk=capability,
+        out_of_limits=out,
+        observed_ppm=observed_ppm(out, count),
+        warning=capability_warning(capability, out, count),
         marginal=0 if row is None else int(row["marginal"]),
         histogram=Histogram(
             start=start,
             width=width,
             counts=[0 if row is None else int(row[h]) for h in HISTOGRAM],
         ),
+    )
+
+
+def _distribution(values: Sequence[float], runs: int) -> Distribution | None:
+    """The histogram of ``values`` (of the latest ``runs`` runs) in bins from the data."""
+    if not values:
+        return None
+    edges, counts, below, above = data_bins(values)
+    return Distribution(
+        edges=edges,
+        counts=counts,
+        values=len(values),
+        below=below,
+        above=above,
+        mean=sum(values) / len(values),
+        runs=runs,
     )
 
 
@@ -798,6 +829,12 @@ def eol_report(
         parameters, rolled = _capability(queries, bounds)
         if not rolled:
             bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
+    if parameters:
+        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
+        parameters = [
+            p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
+            for p in parameters
+        ]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)

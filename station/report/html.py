@@ -14,6 +14,7 @@ from markupsafe import Markup
 
 from station import __version__
 from station.domain.limits import LimitsProfile
+from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.records import GyroFitRecord, RunSummary, StoredRun
@@ -33,7 +34,7 @@ from station.report.tables import (
 )
 
 #: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
-CPK_TARGET = ("target", 1.33)
+CPK_TARGET = ("target", CAPABLE_CPK)
 
 _env = Environment(
     loader=PackageLoader("station.report", "templates"),

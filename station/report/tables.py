@@ -54,6 +54,7 @@ PARAMETER_HEADER = [
     "Cp",
     "Cpk",
     "out",
+    "ppm out",
     "marginal",
 ]
 
@@ -74,6 +75,7 @@ def parameter_cells(report: EolReport) -> list[list[str]]:
             number(p.cp),
             number(p.cpk),
             number(p.out_of_limits),
+            number(p.observed_ppm),
             number(p.marginal),
         ]
         for p in report.parameters

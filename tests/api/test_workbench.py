@@ -10,6 +10,7 @@ from datetime import UTC, datetime, timedelta
 from zoneinfo import ZoneInfo
 
 import httpx
+import numpy as np
 import pytest
 
 from db import Database, RunRepository
@@ -273,3 +274,81 @@ def test_aborts_are_no_failures_retests_or_holds_and_units_per_hour_agree(
     page = plant.get("/api/v1/reports/eol", params={**today, "format": "html"}).text
     assert tile[1] == _cells(page, "summary", "all")["units/h"]
     assert _cells(dashboard, "summary", "all")["units/h"] == tile[1]
+
+
+def _chart(page: str, title: str) -> str:
+    """The inline SVG whose title is ``title``."""
+    for svg in re.findall(r"<svg.*?</svg>", page, flags=re.S):
+        if f"<title>{title}</title>" in svg:
+            return str(svg)
+    raise AssertionError(f"no chart {title!r}")
+
+
+def test_histograms_bin_the_data_and_capability_shows_observed_ppm(
+    plant: httpx.Client, database: Database
+) -> None:
+    # gyro bias z: 200 units tightly around 0.5 deg/s, and 3 far beyond the +10 limit
+    biases = [0.5 + 0.002 * ((i * 37) % 200 - 100) for i in range(200)] + [14.0] * 3
+    store(
+        database,
+        *(
+            make_record(
+                serial=f"G{i}",
+                started_at=T0 + timedelta(minutes=i),
+                gyro={
+                    "bias": {"x": 0.01, "y": -0.02, "z": z},
+                    "noise": {"x": 0.05, "y": 0.05, "z": 0.06},
+                },
+            )
+            for i, z in enumerate(biases)
+        ),
+    )
+    period = {"from": "2026-11-02", "to": "2026-11-04"}
+    report = plant.get("/api/v1/reports/eol", params=period).json()
+    z = next(p for p in report["parameters"] if p["name"] == "gyro_bias_z")
+    assert z["out_of_limits"] == 3
+    assert z["observed_ppm"] == pytest.approx(3 / 203 * 1e6)
+    assert z["cpk"] >= 1.33  # normal theory calls it capable …
+    assert "not one normal population" in z["warning"]  # … and the report says why not
+    d = z["distribution"]
+    # the three far-out values are counted apart; the rest fill bins of their own width
+    assert (d["values"], d["above"], d["below"], sum(d["counts"])) == (203, 3, 0, 200)
+    assert len(d["counts"]) > 5  # not the limits' 2–3 bins
+    assert d["edges"][-1] < 14.0
+    assert d["counts"] == np.histogram(biases[:200], bins=d["edges"])[0].tolist()
+    assert d["mean"] == pytest.approx(float(np.mean(biases)))
+    page = plant.get("/api/v1/reports/eol", params={**period, "format": "html"}).text
+    warning = page.split('class="problem capability-warning">')[1].split("</p>")[0]
+    assert warning.startswith("gyro_bias_z:")
+    chart = _chart(page, "histogram of gyro_bias_z")
+    assert chart.count('class="bar"') >= 5
+    assert ">count<" in chart
+    assert "x̄ " in chart
+    assert "USL 10" in chart
+    assert "3 above →" in chart
+    parameters = _cells(page, "parameters", "gyro_bias_z")
+    assert parameters["ppm out"] == f"{3 / 203 * 1e6:.4g}"
+
+
+def test_the_yield_axes_zoom_on_the_yields(plant: httpx.Client, database: Database) -> None:
+    # day 1: 3 of 4 units pass first time; day 2: all 4
+    day = timedelta(days=1)
+    store(
+        database,
+        *(
+            make_record(
+                serial=f"Y{d}{i}",
+                verdict="fail" if (d, i) == (0, 0) else "pass",
+                started_at=T0 + d * day + timedelta(minutes=i),
+            )
+            for d in range(2)
+            for i in range(4)
+        ),
+    )
+    page = plant.get(
+        "/api/v1/reports/eol", params={"from": "2026-11-02", "to": "2026-11-04", "format": "html"}
+    ).text
+    chart = _chart(page, "yield per day")
+    labels = re.findall(r">(\d+\.\d) %<", chart)
+    assert "0.0" not in labels  # not drawn from 0
+    assert labels[:2] == ["100.0", "70.0"]  # the axis' range, from the 5 % step below 75 %

@@ -98,6 +98,19 @@ class Histogram(_FigurePart):
     counts: list[int]
 
 
+class Distribution(_FigurePart):
+    """The histogram the page draws: the latest runs' values in bins from the data
+    (:func:`station.domain.quality.capability.data_bins`)."""
+
+    edges: list[float] = Field(description="bin edges, one more than counts")
+    counts: list[int]
+    values: int = Field(description="values, those counted apart included")
+    below: int = Field(0, description="values below the far-out fence Q1 − 3·IQR, apart")
+    above: int = Field(0, description="values above the far-out fence Q3 + 3·IQR, apart")
+    mean: float | None = Field(description="mean of the values binned")
+    runs: int = Field(description="the latest runs in range the values are from")
+
+
 class ParameterStats(_FigurePart):
     """Distribution and capability of one parameter against its limits."""
 
@@ -116,6 +129,17 @@ class ParameterStats(_FigurePart):
     out_of_limits: int
     marginal: int = Field(description="within the limits, within 10 % of the width of one")
     histogram: Histogram
+    observed_ppm: float | None = Field(
+        None, description="values out of limits per million values, as observed"
+    )
+    warning: str | None = Field(
+        None,
+        description="why the normal-theory Cp/Cpk should not be trusted (values out of "
+        "limits observed although Cpk says capable), if so",
+    )
+    distribution: Distribution | None = Field(
+        None, description="the histogram drawn: the latest runs' values in bins from the data"
+    )
 
 
 class ChartPoint(_FigurePart):
