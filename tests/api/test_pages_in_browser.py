@@ -206,4 +206,7 @@ def test_docs_and_redoc_render_with_every_other_host_unreachable(
         browser.screenshot("docs-offline")
         assert browser.load(f"{live_url}/redoc").errors == []
         browser.wait_for("document.querySelectorAll('[data-section-id^=\"operation/\"]').length")
+        # the side menu's Redocly logo, drawn last, is the bundle's one CDN address
+        browser.wait_for("document.querySelector('img[alt=\"redocly logo\"]') !== null")
         assert all(url.startswith(own) for url in browser.requested())
+        assert not [url for url in browser.requested() if "redoc.ly" in url]
