@@ -57,32 +57,36 @@ def _validation_answer(errors: Sequence[dict[str, Any]]) -> JSONResponse:
 
 #: The routes that answer a page when asked for HTML (:func:`answers_pages`): each
 #: endpoint with its page's title and its default ``format``.
-_PAGE_ROUTES: dict[Callable[..., Any], tuple[str, str]] = {}
+_PAGE_ROUTES: dict[Callable[..., Any], tuple[str, str, bool]] = {}
 #: The report form's fields, shown again on the page of a refused request.
 FORM_FIELDS = ("from", "to", "station", "operator", "lot", "list")
 
 Endpoint = TypeVar("Endpoint", bound=Callable[..., Any])
 
 
-def answers_pages(title: str, default_format: str) -> Callable[[Endpoint], Endpoint]:
+def answers_pages(
+    title: str, default_format: str, *, form: bool = True
+) -> Callable[[Endpoint], Endpoint]:
     """Mark a route whose ``format`` query parameter (``default_format`` when absent) may
     ask for an HTML page: a request it refuses as HTML is answered with a page (422, one
-    line saying why, the form to correct it), not with JSON. Put below ``@router.get``."""
+    line saying why, and with ``form`` the report's form to correct it), not with JSON.
+    Put below ``@router.get``."""
 
     def mark(endpoint: Endpoint) -> Endpoint:
-        _PAGE_ROUTES[endpoint] = (title, default_format)
+        _PAGE_ROUTES[endpoint] = (title, default_format, form)
         return endpoint
 
     return mark
 
 
-def _page_title(request: Request) -> str | None:
-    """The title of the page the request asked for, ``None`` when it asked for data."""
+def _page(request: Request) -> tuple[str, bool] | None:
+    """The title of the page the request asked for and whether it shows the report's
+    form; ``None`` when it asked for data."""
     found = _PAGE_ROUTES.get(request.scope.get("endpoint"))  # type: ignore[arg-type]
     if found is None:
         return None
-    title, default = found
-    return title if request.query_params.get("format", default) == "html" else None
+    title, default, form = found
+    return (title, form) if request.query_params.get("format", default) == "html" else None
 
 
 def one_line(errors: Sequence[dict[str, Any]]) -> str:
@@ -97,11 +101,12 @@ def one_line(errors: Sequence[dict[str, Any]]) -> str:
 
 async def _validation_error(request: Request, exc: Exception) -> Response:
     assert isinstance(exc, RequestValidationError)
-    title = _page_title(request)
-    if title is not None:
+    page = _page(request)
+    if page is not None:
+        title, with_form = page
         form = {name: request.query_params.get(name, "") for name in FORM_FIELDS}
         return HTMLResponse(
-            problem_page(title, one_line(exc.errors()), form),
+            problem_page(title, one_line(exc.errors()), form if with_form else None),
             status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
         )
     return _validation_answer(exc.errors())

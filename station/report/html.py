@@ -173,6 +173,11 @@ def problem_page(title: str, message: str, form: dict[str, str] | None = None) -
     return _env.get_template("problem.html").render(title=title, message=message, form=form)
 
 
+def found_page(prefix: str, serials: Sequence[str], more: bool) -> str:
+    """The units whose serial begins with ``prefix`` (``more``: the list is cut)."""
+    return _env.get_template("found.html").render(prefix=prefix, serials=serials, more=more)
+
+
 def not_found_page(message: str) -> str:
     """The page of a name nothing is stored under: ``message`` says which."""
     return _env.get_template("not_found.html").render(message=message)

@@ -352,3 +352,41 @@ def test_the_yield_axes_zoom_on_the_yields(plant: httpx.Client, database: Databa
     labels = re.findall(r">(\d+\.\d) %<", chart)
     assert "0.0" not in labels  # not drawn from 0
     assert labels[:2] == ["100.0", "70.0"]  # the axis' range, from the 5 % step below 75 %
+
+
+def test_a_search_box_on_every_page_finds_a_unit_by_serial(
+    plant: httpx.Client, database: Database
+) -> None:
+    store(
+        database,
+        *(make_record(serial=s, started_at=T0) for s in ("PT-0001", "PT-0002", "Q_1", "QX1")),
+    )
+    pages = [
+        "/",
+        "/units/PT-0001",
+        "/units/NOPE-9",
+        "/api/v1/units/PT-0001/certificate",
+        "/api/v1/reports/eol?format=html",
+        "/api/v1/reports/eol?format=html&from=14.11.2026",
+    ]
+    for page in pages:
+        assert 'action="/search"' in plant.get(page).text, page
+
+    def search(text: str) -> httpx.Response:
+        return plant.get("/search", params={"serial": text}, follow_redirects=False)
+
+    exact = search(" PT-0002 ")  # as pasted
+    assert (exact.status_code, exact.headers["location"]) == (303, "/units/PT-0002")
+    assert search("Q_").headers["location"] == "/units/Q_1"  # _ is itself, not any letter
+    several = search("PT-")
+    assert several.status_code == 200
+    assert re.findall(r'href="/units/([^"]+)"', several.text) == ["PT-0001", "PT-0002"]
+    missing = search("ZZ")
+    assert missing.status_code == 404
+    assert "No unit's serial number begins with ZZ." in html.unescape(missing.text)
+    bad = search("a b")
+    assert bad.status_code == 422
+    assert bad.headers["content-type"].startswith("text/html")
+    assert "serial" in _problem(bad)
+    followed = plant.get("/search", params={"serial": "PT-0001"}, follow_redirects=True)
+    assert (followed.status_code, followed.url.path) == (200, "/units/PT-0001")
