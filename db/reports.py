@@ -337,6 +337,30 @@ class ReportQueries:
         )
         return [row for row in self.session.execute(stmt)]
 
+    def failing_runs(self, code: str, limit: int) -> Sequence[Any]:
+        """The latest ``limit`` failing runs in range whose first failure reason is
+        ``code`` (a Pareto bar's runs), newest first, with that reason."""
+        stmt = (
+            select(
+                Run.run_id,
+                Run.started_at,
+                Run.serial,
+                Run.station_id,
+                Run.operator_id,
+                Run.lot,
+                RunFailure.code,
+                RunFailure.message,
+                RunFailure.measured,
+                RunFailure.lower,
+                RunFailure.upper,
+            )
+            .join(RunFailure, and_(RunFailure.run_pk == Run.id, RunFailure.position == 0))
+            .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions())
+            .order_by(Run.started_at.desc(), Run.id.desc())
+            .limit(limit)
+        )
+        return self.session.execute(stmt).all()
+
     def abort_only_units(self) -> list[Row[str, datetime]]:
         """The units the filter selects (first run on the line among its runs) whose
         every run is an operator's abort, never attempted: the station and start of each

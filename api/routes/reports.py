@@ -35,14 +35,14 @@ from api.schemas import Problem
 from db import RunRepository
 from db.holds import held_units
 from db.limits_profiles import stored_profiles
-from db.reports import eol_report
+from db.reports import ReportQueries, eol_report
 from db.run_export import HEADER, run_page
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.html import certificate_page, dashboard_page
+from station.report.html import certificate_page, dashboard_page, failing_runs_page
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 
@@ -291,6 +291,41 @@ def eol_body(
         shifts=plant.shifts,
     )
     return render(report, format)
+
+
+#: The most runs the page of a Pareto bar lists (the latest).
+FAILING_RUNS = 200
+
+
+@router.get(
+    "/reports/eol/failures",
+    response_class=HTMLResponse,
+    responses={
+        200: {
+            "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+            "description": "the latest failing runs of the period whose first failure reason "
+            "is `code`: the runs behind a bar of the report's Pareto (a page)",
+        },
+        422: {**problems(422)[422], **_REFUSED_PAGE},
+    },
+)
+@answers_pages("Failing runs", "html", form=False)
+async def get_failing_runs(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    code: Annotated[str, Query(pattern=IDENTIFIER_PATTERN, description="first failure reason")],
+) -> HTMLResponse:
+    """The runs behind a Pareto bar: failing runs of the period (and station, operator,
+    lot) whose first failure reason is ``code``, the latest first."""
+    body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
+    return HTMLResponse(body)
+
+
+def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str, zone: str) -> str:
+    """The page of a Pareto bar's runs (in a report process: :mod:`api.report_pool`)."""
+    runs = ReportQueries(repository.session, filter).failing_runs(code, FAILING_RUNS)
+    return failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
 
 
 @router.get(

@@ -6,8 +6,10 @@ dashboard's one inline script asks its own server for updates). Every serial on 
 page links to the unit's page through one macro, ``serial_link`` in ``base.html``.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import datetime
+from typing import Any
+from urllib.parse import urlencode
 
 from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
@@ -15,7 +17,7 @@ from markupsafe import Markup
 from station import __version__
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
-from station.domain.quality.figures import EolReport, TrendFigures
+from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.records import GyroFitRecord, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
@@ -54,7 +56,7 @@ _env.filters.update(
 _env.globals.update(
     version=__version__,
     histogram=lambda stats: Markup(svg.histogram(stats)),
-    pareto=lambda entries: Markup(svg.pareto(entries)),
+    pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
     control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
 )
 
@@ -131,10 +133,44 @@ def shift_charts(report: EolReport) -> list[str]:
     return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
 
 
+#: Where a Pareto bar's runs are listed (:func:`failing_runs_page`).
+FAILING_RUNS_PATH = "/api/v1/reports/eol/failures"
+
+
+def filter_query(filter: ReportFilter, zone: str) -> dict[str, str]:
+    """The report's filter as the query of its form (empty fields left out)."""
+    fields = {
+        "from": formatting.field(filter.since, zone),
+        "to": formatting.field(filter.until, zone),
+        "station": filter.station_id or "",
+        "operator": filter.operator_id or "",
+        "lot": filter.lot or "",
+    }
+    return {name: value for name, value in fields.items() if value}
+
+
+def runs_link(filter: ReportFilter, zone: str) -> Callable[[str], str]:
+    """The address of the runs behind a Pareto bar (its reason) under ``filter``."""
+    query = filter_query(filter, zone)
+    return lambda code: f"{FAILING_RUNS_PATH}?{urlencode({'code': code, **query})}"
+
+
+def failing_runs_page(
+    filter: ReportFilter, zone: str, code: str, runs: Sequence[Any], limit: int
+) -> str:
+    """The failing runs whose first failure reason is ``code`` (a Pareto bar's runs),
+    the latest ``limit`` of them, times in the plant's ``zone``."""
+    query = urlencode({"format": "html", **filter_query(filter, zone)})
+    return _env.get_template("failing_runs.html").render(
+        filter=filter, zone=zone, code=code, runs=runs, limit=limit, report_query=query
+    )
+
+
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
         report=report,
+        runs_link=runs_link(report.filter, report.timezone),
         parameter_rows=parameter_cells(report),
         trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
         shift_charts=(
@@ -150,7 +186,11 @@ def dashboard_page(
     hold (of ``held_total``); it follows the server-sent events at ``events`` and brings
     itself up to date after each stored run, without a reload."""
     return _env.get_template("dashboard.html").render(
-        report=report, held=held, held_total=held_total, events=events
+        report=report,
+        held=held,
+        held_total=held_total,
+        events=events,
+        runs_link=runs_link(report.filter, report.timezone),
     )
 
 

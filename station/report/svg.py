@@ -118,9 +118,10 @@ def histogram(stats: ParameterStats) -> str:
     return _svg(title, body)
 
 
-def pareto(entries: Sequence[ParetoEntry]) -> str:
+def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = None) -> str:
     """Failing runs per first failure reason, largest first: each bar labelled with its
-    count and its own share; the cumulative share a line against the top axis (0–100 %)."""
+    count and its own share; the cumulative share a line against the top axis (0–100 %).
+    ``link``: the address of a reason's runs, each bar and its label a link there."""
     rows = list(entries)[:10]
     row_h, top_h, width = 18, 22, CHART_WIDTH
     height = max(len(rows), 1) * row_h + top_h + 8
@@ -137,11 +138,14 @@ def pareto(entries: Sequence[ParetoEntry]) -> str:
     for i, entry in enumerate(rows):
         y = top_h + 4 + i * row_h
         bar = plot_w * entry.count / top
-        body.append(_text(label_w - 4, y + 12, entry.code[:28], "end"))
-        body.append(
+        bar_body = _text(label_w - 4, y + 12, entry.code[:28], "end") + (
             f'<rect class="bar" x="{label_w}" y="{y + 2}" width="{max(bar, 1):.1f}" '
             f'height="{row_h - 4}" fill="{BAR_COLOUR}"><title>{entry.count}</title></rect>'
         )
+        if link is not None:
+            href = escape(link(entry.code), {'"': "&quot;"})
+            bar_body = f'<a class="runs" href="{href}">{bar_body}</a>'
+        body.append(bar_body)
         body.append(_text(label_w + bar + 4, y + 12, f"{entry.count} ({percent(entry.share)})"))
         cumulative.append((label_w + plot_w * entry.cumulative_share, y + row_h / 2))
     if cumulative:

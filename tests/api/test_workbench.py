@@ -390,3 +390,48 @@ def test_a_search_box_on_every_page_finds_a_unit_by_serial(
     assert "serial" in _problem(bad)
     followed = plant.get("/search", params={"serial": "PT-0001"}, follow_redirects=True)
     assert (followed.status_code, followed.url.path) == (200, "/units/PT-0001")
+
+
+def test_a_pareto_bar_opens_the_runs_behind_it(plant: httpx.Client, database: Database) -> None:
+    store(
+        database,
+        make_record(serial="R1", verdict="fail", failures=[POSE_NOISE], started_at=T0),
+        make_record(
+            serial="R2", verdict="fail", failures=[POSE_NOISE], started_at=T0 + timedelta(hours=1)
+        ),
+        make_record(serial="R3", verdict="fail", started_at=T0 + timedelta(hours=2)),
+        make_record(
+            serial="R4",
+            station_id="line1-st2",
+            verdict="fail",
+            failures=[POSE_NOISE],
+            started_at=T0 + timedelta(hours=3),
+        ),
+    )
+    period = {"from": "2026-11-02", "to": "2026-11-03", "station": "line1-st1"}
+    page = plant.get("/api/v1/reports/eol", params={**period, "format": "html"}).text
+    pareto = _chart(page, "failure Pareto: runs per first failure reason")
+    links = dict(
+        (code, html.unescape(href))
+        for href, code in re.findall(r'<a class="runs" href="([^"]+)"><text[^>]*>([^<]+)<', pareto)
+    )
+    assert set(links) == {"pose_noise", "sensitivity_out_of_range"}
+    # the bar's count is the number of runs its page lists, under the same filter
+    runs = plant.get(links["pose_noise"])
+    assert runs.status_code == 200
+    listed = re.findall(
+        r'href="/units/([^"]+)"', runs.text.split('<table class="failing-runs">')[1]
+    )
+    assert listed == ["R2", "R1"]  # latest first; R4 is at another station
+    report = plant.get("/api/v1/reports/eol", params=period).json()
+    bars = {e["code"]: e["count"] for e in report["pareto"]}
+    assert bars["pose_noise"] == len(listed)
+    assert f'href="{links["pose_noise"].replace("&", "&amp;")}">pose_noise</a></td>' in page
+    assert "pose noise x (pose 3) 8.59057 counts" in runs.text
+    none = plant.get(
+        "/api/v1/reports/eol/failures", params={**period, "code": "no_such_reason"}
+    ).text
+    assert 'id="no-runs"' in none
+    bad = plant.get("/api/v1/reports/eol/failures", params={"code": "x y"})
+    assert bad.status_code == 422
+    assert "code" in _problem(bad)
