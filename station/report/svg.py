@@ -81,8 +81,7 @@ def histogram(stats: ParameterStats) -> str:
             body.append(
                 f'<rect class="bar" x="{x0:.1f}" y="{y_of(count):.1f}" '
                 f'width="{max(x1 - x0 - 1, 1):.1f}" height="{bottom - y_of(count):.1f}" '
-                f'fill="{BAR_COLOUR}"><title>{number(d.edges[i])} … {number(d.edges[i + 1])}: '
-                f"{count}</title></rect>"
+                f'fill="{BAR_COLOUR}"><title>{count}</title></rect>'
             )
     if d.mean is not None:
         x = x_of(d.mean)
