@@ -125,7 +125,7 @@ def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = N
     row_h, top_h, width = 18, 22, CHART_WIDTH
     height = max(len(rows), 1) * row_h + top_h + 8
     label_w = 150
-    plot_w = width - label_w - 96  # room right of the longest bar for its label
+    plot_w = width - label_w - 96  # room right of the plot for the counts
     top = max((e.count for e in rows), default=1)
     body = [_line(label_w, top_h, label_w + plot_w, top_h, AXIS_COLOUR)]
     for share, anchor in ((0.0, "start"), (0.5, "middle"), (1.0, "end")):
@@ -145,7 +145,9 @@ def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = N
             href = escape(link(entry.code), {'"': "&quot;"})
             bar_body = f'<a class="runs" href="{href}">{bar_body}</a>'
         body.append(bar_body)
-        body.append(_text(label_w + bar + 4, y + 12, f"{entry.count} ({percent(entry.share)})"))
+        # The counts in a column right of the plot: the cumulative line, which may reach
+        # across the plot, never crosses them.
+        body.append(_text(label_w + plot_w + 6, y + 12, f"{entry.count} ({percent(entry.share)})"))
         cumulative.append((label_w + plot_w * entry.cumulative_share, y + row_h / 2))
     if cumulative:
         path = " ".join(f"{x:.1f},{y:.1f}" for x, y in cumulative)

@@ -416,6 +416,13 @@ def test_a_pareto_bar_opens_the_runs_behind_it(plant: httpx.Client, database: Da
         for href, code in re.findall(r'<a class="runs" href="([^"]+)"><text[^>]*>([^<]+)<', pareto)
     )
     assert set(links) == {"pose_noise", "sensitivity_out_of_range"}
+    # the cumulative line keeps clear of the bars' counts
+    line = re.search(r'<polyline class="cumulative" points="([^"]+)"', pareto)
+    assert line is not None
+    reach = max(float(point.split(",")[0]) for point in line[1].split())
+    counts = [float(x) for x in re.findall(r'<text x="([\d.]+)"[^>]*>\d+ \(', pareto)]
+    assert len(counts) == 2
+    assert min(counts) > reach
     # the bar's count is the number of runs its page lists, under the same filter
     runs = plant.get(links["pose_noise"])
     assert runs.status_code == 200
