@@ -12,6 +12,8 @@ from station.report.formatting import clock, number, percent
 WIDTH, HEIGHT, PAD = 360, 150, 28
 LIMIT_COLOUR, CENTRE_COLOUR, BAR_COLOUR, ALARM_COLOUR = "#c0392b", "#2c7a2c", "#3b6ea5", "#c0392b"
 AXIS_COLOUR = "#999"
+#: Drawn under a label's letters, so a line through it does not hide them.
+HALO = 'paint-order="stroke" stroke="#fff" stroke-width="3" stroke-linejoin="round"'
 #: The control chart's size: room on the left for the time axis' first label, on the
 #: right for the values of the centre and limit lines.
 CHART_WIDTH, CHART_LEFT, CHART_RIGHT, PANEL = 480, 36, 84, 130
@@ -229,6 +231,8 @@ def _panel(
             )
             body.append(
                 _text(x_of(i), y_of(v) - 5, ",".join(map(str, rules)), "middle", ALARM_COLOUR)
+                # a white halo: legible where a limit or centre line runs through it
+                .replace("<text ", f'<text class="rule" {HALO} ', 1)
             )
     return body
 

@@ -442,3 +442,24 @@ def test_a_pareto_bar_opens_the_runs_behind_it(plant: httpx.Client, database: Da
     bad = plant.get("/api/v1/reports/eol/failures", params={"code": "x y"})
     assert bad.status_code == 422
     assert "code" in _problem(bad)
+
+
+def test_a_rule_number_on_a_control_chart_stays_legible_over_the_lines(
+    plant: httpx.Client, database: Database
+) -> None:
+    xs = [2080.0 + (i % 3) for i in range(20)] + [2150.0]  # the last beyond 3σ: rule 1
+    store(
+        database,
+        *(
+            make_record(
+                serial=f"C{i}", offset=(x, 2041.2, 1960.5), started_at=T0 + timedelta(minutes=i)
+            )
+            for i, x in enumerate(xs)
+        ),
+    )
+    page = plant.get("/api/v1/reports/eol", params={"from": "2026-11-02", "format": "html"}).text
+    chart = _chart(page, f"I-MR chart of offset_x, {len(xs)} of {len(xs)} runs plotted")
+    rule = re.search(r'<text class="rule" ([^>]*)>1</text>', chart)
+    assert rule is not None
+    assert 'paint-order="stroke"' in rule[1]
+    assert 'stroke="#fff"' in rule[1]
