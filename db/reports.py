@@ -23,6 +23,7 @@ from sqlalchemy import (
     RowMapping,
     Select,
     and_,
+    exists,
     func,
     or_,
     select,
@@ -309,33 +310,59 @@ class ReportQueries:
         """The units the yield table counts (``held``: those on hold), newest first run
         first, each with its latest run (wherever and whenever it was), run count and
         that run's first failure code; ``offset`` skips the newest (a page)."""
+        # The page first (the units' first runs, cheap conditions: a walk of
+        # ix_runs_started_at, OFFSET included), then the latest run of its units only.
+        page = (
+            select(
+                Run.id.label("first_id"),
+                Run.started_at.label("first_start"),
+                Run.serial,
+                RunFacts.line_final_pass.label("shipped"),
+                RunFacts.unit_runs.label("runs"),
+            )
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .where(*self._selected(held), ~and_(aborted(Run.id), self._only_aborts()))
+            .order_by(Run.started_at.desc(), Run.id.desc())
+            .limit(limit)
+            .offset(offset or None)
+            .subquery("page")
+        )
         latest = aliased(Run, name="latest")
         latest_facts = aliased(RunFacts, name="latest_facts")
-        columns: list[Any] = [
-            latest.id,
-            Run.serial,
-            RunFacts.line_final_pass.label("shipped"),
-            latest.verdict,
-            latest.started_at,
-            latest.station_id,
-            latest.operator_id,
-            RunFacts.unit_runs.label("runs"),
-            latest_facts.first_failure.label("code"),
-        ]
         stmt = (
-            select(*columns)
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .join(latest, latest.serial == Run.serial)
+            select(
+                latest.id,
+                page.c.serial,
+                page.c.shipped,
+                latest.verdict,
+                latest.started_at,
+                latest.station_id,
+                latest.operator_id,
+                page.c.runs,
+                latest_facts.first_failure.label("code"),
+            )
+            .join(latest, latest.serial == page.c.serial)
             .join(
                 latest_facts,
                 and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
             )
-            .where(*self._selected(held), ~aborted(latest.id))
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(limit)
-            .offset(offset or None)
+            .order_by(page.c.first_start.desc(), page.c.first_id.desc())
         )
         return [row for row in self.session.execute(stmt)]
+
+    @staticmethod
+    def _only_aborts() -> ColumnElement[bool]:
+        """Whether the unit of the run in ``runs`` has nothing but aborts: its latest run
+        (the latest that counts, :mod:`db.rollups`) is one. Asked only of a unit whose
+        first run was aborted."""
+        latest = aliased(Run, name="only")
+        facts = aliased(RunFacts, name="only_facts")
+        return exists().where(
+            latest.serial == Run.serial,
+            facts.run_pk == latest.id,
+            facts.line_latest.is_(True),
+            aborted(latest.id),
+        )
 
     def failing_runs(self, code: str, limit: int) -> Sequence[Any]:
         """The latest ``limit`` failing runs in range whose first failure reason is
