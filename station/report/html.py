@@ -171,6 +171,7 @@ def report_page(report: EolReport) -> str:
     return _env.get_template("report.html").render(
         report=report,
         runs_link=runs_link(report.filter, report.timezone),
+        export_query=urlencode(filter_query(report.filter, report.timezone)),
         parameter_rows=parameter_cells(report),
         trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
         shift_charts=(

@@ -465,3 +465,20 @@ def test_a_rule_number_on_a_control_chart_stays_legible_over_the_lines(
     assert rule is not None
     assert 'paint-order="stroke"' in rule[1]
     assert 'stroke="#fff"' in rule[1]
+
+
+def test_the_report_page_exports_its_filtered_runs_as_csv(
+    plant: httpx.Client, database: Database
+) -> None:
+    _filtered_history(database)
+    period = {"from": "2026-11-02", "to": "2026-11-03", "station": ST1}
+    page = plant.get("/api/v1/reports/eol", params={**period, "format": "html"}).text
+    found = re.search(r'<a id="runs-csv" href="([^"]+)"', page)
+    assert found is not None
+    export = plant.get(html.unescape(found[1]))
+    assert export.status_code == 200
+    assert export.headers["content-type"].startswith("text/csv")
+    rows = export.text.strip().splitlines()[1:]
+    # the runs of the period at the station: A, B, C, D's retest, E's retest, F
+    assert len(rows) == 6
+    assert all(f",{ST1}," in row for row in rows)
