@@ -8,11 +8,11 @@ Answer bodies are ``{"detail": "..."}`` (:class:`api.schemas.Problem`); every 42
 
 import logging
 from collections.abc import Awaitable, Callable, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
-from fastapi import FastAPI, Request, status
+from fastapi import FastAPI, Request, Response, status
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import HTMLResponse, JSONResponse
 from sqlalchemy.exc import OperationalError
 
 from api.report_pool import ReadTimeoutError, ReportsBusyError
@@ -25,6 +25,7 @@ from db import (
 )
 from db.timeouts import is_statement_timeout
 from station.domain.errors import InputError
+from station.report.html import problem_page
 
 log = logging.getLogger(__name__)
 
@@ -54,8 +55,60 @@ def _validation_answer(errors: Sequence[dict[str, Any]]) -> JSONResponse:
     )
 
 
-async def _validation_error(_request: Request, exc: Exception) -> JSONResponse:
+#: The routes that answer a page when asked for HTML (:func:`answers_pages`): each
+#: endpoint with its page's title and its default ``format``.
+_PAGE_ROUTES: dict[Callable[..., Any], tuple[str, str, bool]] = {}
+#: The report form's fields, shown again on the page of a refused request.
+FORM_FIELDS = ("from", "to", "station", "operator", "lot", "list")
+
+Endpoint = TypeVar("Endpoint", bound=Callable[..., Any])
+
+
+def answers_pages(
+    title: str, default_format: str, *, form: bool = True
+) -> Callable[[Endpoint], Endpoint]:
+    """Mark a route whose ``format`` query parameter (``default_format`` when absent) may
+    ask for an HTML page: a request it refuses as HTML is answered with a page (422, one
+    line saying why, and with ``form`` the report's form to correct it), not with JSON.
+    Put below ``@router.get``."""
+
+    def mark(endpoint: Endpoint) -> Endpoint:
+        _PAGE_ROUTES[endpoint] = (title, default_format, form)
+        return endpoint
+
+    return mark
+
+
+def _page(request: Request) -> tuple[str, bool] | None:
+    """The title of the page the request asked for and whether it shows the report's
+    form; ``None`` when it asked for data."""
+    found = _PAGE_ROUTES.get(request.scope.get("endpoint"))  # type: ignore[arg-type]
+    if found is None:
+        return None
+    title, default, form = found
+    return (title, form) if request.query_params.get("format", default) == "html" else None
+
+
+def one_line(errors: Sequence[dict[str, Any]]) -> str:
+    """What was refused, as a page says it: each field's problem, once."""
+    parts = []
+    for e in errors[:DETAIL_FIELDS]:
+        name, message = str(tuple(e["loc"])[-1]), str(e["msg"])
+        parts.append(message if message.startswith(name) else f"{name}: {message}")
+    more = f" (and {len(errors) - DETAIL_FIELDS} more)" if len(errors) > DETAIL_FIELDS else ""
+    return "; ".join(parts) + more
+
+
+async def _validation_error(request: Request, exc: Exception) -> Response:
     assert isinstance(exc, RequestValidationError)
+    page = _page(request)
+    if page is not None:
+        title, with_form = page
+        form = {name: request.query_params.get(name, "") for name in FORM_FIELDS}
+        return HTMLResponse(
+            problem_page(title, one_line(exc.errors()), form if with_form else None),
+            status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
+        )
     return _validation_answer(exc.errors())
 
 
@@ -64,7 +117,7 @@ async def _calibration_mismatch(_request: Request, exc: Exception) -> JSONRespon
     return _validation_answer([{"loc": loc, "msg": str(exc), "type": "calibration_mismatch"}])
 
 
-Handler = Callable[[Request, Exception], Awaitable[JSONResponse]]
+Handler = Callable[[Request, Exception], Awaitable[Response]]
 
 
 def _answer(status_code: int) -> Handler:

@@ -13,6 +13,7 @@ from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.metrics import install_metrics
+from api.redoc import add_redoc
 from api.report_pool import ReportPool
 from api.responses import json_problems, problems
 from api.routes import events, gyro, health, reports, reviews, runs, unit_pages, units
@@ -87,12 +88,14 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     # /docs and /redoc from the Swagger UI and ReDoc files the fastapi-offline package
     # ships (under /static-offline-docs), not from a CDN: they work in a plant offline.
     app: FastAPI = FastAPIOffline(
+        redoc_url=None,  # api.redoc serves it, without the bundle's one CDN address
         title="calstation results",
         summary="Calibration runs of the smart putter, per serial number.",
         version=__version__,
         lifespan=lifespan,
         responses=problems(413, 503),
     )
+    add_redoc(app)
     app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)

@@ -9,7 +9,8 @@ from typing import Any
 from sqlalchemy import ColumnElement, Row, func, select
 from sqlalchemy.orm import Session, aliased
 
-from db.models import Run, RunFacts
+from db.models import Run, RunFacts, RunPose
+from db.rollups import PER_POSE, PER_RUN
 from station.domain.quality.parameters import COEFFICIENTS
 
 
@@ -82,3 +83,37 @@ def latest_chart_points(
         .order_by(inner.c.started_at, inner.c.id)
     )
     return list(session.execute(stmt).all())
+
+
+def latest_values(
+    session: Session, where: Sequence[ColumnElement[bool]], runs: int
+) -> tuple[dict[str, list[float]], int]:
+    """Every parameter's values over the latest ``runs`` runs in range (the histograms'
+    sample: bounded, however long the range), and how many runs that is.
+
+    One walk of ``ix_runs_started_at`` backwards for the per-run values, one read of
+    those runs' poses for the per-pose ones."""
+    latest = (
+        select(Run.id, *(column.label(name) for name, column in PER_RUN.items()))
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .where(*where)
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(runs)
+    )
+    rows = session.execute(latest).all()
+    values: dict[str, list[float]] = {name: [] for name in [*PER_RUN, *PER_POSE]}
+    for row in rows:
+        for name in PER_RUN:
+            value = row._mapping[name]
+            if value is not None:
+                values[name].append(float(value))
+    if rows:
+        poses = select(*(column.label(name) for name, column in PER_POSE.items())).where(
+            RunPose.run_pk.in_([row.id for row in rows])
+        )
+        for pose in session.execute(poses):
+            for name in PER_POSE:
+                value = pose._mapping[name]
+                if value is not None:
+                    values[name].append(float(value))
+    return values, len(rows)

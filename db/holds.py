@@ -18,8 +18,9 @@ from dataclasses import dataclass
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from db.models import ReportCounts, Run, RunFacts, Unit
-from station.domain.unit_state import UnitCalibration
+from db.models import ReportCounts, Run, RunFacts, RunFailure, Unit
+from db.rollups import aborted
+from station.domain.unit_state import ABORTED, UnitCalibration
 
 
 @dataclass(frozen=True)
@@ -32,7 +33,9 @@ class HeldUnits:
 
 def held_units(session: Session, limit: int) -> HeldUnits:
     """The latest ``limit`` units on hold (their latest run failed), and how many there are."""
-    on_hold = (Run.verdict == "fail", RunFacts.line_latest)
+    # A unit whose runs are all aborts was never attempted: not on hold (its latest run
+    # is an abort only then, for the latest run is the latest that counts).
+    on_hold = (Run.verdict == "fail", RunFacts.line_latest, ~aborted(Run.id))
     answers = session.scalars(
         select(Unit.calibration)
         .select_from(Run)
@@ -45,5 +48,17 @@ def held_units(session: Session, limit: int) -> HeldUnits:
     total = session.scalar(select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass)))
     return HeldUnits(
         units=[UnitCalibration.model_validate_json(answer) for answer in answers],
-        total=total or 0,
+        total=(total or 0) - abort_only_units(session),
     )
+
+
+def abort_only_units(session: Session) -> int:
+    """Units whose every run is an operator's abort (their latest run is an abort): never
+    attempted, neither on hold nor shipped. Found from the aborts' failure rows
+    (``ix_run_failures_code``), not from a walk over the runs."""
+    stmt = (
+        select(func.count(func.distinct(RunFailure.run_pk)))
+        .join(RunFacts, RunFacts.run_pk == RunFailure.run_pk)
+        .where(RunFailure.code == ABORTED, RunFacts.line_latest.is_(True))
+    )
+    return int(session.execute(stmt).scalar_one())

@@ -10,11 +10,12 @@ profiles: a few dozen) and applies the capability formulas of
 :mod:`station.domain.quality.capability`.
 """
 
-from collections import defaultdict
+from collections import Counter, defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime, time, timedelta
 from typing import Any, NamedTuple
+from zoneinfo import ZoneInfo
 
 from sqlalchemy import (
     ColumnElement,
@@ -23,6 +24,7 @@ from sqlalchemy import (
     Select,
     and_,
     case,
+    exists,
     func,
     literal,
     or_,
@@ -30,11 +32,16 @@ from sqlalchemy import (
     text,
     union_all,
 )
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, aliased
 
-from db.chart_queries import chart_limits, first_moving_ranges, latest_chart_points
+from db.chart_queries import (
+    chart_limits,
+    first_moving_ranges,
+    latest_chart_points,
+    latest_values,
+)
 from db.limits_profiles import stored_profiles
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.rollups import (
     COUNT_VALUES,
     FAILURE_VALUES,
@@ -44,6 +51,7 @@ from db.rollups import (
     PARAMETER_VALUES,
     PRODUCTION,
     TREND_COUNT_VALUES,
+    aborted,
     count_contributions,
     failure_contributions,
     parameter_contributions,
@@ -55,10 +63,13 @@ from station.domain.calibration.uncertainty import COVERAGE_FACTOR
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import (
     D2,
+    capability_warning,
     cp,
     cpk,
+    data_bins,
     histogram_bins,
     individuals_limits,
+    observed_ppm,
     shifted_moments,
     tolerance,
 )
@@ -68,6 +79,7 @@ from station.domain.quality.figures import (
     ChartPoint,
     CoefficientRisk,
     ControlChart,
+    Distribution,
     EolReport,
     Histogram,
     NearLimits,
@@ -91,9 +103,12 @@ from station.domain.quality.parameters import (
 from station.domain.quality.risk import decision_risks
 from station.domain.quality.shifts import plant_shifts, shift_name
 from station.domain.records import LimitsRef
+from station.domain.unit_state import ABORTED
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200
+#: The latest runs in range whose values the histograms draw (bins from the data).
+HISTOGRAM_RUNS = 1000
 
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
@@ -338,44 +353,121 @@ class ReportQueries:
 
     # -- units -------------------------------------------------------------------------
 
-    def _latest(self, held: bool) -> list[ColumnElement[bool]]:
-        """The units' latest runs in range (``held``: only those that failed)."""
-        where: list[ColumnElement[bool]] = [RunFacts.line_latest.is_(True), *self.conditions()]
-        return [*where, Run.verdict == "fail"] if held else where
-
-    def held_units(self) -> int:
-        """How many units' latest run is in range and failed (they are held)."""
-        stmt = (
-            select(func.count())
-            .select_from(Run)
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._latest(True))
-        )
-        return int(self.session.execute(stmt).scalar_one())
+    def _selected(self, held: bool) -> list[ColumnElement[bool]]:
+        """The units the report counts, by their first run on the line: that run is in
+        range and matches the filter (``held``: and the unit's latest run, wherever and
+        whenever it was, failed). The yield table counts the same units."""
+        where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions()]
+        return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
     def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
-        """The units whose latest run is in range (``held``: and failed), with that run,
-        their run count and its first failure code, newest first; ``offset`` skips the
-        newest (a page)."""
-        columns: list[Any] = [
-            Run.id,
-            Run.serial,
-            Run.verdict,
-            Run.started_at,
-            Run.station_id,
-            Run.operator_id,
-            RunFacts.unit_runs.label("runs"),
-            RunFacts.first_failure.label("code"),
-        ]
-        stmt = (
-            select(*columns)
+        """The units the yield table counts (``held``: those on hold), newest first run
+        first, each with its latest run (wherever and whenever it was), run count and
+        that run's first failure code; ``offset`` skips the newest (a page)."""
+        # The page first (the units' first runs, cheap conditions: a walk of
+        # ix_runs_started_at, OFFSET included), then the latest run of its units only.
+        page = (
+            select(
+                Run.id.label("first_id"),
+                Run.started_at.label("first_start"),
+                Run.serial,
+                RunFacts.line_final_pass.label("shipped"),
+                RunFacts.unit_runs.label("runs"),
+            )
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._latest(held))
+            .where(*self._selected(held), ~and_(aborted(Run.id), self._only_aborts()))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
             .offset(offset or None)
+            .subquery("page")
         )
-        return list(self.session.execute(stmt).all())
+        latest = aliased(Run, name="latest")
+        latest_facts = aliased(RunFacts, name="latest_facts")
+        stmt = (
+            select(
+                latest.id,
+                page.c.serial,
+                page.c.shipped,
+                latest.verdict,
+                latest.started_at,
+                latest.station_id,
+                latest.operator_id,
+                page.c.runs,
+                latest_facts.first_failure.label("code"),
+            )
+            .join(latest, latest.serial == page.c.serial)
+            .join(
+                latest_facts,
+                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
+            )
+            .order_by(page.c.first_start.desc(), page.c.first_id.desc())
+        )
+        return [row for row in self.session.execute(stmt)]
+
+    @staticmethod
+    def _only_aborts() -> ColumnElement[bool]:
+        """Whether the unit of the run in ``runs`` has nothing but aborts: its latest run
+        (the latest that counts, :mod:`db.rollups`) is one. Asked only of a unit whose
+        first run was aborted."""
+        latest = aliased(Run, name="only")
+        facts = aliased(RunFacts, name="only_facts")
+        return exists().where(
+            latest.serial == Run.serial,
+            facts.run_pk == latest.id,
+            facts.line_latest.is_(True),
+            aborted(latest.id),
+        )
+
+    def failing_runs(self, code: str, limit: int) -> Sequence[Any]:
+        """The latest ``limit`` failing runs in range whose first failure reason is
+        ``code`` (a Pareto bar's runs), newest first, with that reason."""
+        stmt = (
+            select(
+                Run.run_id,
+                Run.started_at,
+                Run.serial,
+                Run.station_id,
+                Run.operator_id,
+                Run.lot,
+                RunFailure.code,
+                RunFailure.message,
+                RunFailure.measured,
+                RunFailure.lower,
+                RunFailure.upper,
+            )
+            .join(RunFailure, and_(RunFailure.run_pk == Run.id, RunFailure.position == 0))
+            .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions())
+            .order_by(Run.started_at.desc(), Run.id.desc())
+            .limit(limit)
+        )
+        return self.session.execute(stmt).all()
+
+    def abort_only_units(self) -> list[Row[str, datetime]]:
+        """The units the filter selects (first run on the line among its runs) whose
+        every run is an operator's abort, never attempted: the station and start of each
+        one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
+        walk over the runs."""
+        latest = aliased(Run, name="latest")
+        latest_facts = aliased(RunFacts, name="latest_facts")
+        stmt = (
+            select(Run.station_id, Run.started_at)
+            .distinct()
+            .select_from(RunFailure)
+            .join(Run, Run.id == RunFailure.run_pk)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .join(latest, latest.serial == Run.serial)
+            .join(
+                latest_facts,
+                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
+            )
+            .where(
+                RunFailure.code == ABORTED,
+                RunFacts.line_first.is_(True),
+                *self.conditions(),
+                aborted(latest.id),
+            )
+        )
+        return [row for row in self.session.execute(stmt)]
 
 
 def _risks(
@@ -434,7 +526,9 @@ def _ratio(part: float, whole: float) -> float | None:
 
 @dataclass(frozen=True)
 class _Counts:
-    """What a summary is computed from (one station, or the line)."""
+    """What a summary is computed from (one station, or the line): ``units`` without
+    the units that were never attempted (only aborts), ``aborted`` the runs the operator
+    aborted (no attempts)."""
 
     runs: int
     runs_passed: int
@@ -443,20 +537,26 @@ class _Counts:
     final_pass: int
     seconds: float | None
     poses: int
+    aborted: int = 0
+    abort_only: int = 0
 
 
 def _total(rows: Sequence[Row[Any]], column: str) -> int:
     return sum(int(row._mapping[column]) for row in rows)
 
 
-def _counts(rows: Sequence[Row[Any]]) -> _Counts:
+def _counts(rows: Sequence[Row[Any]], aborted: int = 0, abort_only: int = 0) -> _Counts:
     """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of their days):
     a unit counts where its first run on the line is, so a station's units are those
-    whose first attempt was there, and the stations' rows add up to the line's."""
+    whose first attempt was there, and the stations' rows add up to the line's.
+    ``aborted``: the rows' aborted runs; ``abort_only``: their units with nothing but
+    aborts, which are no units tested."""
     return _Counts(
+        aborted=aborted,
+        abort_only=abort_only,
         runs=_total(rows, "runs"),
         runs_passed=_total(rows, "runs_passed"),
-        units=_total(rows, "line_units"),
+        units=_total(rows, "line_units") - abort_only,
         first_pass=_total(rows, "line_first_pass"),
         final_pass=_total(rows, "line_final_pass"),
         seconds=_total(rows, "duration_ms") / 1000 if rows else None,
@@ -465,9 +565,12 @@ def _counts(rows: Sequence[Row[Any]]) -> _Counts:
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    retests = n.runs - n.units
+    # An abort is no attempt: not a retest (a unit's first run aborted and retested
+    # after the range would make it -1: never below none).
+    retests = max(0, n.runs - n.aborted - n.units)
     seconds = n.seconds
     return Summary(
+        aborted_runs=n.aborted,
         runs=n.runs,
         runs_passed=n.runs_passed,
         units_tested=n.units,
@@ -480,12 +583,19 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         retests=retests,
         retest_rate=_ratio(retests, n.units),
         hours=hours,
-        units_per_hour=_ratio(n.units, hours) if hours else None,
+        units_per_hour=units_per_hour(n.units, seconds),
         cycle_time_per_run_s=_ratio(seconds, n.runs) if seconds is not None else None,
         cycle_time_per_unit_s=_ratio(seconds, n.units) if seconds is not None else None,
         cycle_time_per_pose_s=_ratio(seconds, n.poses) if seconds is not None else None,
         poses=n.poses,
     )
+
+
+def units_per_hour(units: int, station_seconds: float | None) -> float | None:
+    """Units per hour of station time (``station_seconds``, Σ finish − start of the
+    runs): 3600 / seconds per unit, on the same basis as the cycle times beside it, the
+    same for any page over the same runs (the dashboard's, the report's)."""
+    return _ratio(3600 * units, station_seconds) if station_seconds else None
 
 
 def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
@@ -505,11 +615,24 @@ class _FailingRow(NamedTuple):
     runs: int
 
 
+def _aborted(rows: Sequence[Row[Any]]) -> dict[str, int]:
+    """Aborted runs per station, from :meth:`ReportQueries.first_failures`'s rows."""
+    counts: dict[str, int] = defaultdict(int)
+    for row in rows:
+        if row.code == ABORTED:
+            counts[row.station_id] += int(row.runs)
+    return counts
+
+
 def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
+    """Failing runs by first failure reason; an operator's abort is no failure of the
+    unit and no category here (the summary counts aborts apart)."""
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     for row in rows:
+        if row.code == ABORTED:
+            continue
         code, station, operator, n = row.code, row.station_id, row.operator_id, int(row.runs)
         counts[code] += n
         stations[code][station] += n
@@ -541,6 +664,8 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
         if row is not None and count
         else (None, None)
     )
+    out = 0 if row is None else int(row["outside"])
+    capability = cpk(mean, std, lower, upper)
     return ParameterStats(
         name=spec.name,
         family=spec.family,
@@ -553,14 +678,32 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
         min=None if row is None else float(row["min"]),
         max=None if row is None else float(row["max"]),
         cp=cp(std, lower, upper),
-        cpk=cpk(mean, std, lower, upper),
-        out_of_limits=0 if row is None else int(row["outside"]),
+        cpk=capability,
+        out_of_limits=out,
+        observed_ppm=observed_ppm(out, count),
+        warning=capability_warning(capability, out, count),
         marginal=0 if row is None else int(row["marginal"]),
         histogram=Histogram(
             start=start,
             width=width,
             counts=[0 if row is None else int(row[h]) for h in HISTOGRAM],
         ),
+    )
+
+
+def _distribution(values: Sequence[float], runs: int) -> Distribution | None:
+    """The histogram of ``values`` (of the latest ``runs`` runs) in bins from the data."""
+    if not values:
+        return None
+    edges, counts, below, above = data_bins(values)
+    return Distribution(
+        edges=edges,
+        counts=counts,
+        values=len(values),
+        below=below,
+        above=above,
+        mean=sum(values) / len(values),
+        runs=runs,
     )
 
 
@@ -708,7 +851,7 @@ def _what_if(
         current,
         runs=judged.runs,
         runs_passed=judged.runs_passed,
-        units=judged.units,
+        units=judged.units - current.abort_only,
         first_pass=judged.first_pass,
         final_pass=judged.final_pass,
     )
@@ -730,9 +873,11 @@ def _trend(
     bounds: FamilyBounds | None,
     zone: str,
     shifts: Sequence[time],
+    unattempted: Sequence[datetime] = (),
 ) -> tuple[list[TrendDay], list[TrendShift]]:
     """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times).
+    over their shifts when the plant has ``shifts`` (start times); ``unattempted``: the
+    first runs of the units with nothing but aborts, which no period counts as units.
 
     In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
     another zone one scan numbers each run with its day and its shift together.
@@ -752,14 +897,20 @@ def _trend(
         parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
         return queries.daily_counts(key), parameters
 
+    local = ZoneInfo(zone)
+    per_day = Counter(day_number(at.astimezone(local).date()) for at in unattempted)
+    per_shift = Counter(
+        i for at in unattempted for i, p in enumerate(periods) if p.start <= at < p.end
+    )
     if is_utc(zone):
-        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
+        by_day = PeriodSums.of_rows(*sums(since, None), bounds).without(per_day)
         if not periods:
             return trend_days(days, by_day), []
         by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift)
+        return trend_days(days, by_day), trend_shifts(periods, by_shift.without(per_shift))
     if not periods:
-        return trend_days(days, PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)), []
+        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
+        return trend_days(days, by_day.without(per_day)), []
     # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
     # runs of the first shift before its midnight, which no listed day shows.
     before = days[0] - timedelta(days=1)
@@ -768,7 +919,9 @@ def _trend(
     rows = sums(min(since, periods[0].start), key)
     by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
     by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
-    return trend_days(days, by_day), trend_shifts(periods, by_shift)
+    return trend_days(days, by_day.without(per_day)), trend_shifts(
+        periods, by_shift.without(per_shift)
+    )
 
 
 def eol_report(
@@ -809,13 +962,19 @@ def eol_report(
         parameters, rolled = _capability(queries, bounds)
         if not rolled:
             bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
+    if parameters:
+        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
+        parameters = [
+            p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
+            for p in parameters
+        ]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)
     units = [
         UnitVerdict(
             serial=row.serial,
-            disposition="ship" if row.verdict == "pass" else "hold",
+            disposition="ship" if row.shipped else "hold",
             verdict=row.verdict,
             runs=row.runs,
             last_started_at=row.started_at,
@@ -827,9 +986,14 @@ def eol_report(
     ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     points = latest_chart_points(session, queries.conditions(), chart_points)
-    line = _counts(counts)
+    failures = queries.first_failures()
+    aborts = _aborted(failures)
+    unattempted = queries.abort_only_units() if aborts else []
+    abort_only = Counter(station for station, _ in unattempted)
+    line = _counts(counts, sum(aborts.values()), len(unattempted))
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
-    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
+    starts = [started_at for _, started_at in unattempted]
+    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
     return EolReport(
         generated_at=now or datetime.now(UTC),
         filter=filter,
@@ -837,19 +1001,24 @@ def eol_report(
         limits_profiles=used,
         summary=_summary(line, hours),
         stations=[
-            StationSummary(station_id=station, summary=_summary(_counts(rows_), hours))
+            StationSummary(
+                station_id=station,
+                summary=_summary(
+                    _counts(rows_, aborts.get(station, 0), abort_only.get(station, 0)), hours
+                ),
+            )
             for station, rows_ in sorted(by_station.items())
         ],
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
         shift_trend=shift_trend,
-        pareto=_pareto(queries.first_failures()),
+        pareto=_pareto(failures),
         parameters=parameters,
         control_charts=_charts(limits, points),
         units=units,
-        units_total=_total(counts, "listed"),
-        units_held=queries.held_units() if held_only else None,
+        units_total=line.units,
+        units_held=line.units - line.final_pass,
         units_listed="held" if held_only else "all",
         units_offset=unit_offset,
         units_limit=unit_limit,

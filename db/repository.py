@@ -248,14 +248,17 @@ class RunRepository:
         ).all()
         return self._summaries(runs)
 
-    def serials(self, prefix: str) -> list[str]:
-        """The serial numbers stored that begin with ``prefix``, in order."""
+    def serials(self, prefix: str, limit: int | None = None) -> list[str]:
+        """The serial numbers stored that begin with ``prefix`` (its ``_`` and ``%`` as
+        themselves), in order; the first ``limit`` of them. A walk of
+        ``ix_runs_serial_started_at`` from ``prefix``."""
         return list(
             self.session.scalars(
                 select(Run.serial)
-                .where(Run.serial.startswith(prefix))
+                .where(Run.serial.startswith(prefix, autoescape=True))
                 .distinct()
                 .order_by(Run.serial)
+                .limit(limit)
             )
         )
 

@@ -302,6 +302,14 @@ _ABORTED = _inline(ABORTED)
 PRODUCTION = Run.purpose.is_(None)
 
 
+def aborted(run_pk: Any) -> ColumnElement[bool]:
+    """Whether the run ``run_pk`` was aborted by the operator (one of its failures says
+    so): it says nothing about the unit, is no attempt and no failure of it
+    (:func:`station.domain.unit_state.counts`)."""
+    failure = aliased(RunFailure, name="abort")  # apart from a RunFailure outside
+    return exists().where(failure.run_pk == run_pk, failure.code == _ABORTED)
+
+
 def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
     """The ``run_facts`` rows of the runs ``where`` selects (see :class:`RunFacts`)."""
     other = aliased(Run, name="other")
@@ -311,8 +319,7 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
     newest = (other.started_at.desc(), other.id.desc())
     # A unit's latest run is its latest that counts: an operator's abort wrote nothing
     # and says nothing about the unit (station.domain.unit_state), unless all its runs are aborts.
-    aborted = exists().where(RunFailure.run_pk == other.id, RunFailure.code == _ABORTED)
-    counted_newest = (case((aborted, _ONE), else_=_ZERO), *newest)
+    counted_newest = (case((aborted(other.id), _ONE), else_=_ZERO), *newest)
 
     def latest(column: Any, *among: ColumnElement[bool]) -> Any:
         """``column`` of the unit's latest run that counts, among the runs ``among``."""

@@ -79,6 +79,15 @@ class PeriodSums:
         self.counts = counts
         self.stats = stats
         self.bounds = bounds
+        #: Units per period with nothing but aborts: no units tested (:meth:`without`).
+        self.unattempted: Mapping[int, int] = {}
+
+    def without(self, unattempted: Mapping[int, int]) -> "PeriodSums":
+        """These sums less the ``unattempted`` units (nothing but operator aborts, first
+        run in the period) per period: their first and final runs failed, so only the
+        units change."""
+        self.unattempted = unattempted
+        return self
 
     @classmethod
     def of_rows(
@@ -124,7 +133,7 @@ class PeriodSums:
             else (
                 int(row["runs"]),
                 int(row["runs_passed"]),
-                int(row["line_units"]),
+                int(row["line_units"]) - self.unattempted.get(n, 0),
                 int(row["line_first_pass"]),
                 int(row["line_final_pass"]),
             )

@@ -29,20 +29,20 @@ from pydantic import BeforeValidator
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from api.deps import ReaderDep, ReadersDep, ReportPoolDep
-from api.errors import invalid
+from api.errors import answers_pages, invalid
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
 from db.holds import held_units
 from db.limits_profiles import stored_profiles
-from db.reports import eol_report
+from db.reports import ReportQueries, eol_report
 from db.run_export import HEADER, run_page
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.html import certificate_page, dashboard_page
+from station.report.html import certificate_page, dashboard_page, failing_runs_page
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 
@@ -151,7 +151,16 @@ class Period:
 PeriodDep = Annotated[Period, Depends()]
 
 
+#: A refused request for the report as HTML is answered with a page saying why (422).
+REPORT_TITLE = "End-of-line report"
+_REFUSED_PAGE = {
+    "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+    "description": "a parameter is invalid: JSON (`errors` names each), or, when the "
+    "report was asked for as HTML, a page saying why in one line with the form to "
+    "correct it",
+}
 _REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
+    422: {**problems(422)[422], **_REFUSED_PAGE},
     200: {
         "model": EolReport,
         "content": {
@@ -171,6 +180,7 @@ PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page o
 
 
 @router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
+@answers_pages(REPORT_TITLE, "json")
 async def get_eol_report(
     repository: ReportPoolDep,
     period: PeriodDep,
@@ -194,17 +204,19 @@ async def get_eol_report(
     response_class=Response,
     responses={
         **_REPORT_ANSWERS,
-        **problems(
-            400,
-            422,
-            _400="the body is not multipart form data",
-            _422="a parameter is invalid, or the limits file is not one (not UTF-8, not TOML, "
-            "nested too deeply, a profile that is not a table or a bound outside what its "
-            "quantity can take): `errors` names `body.limits` and says which",
-        ),
+        **problems(400, _400="the body is not multipart form data"),
+        422: {
+            **problems(422)[422],
+            **_REFUSED_PAGE,
+            "description": "a parameter is invalid, or the limits file is not one (not UTF-8, "
+            "not TOML, nested too deeply, a profile that is not a table or a bound outside "
+            "what its quantity can take): `errors` names `body.limits` and says which; as "
+            "HTML (the default format) a page saying why in one line",
+        },
     },
     summary="Report with what-if limits",
 )
+@answers_pages(REPORT_TITLE, "html")
 async def post_eol_what_if(
     repository: ReportPoolDep,
     period: PeriodDep,
@@ -283,6 +295,41 @@ def eol_body(
         shifts=plant.shifts,
     )
     return render(report, format)
+
+
+#: The most runs the page of a Pareto bar lists (the latest).
+FAILING_RUNS = 200
+
+
+@router.get(
+    "/reports/eol/failures",
+    response_class=HTMLResponse,
+    responses={
+        200: {
+            "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+            "description": "the latest failing runs of the period whose first failure reason "
+            "is `code`: the runs behind a bar of the report's Pareto (a page)",
+        },
+        422: {**problems(422)[422], **_REFUSED_PAGE},
+    },
+)
+@answers_pages("Failing runs", "html", form=False)
+async def get_failing_runs(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    code: Annotated[str, Query(pattern=IDENTIFIER_PATTERN, description="first failure reason")],
+) -> HTMLResponse:
+    """The runs behind a Pareto bar: failing runs of the period (and station, operator,
+    lot) whose first failure reason is ``code``, the latest first."""
+    body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
+    return HTMLResponse(body)
+
+
+def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str, zone: str) -> str:
+    """The page of a Pareto bar's runs (in a report process: :mod:`api.report_pool`)."""
+    runs = ReportQueries(repository.session, filter).failing_runs(code, FAILING_RUNS)
+    return failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
 
 
 @router.get(
@@ -377,6 +424,7 @@ def certificate_run(
 async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
     repository: ReaderDep,
+    zone: PlantZoneDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile and the unit's earlier runs; a failure report
@@ -388,7 +436,7 @@ async def get_certificate(
     stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
     profile = stored.get(run.limits.sha256)
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier))
+    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone))
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

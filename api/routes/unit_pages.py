@@ -8,15 +8,19 @@ stays the unit's JSON. An unknown serial is a 404 page; a serial that is not one
 """
 
 from datetime import UTC, datetime
+from typing import Annotated
 
-from fastapi import APIRouter, Response, status
-from fastapi.responses import HTMLResponse
+from fastapi import APIRouter, Query, Response, status
+from fastapi.responses import HTMLResponse, RedirectResponse
+from pydantic import BeforeValidator
 
 from api.deps import ReaderDep
+from api.errors import answers_pages
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from api.routes.units import SerialPath
-from station.report.html import not_found_page, unit_page
+from station.domain.records import SERIAL_PATTERN
+from station.report.html import found_page, not_found_page, problem_page, unit_page
 
 router = APIRouter(tags=["pages"])
 
@@ -43,3 +47,52 @@ async def get_unit_page(
             status_code=status.HTTP_404_NOT_FOUND,
         )
     return HTMLResponse(unit_page(runs, datetime.now(UTC), zone))
+
+
+#: The most serials a search lists (type more of the serial for fewer).
+FOUND_SERIALS = 50
+SEARCH_TITLE = "Find a unit"
+
+
+def _stripped(text: object) -> object:
+    """A serial as typed or pasted: without the spaces around it."""
+    return text.strip() if isinstance(text, str) else text
+
+
+SearchQuery = Annotated[
+    str,
+    BeforeValidator(_stripped),
+    Query(
+        pattern=SERIAL_PATTERN,
+        description="a serial number, or its beginning (letters, digits, . _ -)",
+    ),
+]
+
+
+@router.get(
+    "/search",
+    response_class=Response,
+    responses={
+        200: {"content": _HTML, "description": "the units whose serial begins so (a page)"},
+        303: {"description": "the one unit of this serial: its page (`Location`)"},
+        404: {"content": _HTML, "description": "no unit's serial begins so (a page)"},
+        422: {
+            "content": _HTML,
+            "description": "not a serial number or its beginning (a page saying why)",
+        },
+    },
+)
+@answers_pages(SEARCH_TITLE, "html", form=False)
+async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
+    """The search box of every page: the unit of this serial number (its page), or the
+    units whose serial begins so."""
+    found = await repository.run(lambda r: r.serials(serial, FOUND_SERIALS + 1))
+    if serial in found or len(found) == 1:
+        exact = serial if serial in found else found[0]
+        return RedirectResponse(f"/units/{exact}", status_code=status.HTTP_303_SEE_OTHER)
+    if not found:
+        return HTMLResponse(
+            problem_page(SEARCH_TITLE, f"No unit's serial number begins with {serial}."),
+            status_code=status.HTTP_404_NOT_FOUND,
+        )
+    return HTMLResponse(found_page(serial, found[:FOUND_SERIALS], len(found) > FOUND_SERIALS))

@@ -1,6 +1,7 @@
 """How numbers read in the text and HTML renderings (the same in both)."""
 
 from datetime import datetime
+from typing import Protocol
 from zoneinfo import ZoneInfo
 
 
@@ -44,3 +45,41 @@ def field(value: datetime | None, zone: str = "UTC") -> str:
     if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0):
         return local.date().isoformat()
     return local.replace(tzinfo=None).isoformat(timespec="seconds" if local.second else "minutes")
+
+
+class Reason(Protocol):
+    """A failure reason as a run stores it (:class:`station.domain.records.FailureReason`)."""
+
+    @property
+    def code(self) -> str: ...
+    @property
+    def message(self) -> str: ...
+    @property
+    def measured(self) -> float | None: ...
+    @property
+    def lower(self) -> float | None: ...
+    @property
+    def upper(self) -> float | None: ...
+
+
+def limits(lower: float | None, upper: float | None, digits: int = 6) -> str:
+    """A check's limits as they read: ``1848 … 2248``, ``≤ 8``, ``≥ 5``; empty for none."""
+    if lower is not None and upper is not None:
+        return f"{number(lower, digits)} … {number(upper, digits)}"
+    if upper is not None:
+        return f"≤ {number(upper, digits)}"
+    if lower is not None:
+        return f"≥ {number(lower, digits)}"
+    return ""
+
+
+def reason(failure: Reason) -> str:
+    """A failure reason as every page shows it: the station's own words (they name the
+    axis, pose and value), then the value measured and the limits, when there are any:
+    ``pose noise x (pose 3) 8.59057 counts (measured 8.59057, limit ≤ 8)``."""
+    bounds = limits(failure.lower, failure.upper)
+    facts = [] if failure.measured is None else [f"measured {number(failure.measured, 6)}"]
+    if bounds:
+        facts.append(f"limit {bounds}" if "…" not in bounds else f"limits {bounds}")
+    text = failure.message or failure.code
+    return f"{text} ({', '.join(facts)})" if facts else text

@@ -6,15 +6,18 @@ dashboard's one inline script asks its own server for updates). Every serial on 
 page links to the unit's page through one macro, ``serial_link`` in ``base.html``.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import datetime
+from typing import Any
+from urllib.parse import urlencode
 
 from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
 from station.domain.limits import LimitsProfile
-from station.domain.quality.figures import EolReport, TrendFigures
+from station.domain.quality.capability import CAPABLE_CPK
+from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.records import GyroFitRecord, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
@@ -36,7 +39,7 @@ from station.report.tables import (
 )
 
 #: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
-CPK_TARGET = ("target", 1.33)
+CPK_TARGET = ("target", CAPABLE_CPK)
 
 _env = Environment(
     loader=PackageLoader("station.report", "templates"),
@@ -48,13 +51,15 @@ _env.filters.update(
     percent=formatting.percent,
     number=formatting.number,
     seconds=formatting.seconds,
-    moment=formatting.moment,
+    # A moment names its zone on every page: the plant's, which each page is given.
+    moment=lambda value, zone: formatting.moment(value, zone),
     field=formatting.field,
+    reason=formatting.reason,
 )
 _env.globals.update(
     version=__version__,
     histogram=lambda stats: Markup(svg.histogram(stats)),
-    pareto=lambda entries: Markup(svg.pareto(entries)),
+    pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
     control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
 )
 
@@ -134,10 +139,45 @@ def shift_charts(report: EolReport) -> list[str]:
     return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
 
 
+#: Where a Pareto bar's runs are listed (:func:`failing_runs_page`).
+FAILING_RUNS_PATH = "/api/v1/reports/eol/failures"
+
+
+def filter_query(filter: ReportFilter, zone: str) -> dict[str, str]:
+    """The report's filter as the query of its form (empty fields left out)."""
+    fields = {
+        "from": formatting.field(filter.since, zone),
+        "to": formatting.field(filter.until, zone),
+        "station": filter.station_id or "",
+        "operator": filter.operator_id or "",
+        "lot": filter.lot or "",
+    }
+    return {name: value for name, value in fields.items() if value}
+
+
+def runs_link(filter: ReportFilter, zone: str) -> Callable[[str], str]:
+    """The address of the runs behind a Pareto bar (its reason) under ``filter``."""
+    query = filter_query(filter, zone)
+    return lambda code: f"{FAILING_RUNS_PATH}?{urlencode({'code': code, **query})}"
+
+
+def failing_runs_page(
+    filter: ReportFilter, zone: str, code: str, runs: Sequence[Any], limit: int
+) -> str:
+    """The failing runs whose first failure reason is ``code`` (a Pareto bar's runs),
+    the latest ``limit`` of them, times in the plant's ``zone``."""
+    query = urlencode({"format": "html", **filter_query(filter, zone)})
+    return _env.get_template("failing_runs.html").render(
+        filter=filter, zone=zone, code=code, runs=runs, limit=limit, report_query=query
+    )
+
+
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
         report=report,
+        runs_link=runs_link(report.filter, report.timezone),
+        export_query=urlencode(filter_query(report.filter, report.timezone)),
         parameter_rows=parameter_cells(report),
         trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
         shift_charts=(
@@ -153,7 +193,11 @@ def dashboard_page(
     hold (of ``held_total``); it follows the server-sent events at ``events`` and brings
     itself up to date after each stored run, without a reload."""
     return _env.get_template("dashboard.html").render(
-        report=report, held=held, held_total=held_total, events=events
+        report=report,
+        held=held,
+        held_total=held_total,
+        events=events,
+        runs_link=runs_link(report.filter, report.timezone),
     )
 
 
@@ -170,6 +214,17 @@ def unit_page(runs: Sequence[RunSummary], generated_at: datetime, zone: str = "U
     )
 
 
+def problem_page(title: str, message: str, form: dict[str, str] | None = None) -> str:
+    """The page of a request a page could not answer: ``message``, one line, says why;
+    ``form``: the report's filter fields as they were sent, to correct them."""
+    return _env.get_template("problem.html").render(title=title, message=message, form=form)
+
+
+def found_page(prefix: str, serials: Sequence[str], more: bool) -> str:
+    """The units whose serial begins with ``prefix`` (``more``: the list is cut)."""
+    return _env.get_template("found.html").render(prefix=prefix, serials=serials, more=more)
+
+
 def not_found_page(message: str) -> str:
     """The page of a name nothing is stored under: ``message`` says which."""
     return _env.get_template("not_found.html").render(message=message)
@@ -181,6 +236,7 @@ def certificate_page(
     issued_at: datetime,
     gyro_fit: GyroFitRecord | None = None,
     earlier: Sequence[RunSummary] = (),
+    zone: str = "UTC",
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -188,7 +244,7 @@ def certificate_page(
 
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
-    stations), which the page says.
+    stations), which the page says. Times are in the plant's ``zone``, as on the unit's page.
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
     """
@@ -205,6 +261,7 @@ def certificate_page(
         issued_at=issued_at,
         gyro_fit=gyro_fit,
         earlier=earlier,
+        zone=zone,
         document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
     )

@@ -7,6 +7,7 @@ report to round it to its whole day (:data:`EARLIEST` … :data:`LATEST`); ``fro
 come before ``to``.
 """
 
+import re
 from datetime import UTC, date, datetime, time
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
@@ -47,7 +48,8 @@ def parse_moment(text: str, *, name: str, zone: str = "UTC") -> datetime:
             moment = datetime.combine(date.fromisoformat(text), time())
         except ValueError:
             raise InputError(
-                f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or 2026-11-02T14:00Z)"
+                f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or "
+                f"2026-11-02T14:00Z){_written_as_iso(text)}"
             ) from None
     try:
         local = moment.replace(tzinfo=ZoneInfo(zone)) if moment.tzinfo is None else moment
@@ -60,6 +62,18 @@ def parse_moment(text: str, *, name: str, zone: str = "UTC") -> datetime:
             f"{EARLIEST.date().isoformat()} to {LATEST.date().isoformat()} (UTC)"
         )
     return utc
+
+
+def _written_as_iso(text: str) -> str:
+    """For a day written the European way (``14.11.2026``), the same day as ISO."""
+    found = re.fullmatch(r"\s*(\d{1,2})\.(\d{1,2})\.(\d{4})\s*", text)
+    if found is None:
+        return ""
+    day, month, year = (int(part) for part in found.groups())
+    try:
+        return f": write {date(year, month, day).isoformat()}"
+    except ValueError:
+        return ""
 
 
 def check_order(

@@ -260,7 +260,7 @@ def as_text(report: EolReport) -> str:
         ),
         "",
         *_what_if_text(report),
-        f"Units ({listed(report)}, latest first)",
+        f"Units ({listed(report)}, newest first run first)",
         *_table(
             ["serial", "disposition", "runs", "last run", "station", "operator", "failure"],
             [

@@ -2,6 +2,7 @@
 Pareto, individuals and moving-range (I-MR) control charts. No script, no external file.
 """
 
+import math
 from collections.abc import Callable, Sequence
 from xml.sax.saxutils import escape
 
@@ -11,6 +12,8 @@ from station.report.formatting import clock, number, percent
 WIDTH, HEIGHT, PAD = 360, 150, 28
 LIMIT_COLOUR, CENTRE_COLOUR, BAR_COLOUR, ALARM_COLOUR = "#c0392b", "#2c7a2c", "#3b6ea5", "#c0392b"
 AXIS_COLOUR = "#999"
+#: Drawn under a label's letters, so a line through it does not hide them.
+HALO = 'paint-order="stroke" stroke="#fff" stroke-width="3" stroke-linejoin="round"'
 #: The control chart's size: room on the left for the time axis' first label, on the
 #: right for the values of the centre and limit lines.
 CHART_WIDTH, CHART_LEFT, CHART_RIGHT, PANEL = 480, 36, 84, 130
@@ -42,44 +45,90 @@ def _line(x1: float, y1: float, x2: float, y2: float, colour: str, dash: bool = 
 
 
 def histogram(stats: ParameterStats) -> str:
-    """Bars of the histogram, red lines at the limits."""
-    h = stats.histogram
-    span = h.width * len(h.counts)
-    plot_w, plot_h = WIDTH - 2 * PAD, HEIGHT - 2 * PAD
-    top = max(h.counts) or 1
+    """The parameter's values (the latest runs', :attr:`ParameterStats.distribution`) in
+    bins from the data, on a count axis, with the mean and the limits: the limits join
+    the value axis unless they would squeeze the values into less than a third of it,
+    else an arrow at the edge names them."""
+    d = stats.distribution
+    title = f"histogram of {stats.name}"
+    if d is None or not d.counts:
+        return _svg(title, [_text(WIDTH / 2, HEIGHT / 2, f"{stats.name}: no values", "middle")])
+    low, high = d.edges[0], d.edges[-1]
+    for limit in (stats.lower, stats.upper):
+        if limit is not None:
+            wider = (min(low, limit), max(high, limit))
+            if 3 * (high - low) >= wider[1] - wider[0]:
+                low, high = wider
+    margin = (high - low) * 0.03
+    low, high = low - margin, high + margin
+    left, right, top, bottom = 34, WIDTH - 10, PAD, HEIGHT - PAD
+    most = max(d.counts) or 1
 
     def x_of(value: float) -> float:
-        return PAD + plot_w * (value - h.start) / span
+        return left + (right - left) * (value - low) / (high - low)
 
-    body = [_line(PAD, HEIGHT - PAD, WIDTH - PAD, HEIGHT - PAD, "#999")]
-    bar_w = plot_w / len(h.counts)
-    for i, count in enumerate(h.counts):
+    def y_of(count: float) -> float:
+        return bottom - (bottom - top) * count / most
+
+    body = [
+        _line(left, bottom, right, bottom, AXIS_COLOUR),
+        _line(left, top, left, bottom, AXIS_COLOUR),
+        _text(left - 3, top + 3, str(most), "end"),
+        _text(left - 3, bottom + 3, "0", "end"),
+        _text(left - 3, (top + bottom) / 2 + 3, "count", "end"),
+    ]
+    # Size (the report page's 300 kB target, docs/benchmarks.md): the bars are one path
+    # of whole-pixel boxes, not an element each.
+    boxes = []
+    for i, count in enumerate(d.counts):
         if count:
-            bar_h = plot_h * count / top
-            body.append(
-                f'<rect class="bar" x="{PAD + i * bar_w:.1f}" y="{HEIGHT - PAD - bar_h:.1f}" '
-                f'width="{max(bar_w - 1, 1):.1f}" height="{bar_h:.1f}" fill="{BAR_COLOUR}">'
-                f"<title>{count}</title></rect>"
-            )
-    for label, limit in (("LSL", stats.lower), ("USL", stats.upper)):
-        if limit is not None:
+            x0, x1 = x_of(d.edges[i]), x_of(d.edges[i + 1])
+            width = max(round(x1 - x0) - 1, 1)
+            boxes.append(f"M{x0:.0f} {bottom:.0f}V{y_of(count):.0f}h{width}V{bottom:.0f}z")
+    body.append(f'<path class="bars" fill="{BAR_COLOUR}" d="{"".join(boxes)}"/>')
+    if d.mean is not None:
+        x = x_of(d.mean)
+        body.append(_line(x, top - 2, x, bottom, CENTRE_COLOUR, dash=True))
+        body.append(_text(x, top - 4, f"x̄ {number(d.mean)}", "middle", CENTRE_COLOUR))
+    for label, limit, edge, arrow in (
+        ("LSL", stats.lower, left, "← "),
+        ("USL", stats.upper, right, ""),
+    ):
+        if limit is None:
+            continue
+        if low <= limit <= high:
             x = x_of(limit)
-            body.append(_line(x, PAD - 8, x, HEIGHT - PAD, LIMIT_COLOUR))
-            body.append(_text(x, PAD - 10, f"{label} {number(limit)}", "middle", LIMIT_COLOUR))
-    body.append(_text(PAD, HEIGHT - 8, number(h.start)))
-    body.append(_text(WIDTH - PAD, HEIGHT - 8, number(h.start + span), "end"))
-    body.append(_text(WIDTH / 2, HEIGHT - 8, f"{stats.name} ({stats.unit})", "middle"))
-    return _svg(f"histogram of {stats.name}", body)
+            body.append(_line(x, top - 12, x, bottom, LIMIT_COLOUR))
+            anchor = "start" if x < left + 40 else "end" if x > right - 40 else "middle"
+            body.append(_text(x, top - 14, f"{label} {number(limit)}", anchor, LIMIT_COLOUR))
+        else:  # beyond the axis: named at its edge
+            text = f"{arrow}{label} {number(limit)}{'' if arrow else ' →'}"
+            anchor = "start" if arrow else "end"
+            body.append(_text(edge, top - 14, text, anchor, LIMIT_COLOUR))
+    for apart, x, anchor, words in (
+        (d.below, left + 2, "start", f"← {d.below} below"),
+        (d.above, right - 2, "end", f"{d.above} above →"),
+    ):
+        if apart:  # far-out values, counted apart (Tukey's fences)
+            body.append(_text(x, (top + bottom) / 2, words, anchor, ALARM_COLOUR))
+    body.append(_text(left, HEIGHT - 8, number(low)))
+    body.append(_text(right, HEIGHT - 8, number(high), "end"))
+    sample = f", latest {d.values} of {stats.count}" if d.values < stats.count else ""
+    body.append(
+        _text((left + right) / 2, HEIGHT - 8, f"{stats.name} ({stats.unit}){sample}", "middle")
+    )
+    return _svg(title, body)
 
 
-def pareto(entries: Sequence[ParetoEntry]) -> str:
+def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = None) -> str:
     """Failing runs per first failure reason, largest first: each bar labelled with its
-    count and its own share; the cumulative share a line against the top axis (0–100 %)."""
+    count and its own share; the cumulative share a line against the top axis (0–100 %).
+    ``link``: the address of a reason's runs, each bar and its label a link there."""
     rows = list(entries)[:10]
     row_h, top_h, width = 18, 22, CHART_WIDTH
     height = max(len(rows), 1) * row_h + top_h + 8
     label_w = 150
-    plot_w = width - label_w - 96  # room right of the longest bar for its label
+    plot_w = width - label_w - 96  # room right of the plot for the counts
     top = max((e.count for e in rows), default=1)
     body = [_line(label_w, top_h, label_w + plot_w, top_h, AXIS_COLOUR)]
     for share, anchor in ((0.0, "start"), (0.5, "middle"), (1.0, "end")):
@@ -91,12 +140,17 @@ def pareto(entries: Sequence[ParetoEntry]) -> str:
     for i, entry in enumerate(rows):
         y = top_h + 4 + i * row_h
         bar = plot_w * entry.count / top
-        body.append(_text(label_w - 4, y + 12, entry.code[:28], "end"))
-        body.append(
+        bar_body = _text(label_w - 4, y + 12, entry.code[:28], "end") + (
             f'<rect class="bar" x="{label_w}" y="{y + 2}" width="{max(bar, 1):.1f}" '
             f'height="{row_h - 4}" fill="{BAR_COLOUR}"><title>{entry.count}</title></rect>'
         )
-        body.append(_text(label_w + bar + 4, y + 12, f"{entry.count} ({percent(entry.share)})"))
+        if link is not None:
+            href = escape(link(entry.code), {'"': "&quot;"})
+            bar_body = f'<a class="runs" href="{href}">{bar_body}</a>'
+        body.append(bar_body)
+        # The counts in a column right of the plot: the cumulative line, which may reach
+        # across the plot, never crosses them.
+        body.append(_text(label_w + plot_w + 6, y + 12, f"{entry.count} ({percent(entry.share)})"))
         cumulative.append((label_w + plot_w * entry.cumulative_share, y + row_h / 2))
     if cumulative:
         path = " ".join(f"{x:.1f},{y:.1f}" for x, y in cumulative)
@@ -178,6 +232,8 @@ def _panel(
             )
             body.append(
                 _text(x_of(i), y_of(v) - 5, ",".join(map(str, rules)), "middle", ALARM_COLOUR)
+                # a white halo: legible where a limit or centre line runs through it
+                .replace("<text ", f'<text class="rule" {HALO} ', 1)
             )
     return body
 
@@ -226,6 +282,20 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
 SERIES_COLOURS = ("#3b6ea5", "#2c7a2c", "#b06a00", "#7a3b8f")
 
 
+#: A yield axis starts at a multiple of this below its lowest value (with a margin).
+PERCENT_STEP = 0.05
+
+
+def percent_range(values: Sequence[float]) -> tuple[float, float]:
+    """A yield axis zoomed on ``values``: from the 5 % step below the lowest value (two
+    points of margin) to 100 %, so a drop from 97 to 85 % fills the chart; 0–100 %
+    without values."""
+    if not values:
+        return 0.0, 1.0
+    low = math.floor((min(values) - 0.02) / PERCENT_STEP) * PERCENT_STEP
+    return max(0.0, min(round(low, 6), 1.0 - PERCENT_STEP)), 1.0
+
+
 def trend_chart(
     title: str,
     periods: Sequence[tuple[str, str]],
@@ -237,13 +307,16 @@ def trend_chart(
 ) -> str:
     """Values per period (day or shift; ``periods``: its axis label and its full name):
     ``bars`` (counts) and/or ``series`` of lines (a gap where a period has no value), a
-    time axis below, a value axis on the left from 0 with its range
-    labelled, and a ``reference`` line (a target such as Cpk 1.33)."""
+    time axis below, a value axis on the left from 0 with its range labelled (a
+    ``percent_axis`` zoomed on its values, :func:`percent_range`), and a ``reference``
+    line (a target such as Cpk 1.33)."""
     left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
     levels = [v for _, values in series for v in values if v is not None]
     if reference is not None:
         levels.append(reference[1] * 1.2)
-    low, high = (0.0, 1.0) if percent_axis else (min([0.0, *levels]), max(levels, default=1.0))
+    low, high = (
+        percent_range(levels) if percent_axis else (min([0.0, *levels]), max(levels, default=1.0))
+    )
     if bars is not None:
         low, high = 0.0, float(max(bars, default=1) or 1)
     if high <= low:
@@ -263,6 +336,10 @@ def trend_chart(
         _text(left - 3, top + 3, label(high), "end"),
         _text(left - 3, bottom + 3, label(low), "end"),
     ]
+    if percent_axis:  # a zoomed axis: its middle too, and a grid line there
+        middle = (low + high) / 2
+        body.append(_line(left, y_of(middle), right, y_of(middle), "#eee"))
+        body.append(_text(left - 3, y_of(middle) + 3, label(middle), "end"))
     if reference is not None:
         name, level = reference
         body.append(_line(left, y_of(level), right, y_of(level), LIMIT_COLOUR, dash=True))

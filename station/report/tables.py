@@ -14,6 +14,7 @@ SUMMARY_HEADER = [
     "final yield",
     "retests",
     "retest rate",
+    "aborts",
     "units/h",
     "s/unit",
     "s/pose",
@@ -33,6 +34,7 @@ def summary_cells(name: str, s: Summary) -> list[str]:
         percent(s.final_yield),
         number(s.retests),
         percent(s.retest_rate),
+        number(s.aborted_runs),
         number(s.units_per_hour),
         seconds(s.cycle_time_per_unit_s),
         seconds(s.cycle_time_per_pose_s),
@@ -52,6 +54,7 @@ PARAMETER_HEADER = [
     "Cp",
     "Cpk",
     "out",
+    "ppm out",
     "marginal",
 ]
 
@@ -72,6 +75,7 @@ def parameter_cells(report: EolReport) -> list[list[str]]:
             number(p.cp),
             number(p.cpk),
             number(p.out_of_limits),
+            number(p.observed_ppm),
             number(p.marginal),
         ]
         for p in report.parameters

@@ -365,7 +365,9 @@ def test_what_if_limits_re_judge_the_runs_and_store_nothing(
     assert page.headers["content-type"].startswith("text/html")
     assert "candidate v2" in page.text
     bad = client.post(
-        "/api/v1/reports/eol", files={"limits": ("bad.toml", b"[profiles.x]\noffset = 3")}
+        "/api/v1/reports/eol",
+        params={"format": "json"},
+        files={"limits": ("bad.toml", b"[profiles.x]\noffset = 3")},
     )
     assert bad.status_code == 422
     assert bad.json()["errors"][0]["loc"] == "body.limits"

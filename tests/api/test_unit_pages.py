@@ -69,7 +69,8 @@ def test_a_unit_page_lists_every_run_and_links_each_record(
     assert retested[2] not in page  # U2's runs are not U1's
     assert "line1-st2" in page
     assert "op-b" in page
-    assert "offset: 2302 (1848 … 2248)" in page  # what failed, its value and limits
+    # what failed in the station's words, its value and limits
+    assert "offset x out of limits (measured 2301.5, limits 1848 … 2248)" in page
     assert '<b id="verdict" class="pass">pass</b>' in page
     assert 'href="/api/v1/units/U1/certificate">Calibration certificate</a>' in page
     # the JSON answer at the API's path is unchanged

@@ -39,7 +39,8 @@ def test_counts_and_yields_over_the_range(session: Session) -> None:
     assert s.final_yield == pytest.approx(3 / 5)
     assert (s.retests, s.retest_rate) == (2, pytest.approx(2 / 5))
     assert s.hours == pytest.approx(2.0)
-    assert s.units_per_hour == pytest.approx(5 / 2)
+    # per hour of station time, as the cycle times: 3600 / (7 runs' time / 5 units)
+    assert s.units_per_hour == pytest.approx(3600 * 5 / (7 * RUN_SECONDS))
     assert s.cycle_time_per_run_s == pytest.approx(RUN_SECONDS)
     assert s.cycle_time_per_unit_s == pytest.approx(7 * RUN_SECONDS / 5)
     assert s.poses == 7 * POSES_PER_RUN
@@ -145,7 +146,8 @@ def test_units_list_gives_each_units_final_disposition(session: Session) -> None
         "U5": "hold",
     }
     assert (units["U3"].runs, units["U3"].failure) == (2, "verification_error")
-    assert [u.serial for u in report.units][:2] == ["U3", "U2"]  # latest first
+    # newest first run first (the order the yield table counts them in)
+    assert [u.serial for u in report.units][:2] == ["U5", "U4"]
 
 
 def test_filters_by_station_and_operator(session: Session) -> None:
@@ -170,7 +172,7 @@ def test_an_empty_range_reports_zeros_and_no_ratios(session: Session) -> None:
     assert all(p.count == 0 and p.mean is None for p in report.parameters)
 
 
-def test_a_unit_counts_where_its_first_run_is_and_lists_where_its_latest_is(
+def test_a_unit_counts_and_is_listed_where_its_first_run_is_with_its_latest_run(
     session: Session,
 ) -> None:
     repository = RunRepository(session)
@@ -188,11 +190,13 @@ def test_a_unit_counts_where_its_first_run_is_and_lists_where_its_latest_is(
         1,
         0,
     )
-    assert (first.units, first.units_total) == ([], 0)
+    # listed with the unit's latest run, the day after the range
+    assert [(u.serial, u.disposition, u.runs) for u in first.units] == [("U1", "ship", 2)]
+    assert (first.units[0].last_started_at, first.units_total) == (T0 + day, 1)
     second = eol_report(session, ReportFilter(since=SINCE + day, until=SINCE + 2 * day))
     s = second.summary
     assert (s.runs, s.units_tested, s.retests) == (1, 0, 1)
-    assert [(u.serial, u.disposition, u.runs) for u in second.units] == [("U1", "ship", 2)]
+    assert (second.units, second.units_total) == ([], 0)
 
 
 def test_filters_by_lot(session: Session) -> None:

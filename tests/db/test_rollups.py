@@ -116,9 +116,11 @@ def _expected_counts(
     history: list[Planned], chosen: list[Planned], same: Any
 ) -> tuple[int, int, int, int, int]:
     """(runs, passed, units, first passes, final passes), units counted at their first
-    run among the runs ``same`` groups with it."""
+    run among the runs ``same`` groups with it, not the units with nothing but aborts."""
     first = [r for r in chosen if r == min((o for o in history if same(o, r)), key=_start)]
     latest = {id(r): max((o for o in history if same(o, r)), key=_latest) for r in first}
+    # a unit with nothing but aborts (its latest run is one) was never attempted
+    first = [r for r in first if latest[id(r)].code != "aborted"]
     return (
         len(chosen),
         sum(r.passed for r in chosen),
@@ -162,18 +164,26 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         # selected), their first and final passes, and every run at the station.
         at = [r for r in chosen if r.station == station]
         assert _counts_of(summary) == _expected_counts(history, at, unit)
-        assert summary.retests == len(at) - summary.units_tested
+        aborts = sum(r.code == "aborted" for r in at)
+        assert summary.aborted_runs == aborts
+        assert summary.retests == max(0, len(at) - aborts - summary.units_tested)
     # So the rows add up to the "all" row, on a filtered page too.
     for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
         assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
-    assert sum(s.retests for s in stations.values()) == report.summary.retests
     _check_trend(report, history, chosen)
-    codes = [r.code for r in chosen if r.code is not None]
+    # an operator's abort is no failure category
+    codes = [r.code for r in chosen if r.code not in (None, "aborted")]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
+    # the units listed are the units counted: first run selected, not only aborts
     latest = {r.serial: r for r in sorted(history, key=_latest)}
-    listed = {serial for serial, r in latest.items() if r in chosen}
-    assert report.units_total == len(listed)
+    first = {r.serial: r for r in sorted(history, key=_start, reverse=True)}
+    listed = {
+        serial for serial, r in first.items() if r in chosen and latest[serial].code != "aborted"
+    }
+    assert report.units_total == report.summary.units_tested == len(listed)
     assert {u.serial for u in report.units} == listed
+    held = {u.serial for u in report.units if u.disposition == "hold"}
+    assert report.units_held == report.summary.units_failed == len(held)
 
     xs = [r.offset_x for r in chosen if r.charted]
     params = {p.name: p for p in report.parameters}
@@ -283,7 +293,7 @@ def _check_what_if(report: EolReport, history: list[Planned], f: ReportFilter) -
     )
     expected = _expected_counts(again, chosen, lambda a, b: a.serial == b.serial)
     assert _counts_of(what_if.summary) == expected
-    codes = [r.code for r in chosen if r.code is not None]
+    codes = [r.code for r in chosen if r.code not in (None, "aborted")]
     assert {e.code: e.count for e in what_if.pareto} == {c: codes.count(c) for c in set(codes)}
     before = sorted((r for r in history if _selected(r, f)), key=_start)
     pairs = list(zip(before, chosen, strict=True))

@@ -20,6 +20,9 @@ A value is *marginal* when it is within the limits but closer to one of them tha
 """
 
 import math
+from collections.abc import Sequence
+
+import numpy as np
 
 #: d₂ of subgroups of two (a moving range spans two values).
 D2 = 1.128
@@ -30,6 +33,8 @@ MARGIN = 0.10
 #: Histogram bins, and how far past the limits the histogram reaches (fraction of width).
 HISTOGRAM_BINS = 30
 HISTOGRAM_OVERHANG = 0.25
+#: The Cpk a process in production is read as capable at (AIAG: 1.33).
+CAPABLE_CPK = 1.33
 #: Relative size of the rounding left in a one-pass sum of squares.
 ROUNDING = 1e-12
 
@@ -103,3 +108,56 @@ def individuals_limits(mean: float, mr_bar: float) -> tuple[float, float, float]
     """``(LCL, UCL, MR UCL)`` of the I-MR chart."""
     sigma = mr_bar / D2
     return (mean - 3 * sigma, mean + 3 * sigma, D4 * mr_bar)
+
+
+def observed_ppm(out_of_limits: int, count: int) -> float | None:
+    """Values out of limits per million values, as observed (no distribution assumed)."""
+    return None if not count else 1e6 * out_of_limits / count
+
+
+def capability_warning(cpk_value: float | None, out_of_limits: int, count: int) -> str | None:
+    """Why a normal-theory Cpk should not be trusted here, or ``None``: values out of
+    limits were observed although Cpk says capable (it predicts well under 100 ppm), so
+    the values are not one normal population (two populations, a shift, outliers)."""
+    if cpk_value is None or cpk_value < CAPABLE_CPK or not out_of_limits:
+        return None
+    ppm = observed_ppm(out_of_limits, count) or 0.0
+    return (
+        f"{out_of_limits} of {count} values out of limits ({ppm:.0f} ppm observed) although "
+        f"Cpk {cpk_value:.2f} says capable: the values are not one normal population "
+        "(two populations, a shift or outliers); read the observed ppm, not Cpk"
+    )
+
+
+#: The most bins a histogram drawn from the data gets (the page's size).
+MAX_DATA_BINS = 30
+#: Tukey's far-out fences: values beyond Q1 − k·IQR or Q3 + k·IQR are binned apart.
+FAR_OUT = 3.0
+
+
+def data_bins(values: Sequence[float]) -> tuple[list[float], list[int], int, int]:
+    """Bins from the values themselves: edges, counts, and the values below and above
+    Tukey's far-out fences (``Q1 − 3·IQR``, ``Q3 + 3·IQR``), counted apart so a few
+    outliers do not squeeze the rest into one bar. The bins span the values within the
+    fences, of the Freedman–Diaconis width (``2·IQR·n^(-1/3)``; Sturges where the IQR
+    is 0), at most :data:`MAX_DATA_BINS`."""
+    data = np.asarray(values, dtype=float)
+    if data.size == 0:
+        return [], [], 0, 0
+    q1, q3 = (float(q) for q in np.percentile(data, [25, 75]))
+    spread = q3 - q1
+    low, high = float(data.min()), float(data.max())
+    if spread > 0:
+        low, high = max(low, q1 - FAR_OUT * spread), min(high, q3 + FAR_OUT * spread)
+    inside = data[(data >= low) & (data <= high)]
+    if high <= low:  # one value: one bin around it
+        half = abs(low) * 1e-6 or 1e-6
+        low, high = low - half, high + half
+    edges = np.histogram_bin_edges(
+        inside, bins="fd" if spread > 0 else "sturges", range=(low, high)
+    )
+    if len(edges) - 1 > MAX_DATA_BINS:
+        edges = np.linspace(low, high, MAX_DATA_BINS + 1)
+    counts, edges = np.histogram(inside, bins=edges)
+    below, above = int((data < low).sum()), int((data > high).sum())
+    return [float(e) for e in edges], [int(c) for c in counts], below, above

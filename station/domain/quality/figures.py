@@ -44,17 +44,29 @@ class Summary(_FigurePart):
 
     runs: int
     runs_passed: int
-    units_tested: int = Field(description="units whose first run is in range")
+    units_tested: int = Field(
+        description="units whose first run is in range, those with nothing but operator "
+        "aborts aside"
+    )
     units_passed: int = Field(description="units whose latest run passed")
     units_failed: int
     first_pass_units: int = Field(description="units whose first run passed")
     report_yield: float | None = Field(description="run yield: passing runs / runs")
     first_pass_yield: float | None = Field(description="units whose first run passed / units")
     final_yield: float | None = Field(description="units whose latest run passed / units")
-    retests: int = Field(description="runs that are not a unit's first")
+    retests: int = Field(
+        description="runs that are not a unit's first, operator aborts aside (no attempts)"
+    )
     retest_rate: float | None = Field(description="retests / units")
+    aborted_runs: int = Field(
+        0,
+        description="runs the operator aborted: no attempt, no failure of the unit (not in "
+        "the Pareto, not retests); a unit with nothing but aborts is no unit tested",
+    )
     hours: float | None = Field(description="length of the range, hours")
-    units_per_hour: float | None
+    units_per_hour: float | None = Field(
+        description="units per hour of station time: 3600 / cycle_time_per_unit_s"
+    )
     cycle_time_per_run_s: float | None
     cycle_time_per_unit_s: float | None = Field(description="station time / units")
     cycle_time_per_pose_s: float | None = Field(description="station time / poses")
@@ -87,6 +99,19 @@ class Histogram(_FigurePart):
     counts: list[int]
 
 
+class Distribution(_FigurePart):
+    """The histogram the page draws: the latest runs' values in bins from the data
+    (:func:`station.domain.quality.capability.data_bins`)."""
+
+    edges: list[float] = Field(description="bin edges, one more than counts")
+    counts: list[int]
+    values: int = Field(description="values, those counted apart included")
+    below: int = Field(0, description="values below the far-out fence Q1 − 3·IQR, apart")
+    above: int = Field(0, description="values above the far-out fence Q3 + 3·IQR, apart")
+    mean: float | None = Field(description="mean of the values binned")
+    runs: int = Field(description="the latest runs in range the values are from")
+
+
 class ParameterStats(_FigurePart):
     """Distribution and capability of one parameter against its limits."""
 
@@ -105,6 +130,17 @@ class ParameterStats(_FigurePart):
     out_of_limits: int
     marginal: int = Field(description="within the limits, within 10 % of the width of one")
     histogram: Histogram
+    observed_ppm: float | None = Field(
+        None, description="values out of limits per million values, as observed"
+    )
+    warning: str | None = Field(
+        None,
+        description="why the normal-theory Cp/Cpk should not be trusted (values out of "
+        "limits observed although Cpk says capable), if so",
+    )
+    distribution: Distribution | None = Field(
+        None, description="the histogram drawn: the latest runs' values in bins from the data"
+    )
 
 
 class ChartPoint(_FigurePart):
@@ -248,13 +284,16 @@ class EolReport(_FigurePart):
     control_charts: list[ControlChart]
     units: list[UnitVerdict]
     units_total: int = Field(
-        description="units whose latest run is in range (the list may be cut to the latest)"
+        description="units the yield table counts: their first run on the line is in range "
+        "and matches the filter (the list may be cut to the latest)"
     )
     units_listed: Literal["all", "held"] = Field(
         "all", description="which units the list holds: all, or the held ones (latest run failed)"
     )
     units_held: int | None = Field(
-        None, description="held units (latest run in range failed), when the list holds them"
+        None,
+        description="of those units, the held ones: their latest run (wherever and whenever "
+        "it was) failed; the yield table's failed units",
     )
     units_offset: int = Field(0, description="units before this page of the list, newest first")
     units_limit: int | None = Field(None, description="the most units a page of the list holds")
