@@ -1,0 +1,141 @@
+"""imucal's example Ferraris session, calibrated by the station and by imucal itself.
+
+    git clone https://github.com/mad-lab-fau/imucal /tmp/imucal   # the public recording
+    pip install 'imucal>=2.6,<3'                                    # imucal itself
+    python benchmarks/imucal_ferraris.py /tmp/imucal
+
+The recording (``example_data/example_ferraris_session.csv`` of mad-lab-fau/imucal) is a
+6-DOF IMU put through Ferraris' procedure at 102.4 samples/s: six still faces, then a
+turn of 360° about each axis; the accelerometer in m/s², the gyros in deg/s. Nobody here
+made it. The station reads it as any IMU's recording, with its units declared
+(``calstation solve LOG --stream --accel-units m/s2 --rate 102.4``): its own stillness
+judge finds the still poses, the six-parameter model ([Song2006]) is fitted to them by
+least squares and the gyro bias and matrix K come from the moves between them
+([Tedaldi2014]). imucal's ``FerrarisCalibration`` is given the session's annotated
+regions (``example_ferraris_session_list.json``, shipped beside it), as its own example
+does. Printed: each axis' accelerometer bias (mg) and scale, and each gyro's bias (deg/s)
+and scale, by both, and the differences. imucal also fits the accelerometer's
+misalignment, which the six-parameter model leaves out (its nine-parameter model needs
+poses off the axes, which a Ferraris session does not have: it is refused, as it should
+be).
+"""
+
+import argparse
+import csv
+import json
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from station.domain.gyro.motion import calibrate_stream, stream_thresholds
+from station.domain.gyro.motion.stream_file import read_stream_file
+from station.domain.gyro.motion.stream_units import StreamUnits, check_units, convert
+from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+
+RATE_HZ = 102.4
+#: Standard gravity, m/s² (the unit conversion the station declares, stream_units.py).
+G0 = 9.80665
+SESSION = Path("example_data") / "example_ferraris_session.csv"
+REGIONS = Path("example_data") / "example_ferraris_session_list.json"
+
+
+def as_station_stream(session: Path, into: Path) -> Path:
+    """The session's columns under the station's names (``t,ax,ay,az,gx,gy,gz``)."""
+    path = into / "ferraris_stream.csv"
+    with session.open(newline="") as src, path.open("w", newline="") as dst:
+        writer = csv.writer(dst)
+        writer.writerow(["t", "ax", "ay", "az", "gx", "gy", "gz"])
+        for row in csv.DictReader(src):
+            writer.writerow(
+                [int(row["n_samples"]) / RATE_HZ]
+                + [row[f"acc_{a}"] for a in "xyz"]
+                + [row[f"gyr_{a}"] for a in "xyz"]
+            )
+    return path
+
+
+def station(stream_csv: Path) -> dict[str, Any]:
+    """The station's calibration of the stream, in imucal's terms (m/s², deg/s)."""
+    units = StreamUnits(accel="m/s2", rate_hz=RATE_HZ)
+    stream = convert(read_stream_file(stream_csv), units)
+    check_units(stream, units)
+    result = calibrate_stream(stream, "six", thresholds=stream_thresholds(stream.rate_hz, 1.0))
+    document = result.to_dict()
+    offset = np.array([document["offset"][a] for a in "xyz"])
+    sensitivity = np.array([document["sensitivity"][a] for a in "xyz"])
+    gyro = document["gyro"]
+    return {
+        "acc_bias_ms2": (offset - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G * G0,
+        "acc_scale": sensitivity / NOMINAL_SENSITIVITY_COUNTS_PER_G,
+        "gyr_bias_dps": np.array(gyro["bias_dps"]),
+        "gyr_scale": np.diag(np.array(gyro["scale_matrix"])),
+        "poses": document["poses"],
+        "moves": gyro["moves"],
+    }
+
+
+def imucal(repo: Path) -> dict[str, Any]:
+    """imucal's Ferraris calibration of the session, over its annotated regions."""
+    import pandas as pd
+    from imucal import FerrarisCalibration, ferraris_regions_from_section_list
+
+    data = pd.read_csv(repo / SESSION, header=0, index_col=0)
+    sections = pd.read_json(repo / REGIONS).T
+    regions = ferraris_regions_from_section_list(data, sections)
+    info = FerrarisCalibration().compute(
+        regions, sampling_rate_hz=RATE_HZ, from_acc_unit="m/s^2", from_gyr_unit="deg/s"
+    )
+    return {
+        "acc_bias_ms2": np.asarray(info.b_a, dtype=float),
+        "acc_scale": np.diag(np.asarray(info.K_a, dtype=float)),
+        "gyr_bias_dps": np.asarray(info.b_g, dtype=float),
+        "gyr_scale": np.diag(np.asarray(info.K_g, dtype=float)),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("imucal_repo", type=Path, help="a clone of mad-lab-fau/imucal")
+    parser.add_argument("--json", action="store_true", help="the figures as JSON")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        ours = station(as_station_stream(args.imucal_repo / SESSION, Path(tmp)))
+    theirs = imucal(args.imucal_repo)
+    rows = []
+    for i, axis in enumerate("xyz"):
+        rows.append(
+            {
+                "axis": axis,
+                "acc_bias_mg": [
+                    ours["acc_bias_ms2"][i] / G0 * 1e3,
+                    theirs["acc_bias_ms2"][i] / G0 * 1e3,
+                ],
+                "acc_scale": [ours["acc_scale"][i], theirs["acc_scale"][i]],
+                "gyr_bias_dps": [ours["gyr_bias_dps"][i], theirs["gyr_bias_dps"][i]],
+                "gyr_scale": [ours["gyr_scale"][i], theirs["gyr_scale"][i]],
+            }
+        )
+    if args.json:
+        print(json.dumps({"poses": ours["poses"], "moves": ours["moves"], "axes": rows}))
+        return
+    print(f"station: {ours['poses']} still poses and {ours['moves']} moves found by itself")
+    print(
+        "| axis | acc bias: station | imucal | Δ | acc scale: station | imucal | Δ "
+        "| gyro bias: station | imucal | Δ | gyro scale: station | imucal | Δ |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        (ab, tb), (asc, tsc) = r["acc_bias_mg"], r["acc_scale"]
+        (gb, tgb), (gs, tgs) = r["gyr_bias_dps"], r["gyr_scale"]
+        print(
+            f"| {r['axis']} | {ab:.2f} mg | {tb:.2f} mg | {ab - tb:+.2f} mg "
+            f"| {asc:.5f} | {tsc:.5f} | {(asc / tsc - 1) * 1e6:+.0f} ppm "
+            f"| {gb:+.4f} | {tgb:+.4f} | {gb - tgb:+.4f} deg/s "
+            f"| {gs:.4f} | {tgs:.4f} | {(gs / tgs - 1) * 1e2:+.2f} % |"
+        )
+
+
+if __name__ == "__main__":
+    main()
