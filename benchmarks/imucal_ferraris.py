@@ -8,7 +8,8 @@ The recording (``example_data/example_ferraris_session.csv`` of mad-lab-fau/imuc
 6-DOF IMU put through Ferraris' procedure at 102.4 samples/s: six still faces, then a
 turn of 360° about each axis; the accelerometer in m/s², the gyros in deg/s. Nobody here
 made it. The station reads it as any IMU's recording, with its units declared
-(``calstation solve LOG --stream --accel-units m/s2 --rate 102.4``): its own stillness
+(``calstation solve LOG --stream --accel-units m/s2 --rate 102.4``, and with
+``--known-turn-deg 360`` its three whole turns declared): its own stillness
 judge finds the still poses, the six-parameter model ([Song2006]) is fitted to them by
 least squares and the gyro bias and matrix K come from the moves between them
 ([Tedaldi2014]). imucal's ``FerrarisCalibration`` is given the session's annotated
@@ -56,12 +57,17 @@ def as_station_stream(session: Path, into: Path) -> Path:
     return path
 
 
-def station(stream_csv: Path) -> dict[str, Any]:
+def station(stream_csv: Path, known_turn_deg: float | None) -> dict[str, Any]:
     """The station's calibration of the stream, in imucal's terms (m/s², deg/s)."""
     units = StreamUnits(accel="m/s2", rate_hz=RATE_HZ)
     stream = convert(read_stream_file(stream_csv), units)
     check_units(stream, units)
-    result = calibrate_stream(stream, "six", thresholds=stream_thresholds(stream.rate_hz, 1.0))
+    result = calibrate_stream(
+        stream,
+        "six",
+        thresholds=stream_thresholds(stream.rate_hz, 1.0),
+        known_turn_deg=known_turn_deg,
+    )
     document = result.to_dict()
     offset = np.array([document["offset"][a] for a in "xyz"])
     sensitivity = np.array([document["sensitivity"][a] for a in "xyz"])
@@ -73,6 +79,7 @@ def station(stream_csv: Path) -> dict[str, Any]:
         "gyr_scale": np.diag(np.array(gyro["scale_matrix"])),
         "poses": document["poses"],
         "moves": gyro["moves"],
+        "turns_deg": gyro["known_turn_swept_deg"],
     }
 
 
@@ -99,9 +106,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("imucal_repo", type=Path, help="a clone of mad-lab-fau/imucal")
     parser.add_argument("--json", action="store_true", help="the figures as JSON")
+    parser.add_argument(
+        "--known-turn-deg",
+        type=float,
+        default=None,
+        help="declare the session's whole turns (360) to the station's gyro fit",
+    )
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        ours = station(as_station_stream(args.imucal_repo / SESSION, Path(tmp)))
+        stream_csv = as_station_stream(args.imucal_repo / SESSION, Path(tmp))
+        ours = station(stream_csv, args.known_turn_deg)
     theirs = imucal(args.imucal_repo)
     rows = []
     for i, axis in enumerate("xyz"):
@@ -120,7 +134,11 @@ def main() -> None:
     if args.json:
         print(json.dumps({"poses": ours["poses"], "moves": ours["moves"], "axes": rows}))
         return
-    print(f"station: {ours['poses']} still poses and {ours['moves']} moves found by itself")
+    turns = ", ".join(f"{a:.2f}°" for a in ours["turns_deg"]) or "none declared"
+    print(
+        f"station: {ours['poses']} still poses and {ours['moves']} moves found by itself; "
+        f"known turns as fitted: {turns}"
+    )
     print(
         "| axis | acc bias: station | imucal | Δ | acc scale: station | imucal | Δ "
         "| gyro bias: station | imucal | Δ | gyro scale: station | imucal | Δ |"

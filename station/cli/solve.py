@@ -109,6 +109,15 @@ def solve_command(
             help="With --stream: the sample rate, samples/s (the time column is then ignored)."
         ),
     ] = None,
+    known_turn_deg: Annotated[
+        float | None,
+        typer.Option(
+            help="With --stream: the recording's whole turns (Ferraris' 360° about each "
+            "axis) sweep this many degrees; the gyro matrix fit uses them.",
+            min=1.0,
+            max=3600.0,
+        ),
+    ] = None,
 ) -> None:
     """Compute offsets and sensitivities from still-pose means (ADC counts)."""
     declared = (
@@ -116,6 +125,7 @@ def solve_command(
         or gyro_units is not GyroUnitsChoice.dps
         or time_units is not TimeUnitsChoice.s
         or rate is not None
+        or known_turn_deg is not None
     )
     if stream:
         from station.cli.solve_stream import solve_stream
@@ -126,12 +136,19 @@ def solve_command(
             units = StreamUnits(accel_units.value, gyro_units.value, time_units.value, rate)
         except StreamError as exc:
             raise InputError(f"--rate: {exc}") from None
-        solve_stream(file, model.value, as_json=as_json, still_window_s=still_window, units=units)
+        solve_stream(
+            file,
+            model.value,
+            as_json=as_json,
+            still_window_s=still_window,
+            units=units,
+            known_turn_deg=known_turn_deg,
+        )
         return
     if declared:
         raise InputError(
-            "--accel-units, --gyro-units, --time-units and --rate describe a raw stream: "
-            "use them with --stream"
+            "--accel-units, --gyro-units, --time-units, --rate and --known-turn-deg describe "
+            "a raw stream: use them with --stream"
         )
     from station.domain.calibration import (
         CalibrationError,

@@ -31,9 +31,11 @@ def solve_stream(
     as_json: bool,
     still_window_s: float,
     units: StreamUnits | None = None,
+    known_turn_deg: float | None = None,
 ) -> None:
     """Calibrate the unit recorded in ``file`` (its columns in ``units``: the station's
-    own by default) and print the result."""
+    own by default; its whole turns of ``known_turn_deg``, if it declares them) and print
+    the result."""
     from station.domain.calibration import CalibrationError
     from station.domain.gyro.motion import (
         GyroMatrixError,
@@ -49,7 +51,10 @@ def solve_stream(
         stream = convert(read_stream_file(file), declared)
         check_units(stream, declared)
         result = calibrate_stream(
-            stream, model, thresholds=stream_thresholds(stream.rate_hz, still_window_s)
+            stream,
+            model,
+            thresholds=stream_thresholds(stream.rate_hz, still_window_s),
+            known_turn_deg=known_turn_deg,
         )
     except CalibrationError as exc:
         where = "" if exc.pose is None else f" (still pose {exc.pose} from 0)"

@@ -23,6 +23,7 @@ nine-parameter calibration is ``C = Q·S⁻¹`` with C upper triangular and Q a 
 QR factors of S⁻¹), and ω_cal = Q·ω, so ``K_cal = K·Qᵀ`` (:func:`k_in_calibrated_frame`).
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,14 +164,14 @@ def _still_samples(
 def _move_samples(
     truth: SensorTruth,
     start: Rotation,
-    target: Rotation,
+    phi: FloatArray,
     n: int,
     plan: StreamPlan,
     rng: np.random.Generator,
 ) -> tuple[FloatArray, FloatArray, Rotation]:
-    """Samples strictly inside a move of n + 1 steps, and the orientation it ends in."""
+    """Samples strictly inside a move of n + 1 steps turning by the rotation vector
+    ``phi`` (body frame, radians), and the orientation it ends in."""
     duration = (n + 1) / plan.rate_hz
-    phi = (start.inv() * target).as_rotvec()
     axis = rng.standard_normal(3)
     wobble = np.radians(plan.wobble_deg) * axis / np.linalg.norm(axis)
 
@@ -202,15 +203,31 @@ def recorded_stream(
     truth: SensorTruth,
     orientations: Rotation,
     plan: StreamPlan = StreamPlan(),
+    turns: Mapping[int, float] | None = None,
 ) -> RecordedStream:
-    """The unit's raw stream over stills at ``orientations`` joined by moves."""
+    """The unit's raw stream over stills at ``orientations`` joined by moves.
+
+    ``turns``: after the still at orientation ``i``, a turn of ``turns[i]`` degrees about
+    the vertical, then a still again (Ferraris' whole turns: 360° brings the unit back
+    where it was).
+    """
     still_n = round(plan.still_s * plan.rate_hz)
     move_n = round(plan.move_s * plan.rate_hz) - 1
     current = orientations[0]
     accel, gyro = _still_samples(truth, current, still_n, plan, rng)
     accel_parts, gyro_parts = [accel], [gyro]
-    for i in range(1, len(orientations)):
-        accel, gyro, current = _move_samples(truth, current, orientations[i], move_n, plan, rng)
+    moves: list[tuple[int, float | None]] = []
+    for i in range(len(orientations)):
+        if turns is not None and i in turns:
+            moves.append((i, turns[i]))
+        if i + 1 < len(orientations):
+            moves.append((i + 1, None))
+    for i, turn_deg in moves:
+        if turn_deg is None:
+            phi = (current.inv() * orientations[i]).as_rotvec()
+        else:
+            phi = np.radians(turn_deg) * current.inv().apply(_UP)
+        accel, gyro, current = _move_samples(truth, current, phi, move_n, plan, rng)
         accel_parts.append(accel)
         gyro_parts.append(gyro)
         accel, gyro = _still_samples(truth, current, still_n, plan, rng)

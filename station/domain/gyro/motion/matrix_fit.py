@@ -16,6 +16,17 @@ to it), so five moves would just determine it; at least six usable moves are ask
 for (:data:`MIN_MOVES`), about varied axes. Standard errors
 are ``σ·√diag((JᵀJ)⁻¹)`` with σ² = Σ|r|² / (2·moves − 9); a move's residual is the
 angle between ``R·u_after`` and ``u_before``, in degrees.
+
+**Known turns.** A move that ends where it began after a whole turn about the vertical
+(Ferraris' 360° about each axis, [Ferraris1995]_, as imucal records them) constrains
+nothing above: gravity's direction is the same at both ends, whatever K. When the
+recording declares the angle of such turns (``known_turn_deg``), a move whose two still
+poses lie within :data:`SAME_POSE_DEG` of each other and whose raw rates sweep more than
+half that angle is taken as one. Its axis is the vertical, which the accelerometer
+measures: gravity's direction ``u`` at its start. The corrected rates must then sweep
+exactly that turn, ``K⁻¹·Σφ_raw = ±θ·u`` (the sum of the steps' rotation vectors is the
+angle times the axis for a turn about a fixed axis; the sign is the raw sweep's), three
+equations a turn, in radians beside the gravity residuals' unit-vector lengths.
 """
 
 from dataclasses import dataclass
@@ -39,6 +50,9 @@ CONSTRAINTS_PER_MOVE: Final = 2
 MIN_MOVES: Final = 6
 #: Above this condition number of the Jacobian the moves do not determine K.
 MAX_CONDITION: Final = 1e6
+#: A move whose still poses lie this close (degrees) returns to where it began: with a
+#: declared turn angle, it is a known turn.
+SAME_POSE_DEG: Final = 20.0
 
 
 @dataclass(frozen=True)
@@ -73,6 +87,10 @@ class GyroMatrixFit:
     residual_identity_deg: FloatArray
     unusable: tuple[UnusableMove, ...]
     condition_number: float
+    #: Moves fitted as known turns (indices into the moves), and each one's swept angle
+    #: with the fitted K, degrees.
+    known_turns: tuple[int, ...] = ()
+    known_turn_swept_deg: tuple[float, ...] = ()
 
     @property
     def residual_rms_deg(self) -> float:
@@ -92,6 +110,8 @@ class GyroMatrixFit:
             "residual_identity_deg": self.residual_identity_deg.tolist(),
             "unusable_moves": [{"move": u.index, "reason": u.reason} for u in self.unusable],
             "condition_number": self.condition_number,
+            "known_turns": list(self.known_turns),
+            "known_turn_swept_deg": list(self.known_turn_swept_deg),
         }
 
 
@@ -104,8 +124,33 @@ class _Moves:
     steps (identity rotations) to it, so the arrays hold under twice the steps.
     """
 
-    def __init__(self, moves: list[Move], bias_dps: FloatArray) -> None:
+    def __init__(
+        self, moves: list[Move], bias_dps: FloatArray, known_turn_deg: float | None = None
+    ) -> None:
         raw = [step_rotvecs(m.t, np.radians(m.rates_dps - bias_dps)) for m in moves]
+        #: Each move's raw steps summed: ``K⁻¹·swept`` is its rotation vector for a turn
+        #: about a fixed axis.
+        swept = np.array([r.sum(axis=0) for r in raw]).reshape(-1, 3)
+        returns = np.array(
+            [
+                np.degrees(np.arccos(np.clip(m.gravity_before @ m.gravity_after, -1, 1)))
+                < SAME_POSE_DEG
+                for m in moves
+            ],
+            dtype=bool,
+        )
+        self.turns = (
+            np.flatnonzero(
+                returns & (np.linalg.norm(swept, axis=1) > np.radians(known_turn_deg) / 2)
+            )
+            if known_turn_deg is not None
+            else np.array([], dtype=int)
+        )
+        self.swept = swept[self.turns]
+        #: Each known turn as the corrected rates must sweep it: ±θ about the vertical.
+        axes = np.array([moves[i].gravity_before for i in self.turns]).reshape(-1, 3)
+        signs = np.sign(np.sum(self.swept * axes, axis=1))
+        self.turn_vectors = np.radians(known_turn_deg or 0.0) * signs[:, None] * axes
         widths = [1 << max(0, len(r) - 1).bit_length() for r in raw]
         self.groups: list[tuple[list[int], FloatArray]] = []
         for width in sorted(set(widths)):
@@ -125,8 +170,17 @@ class _Moves:
             out[members] = integrate_steps(steps @ k_inv_t).apply(self.after[members])
         return out
 
+    def swept_rad(self, k: FloatArray) -> FloatArray:
+        """Each known turn's angle swept by the corrected rates, radians."""
+        return np.asarray(np.linalg.norm(self.swept @ np.linalg.inv(k).T, axis=1))
+
     def residual(self, theta: FloatArray) -> FloatArray:
-        return np.asarray((self.carried(theta.reshape(3, 3)) - self.before).ravel())
+        k = theta.reshape(3, 3)
+        gravity = (self.carried(k) - self.before).ravel()
+        if not len(self.turns):
+            return np.asarray(gravity)
+        turned = self.swept @ np.linalg.inv(k).T - self.turn_vectors
+        return np.concatenate((gravity, turned.ravel()))
 
     def angles_deg(self, k: FloatArray) -> FloatArray:
         carried = self.carried(k)
@@ -140,8 +194,12 @@ def fit_gyro_matrix(
     *,
     gap_factor: float = GAP_FACTOR,
     min_moves: int = MIN_MOVES,
+    known_turn_deg: float | None = None,
 ) -> GyroMatrixFit:
     """Fit K from ``moves`` with the gyro bias ``bias_dps`` (3,) removed.
+
+    ``known_turn_deg``: the angle of every whole turn the recording holds (module
+    docstring, *Known turns*); None: no turn is known.
 
     Moves with gaps or too few samples are left out and named in ``unusable``.
     ``min_moves`` below :data:`MIN_MOVES` (down to 5) is for measuring why it is the
@@ -170,7 +228,7 @@ def fit_gyro_matrix(
             f"gyro matrix needs {min_moves} usable moves, got {len(used)} of {len(moves)}"
             + (f" ({why})" if why else "")
         )
-    data = _Moves([moves[i] for i in used], bias)
+    data = _Moves([moves[i] for i in used], bias, known_turn_deg)
     result = least_squares(data.residual, np.eye(3).ravel(), method="lm", x_scale=1.0)
     k = result.x.reshape(3, 3)
     jac = np.asarray(result.jac)
@@ -181,7 +239,7 @@ def fit_gyro_matrix(
             f"gyro matrix not determined: the {len(used)} moves turn about too few axes "
             f"(condition number {condition:.3g} > {MAX_CONDITION:g})"
         )
-    dof = CONSTRAINTS_PER_MOVE * len(used) - K_UNKNOWNS
+    dof = CONSTRAINTS_PER_MOVE * len(used) + 3 * len(data.turns) - K_UNKNOWNS
     sigma2 = float(result.fun @ result.fun) / dof
     errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
     return GyroMatrixFit(
@@ -193,4 +251,6 @@ def fit_gyro_matrix(
         residual_identity_deg=data.angles_deg(np.eye(3)),
         unusable=tuple(unusable),
         condition_number=condition,
+        known_turns=tuple(used[i] for i in data.turns),
+        known_turn_swept_deg=tuple(float(a) for a in np.degrees(data.swept_rad(k))),
     )

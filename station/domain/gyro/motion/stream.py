@@ -156,10 +156,12 @@ def calibrate_stream(
     *,
     thresholds: StillnessThresholds | None = None,
     min_moves: int = MIN_MOVES,
+    known_turn_deg: float | None = None,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
 
-    ``min_moves`` goes to :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
+    ``min_moves`` and ``known_turn_deg`` (the angle of the recording's whole turns, when
+    it declares one) go to :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
 
     Raises:
         StreamError: fewer still poses than ``model`` needs.
@@ -196,7 +198,7 @@ def calibrate_stream(
         )
         for i, (a, b) in enumerate(pairwise(stills))
     ]
-    gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves)
+    gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
     gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
     uncertainty = Uncertainty.of_budget(

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
 
 from station.domain.gyro.motion import GyroMatrixError, Move, calibrate_stream, fit_gyro_matrix
 from station.simulator.recording import (
@@ -170,3 +171,33 @@ def test_five_moves_are_refused_unless_asked_for() -> None:
     assert len(fit_gyro_matrix(moves[:5], bias, min_moves=5).used) == 5
     with pytest.raises(ValueError, match="no degree of freedom"):
         fit_gyro_matrix(moves, bias, min_moves=4)
+
+
+def _turns_about_x_and_z_only() -> Rotation:
+    """Eight poses joined by turns about body x and z only: a y rotation is never seen
+    except in a whole turn about the vertical while y points up (pose 1)."""
+    steps = [("x", 0), ("x", 90), ("z", 90), ("z", 180), ("z", 90), ("x", 90), ("x", 90), ("z", 90)]
+    poses = [Rotation.identity()]
+    for axis, deg in steps[1:]:
+        poses.append(poses[-1] * Rotation.from_euler(axis, deg, degrees=True))
+    return Rotation.concatenate(poses)
+
+
+@pytest.mark.parametrize("seed", [7, 8])
+def test_a_declared_whole_turn_gives_the_rotation_gravity_cannot_see(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    truth = random_imu(rng, cross_axis=0.0)
+    stream = recorded_stream(
+        rng, truth, _turns_about_x_and_z_only(), StreamPlan(wobble_deg=1.0), turns={1: 360.0}
+    )
+    true_k = k_in_calibrated_frame(truth, "six")
+    blind = calibrate_stream(stream, "six").gyro
+    known = calibrate_stream(stream, "six", known_turn_deg=360.0).gyro
+    assert blind.known_turns == ()
+    assert known.known_turns == (1,)  # the move after pose 1, and no other
+    assert abs(known.known_turn_swept_deg[0] - 360.0) < 0.5
+    error_blind = float(np.abs(blind.scale_matrix - true_k).max())
+    error_known = float(np.abs(known.scale_matrix - true_k).max())
+    assert error_known < 5e-4
+    assert error_known < error_blind / 5
+    assert known.condition_number < blind.condition_number
