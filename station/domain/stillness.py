@@ -87,6 +87,12 @@ class StillnessThresholds(BaseModel):
         description="per-gyro spread: white noise is under 0.1 deg/s rms; handling and "
         "tremor rates are several deg/s",
     )
+    gyro_bias_dps: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0),
+        description="each gyro's bias, taken off its mean rate before the rate is judged: "
+        "0 live (the putter's gyros are within 0.3 deg/s); a recording's own, estimated "
+        "from its quietest windows (station.domain.gyro.motion.stream.adapted_thresholds)",
+    )
     max_loss_fraction: float = Field(
         0.01,
         ge=0,
@@ -152,7 +158,8 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
-    for axis, rate, s in zip(AXES, summary.gyro_mean, summary.gyro_std, strict=True):
+    turning = summary.gyro_mean - np.asarray(limits.gyro_bias_dps)
+    for axis, rate, s in zip(AXES, turning, summary.gyro_std, strict=True):
         if abs(rate) > limits.gyro_rate_max_dps:
             reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
             motion = True
@@ -198,7 +205,7 @@ def still_segments(block: SampleBlock, limits: StillnessThresholds) -> list[Stil
 _NUMBERS = re.compile(r"[-+]?\d[\d.]*%?")
 #: What each kind of refusal, in most windows of a recording, says about it.
 _HINTS = (
-    ("turning", "a gyro bias above the stillness limit, or gyro units not deg/s?"),
+    ("turning", "a unit never at rest, a gyro's rate swinging, or gyro units not deg/s?"),
     (
         "at the ADC rail",
         "the accelerometer not in this putter's counts (zero 2048, 819.2 "

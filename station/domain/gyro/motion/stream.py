@@ -4,8 +4,9 @@ The stream is the unit's raw output over the procedure of [Tedaldi2014]_: still 
 in varied orientations, with a hand move between each two. From it:
 
 1. the still poses, by the station's own stillness judge
-   (:func:`station.domain.stillness.still_segments`, windows of ``still_window_s``), each
-   trimmed by a quarter window at both ends;
+   (:func:`station.domain.stillness.still_segments`, windows of ``still_window_s``) with
+   its limits fitted to the recording's own gyro bias and noise
+   (:func:`adapted_thresholds`), each trimmed by a quarter window at both ends;
 2. the accelerometer calibration from the poses' mean counts
    (:func:`station.domain.calibration.solve`, [Song2006]_);
 3. the gyro bias, the mean rate over every still sample;
@@ -139,6 +140,59 @@ def stream_thresholds(
     return StillnessThresholds(window_samples=width, hop_samples=max(1, width // HOPS_PER_WINDOW))
 
 
+#: A recording's spread limits never fall below the live ones; they rise to this many
+#: times its own quiet spread (an IMU noisier than the putter's).
+NOISE_MARGIN: Final = 4.0
+
+
+def _window_stats(values: FloatArray, width: int, hop: int) -> tuple[FloatArray, FloatArray]:
+    """Means and standard deviations of ``values`` (n, 3) over windows of ``width`` rows
+    every ``hop`` rows: running sums, linear in the rows whatever the window."""
+    starts = np.arange(0, len(values) - width + 1, hop)
+    zero = np.zeros((1, values.shape[1]))
+    s1 = np.concatenate((zero, np.cumsum(values, axis=0)))
+    s2 = np.concatenate((zero, np.cumsum(values * values, axis=0)))
+    total = s1[starts + width] - s1[starts]
+    squares = s2[starts + width] - s2[starts]
+    mean = total / width
+    var = np.maximum(squares / width - mean * mean, 0.0) * width / (width - 1)
+    return mean, np.sqrt(var)
+
+
+def adapted_thresholds(stream: RecordedStream, limits: StillnessThresholds) -> StillnessThresholds:
+    """The stillness limits fitted to the recording's own gyro bias and noise.
+
+    A recording is mostly still poses, so its quieter windows are the unit at rest: the
+    windows whose largest accelerometer spread is at most the median of all windows',
+    and of those, the ones whose largest gyro spread is at most their median. Their
+    median gyro rate is each gyro's bias, taken off before a rate is judged (a MEMS
+    gyro's bias of several deg/s would otherwise make every window "turn"); the spread
+    limits rise to :data:`NOISE_MARGIN` times their median spread where that is above
+    the live limits (a noisier IMU than the putter's), never below.
+    """
+    width, hop = limits.window_samples, limits.hop_samples
+    if len(stream.t) < width:
+        return limits
+    _, accel_std = _window_stats(stream.accel_counts, width, hop)
+    gyro_mean, gyro_std = _window_stats(stream.gyro_dps, width, hop)
+    accel_score, gyro_score = accel_std.max(axis=1), gyro_std.max(axis=1)
+    calm = accel_score <= np.median(accel_score)
+    quiet = calm & (gyro_score <= np.median(gyro_score[calm]))
+    return limits.model_copy(
+        update={
+            "gyro_bias_dps": tuple(float(b) for b in np.median(gyro_mean[quiet], axis=0)),
+            "accel_std_max_counts": max(
+                limits.accel_std_max_counts,
+                NOISE_MARGIN * float(np.median(accel_std[quiet], axis=0).max()),
+            ),
+            "gyro_std_max_dps": max(
+                limits.gyro_std_max_dps,
+                NOISE_MARGIN * float(np.median(gyro_std[quiet], axis=0).max()),
+            ),
+        }
+    )
+
+
 def _geometry(model: Model, poses: int) -> GeometryLimits:
     """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
 
@@ -168,7 +222,7 @@ def calibrate_stream(
         station.domain.calibration.CalibrationError: the poses cannot calibrate the accelerometer.
         GyroMatrixError: the moves cannot determine K.
     """
-    limits = thresholds or stream_thresholds(stream.rate_hz)
+    limits = adapted_thresholds(stream, thresholds or stream_thresholds(stream.rate_hz))
     trim = limits.window_samples // EDGE_TRIM
     stills = [
         StillSegment(s.start + trim, s.stop - trim) for s in still_segments(stream.block(), limits)
