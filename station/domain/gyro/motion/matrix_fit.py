@@ -63,6 +63,13 @@ class GyroMatrixFit:
         residual_identity_deg: the same with K = I (no gyro calibration), for contrast.
         unusable: the moves left out and why.
         condition_number: cond(J) of the fit's Jacobian at the solution.
+        directions: shape (len(used), 2, 3), each used move's gravity directions before
+            and after it, as fitted.
+        direction_gain: shape (3, 3, len(used), 2, 3), ∂K/∂(u_before, u_after) of each
+            used move to first order (``−(JᵀJ)⁻¹Jᵀ·∂r/∂u``, ∂r_j/∂u_before = −I,
+            ∂r_j/∂u_after = R_j): how an error of the gravity directions moves K, the
+            moves' geometry of the uncertainty budget
+            (:func:`station.domain.calibration.uncertainty.gyro_matrix_uncertainty`).
     """
 
     scale_matrix: FloatArray
@@ -73,6 +80,8 @@ class GyroMatrixFit:
     residual_identity_deg: FloatArray
     unusable: tuple[UnusableMove, ...]
     condition_number: float
+    directions: FloatArray
+    direction_gain: FloatArray
 
     @property
     def residual_rms_deg(self) -> float:
@@ -123,6 +132,14 @@ class _Moves:
         out = np.empty_like(self.after)
         for members, steps in self.groups:
             out[members] = integrate_steps(steps @ k_inv_t).apply(self.after[members])
+        return out
+
+    def rotations(self, k: FloatArray) -> FloatArray:
+        """Each move's rotation R(K) as a matrix, shape (moves, 3, 3)."""
+        k_inv_t = np.linalg.inv(k).T
+        out = np.empty((len(self.after), 3, 3))
+        for members, steps in self.groups:
+            out[members] = integrate_steps(steps @ k_inv_t).as_matrix()
         return out
 
     def residual(self, theta: FloatArray) -> FloatArray:
@@ -183,7 +200,16 @@ def fit_gyro_matrix(
         )
     dof = CONSTRAINTS_PER_MOVE * len(used) - K_UNKNOWNS
     sigma2 = float(result.fun @ result.fun) / dof
-    errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
+    normal_inv = np.linalg.inv(jac.T @ jac)
+    errors = np.sqrt(np.diag(normal_inv) * sigma2).reshape(3, 3)
+    # ∂r/∂u: r_j = R_j·u_after,j − u_before,j, so −I on u_before and R_j on u_after.
+    moved = len(used)
+    dr_du = np.zeros((moved, 3, moved, 2, 3))
+    rotations = data.rotations(k)
+    for j in range(moved):
+        dr_du[j, :, j, 0, :] = -np.eye(3)
+        dr_du[j, :, j, 1, :] = rotations[j]
+    gain = -(normal_inv @ jac.T) @ dr_du.reshape(3 * moved, 6 * moved)
     return GyroMatrixFit(
         scale_matrix=k,
         standard_errors=errors,
@@ -193,4 +219,6 @@ def fit_gyro_matrix(
         residual_identity_deg=data.angles_deg(np.eye(3)),
         unusable=tuple(unusable),
         condition_number=condition,
+        directions=np.stack([data.before, data.after], axis=1),
+        direction_gain=gain.reshape(3, 3, moved, 2, 3),
     )
