@@ -248,6 +248,24 @@ class RunRepository:
         ).all()
         return self._summaries(runs)
 
+    def latest_golden(
+        self, station_id: str, since: datetime, before: datetime
+    ) -> RunSummary | None:
+        """The latest golden-unit run (``purpose`` golden) of ``station_id`` started in
+        ``[since, before)``: the shift's check a certificate names as its reference."""
+        run = self.session.scalars(
+            select(Run)
+            .where(
+                Run.station_id == station_id,
+                Run.purpose == "golden",
+                Run.started_at >= since,
+                Run.started_at < before,
+            )
+            .order_by(Run.started_at.desc(), Run.id.desc())
+            .limit(1)
+        ).one_or_none()
+        return None if run is None else self._summaries([run])[0]
+
     def serials(self, prefix: str, limit: int | None = None) -> list[str]:
         """The serial numbers stored that begin with ``prefix`` (its ``_`` and ``%`` as
         themselves), in order; the first ``limit`` of them. A walk of

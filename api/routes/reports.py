@@ -40,6 +40,7 @@ from db.run_export import HEADER, run_page
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
+from station.domain.quality.shifts import shift_start
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
 from station.report.html import certificate_page, dashboard_page, failing_runs_page
@@ -425,10 +426,12 @@ async def get_certificate(
     serial: Annotated[str, Path(pattern=SERIAL_PATTERN, description="the unit's serial number")],
     repository: ReaderDep,
     zone: PlantZoneDep,
+    shifts: PlantShiftsDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
-    the limits stored with the run's profile and the unit's earlier runs; a failure report
-    for a unit whose latest run failed."""
+    the limits stored with the run's profile, its reference (the latest golden-unit check
+    of its station in the plant's shift, before it) and the unit's earlier runs; a failure
+    report for a unit whose latest run failed."""
     found = await repository.run(lambda r: certificate_run(r, serial))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
@@ -436,7 +439,11 @@ async def get_certificate(
     stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
     profile = stored.get(run.limits.sha256)
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone))
+    since = shift_start(run.started_at, zone, shifts)
+    golden = await repository.run(lambda r: r.latest_golden(run.station_id, since, run.started_at))
+    return HTMLResponse(
+        certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden)
+    )
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

@@ -22,6 +22,7 @@ from station.domain.quality.parameters import profile_bounds
 from station.domain.records import GyroFitRecord, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
+from station.report.certificate import check_rows, identity
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
     CAPABILITY_HEADER,
@@ -237,6 +238,7 @@ def certificate_page(
     gyro_fit: GyroFitRecord | None = None,
     earlier: Sequence[RunSummary] = (),
     zone: str = "UTC",
+    golden: RunSummary | None = None,
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -247,6 +249,8 @@ def certificate_page(
     stations), which the page says. Times are in the plant's ``zone``, as on the unit's page.
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
+    ``golden``: that shift's golden-unit check at the run's station, its reference
+    (ISO/IEC 17025 7.8; the identity block, :func:`station.report.certificate.identity`).
     """
     plot = None
     if gyro_fit is not None and gyro_fit.dwells is not None and not gyro_fit.report.unestimable:
@@ -264,4 +268,6 @@ def certificate_page(
         zone=zone,
         document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
+        identity=identity(run, golden),
+        checks=None if profile is None else check_rows(run, profile),
     )

@@ -14,14 +14,15 @@ from pydantic import ValidationError
 from station import __version__
 from station.domain.arrays import FloatArray as Array
 from station.domain.calibration import (
-    COVERAGE_FACTOR,
     Solution,
     Uncertainty,
     accelerometer_budget,
     apply,
     gyro_bias_uncertainty,
+    gyro_matrix_uncertainty,
 )
 from station.domain.gyro import summarize_still_poses
+from station.domain.gyro.motion import GyroMatrixFit
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
     Coefficients,
@@ -142,12 +143,13 @@ def uncertainty_record(
     captures: Mapping[int, Capture],
     fit_count: int,
     solution: Solution | None,
-    gyro_matrix: GyroMatrixRecord | None = None,
+    gyro_fit: GyroMatrixFit | None = None,
 ) -> UncertaintyRecord | None:
     """The expanded uncertainties of the run's coefficients
     (:mod:`station.domain.calibration.uncertainty`): the accelerometer's from the fit
     poses' means, spreads and sample counts and the verification pose, the gyro bias's
-    from the fit poses' gyro means, the gyro matrix's from its fit (None: no solution)."""
+    from the fit poses' gyro means, the gyro matrix's from its fit and the accelerometer
+    calibration its moves' gravity directions came from (None: no solution)."""
     if solution is None or any(i not in captures for i in range(fit_count)):
         return None
     fit = [captures[i] for i in range(fit_count)]
@@ -170,9 +172,7 @@ def uncertainty_record(
             np.array([c.gyro_std.as_tuple() for c in fit]),
             np.array([c.record.sample_count for c in fit]),
         )
-    matrix = None
-    if gyro_matrix is not None and gyro_matrix.standard_errors is not None:
-        matrix = COVERAGE_FACTOR * np.array(gyro_matrix.standard_errors)
+    matrix = None if gyro_fit is None else gyro_matrix_uncertainty(gyro_fit, budget)
     try:
         return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
     except ValidationError as exc:

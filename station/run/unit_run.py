@@ -352,6 +352,7 @@ class UnitRun:
             evidence=self._evidence,
             gyro_checks=gyro.checks(self.profile) if gyro is not None else (),
             gyro_matrix=gyro.record() if gyro is not None else None,
+            gyro_fit=gyro.fit if gyro is not None else None,
             store=store,
         )
         self.verification_error_mg = outcome.verification_error_mg

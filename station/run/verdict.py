@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.domain.calibration import CalibrationError, Solution, apply
+from station.domain.gyro.motion import GyroMatrixFit
 from station.domain.judging import Measured, limit_checks, uncertainty_of, verdict_failures
 from station.domain.limits import LimitsProfile
 from station.domain.records import (
@@ -148,13 +149,15 @@ def conclude(
     evidence: PoseRecord | None = None,
     gyro_checks: Sequence[FailureReason] = (),
     gyro_matrix: GyroMatrixRecord | None = None,
+    gyro_fit: GyroMatrixFit | None = None,
     store: bool,
 ) -> Conclusion:
     """The verdict of the run and, if ``store``, its record.
 
     ``evidence`` is the live window that failed the unit before its pose was captured;
     ``gyro_checks`` the limit checks of a whole-unit run's gyro matrix (found while it
-    went), ``gyro_matrix`` that matrix as recorded.
+    went), ``gyro_matrix`` that matrix as recorded and ``gyro_fit`` its fit (for its
+    uncertainty).
     """
     captures = journal.captures
     fit_count = len(settings.poses)
@@ -162,7 +165,7 @@ def conclude(
     for reason in gyro_checks:
         failures.add(reason)
     error = _verification_error_mg(captures, solution, fit_count)
-    uncertainty = record.uncertainty_record(captures, fit_count, solution, gyro_matrix)
+    uncertainty = record.uncertainty_record(captures, fit_count, solution, gyro_fit)
     if failures.aborted:
         reasons, error = list(failures.found), None
     else:

@@ -11,7 +11,7 @@ import pytest
 
 from db import Database, RunRepository
 from station.domain.records import RunRecord
-from tests.db.records import T0, make_record
+from tests.db.records import LIMITS, T0, make_record
 from tests.servers import STATION
 
 #: A failure with its value and limits, as the station records an offset out of limits.
@@ -181,3 +181,88 @@ def test_the_dashboard_lists_the_units_on_hold_with_what_they_hold(
     assert "U1" not in held  # passed at its retest
     assert "no verified coefficients" not in held  # its failed runs wrote it (offset limits)
     assert "coefficients of a failed run" in held
+
+
+def _identity(page: str) -> str:
+    """The identity block and method of a certificate or failure report."""
+    return page.split('<table class="identity">')[1].split("<h2>Limits</h2>")[0]
+
+
+@pytest.fixture
+def checked(database: Database) -> RunRecord:
+    """A run of U5 at line1-st1 whose shift's golden-unit check passed at 07:10; other
+    golden runs that are not its reference: another station's, the day before, after it."""
+    golden = make_record(serial="GU-001", purpose="golden", started_at=T0 - timedelta(minutes=50))
+    others = [
+        make_record(serial="GU-002", purpose="golden", station_id="line1-st2", started_at=T0),
+        make_record(serial="GU-003", purpose="golden", started_at=T0 - timedelta(days=1)),
+        make_record(serial="GU-004", purpose="golden", started_at=T0 + timedelta(minutes=30)),
+    ]
+    run = make_record(serial="U5", part_number="DIXX-A12", started_at=T0 + timedelta(minutes=5))
+    _store(database, golden, *others, run)
+    return run
+
+
+def test_a_certificate_states_what_iso_17025_asks_of_it(
+    client: httpx.Client, checked: RunRecord
+) -> None:
+    page = client.get("/api/v1/units/U5/certificate").text
+    block = _identity(page)
+    number = f"CAL-2026-{checked.run_id.hex[:12].upper()}"
+    assert f'<td id="document-number">{number}</td>' in block
+    assert "<tr><th>part number</th><td>DIXX-A12</td></tr>" in block
+    assert "08:05:00 UTC" in block  # the run's time in the plant's zone (UTC here)
+    assert "<tr><th>station / operator</th><td>line1-st1 / op-17</td></tr>" in block
+    assert "1.4.0 / autocal-ls / six" in block
+    assert f"sha256 {LIMITS['sha256']}" in block
+    reference = block.split('<td class="golden">')[1].split("</td>")[0]
+    assert "GU-001" in reference
+    assert "07:10:00 UTC" in reference
+    assert ", pass (" in reference
+    for other in ("GU-002", "GU-003", "GU-004"):
+        assert other not in page
+    assert "temperature 24.5 °C (mean of the run's poses)" in block
+    method = block.split('<table class="method">')[1]
+    for source in ("[Song2006]", "JCGM 100:2008", "ILAC-G8:09/2019"):
+        assert source in method
+    assert "[Tedaldi2014]" not in method  # a six-parameter run without gyro moves
+    assert "<tr><th>decision rule</th><td>simple acceptance" in block
+
+
+def test_the_limits_table_gives_each_check_its_unit_and_result(
+    client: httpx.Client, checked: RunRecord
+) -> None:
+    page = client.get("/api/v1/units/U5/certificate").text
+    limits = page.split('<table class="limits">')[1].split("</table>")[0]
+    rows = {
+        cells[0]: cells[1:]
+        for cells in (re.findall(r"<td[^>]*>(.*?)</td>", row) for row in limits.split("<tr>"))
+        if cells
+    }
+    assert rows["offset"][0] == "counts"
+    assert rows["offset"][3] == "x 2081.9, y 2041.2, z 1960.5"
+    assert rows["sensitivity"][0] == "counts/g"
+    assert rows["verification pose error"][0] == "mg"
+    assert rows["verification pose error"][3] == "0.7"
+    assert rows["pose noise (std)"][0] == "counts"
+    assert rows["gyro bias"][0] == "deg/s"
+    assert rows["link loss"][0] == "fraction"
+    assert all(cells[4] == "pass" for cells in rows.values())
+
+
+def test_no_golden_check_that_shift_is_said_and_a_failure_report_has_the_same_identity(
+    client: httpx.Client, database: Database
+) -> None:
+    record = make_record(serial="U6", verdict="fail", failures=[OFFSET_X_HIGH], started_at=T0)
+    yesterday = make_record(serial="GU-001", purpose="golden", started_at=T0 - timedelta(days=1))
+    _store(database, yesterday, record)
+    page = client.get("/api/v1/units/U6/certificate").text
+    block = _identity(page)
+    assert "<h1>Failure report</h1>" in page
+    assert f'<td id="document-number">FR-2026-{record.run_id.hex[:12].upper()}</td>' in block
+    assert "<tr><th>part number</th><td>" in block
+    assert "no golden-unit check on record for this station that shift" in block
+    assert "GU-001" not in page
+    assert "[Song2006]" in block
+    limits = page.split('<table class="limits">')[1].split("</table>")[0]
+    assert re.search(r"<td>offset</td><td>counts</td>.*?<td class=\"fail\">fail</td>", limits)

@@ -54,6 +54,7 @@ from station.domain.calibration.uncertainty import (
     Uncertainty,
     accelerometer_budget,
     gyro_bias_uncertainty,
+    gyro_matrix_uncertainty,
 )
 
 __all__ = [
@@ -88,6 +89,7 @@ __all__ = [
     "apply",
     "coverage",
     "gyro_bias_uncertainty",
+    "gyro_matrix_uncertainty",
     "pair_angles_deg",
     "residual_limit",
     "solve",

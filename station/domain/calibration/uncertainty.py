@@ -61,7 +61,15 @@ Gyro bias (:func:`gyro_bias_uncertainty`): the mean over the still poses; Type A
 within-pose noise σ/√(Σ N_i), or the poses' scatter s/√P where it exceeds that beyond
 the χ² 95 % point (the scatter would also carry a g-dependent bias, which [Park2014]_
 says a still unit has none of, or drift), plus the report's quantisation, 0.02 deg/s/√12
-per sample. Gyro matrix: the fit's own standard errors ([Tedaldi2014]_).
+per sample. Gyro matrix K (:func:`gyro_matrix_uncertainty`): Type A the fit's own
+standard errors ([Tedaldi2014]_: the moves' residuals, so the noise of each gravity
+direction and of the integrated rates, and the integration's own error, as far as they
+differ from move to move), and the moves' geometry: the accelerometer calibration the
+gravity directions are computed with is uncertain too (the covariance of θ from the
+pose noise, quantisation and the fit's evidence, :attr:`AccelerometerBudget.covariance`),
+and its error turns every direction alike, which no residual shows; propagated to first
+order through ∂u/∂θ and the fit's ∂K/∂u
+(:attr:`station.domain.gyro.motion.GyroMatrixFit.direction_gain`).
 
 .. [JCGM100] JCGM 100:2008, Evaluation of measurement data — Guide to the expression of
    uncertainty in measurement (GUM).
@@ -73,7 +81,7 @@ per sample. Gyro matrix: the fit's own standard errors ([Tedaldi2014]_).
 """
 
 from dataclasses import dataclass, field
-from typing import Final
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -83,6 +91,9 @@ from station.domain.calibration.model import Model
 from station.domain.calibration.residual import UPPER
 from station.domain.calibration.solution import Solution
 from station.domain.sensor import CROSS_AXIS_TYPICAL, GYRO_DPS_PER_LSB, SAMPLES_PER_POSE
+
+if TYPE_CHECKING:  # the gyro package imports this module: a type only
+    from station.domain.gyro.motion.matrix_fit import GyroMatrixFit
 
 #: Coverage factor of every expanded uncertainty ([JCGM100]_ 6.2.1).
 COVERAGE_FACTOR: Final = 2.0
@@ -115,11 +126,18 @@ class AccelerometerBudget:
         k: the coverage factor of :attr:`expanded`.
         verification_ratio: |r_v|/(k·u(r_v)) of the verification pose (``None`` without
             one); above 1 it scaled the ``model`` and ``fit`` terms.
+        theta, model: the fit's parameters θ ((o, s) or (o, C_upper)) and its model.
+        covariance: shape (p, p), the covariance of θ from the pose noise, quantisation
+            and the fit's evidence (the gravity directions' uncertainty for the gyro
+            matrix, :func:`gyro_matrix_uncertainty`).
     """
 
     terms: dict[str, FloatArray]
     k: float = COVERAGE_FACTOR
     verification_ratio: float | None = None
+    theta: FloatArray | None = None
+    model: Model = "six"
+    covariance: FloatArray | None = None
 
     @property
     def combined(self) -> FloatArray:
@@ -228,6 +246,7 @@ def accelerometer_budget(
 
     w_noise = np.einsum("ij,ij->i", dr_da**2, var_noise)
     w_quant = np.einsum("ij,ij->i", dr_da**2, var_quant)
+    covariance = (pinv * (w_noise + w_quant)) @ pinv.T
     terms = {
         "pose_noise": np.sqrt(gp**2 @ w_noise),
         "quantisation": np.sqrt(gp**2 @ w_quant),
@@ -256,6 +275,7 @@ def accelerometer_budget(
 
         if sigma2 > expected * chi2.ppf(_CHI2_QUANTILE, rows - p) / (rows - p):
             cov = np.linalg.pinv((jac / scale).T @ (jac / scale)) / np.outer(scale, scale)
+            covariance = covariance + cov * (sigma2 - expected)
             terms["fit"] = np.sqrt(
                 np.clip(np.einsum("ij,jk,ik->i", g, cov, g), 0.0, None) * (sigma2 - expected)
             )
@@ -283,6 +303,9 @@ def accelerometer_budget(
         terms={name: np.asarray(terms[name], dtype=np.float64) for name in TERMS},
         k=k,
         verification_ratio=ratio,
+        theta=theta,
+        model=model,
+        covariance=covariance,
     )
 
 
@@ -330,6 +353,52 @@ def gyro_bias_uncertainty(
         type_a = np.where(beyond, scatter, within)
     u = np.sqrt(type_a**2 + quant**2)
     return np.asarray(k * u, dtype=np.float64)
+
+
+def gyro_matrix_uncertainty(
+    fit: "GyroMatrixFit", budget: AccelerometerBudget | None, k: float = COVERAGE_FACTOR
+) -> FloatArray:
+    """Expanded uncertainty (3, 3) of each element of the gyro matrix K (module docstring):
+    k·√(u_fit² + u_geometry²), u_fit the fit's standard errors ([Tedaldi2014]_), u_geometry
+    the accelerometer calibration's covariance carried into K through the gravity
+    directions (``budget`` None: the fit's term alone). [JCGM100]_ 5.1.2."""
+    variance = fit.standard_errors**2
+    if budget is not None:
+        variance = variance + geometry_variance(fit, budget)
+    return np.asarray(k * np.sqrt(variance), dtype=np.float64)
+
+
+def geometry_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatArray:
+    """Variance (3, 3) of K from the accelerometer calibration's error (the moves'
+    geometry): each gravity direction u = C(a − o)/|C(a − o)| of a move's end moves by
+    ∂u/∂θ·δθ, the same δθ for every move, so ``var(K) = diag(A Σ_θ Aᵀ)`` with
+    A = ∂K/∂u · ∂u/∂θ. A move's end in counts is ``a = o + C⁻¹u`` (|g| = 1 at rest); ∂u/∂θ
+    by central differences of one thousandth of each θ's standard uncertainty. Zero
+    without θ's covariance."""
+    if budget.theta is None or budget.covariance is None:
+        return np.zeros((3, 3))
+    theta, cov = budget.theta, budget.covariance
+    offset, c = _unpack(theta, budget.model)
+    ends = fit.directions.reshape(-1, 3)
+    counts = offset + np.linalg.solve(c, ends.T).T  # (2M, 3)
+
+    def directions(t: FloatArray) -> FloatArray:
+        o, m = _unpack(t, budget.model)
+        g = (counts - o) @ m.T
+        return np.asarray(g / np.linalg.norm(g, axis=1, keepdims=True), dtype=np.float64)
+
+    steps = 1e-3 * np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    du = np.zeros((ends.size, len(theta)))
+    for m, h in enumerate(steps):
+        if h == 0.0:
+            continue
+        e = np.zeros(len(theta))
+        e[m] = h
+        du[:, m] = ((directions(theta + e) - directions(theta - e)) / (2 * h)).ravel()
+    a = fit.direction_gain.reshape(9, -1) @ du  # (9, p)
+    return np.asarray(
+        np.clip(np.einsum("ij,jk,ik->i", a, cov, a), 0.0, None).reshape(3, 3), dtype=np.float64
+    )
 
 
 def _pose_variances(

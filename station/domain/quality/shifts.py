@@ -82,3 +82,13 @@ def plant_shifts(
         if following > start and begin <= end
     ]
     return shifts[-latest:]
+
+
+def shift_start(moment: datetime, zone: str, starts: Sequence[time]) -> datetime:
+    """When the shift that holds ``moment`` started (UTC): the plant's shift of ``starts``
+    in ``zone``, or, for a plant without shifts, its day (local midnight), the period
+    a certificate's golden-unit check is looked for in (``docs/report.md``)."""
+    if starts:
+        return plant_shifts(moment, moment, zone, starts, 1)[0].start
+    local = moment.astimezone(ZoneInfo(zone))
+    return datetime.combine(local.date(), time(), tzinfo=ZoneInfo(zone)).astimezone(UTC)

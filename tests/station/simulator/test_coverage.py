@@ -6,7 +6,7 @@ at half the right U, 99.99 % at twice it; mean |error|/U: 0.80 and 0.20 against 
 import numpy as np
 import pytest
 
-from station.simulator.coverage import GROUPS, simulate_coverage
+from station.simulator.coverage import GROUPS, simulate_coverage, simulate_gyro_matrix_coverage
 
 
 @pytest.mark.parametrize(("profile", "tilt_deg"), [("kxm52-production", 5.0), ("whole-unit", 0.0)])
@@ -28,3 +28,12 @@ def test_poses_along_the_axes_leave_the_six_parameter_sensitivities_conservative
     coverage = simulate_coverage("kxm52-production", 100, np.random.default_rng(26), 0.0)
     assert coverage.fraction("sensitivity") >= 0.97
     assert 0.90 <= coverage.fraction("offset") <= 0.99
+
+
+def test_the_gyro_matrix_truth_lies_within_its_expanded_uncertainty() -> None:
+    # 40 whole units' streams, 360 elements of K: U(K) half the right size would leave
+    # about a third outside and mean |e|/U near 0.8, twice it none outside and 0.2.
+    coverage = simulate_gyro_matrix_coverage("whole-unit", 40, np.random.default_rng(25))
+    assert coverage.units == 40
+    assert 0.88 <= coverage.fraction() <= 0.99
+    assert 0.30 <= float(coverage.mean_ratio.mean()) <= 0.52

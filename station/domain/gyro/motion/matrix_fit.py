@@ -77,6 +77,13 @@ class GyroMatrixFit:
         residual_identity_deg: the same with K = I (no gyro calibration), for contrast.
         unusable: the moves left out and why.
         condition_number: cond(J) of the fit's Jacobian at the solution.
+        directions: shape (len(used), 2, 3), each used move's gravity directions before
+            and after it, as fitted.
+        direction_gain: shape (3, 3, len(used), 2, 3), ∂K/∂(u_before, u_after) of each
+            used move to first order (``−(JᵀJ)⁻¹Jᵀ·∂r/∂u``, ∂r_j/∂u_before = −I,
+            ∂r_j/∂u_after = R_j): how an error of the gravity directions moves K, the
+            moves' geometry of the uncertainty budget
+            (:func:`station.domain.calibration.uncertainty.gyro_matrix_uncertainty`).
     """
 
     scale_matrix: FloatArray
@@ -87,6 +94,8 @@ class GyroMatrixFit:
     residual_identity_deg: FloatArray
     unusable: tuple[UnusableMove, ...]
     condition_number: float
+    directions: FloatArray
+    direction_gain: FloatArray
     #: Moves fitted as known turns (indices into the moves), and each one's swept angle
     #: with the fitted K, degrees.
     known_turns: tuple[int, ...] = ()
@@ -150,7 +159,9 @@ class _Moves:
         #: Each known turn as the corrected rates must sweep it: ±θ about the vertical.
         axes = np.array([moves[i].gravity_before for i in self.turns]).reshape(-1, 3)
         signs = np.sign(np.sum(self.swept * axes, axis=1))
-        self.turn_vectors = np.radians(known_turn_deg or 0.0) * signs[:, None] * axes
+        #: ±θ of each known turn, radians: its target is ``turn_scale·u_before``.
+        self.turn_scale = np.radians(known_turn_deg or 0.0) * signs
+        self.turn_vectors = self.turn_scale[:, None] * axes
         widths = [1 << max(0, len(r) - 1).bit_length() for r in raw]
         self.groups: list[tuple[list[int], FloatArray]] = []
         for width in sorted(set(widths)):
@@ -173,6 +184,14 @@ class _Moves:
     def swept_rad(self, k: FloatArray) -> FloatArray:
         """Each known turn's angle swept by the corrected rates, radians."""
         return np.asarray(np.linalg.norm(self.swept @ np.linalg.inv(k).T, axis=1))
+
+    def rotations(self, k: FloatArray) -> FloatArray:
+        """Each move's rotation R(K) as a matrix, shape (moves, 3, 3)."""
+        k_inv_t = np.linalg.inv(k).T
+        out = np.empty((len(self.after), 3, 3))
+        for members, steps in self.groups:
+            out[members] = integrate_steps(steps @ k_inv_t).as_matrix()
+        return out
 
     def residual(self, theta: FloatArray) -> FloatArray:
         k = theta.reshape(3, 3)
@@ -241,7 +260,19 @@ def fit_gyro_matrix(
         )
     dof = CONSTRAINTS_PER_MOVE * len(used) + 3 * len(data.turns) - K_UNKNOWNS
     sigma2 = float(result.fun @ result.fun) / dof
-    errors = np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)) * sigma2).reshape(3, 3)
+    normal_inv = np.linalg.inv(jac.T @ jac)
+    errors = np.sqrt(np.diag(normal_inv) * sigma2).reshape(3, 3)
+    # ∂r/∂u: r_j = R_j·u_after,j − u_before,j, so −I on u_before and R_j on u_after; a
+    # known turn's r = K⁻¹·Σφ − ±θ·u_before, so −(±θ)·I on its move's u_before.
+    moved, turns = len(used), len(data.turns)
+    dr_du = np.zeros((moved + turns, 3, moved, 2, 3))
+    rotations = data.rotations(k)
+    for j in range(moved):
+        dr_du[j, :, j, 0, :] = -np.eye(3)
+        dr_du[j, :, j, 1, :] = rotations[j]
+    for q, j in enumerate(data.turns):
+        dr_du[moved + q, :, j, 0, :] = -data.turn_scale[q] * np.eye(3)
+    gain = -(normal_inv @ jac.T) @ dr_du.reshape(3 * (moved + turns), 6 * moved)
     return GyroMatrixFit(
         scale_matrix=k,
         standard_errors=errors,
@@ -251,6 +282,8 @@ def fit_gyro_matrix(
         residual_identity_deg=data.angles_deg(np.eye(3)),
         unusable=tuple(unusable),
         condition_number=condition,
+        directions=np.stack([data.before, data.after], axis=1),
+        direction_gain=gain.reshape(3, 3, moved, 2, 3),
         known_turns=tuple(used[i] for i in data.turns),
         known_turn_swept_deg=tuple(float(a) for a in np.degrees(data.swept_rad(k))),
     )

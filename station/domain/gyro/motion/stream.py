@@ -27,7 +27,6 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration import (
-    COVERAGE_FACTOR,
     GeometryLimits,
     Model,
     Solution,
@@ -35,6 +34,7 @@ from station.domain.calibration import (
     accelerometer_budget,
     apply,
     gyro_bias_uncertainty,
+    gyro_matrix_uncertainty,
     solve,
 )
 from station.domain.constants import STILL_WINDOW_S
@@ -255,11 +255,10 @@ def calibrate_stream(
     gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
     gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
-    uncertainty = Uncertainty.of_budget(
-        accelerometer_budget(accel, means, spreads, samples)
-    ).with_gyro(
+    budget = accelerometer_budget(accel, means, spreads, samples)
+    uncertainty = Uncertainty.of_budget(budget).with_gyro(
         gyro_bias_uncertainty(gyro_means, gyro_spreads, samples),
-        COVERAGE_FACTOR * gyro.standard_errors,
+        gyro_matrix_uncertainty(gyro, budget),
     )
     return StreamCalibration(
         stills=stills,

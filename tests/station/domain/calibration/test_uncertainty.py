@@ -225,3 +225,51 @@ def test_the_gyro_bias_uncertainty_follows_the_noise(bias, sigma, poses, count, 
 def test_the_gyro_bias_needs_a_pose() -> None:
     with pytest.raises(ValueError, match="at least one still pose"):
         gyro_bias_uncertainty(np.zeros((0, 3)))
+
+
+def test_the_gyro_matrix_gain_to_the_gravity_directions_is_the_refit_s() -> None:
+    # The moves' geometry term rests on ∂K/∂u: a small turn of the directions moves the
+    # refitted K as the gain says (first order), and U(K) is the fit's 2·SE plus it.
+    from dataclasses import replace
+
+    from scipy.spatial.transform import Rotation
+
+    from station.domain.calibration import gyro_matrix_uncertainty
+    from station.domain.gyro.motion import calibrate_stream, fit_gyro_matrix
+    from station.simulator.recording import (
+        pose_orientations,
+        random_imu,
+        recorded_stream,
+        spread_directions,
+    )
+
+    rng = np.random.default_rng(7)
+    stream = recorded_stream(rng, random_imu(rng), pose_orientations(rng, spread_directions(12)))
+    result = calibrate_stream(stream, "nine")
+    fit = result.gyro
+    turns = Rotation.from_rotvec(rng.normal(0.0, 2e-4, (len(result.moves) + 1, 3)))
+    turned = [
+        replace(
+            m,
+            gravity_before=turns[i].apply(m.gravity_before),
+            gravity_after=turns[i + 1].apply(m.gravity_after),
+        )
+        for i, m in enumerate(result.moves)
+    ]
+    refit = fit_gyro_matrix(turned, result.bias_dps)
+    du = np.stack(
+        [
+            [
+                np.array(t.gravity_before) - m.gravity_before,
+                np.array(t.gravity_after) - m.gravity_after,
+            ]
+            for t, m in zip(turned, result.moves, strict=True)
+        ]
+    )
+    predicted = np.einsum("abmij,mij->ab", fit.direction_gain, du)
+    moved = refit.scale_matrix - fit.scale_matrix
+    assert np.abs(moved).max() > 1e-5  # the turn moved K measurably
+    np.testing.assert_allclose(moved, predicted, atol=0.05 * np.abs(moved).max())
+    np.testing.assert_allclose(gyro_matrix_uncertainty(fit, None), 2 * fit.standard_errors)
+    assert result.uncertainty.gyro_matrix is not None
+    assert (result.uncertainty.gyro_matrix > 2 * fit.standard_errors).all()

@@ -1,0 +1,190 @@
+"""What a calibration certificate (or a failed unit's failure report) states about its run.
+
+The content ISO/IEC 17025:2017 clause 7.8 asks of a calibration certificate (7.8.2: a
+unique identification, the item's identity, the date, the method, the results with their
+units, the person who authorised it; 7.8.4: the measurement uncertainty, the conditions,
+the traceability; 7.8.6: the decision rule of a statement of conformity), from the stored
+run alone: :func:`identity` is the block both documents open with, one place for both.
+The page (``templates/certificate.html`` and its ``identity.html``) lays it out.
+"""
+
+import math
+from dataclasses import dataclass
+
+from station.domain.limits import CHECKS, UNITS, Bounds, LimitsProfile
+from station.domain.records import RunRecord, RunSummary
+
+#: The document's number prefix by the run's verdict: a certificate, or a failure report.
+NUMBER_PREFIXES = {"pass": "CAL", "fail": "FR"}
+
+#: Hex digits of the run id in a document's number: 48 random bits of a version-4 UUID,
+#: so that a line's runs of a year share a number with odds below 1 in 500 at a million
+#: runs (n²/2⁴⁹); 8 digits (32 bits) would collide about once in 100,000 runs.
+NUMBER_DIGITS = 12
+
+#: Each check's name on the page, in the order of the limits profile.
+CHECK_NAMES = {
+    "offset": "offset",
+    "sensitivity": "sensitivity",
+    "verification_error": "verification pose error",
+    "pose_noise": "pose noise (std)",
+    "gyro_bias": "gyro bias",
+    "link_loss": "link loss",
+    "writeback": "write-back relative error",
+    "unit_output": "unit's own output after write-back",
+    "gyro_scale": "gyro scale error K_ii − 1",
+    "gyro_misalignment": "gyro misalignment K_ij",
+    "gyro_verification": "gyro verification move",
+}
+
+#: Units of the checks that :data:`station.domain.limits.UNITS` leaves bare: fractions.
+FRACTION = "fraction"
+
+
+def document_number(run: RunRecord | RunSummary) -> str:
+    """The document's number: ``CAL-<year>-<run id>`` for a certificate, ``FR-…`` for a
+    failure report; the year the run started (UTC) and the first :data:`NUMBER_DIGITS` hex
+    digits of its run id. Derived from the stored run only, so the same run always gets
+    the same number, whoever prints it when (ISO/IEC 17025 7.8.2.1 b: a unique
+    identification)."""
+    prefix = NUMBER_PREFIXES[run.verdict]
+    return f"{prefix}-{run.started_at.year:04d}-{run.run_id.hex[:NUMBER_DIGITS].upper()}"
+
+
+def mean_temperature(run: RunRecord) -> float | None:
+    """The mean of the run's pose temperatures, °C (ISO/IEC 17025 7.8.4.1 a: the
+    conditions); None when no pose recorded one."""
+    values = [p.temperature_c for p in run.poses if p.temperature_c is not None]
+    return math.fsum(values) / len(values) if values else None
+
+
+def method(run: RunRecord) -> list[tuple[str, str]]:
+    """The methods that produced the run's results, each with its source."""
+    rule = run.decision_rule or "simple"
+    lines = [
+        (
+            "accelerometer",
+            "six-position autocalibration: offset and sensitivity per axis from |g| = 1 [Song2006]"
+            if run.model == "six"
+            else "six-position autocalibration [Song2006] with the nine-parameter model "
+            "(offset, sensitivity, axis misalignment) fitted by least squares [Tedaldi2014]",
+        ),
+    ]
+    if run.gyro is not None:
+        lines.append(("gyro bias", "mean rate of the still poses"))
+    if run.gyro_matrix is not None:
+        lines.append(("gyro matrix K", "fitted from the moves between still poses [Tedaldi2014]"))
+    lines.append(
+        (
+            "uncertainty",
+            "expanded uncertainty U = k·u_c, k = 2, evaluated per JCGM 100:2008 (GUM), "
+            "validated by Monte Carlo per JCGM 101:2008",
+        )
+    )
+    lines.append(
+        (
+            "decision rule",
+            "simple acceptance: a value within its limits conforms (ILAC-G8:09/2019 §4.2.1)"
+            if rule == "simple"
+            else "guarded acceptance, guard band w = U: a value conforms when value ± U lies "
+            "within its limits (ILAC-G8:09/2019 §4.2.2, JCGM 106:2012)",
+        )
+    )
+    return lines
+
+
+@dataclass(frozen=True)
+class CheckRow:
+    """One check of the run against its limits: what, in which unit, the bounds, the
+    measured values (``"x 2048.1, y …"``; empty when the run did not reach it) and its
+    result: ``pass``, ``fail`` or ``not reached``."""
+
+    name: str
+    unit: str
+    lower: float | None
+    upper: float | None
+    measured: str
+    result: str
+
+
+def _triple(values: tuple[float, float, float]) -> str:
+    return ", ".join(f"{axis} {value:.6g}" for axis, value in zip("xyz", values, strict=True))
+
+
+def _measured(run: RunRecord, code: str) -> str:
+    """What the run measured for check ``code``, as the check judged it; "" if nothing."""
+    cal, matrix = run.coefficients, run.gyro_matrix
+    if code == "offset" and cal is not None:
+        return _triple(cal.offset.as_tuple())
+    if code == "sensitivity" and cal is not None:
+        return _triple(cal.sensitivity.as_tuple())
+    if code == "verification_error" and run.quality is not None:
+        value = run.quality.verification_error_mg
+        return "" if value is None else f"{value:.6g}"
+    if code == "pose_noise":
+        return f"largest {max(max(p.std.as_tuple()) for p in run.poses):.6g}"
+    if code == "gyro_bias" and run.gyro is not None:
+        return _triple(run.gyro.bias.as_tuple())
+    if code == "gyro_scale" and matrix is not None:
+        k = matrix.matrix
+        return _triple((k[0][0] - 1, k[1][1] - 1, k[2][2] - 1))
+    if code == "gyro_misalignment" and matrix is not None:
+        off = [abs(matrix.matrix[i][j]) for i in range(3) for j in range(3) if i != j]
+        return f"largest |K_ij| {max(off):.6g}"
+    if code == "gyro_verification" and matrix is not None and matrix.verification_deg is not None:
+        return f"{matrix.verification_deg:.6g}"
+    return ""
+
+
+def check_rows(run: RunRecord, profile: LimitsProfile) -> list[CheckRow]:
+    """Every check ``profile`` bounds, with its unit, its bounds, what the run measured
+    and its result (ISO/IEC 17025 7.8.6: the statement of conformity of each
+    quantity): ``fail`` when the run failed it, ``pass`` when the run passed or
+    measured it without failing it, else ``not reached`` (the run stopped before)."""
+    failed = {f.code for f in run.failures}
+    rows = []
+    for code, field in CHECKS.items():
+        bounds: Bounds | None = getattr(profile, field)
+        if bounds is None:
+            continue
+        measured = _measured(run, code)
+        result = (
+            "fail"
+            if code in failed
+            else "pass"
+            if run.verdict == "pass" or measured
+            else "not reached"
+        )
+        rows.append(
+            CheckRow(
+                name=CHECK_NAMES[code],
+                unit=UNITS[code] or FRACTION,
+                lower=bounds.lower,
+                upper=bounds.upper,
+                measured=measured,
+                result=result,
+            )
+        )
+    return rows
+
+
+@dataclass(frozen=True)
+class Identity:
+    """The identity block a certificate and a failure report share."""
+
+    number: str
+    temperature_c: float | None
+    method: list[tuple[str, str]]
+    #: That shift's golden-unit check at the run's station (the reference); None: none.
+    golden: RunSummary | None
+
+
+def identity(run: RunRecord, golden: RunSummary | None) -> Identity:
+    """The identity block of ``run``'s document; ``golden``: the latest golden-unit run
+    of its station in its shift before it (``db.RunRepository.latest_golden``)."""
+    return Identity(
+        number=document_number(run),
+        temperature_c=mean_temperature(run),
+        method=method(run),
+        golden=golden,
+    )
