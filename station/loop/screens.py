@@ -23,16 +23,21 @@ from station.run.operator_text import (
 from station.run.phases import Phase
 from station.run.view import RunView
 
-#: Small drawings of the putter in each named pose (head ▣, shaft ║ or ═, grip ▓).
-DRAWINGS: dict[str, str] = {
-    "face_up": "   face ↑\n ▣═════════▓\n (lying on its back)",
-    "face_down": " ▣═════════▓\n   face ↓\n (lying face down)",
-    "toe_up": "  toe ↑\n  ▣═════════▓\n  heel on the table",
-    "toe_down": "  heel ↑\n  ▣═════════▓\n  toe on the table",
-    "shaft_up": "  ▓\n  ║\n  ║\n  ▣  head down, shaft up",
-    "shaft_down": "  ▣  head up, grip down\n  ║\n  ║\n  ▓",
-    "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   tilted cradle",
-}
+
+def drawing(name: str) -> str:
+    """A small drawing of the putter in the pose ``name`` (head ▣, shaft ║ or ═, grip ▓),
+    its words in the operator's language ("" for a pose without one)."""
+    drawings = {
+        "face_up": "   " + tr("face") + " ↑\n ▣═════════▓\n " + tr("(lying on its back)"),
+        "face_down": " ▣═════════▓\n   " + tr("face") + " ↓\n " + tr("(lying face down)"),
+        "toe_up": "  " + tr("toe") + " ↑\n  ▣═════════▓\n  " + tr("heel on the table"),
+        "toe_down": "  " + tr("heel") + " ↑\n  ▣═════════▓\n  " + tr("toe on the table"),
+        "shaft_up": "  ▓\n  ║\n  ║\n  ▣  " + tr("head down, shaft up"),
+        "shaft_down": "  ▣  " + tr("head up, grip down") + "\n  ║\n  ║\n  ▓",
+        "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   " + tr("tilted cradle"),
+    }
+    return drawings.get(name, "")
+
 
 BANNER = {
     "pass": (
@@ -163,7 +168,7 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
             f" — {pose_instruction(target)}",
         )
         parts.append(step)
-        parts.append(Text(DRAWINGS.get(target.name, ""), style="cyan"))
+        parts.append(Text(drawing(target.name), style="cyan"))
         live = view.live
         if live.sensed is not None:
             ok = tr("✓ matches") if live.matches else tr("✗ not the pose asked for")

@@ -164,7 +164,15 @@ def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_
         assert re.search(rf"PT\d{{6}}: 자세 \d\({pose}\) 측정 완료", said), pose
     assert re.search(r"PT\d{6}: 합격: 출하$", said, re.MULTILINE)
     assert "유닛 1개 교정 완료; 전송 대기 0; 데이터베이스 " in said
-    for english in ("calibration started", "captured", "PASS", "ship", "virtual putter"):
+    assert "결과 데이터베이스: 연결됨" in said
+    for english in (
+        "calibration started",
+        "captured",
+        "PASS",
+        "ship",
+        "virtual putter",
+        "database:",
+    ):
         assert english not in said, english
     refused = run_cli("demo", "--units", "1", "--language", "fr", env=env, timeout=60)
     assert refused.returncode == 2

@@ -30,8 +30,24 @@ POSES = tuple(pose(n) for n in (*CALIBRATION_POSES, VERIFICATION_POSE))
 
 #: Words each screen must show in the operator's language (and the English they replace).
 UNIT_WORDS = {
-    "ko": ("자세 3/7: 토우 위", "감지된 자세", "가속도", "키: r 마지막 자세 다시", "합격", "출하"),
-    "zh": ("姿态 3/7：趾部朝上", "工位检测到", "加速度", "按键：r 重做上一姿态", "合格", "出货"),
+    "ko": (
+        "자세 3/7: 토우 위",
+        "감지된 자세",
+        "가속도",
+        "키: r 마지막 자세 다시",
+        "합격",
+        "출하",
+        "힐이 테이블에 닿음",
+    ),
+    "zh": (
+        "姿态 3/7：趾部朝上",
+        "工位检测到",
+        "加速度",
+        "按键：r 重做上一姿态",
+        "合格",
+        "出货",
+        "跟部贴桌面",
+    ),
 }
 FIXTURE_WORDS = {
     "ko": ("지그: 자세 3/7: 토우 위", "슬롯", "상태", "수리함", "다음 사이클", "측정 중"),
