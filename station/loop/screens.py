@@ -121,12 +121,13 @@ def header(
     return Group(who, Text(versions, style="dim"))
 
 
-def _meter(value: float, limit: float, label: str, unit: str) -> Text:
+def _meter(value: float, limit: float, label: str, width: int, unit: str) -> Text:
+    """``label`` in ``width`` cells, then a bar of ``value`` against ``limit``."""
     ratio = min(value / limit, 2.0) if limit > 0 else 0.0
     filled = round(ratio * 10)
     style = "green" if ratio <= 1 else "red"
     bar = "▇" * min(filled, 20) + "·" * max(0, 10 - filled)
-    return Text.assemble(pad(label, 6), (bar, style), f" {value:5.2f} / {limit:g} {unit}")
+    return Text.assemble(pad(label, width), (bar, style), f" {value:5.2f} / {limit:g} {unit}")
 
 
 def pad(text: str, cells: int) -> str:
@@ -181,11 +182,13 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
                 )
             )
         limits = view.stillness
+        accel, gyro = tr("accel"), tr("gyro")
+        width = max(cell_len(accel), cell_len(gyro)) + 1  # the bars start in one column
         parts.append(
-            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, tr("accel"), "counts")
+            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, "counts")
         )
         parts.append(
-            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, tr("gyro"), "deg/s")
+            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, gyro, width, "deg/s")
         )
         state = tr("moving") if live.moving else tr("still")
         filled = round(live.progress * 30)

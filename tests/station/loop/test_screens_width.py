@@ -53,7 +53,16 @@ FIXTURE_WORDS = {
     "ko": ("지그: 자세 3/7: 토우 위", "슬롯", "상태", "수리함", "다음 사이클", "측정 중"),
     "zh": ("治具：姿态 3/7：趾部朝上", "槽位", "状态", "返修箱", "下一轮", "采集中"),
 }
-ENGLISH = ("pose 3 of 7", "station sees", "keys:", "PASS", "FIXTURE: pose 3 of 7", "rework bin")
+ENGLISH = (
+    "accel ▇",
+    "gyro  ▇",
+    "pose 3 of 7",
+    "station sees",
+    "keys:",
+    "PASS",
+    "FIXTURE: pose 3 of 7",
+    "rework bin",
+)
 
 
 @pytest.fixture(autouse=True)
