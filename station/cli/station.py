@@ -74,11 +74,8 @@ def _station(
     probe_port: bool = True,
 ) -> StationApp | FixtureApp:
     """The one-port station, or the fixture's when several slots are configured."""
-    from station.domain.i18n import set_language
     from station.loop.app import StationApp
     from station.loop.fixture.app import FixtureApp
-
-    set_language(config.language)  # the operator's lines, for this process
 
     front_end = FixtureApp if config.slots else StationApp
     return front_end(
@@ -126,12 +123,12 @@ def run_command(
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
     from station.domain.errors import InputError
+    from station.domain.i18n import tr
     from station.domain.limits import load_profile
-    from station.loop.config import load_config
     from station.loop.keyboard import TerminalKeys
     from station.loop.startup import check_port, prepare_data_dir
 
-    config = load_config(
+    config = _load_config(
         config_file,
         {
             "slots": ports or None,
@@ -148,7 +145,7 @@ def run_command(
     )
     why = config.product.not_calibrated()
     if why is not None:
-        raise InputError(f"run: {why}")
+        raise InputError(tr("run: {why}", why=why))
     limits_profile = load_profile(config.limits_file, config.limits_profile)
     prepare_data_dir(config.data_dir)
     if not config.slots:
@@ -197,13 +194,13 @@ def demo_command(
     language: LanguageOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
+    from station.domain.i18n import tr
     from station.domain.limits import load_profile
-    from station.loop.config import load_config
     from station.loop.demo import CablePuller, ScriptedOperator, demo_sensor
     from station.loop.fixture.demo import FixtureOperator
     from station.loop.startup import prepare_data_dir
 
-    config = load_config(
+    config = _load_config(
         config_file,
         {
             "station_id": station or "demo-station",
@@ -232,7 +229,7 @@ def demo_command(
             cables=cables,
             sensor=sensor,
         )
-        where = f"each plugged into {port} in turn and moved through the poses"
+        where = tr("each plugged into {port} in turn and moved through the poses", port=port)
     else:
         ports = [demo_dir / f"putter-slot{n}" for n in range(1, slots + 1)]
         config = config.model_copy(update={"port": None, "slots": tuple(map(str, ports))})
@@ -245,16 +242,28 @@ def demo_command(
             cables=cables,
             sensor=sensor,
         )
-        where = (
-            f"{slots} at a time in a fixture ({demo_dir}/putter-slotN), turned through the poses"
+        where = tr(
+            "{slots} at a time in a fixture ({ports}), turned through the poses",
+            slots=slots,
+            ports=f"{demo_dir}/putter-slotN",
         )
     console = err if as_json or not out.is_terminal else out
     limits = load_profile(config.limits_file, config.limits_profile)
     app = _station(config, limits, operator_script, console, units, probe_port=False)
     operator_script.station = app
     console.print(
-        f"demo: {units} virtual putter{'s' * (units > 1)}, {where} "
-        f"by a scripted operator, at {speed:g}× real time",
+        tr(
+            "demo: {units} virtual putters, {where} by a scripted operator, at {speed}× real time",
+            units=units,
+            where=where,
+            speed=f"{speed:g}",
+        )
+        if units > 1
+        else tr(
+            "demo: 1 virtual putter, {where} by a scripted operator, at {speed}× real time",
+            where=where,
+            speed=f"{speed:g}",
+        ),
         markup=False,
         highlight=False,
     )
@@ -265,14 +274,29 @@ def demo_command(
     _demo_summary(records, operator_script.done, as_json)
     _stopped(app)
     if not records:
-        why = app.last_note or "no unit got through its scan"
-        raise CalstationError(f"demo: no unit was calibrated: {why}")
+        why = app.last_note or tr("no unit got through its scan")
+        raise CalstationError(tr("demo: no unit was calibrated: {why}", why=why))
     if not as_json:
         backlog = app.results.outbox.count()
         out.print(
-            f"{len(records)} units calibrated; outbox {backlog}; "
-            f"database {config.database_url or config.data_dir}"
+            tr(
+                "{count} units calibrated; outbox {backlog}; database {database}",
+                count=len(records),
+                backlog=backlog,
+                database=config.database_url or config.data_dir,
+            )
         )
+
+
+def _load_config(config_file: Path | None, overrides: dict[str, Any]) -> StationConfig:
+    """The station's configuration; its language is the operator's from here on, so the
+    refusals that follow are in it too."""
+    from station.domain.i18n import set_language
+    from station.loop.config import load_config
+
+    config = load_config(config_file, overrides)
+    set_language(config.language)
+    return config
 
 
 def _first_new_unit(config: StationConfig, seed: int) -> int:

@@ -103,11 +103,17 @@ class StationApp(FrontEnd):
         if not self.probe_ports:
             return []
         if port is None:
-            return ["no putter port configured"]
+            return [tr("no putter port configured")]
         try:
             PutterDriver.open(port).close()
         except DeviceError as exc:
-            return [f"putter port {port}: {port_problem(exc)} (waiting for a unit)"]
+            return [
+                tr(
+                    "putter port {port}: {problem} (waiting for a unit)",
+                    port=port,
+                    problem=port_problem(exc),
+                )
+            ]
         return []
 
     def _begin(self) -> None:
@@ -117,8 +123,12 @@ class StationApp(FrontEnd):
         for _, journal in interrupted:
             self.prompt.ask_resume(journal)
             self._say_line(
-                f"unit {journal.serial} was interrupted at pose {journal.next_pose + 1} of "
-                f"{len(journal.poses)}: resume it? (y/n)"
+                tr(
+                    "unit {serial} was interrupted at pose {number} of {total}: resume it? (y/n)",
+                    serial=journal.serial,
+                    number=journal.next_pose + 1,
+                    total=len(journal.poses),
+                )
             )
 
     def tick(self) -> None:
@@ -174,10 +184,14 @@ class StationApp(FrontEnd):
         run = self.run
         assert run is not None
         if text == self.slot.serial:
-            run.messages.say("warn", f"{text} is the unit on the station now: finish it first")
+            run.messages.say(
+                "warn", tr("{serial} is the unit on the station now: finish it first", serial=text)
+            )
             return
         self.prompt.next_serial = text
-        run.messages.say("info", f"next unit {text} scanned: Enter at the prompt takes it")
+        run.messages.say(
+            "info", tr("next unit {serial} scanned: Enter at the prompt takes it", serial=text)
+        )
 
     def _key(self, key: str) -> None:
         answer = self.prompt.key(key, self.run)
@@ -187,11 +201,11 @@ class StationApp(FrontEnd):
             self._look_up(self.lifecycle.look_up(answer.journal.serial), answer.journal)
         elif isinstance(answer, Resume):
             self.slot.journal_file.clear()
-            self._tell(f"interrupted run of {answer.journal.serial} discarded")
+            self._tell(tr("interrupted run of {serial} discarded", serial=answer.journal.serial))
         elif isinstance(answer, Recalibrate) and answer.yes and self.known is not None:
             self._start_unit(self.known)
         elif isinstance(answer, Recalibrate):
-            self.prompt.note = "not calibrated again: scan the next unit"
+            self.prompt.note = tr("not calibrated again: scan the next unit")
 
     @property
     def last_note(self) -> str | None:
@@ -256,15 +270,28 @@ class StationApp(FrontEnd):
         started = self.lifecycle.start(self.slot, known, journal)
         if isinstance(started, StoredAlready):
             self._tell(
-                f"run {started.run_id} of {serial} is stored already: its journal was left "
-                "behind, discarded; scan the next unit"
+                tr(
+                    "run {run_id} of {serial} is stored already: its journal was left "
+                    "behind, discarded; scan the next unit",
+                    run_id=started.run_id,
+                    serial=serial,
+                )
             )
             return
         if isinstance(started, WrongUnit):
-            self._tell(f"{started.sentence}: set the unit aside; nothing was recorded")
+            self._tell(
+                tr("{problem}: set the unit aside; nothing was recorded", problem=started.sentence)
+            )
             return
         if isinstance(started, Unreachable):
-            self._tell(f"cannot reach unit {serial} on {self.config.port}: {started.problem}")
+            self._tell(
+                tr(
+                    "cannot reach unit {serial} on {port}: {problem}",
+                    serial=serial,
+                    port=self.config.port,
+                    problem=started.problem,
+                )
+            )
             return
         self.prompt.note = self.prompt.note if keep_note else None
         self.prompt.state = State.UNIT
@@ -283,7 +310,7 @@ class StationApp(FrontEnd):
         # A label half-scanned as the unit ended goes on at the serial prompt.
         self.prompt.typed, self.labels.typed = self.labels.typed, ""
         if record is None:
-            self._tell(f"unit {serial} aborted before any pose: nothing recorded")
+            self._tell(tr("unit {serial} aborted before any pose: nothing recorded", serial=serial))
         else:
             self.last_record = record
             self._say_line(verdict_line(record))

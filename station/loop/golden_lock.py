@@ -19,6 +19,7 @@ from uuid import UUID
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from station.domain.i18n import tr
 from station.domain.quality.golden import GoldenUnit, disagreements, due
 from station.domain.records import RunRecord
 from station.results.files import disk_problem, write_atomic
@@ -112,9 +113,11 @@ class GoldenLock:
         if state.locked:
             return state.locked
         if self.unit is not None and due(self.unit, state.last_ok_at, now or datetime.now(UTC)):
-            return (
-                f"GOLDEN UNIT due: scan golden unit {self.unit.serial} before the next unit "
-                f"(every {self.unit.period_h:g} h and at each shift start)"
+            return tr(
+                "GOLDEN UNIT due: scan golden unit {serial} before the next unit "
+                "(every {hours} h and at each shift start)",
+                serial=self.unit.serial,
+                hours=f"{self.unit.period_h:g}",
             )
         return None
 
@@ -141,7 +144,9 @@ class GoldenLock:
             )
             self._save(state)
             self._audit("golden_ok", serial=serial, run_id=str(record.run_id))
-            return f"GOLDEN OK: golden unit {serial} agrees with its reference: go on"
+            return tr(
+                "GOLDEN OK: golden unit {serial} agrees with its reference: go on", serial=serial
+            )
         more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
         sentence = f"LOCKED: golden unit {serial} {found[0]}{more}: call a supervisor"
         state = state.model_copy(
@@ -159,7 +164,7 @@ class GoldenLock:
         """
         state = self.state()
         if not state.locked:
-            return "not locked: nothing to unlock"
+            return tr("not locked: nothing to unlock")
         self._audit(
             "unlock",
             supervisor=supervisor,
@@ -168,4 +173,9 @@ class GoldenLock:
             locked_run=str(state.locked_run) if state.locked_run else None,
         )
         self._save(GoldenState(last_ok_at=datetime.now(UTC), last_ok_run=state.last_ok_run))
-        return f"UNLOCKED by {supervisor}: {reason} (recorded in {self.audit_path.name})"
+        return tr(
+            "UNLOCKED by {supervisor}: {reason} (recorded in {file})",
+            supervisor=supervisor,
+            reason=reason,
+            file=self.audit_path.name,
+        )

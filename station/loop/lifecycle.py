@@ -33,6 +33,7 @@ from datetime import UTC, datetime
 
 from station import __version__
 from station.device import DeviceError, SerialNumberMismatchError
+from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile
 from station.domain.products import Label
 from station.domain.records import RunRecord
@@ -43,7 +44,14 @@ from station.loop.slot import Slot, SlotState
 from station.loop.unit_history import ScanAction, ScanDecision, UnitHistory
 from station.results.journal import DiscardedJournal, RunJournal
 from station.results.storage import RunStore
-from station.run.operator_text import not_a_label, not_a_serial, other_product, port_problem
+from station.run.operator_text import (
+    disposition_word,
+    not_a_label,
+    not_a_serial,
+    other_product,
+    port_problem,
+    verdict_word,
+)
 from station.run.record import ALGORITHM
 from station.run.unit_run import UnitRun, open_unit
 from station.run.verdict import Purpose
@@ -117,8 +125,9 @@ def versions(profile: LimitsProfile) -> str:
 def verdict_line(record: RunRecord) -> str:
     """``PT000042: FAIL (offset): retest``: the verdict in the station's log."""
     failed = ", ".join(f.code for f in record.failures)
-    then = f": {record.disposition}" if record.disposition else ""
-    return f"{record.serial}: {record.verdict.upper()}" + (f" ({failed})" if failed else "") + then
+    then = f": {disposition_word(record.disposition)}" if record.disposition else ""
+    verdict = verdict_word(record.verdict)
+    return f"{record.serial}: {verdict}" + (f" ({failed})" if failed else "") + then
 
 
 def _new_journal(config: StationConfig, label: Label, part_number: str) -> RunJournal:
@@ -207,8 +216,13 @@ class UnitLifecycle:
         elsewhere = next((s for s in self.slots if s.serial == text and s is not slot), None)
         if elsewhere is not None:
             return Said(
-                f"{text} is in {elsewhere.name} already: scan the unit in {slot.name} "
-                f"(Enter: leave {slot.name} empty)"
+                tr(
+                    "{serial} is in {other} already: scan the unit in {slot} "
+                    "(Enter: leave {slot} empty)",
+                    serial=text,
+                    other=elsewhere.name,
+                    slot=slot.name,
+                )
             )
         self._labels[text] = label
         return self.look_up(text)
@@ -263,7 +277,7 @@ class UnitLifecycle:
             slot.journal_file.clear()
             return StoredAlready(str(journal.run_id))
         if port is None:
-            return Unreachable("no putter port configured (--port)")
+            return Unreachable(tr("no putter port configured (--port)"))
         try:
             driver = open_unit(port, serial)
         except SerialNumberMismatchError as exc:

@@ -18,6 +18,7 @@ from rich.live import Live
 from rich.text import Text
 
 from station.domain.errors import InputError
+from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
@@ -118,7 +119,9 @@ class FrontEnd(ABC):
                 f"metrics_port {port}: cannot listen on {self.config.metrics_host}:{port} "
                 f"({exc.strerror or exc})"
             ) from None
-        self._say_line(f"metrics: http://{self.config.metrics_host}:{port}/metrics")
+        self._say_line(
+            tr("metrics: {url}", url=f"http://{self.config.metrics_host}:{port}/metrics")
+        )
         return stop
 
     def _stop(self) -> None:
@@ -142,18 +145,29 @@ class FrontEnd(ABC):
             self.done = True
             return
         self._warned = True
-        held = " and ".join(
+        held = tr(" and ").join(
             part
             for part in (
-                f"{runs} finished run{'s' * (runs != 1)}" if runs else "",
-                f"{journals} unit journal{'s' * (journals != 1)}" if journals else "",
+                (tr("1 finished run") if runs == 1 else tr("{count} finished runs", count=runs))
+                if runs
+                else "",
+                (
+                    tr("1 unit journal")
+                    if journals == 1
+                    else tr("{count} unit journals", count=journals)
+                )
+                if journals
+                else "",
             )
             if part
         )
         self._tell(
-            f"NOT STOPPED: {held} only in memory (the disk refuses them, the results store "
-            "does not take them): free the disk or bring the store back and they go; quit "
-            "or Ctrl-D again to save them elsewhere and stop"
+            tr(
+                "NOT STOPPED: {held} only in memory (the disk refuses them, the results store "
+                "does not take them): free the disk or bring the store back and they go; quit "
+                "or Ctrl-D again to save them elsewhere and stop",
+                held=held,
+            )
         )
 
     def _loop(self, draw: Callable[[], None]) -> None:

@@ -22,6 +22,7 @@ from enum import StrEnum
 from rich.console import Group, RenderableType
 from rich.text import Text
 
+from station.domain.i18n import tr
 from station.domain.records import RunRecord
 from station.loop.screens import serial_prompt, unit_screen, verdict_screen
 from station.results.journal import RunJournal
@@ -158,8 +159,13 @@ class Prompt:
             j = self.pending_resume
             parts.append(
                 Text(
-                    f"Unit {j.serial} was interrupted at pose {j.next_pose + 1} of {len(j.poses)}. "
-                    "Resume it? press y (resume) or n (discard)",
+                    tr(
+                        "Unit {serial} was interrupted at pose {number} of {total}. "
+                        "Resume it? press y (resume) or n (discard)",
+                        serial=j.serial,
+                        number=j.next_pose + 1,
+                        total=len(j.poses),
+                    ),
                     style="bold yellow",
                 )
             )
@@ -170,7 +176,7 @@ class Prompt:
             if self.confirm_abort:
                 parts.append(
                     Text(
-                        "abort this unit? press y to confirm, any other key to go on",
+                        tr("abort this unit? press y to confirm, any other key to go on"),
                         style="bold red",
                     )
                 )
@@ -178,14 +184,22 @@ class Prompt:
                 index = self.confirm_redo
                 parts.append(
                     Text(
-                        f"take pose {index + 1} ({pose_words(run.poses[index].name)}) again? "
-                        "press y to confirm, any other key to go on",
+                        tr(
+                            "take pose {number} ({pose}) again? "
+                            "press y to confirm, any other key to go on",
+                            number=index + 1,
+                            pose=pose_words(run.poses[index].name),
+                        ),
                         style="bold red",
                     )
                 )
             if label or self.next_serial:
-                shown = f"{label}█" if label else f"{self.next_serial} (Enter at the prompt)"
-                parts.append(Text(f"next unit: {shown}", style="bold"))
+                shown = (
+                    f"{label}█"
+                    if label
+                    else tr("{serial} (Enter at the prompt)", serial=self.next_serial)
+                )
+                parts.append(Text(tr("next unit: {unit}", unit=shown), style="bold"))
         else:
             if last_record is not None:
                 parts.append(verdict_screen(last_record))

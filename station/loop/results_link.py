@@ -29,6 +29,7 @@ from rich.text import Text
 
 from station.domain.arrays import FloatArray
 from station.domain.gyro import NotIdentifiableError
+from station.domain.i18n import tr
 from station.domain.records import RunRecord
 from station.loop.unit_history import UnitHistory
 from station.results.disk import DiskWatch
@@ -153,7 +154,9 @@ class ResultsLink:
         if self.store_note:
             lines.append(Text(self.store_note, style="yellow"))
         for serial in self._lookups:
-            lines.append(Text(f"waiting for the results store: the history of {serial}…"))
+            lines.append(
+                Text(tr("waiting for the results store: the history of {serial}…", serial=serial))
+            )
         if self._sync is not None and time.monotonic() - self._sync_started > SAY_WAITING_AFTER_S:
             lines.append(Text(f"waiting for the results store: {waiting(self.backlog)}…"))
         return lines
@@ -267,11 +270,13 @@ class ResultsLink:
         if opened is not None and opened.done():
             self._opened = None
             if opened.result():
-                self._say_line("results database: connected")
+                self._say_line(tr("results database: connected"))
             else:
                 self._store_says(
-                    f"results database unreachable ({self._sender.unavailable}): "
-                    "runs will wait in the outbox"
+                    tr(
+                        "results database unreachable ({why}): runs will wait in the outbox",
+                        why=self._sender.unavailable,
+                    )
                 )
         sync = self._sync
         if sync is None or not sync.done():

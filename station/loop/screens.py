@@ -5,27 +5,39 @@ terminal, the demo's scripted operator and the tests.
 """
 
 from rich.align import Align
+from rich.cells import cell_len
 from rich.console import Group, RenderableType
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from station.domain.i18n import tr
 from station.domain.poses import Pose
 from station.domain.records import RunRecord
-from station.run.operator_text import pose_words, wrong_unit
+from station.run.operator_text import (
+    pose_instruction,
+    pose_words,
+    verdict_word,
+    wrong_unit,
+)
 from station.run.phases import Phase
 from station.run.view import RunView
 
-#: Small drawings of the putter in each named pose (head ▣, shaft ║ or ═, grip ▓).
-DRAWINGS: dict[str, str] = {
-    "face_up": "   face ↑\n ▣═════════▓\n (lying on its back)",
-    "face_down": " ▣═════════▓\n   face ↓\n (lying face down)",
-    "toe_up": "  toe ↑\n  ▣═════════▓\n  heel on the table",
-    "toe_down": "  heel ↑\n  ▣═════════▓\n  toe on the table",
-    "shaft_up": "  ▓\n  ║\n  ║\n  ▣  head down, shaft up",
-    "shaft_down": "  ▣  head up, grip down\n  ║\n  ║\n  ▓",
-    "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   tilted cradle",
-}
+
+def drawing(name: str) -> str:
+    """A small drawing of the putter in the pose ``name`` (head ▣, shaft ║ or ═, grip ▓),
+    its words in the operator's language ("" for a pose without one)."""
+    drawings = {
+        "face_up": "   " + tr("face") + " ↑\n ▣═════════▓\n " + tr("(lying on its back)"),
+        "face_down": " ▣═════════▓\n   " + tr("face") + " ↓\n " + tr("(lying face down)"),
+        "toe_up": "  " + tr("toe") + " ↑\n  ▣═════════▓\n  " + tr("heel on the table"),
+        "toe_down": "  " + tr("heel") + " ↑\n  ▣═════════▓\n  " + tr("toe on the table"),
+        "shaft_up": "  ▓\n  ║\n  ║\n  ▣  " + tr("head down, shaft up"),
+        "shaft_down": "  ▣  " + tr("head up, grip down") + "\n  ║\n  ║\n  ▓",
+        "verify_tilted": "     ▓\n    ╱\n   ╱\n  ▣   " + tr("tilted cradle"),
+    }
+    return drawings.get(name, "")
+
 
 BANNER = {
     "pass": (
@@ -44,29 +56,45 @@ BANNER = {
     ),
 }
 
-#: What each disposition tells the operator, under the verdict.
-NEXT_STEP: dict[str, tuple[str, str]] = {
-    "ship": ("SHIP: the unit holds verified coefficients; put it with the good units", "green"),
-    "retest": ("RETEST: calibrate this unit again", "yellow"),
-    "rework": ("REWORK: take the unit to the repair bench; do not calibrate it again", "red"),
-}
 
-KEYS_HELP = (
-    "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help · "
-    "scan the next unit's label any time"
-)
-HELP = """\
-The station asks for one pose at a time. Put the putter in the pose shown, let go,
-and keep hands off: the capture starts by itself once it lies still in that pose.
+def next_step(disposition: str) -> tuple[str, str]:
+    """What a disposition tells the operator, under the verdict, and its colour."""
+    return {
+        "ship": (
+            tr("SHIP: the unit holds verified coefficients; put it with the good units"),
+            "green",
+        ),
+        "retest": (tr("RETEST: calibrate this unit again"), "yellow"),
+        "rework": (
+            tr("REWORK: take the unit to the repair bench; do not calibrate it again"),
+            "red",
+        ),
+    }[disposition]
 
-  r      redo the last pose taken (then y to confirm)
-  1…9    redo pose number N, once taken (then y; its old capture is kept for audit)
-  a      abort this unit (press a, then y to confirm)
-  h, ?   show or hide this help
 
-A label scanned during a unit is the next unit's: Enter at the serial prompt takes it.
+def keys_help() -> str:
+    """The keys, in one line under the unit's screen."""
+    return tr(
+        "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help · "
+        "scan the next unit's label any time"
+    )
 
-At the serial prompt: scan the label (or type it and press Enter); type quit to stop."""
+
+def help_text() -> str:
+    """The help the h key shows."""
+    return tr(
+        "The station asks for one pose at a time. Put the putter in the pose shown, let go,\n"
+        "and keep hands off: the capture starts by itself once it lies still in that pose.\n"
+        "\n"
+        "  r      redo the last pose taken (then y to confirm)\n"
+        "  1…9    redo pose number N, once taken (then y; its old capture is kept for audit)\n"
+        "  a      abort this unit (press a, then y to confirm)\n"
+        "  h, ?   show or hide this help\n"
+        "\n"
+        "A label scanned during a unit is the next unit's: Enter at the serial prompt takes it.\n"
+        "\n"
+        "At the serial prompt: scan the label (or type it and press Enter); type quit to stop."
+    )
 
 
 def header(
@@ -77,26 +105,35 @@ def header(
     set_aside: tuple[int, int] = (0, 0),
 ) -> RenderableType:
     """The top lines: who, how many runs wait in the outbox (and were set aside), versions."""
-    backlog_text = f"outbox {backlog}" if backlog else "outbox empty"
+    backlog_text = tr("outbox {count}", count=backlog) if backlog else tr("outbox empty")
     style = "bold yellow" if backlog else "green"
     unreadable, refused = set_aside
-    aside = [f"{unreadable} unreadable"] if unreadable else []
-    aside += [f"{refused} refused"] if refused else []
+    aside = [tr("{count} unreadable", count=unreadable)] if unreadable else []
+    aside += [tr("{count} refused", count=refused)] if refused else []
     who = Text.assemble(
         ("calstation", "bold"),
-        f" · station {station_id} · operator {operator_id} · ",
+        " · ",
+        tr("station {station} · operator {operator}", station=station_id, operator=operator_id),
+        " · ",
         (backlog_text, style),
         (f" · {' · '.join(aside)} (calstation outbox list)" if aside else "", "bold red"),
     )
     return Group(who, Text(versions, style="dim"))
 
 
-def _meter(value: float, limit: float, label: str, unit: str) -> Text:
+def _meter(value: float, limit: float, label: str, width: int, unit: str) -> Text:
+    """``label`` in ``width`` cells, then a bar of ``value`` against ``limit``."""
     ratio = min(value / limit, 2.0) if limit > 0 else 0.0
     filled = round(ratio * 10)
     style = "green" if ratio <= 1 else "red"
     bar = "▇" * min(filled, 20) + "·" * max(0, 10 - filled)
-    return Text.assemble(f"{label:<6}", (bar, style), f" {value:5.2f} / {limit:g} {unit}")
+    return Text.assemble(pad(label, width), (bar, style), f" {value:5.2f} / {limit:g} {unit}")
+
+
+def pad(text: str, cells: int) -> str:
+    """``text`` padded with spaces to ``cells`` terminal cells (a Korean or Chinese
+    character takes two)."""
+    return text + " " * max(0, cells - cell_len(text))
 
 
 def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
@@ -104,51 +141,64 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
     total = len(view.poses)
     target: Pose | None = view.requested
     parts: list[RenderableType] = []
-    title = f"unit {view.serial}"
+    title = tr("unit {serial}", serial=view.serial)
     if view.phase is Phase.RECONNECT and view.wrong_unit is not None:
         parts.append(Text(wrong_unit(view.wrong_unit, view.serial).upper(), style="bold red"))
     elif view.phase is Phase.RECONNECT:
         parts.append(
-            Text("CABLE PULLED — plug the unit back in; the poses taken are kept", style="bold red")
+            Text(
+                tr("CABLE PULLED — plug the unit back in; the poses taken are kept"),
+                style="bold red",
+            )
         )
     elif view.phase is Phase.UNIT_OUTPUT:
         parts.append(
-            Text("checking the unit's own calibrated output — keep it still", style="bold")
+            Text(tr("checking the unit's own calibrated output — keep it still"), style="bold")
         )
     elif target is not None:
         step = Text.assemble(
-            (f"pose {view.index + 1} of {total}: {pose_words(target.name)}", "bold cyan"),
-            f" — {target.instruction}",
+            (
+                tr(
+                    "pose {number} of {total}: {pose}",
+                    number=view.index + 1,
+                    total=total,
+                    pose=pose_words(target.name),
+                ),
+                "bold cyan",
+            ),
+            f" — {pose_instruction(target)}",
         )
         parts.append(step)
-        parts.append(Text(DRAWINGS.get(target.name, ""), style="cyan"))
+        parts.append(Text(drawing(target.name), style="cyan"))
         live = view.live
         if live.sensed is not None:
-            ok = "✓ matches" if live.matches else "✗ not the pose asked for"
+            ok = tr("✓ matches") if live.matches else tr("✗ not the pose asked for")
             parts.append(
                 Text.assemble(
-                    "station sees: ",
+                    tr("station sees: "),
                     (pose_words(live.sensed.nearest.name), "bold"),
-                    f" ({live.sensed.nearest_deg:.0f}° off)  ",
+                    tr(" ({degrees}° off)  ", degrees=f"{live.sensed.nearest_deg:.0f}"),
                     (ok, "green" if live.matches else "red"),
                 )
             )
         limits = view.stillness
+        accel, gyro = tr("accel"), tr("gyro")
+        width = max(cell_len(accel), cell_len(gyro)) + 1  # the bars start in one column
         parts.append(
-            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, "accel", "counts")
+            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, "counts")
         )
         parts.append(
-            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, "gyro", "deg/s")
+            _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, gyro, width, "deg/s")
         )
-        state = "moving" if live.moving else "still"
+        state = tr("moving") if live.moving else tr("still")
         filled = round(live.progress * 30)
         refused = live.refused is not None and live.progress >= 1.0
         parts.append(
             Text.assemble(
-                f"capture ({state}) ",
+                tr("capture ({state}) ", state=state),
                 ("█" * filled, "red" if refused else "green"),
                 ("░" * (30 - filled), "dim"),
-                " refused" if refused else f" {live.progress:4.0%}",
+                " " + tr("refused") if refused else f" {live.progress:4.0%}",
             )
         )
         if live.refused is not None:
@@ -162,7 +212,7 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
     for message in view.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
         parts.append(Text(message.text, style=style))
-    parts.append(Text(HELP if show_help else KEYS_HELP, style="dim"))
+    parts.append(Text(help_text() if show_help else keys_help(), style="dim"))
     return Panel(Group(*parts), title=title, border_style="cyan")
 
 
@@ -172,14 +222,22 @@ def verdict_screen(record: RunRecord) -> RenderableType:
     big = Text("\n".join(BANNER[record.verdict]), style=style, justify="left", no_wrap=True)
     lines: list[RenderableType] = [
         Align.center(big),
-        Text(f"{record.verdict.upper()}  unit {record.serial}", style="bold", justify="center"),
+        Text(
+            tr(
+                "{verdict}  unit {serial}",
+                verdict=verdict_word(record.verdict),
+                serial=record.serial,
+            ),
+            style="bold",
+            justify="center",
+        ),
     ]
     if record.coefficients is not None:
         c = record.coefficients
         table = Table(box=None, show_header=True, pad_edge=False)
-        table.add_column("axis")
-        table.add_column("offset (counts)", justify="right")
-        table.add_column("sensitivity (counts/g)", justify="right")
+        table.add_column(tr("axis"))
+        table.add_column(tr("offset (counts)"), justify="right")
+        table.add_column(tr("sensitivity (counts/g)"), justify="right")
         for axis in ("x", "y", "z"):
             table.add_row(
                 axis, f"{getattr(c.offset, axis):.2f}", f"{getattr(c.sensitivity, axis):.2f}"
@@ -188,19 +246,19 @@ def verdict_screen(record: RunRecord) -> RenderableType:
     for failure in record.failures:
         lines.append(Text(f"✗ {failure.code}: {failure.message}", style="red"))
     if record.disposition is not None:
-        step, colour = NEXT_STEP[record.disposition]
-        lines.append(Text(f"next: {step}", style=f"bold {colour}", justify="center"))
-    lines.append(Text(f"run {record.run_id}", style="dim", justify="center"))
+        step, colour = next_step(record.disposition)
+        lines.append(Text(tr("next: {step}", step=step), style=f"bold {colour}", justify="center"))
+    lines.append(Text(tr("run {run_id}", run_id=record.run_id), style="dim", justify="center"))
     return Panel(Group(*lines), border_style="green" if record.verdict == "pass" else "red")
 
 
 def serial_prompt(typed: str, note: str | None, queued: str | None = None) -> RenderableType:
     """The prompt for the next unit's serial number (``queued``: scanned during the last
     unit, taken by Enter)."""
-    take = f" (Enter: {queued}, scanned during the last unit)" if queued else ""
+    take = tr(" (Enter: {serial}, scanned during the last unit)", serial=queued) if queued else ""
     parts: list[RenderableType] = [
         Text.assemble(
-            ("Scan the next unit's serial number", "bold"), f"{take}: ", typed, ("█", "blink")
+            (tr("Scan the next unit's serial number"), "bold"), f"{take}: ", typed, ("█", "blink")
         )
     ]
     if note:

@@ -14,14 +14,18 @@ audit file (:mod:`station.loop.golden_lock`).
 from dataclasses import dataclass
 from pathlib import Path
 
+from station.domain.i18n import tr
 from station.domain.quality.golden import GoldenUnit
 from station.domain.records import RunRecord
 from station.loop.drift_watch import DriftWatch
 from station.loop.golden_lock import GoldenLock
 
-UNLOCK_USAGE = (
-    "unlock needs a name and a reason: unlock NAME REASON (e.g. unlock j.smith jig reseated)"
-)
+
+def unlock_usage() -> str:
+    """How a supervisor unlocks the station, said when the unlock lacks a word."""
+    return tr(
+        "unlock needs a name and a reason: unlock NAME REASON (e.g. unlock j.smith jig reseated)"
+    )
 
 
 @dataclass(frozen=True)
@@ -48,7 +52,7 @@ class ShiftChecks:
         words = text.split()
         if words and words[0].lower() == "unlock":
             if len(words) < 3:
-                return AtScan(UNLOCK_USAGE)
+                return AtScan(unlock_usage())
             return AtScan(self.golden.unlock(words[1], " ".join(words[2:])))
         refusal = self.golden.refusal(text)
         if refusal is not None:
@@ -60,6 +64,6 @@ class ShiftChecks:
         against its reference, a production run fed to the drift watch."""
         if record.purpose == "golden":
             if record.failures and all(f.code == "aborted" for f in record.failures):
-                return "golden unit aborted: it is still due"
+                return tr("golden unit aborted: it is still due")
             return self.golden.finish(record)
         return self.drift.add(record)

@@ -16,6 +16,7 @@ from urllib.parse import urlsplit
 import serial
 
 from station.domain.errors import InputError
+from station.domain.i18n import tr
 from station.results.files import disk_problem, write_atomic
 
 #: Room the data directory must have at start: a unit's journal and its run record
@@ -34,8 +35,12 @@ def prepare_data_dir(path: Path) -> None:
         probe.unlink()
     except OSError as exc:
         raise InputError(
-            f"data directory {directory}: {disk_problem(exc)}: the station cannot keep "
-            "its journal and outbox there"
+            tr(
+                "data directory {directory}: {problem}: the station cannot keep "
+                "its journal and outbox there",
+                directory=directory,
+                problem=disk_problem(exc),
+            )
         ) from None
 
 
@@ -48,7 +53,7 @@ def check_port(port: str | None) -> None:
     says so and tries again at every scan.
     """
     if not port:
-        raise InputError("no putter port: give --port or set port in the station configuration")
+        raise InputError(tr("no putter port: give --port or set port in the station configuration"))
     if "://" in port:
         try:
             serial.serial_for_url(port, do_not_open=True)
@@ -61,13 +66,18 @@ def check_port(port: str | None) -> None:
     except OSError as exc:
         if isinstance(exc, FileNotFoundError):
             raise InputError(
-                f"port {port}: no such device (is the adapter plugged in? check --port)"
+                tr(
+                    "port {port}: no such device (is the adapter plugged in? check --port)",
+                    port=port,
+                )
             ) from None
         raise InputError(f"port {port}: {disk_problem(exc)}") from None
     if not stat.S_ISCHR(mode):
-        raise InputError(f"port {port}: not a serial device")
+        raise InputError(tr("port {port}: not a serial device", port=port))
     if not os.access(port, os.R_OK | os.W_OK):
-        raise InputError(f"port {port}: permission denied (the user needs the dialout group)")
+        raise InputError(
+            tr("port {port}: permission denied (the user needs the dialout group)", port=port)
+        )
 
 
 def check_slot_ports(ports: Sequence[str]) -> list[str]:
@@ -86,7 +96,9 @@ def check_slot_ports(ports: Sequence[str]) -> list[str]:
         try:
             check_port(port)
         except InputError as exc:
-            lines.append(f"slot {number}: {exc}: the other slots go on")
+            lines.append(
+                tr("slot {number}: {problem}: the other slots go on", number=number, problem=exc)
+            )
     return lines
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from station.domain.constants import DEFAULT_PART_NUMBER
+from station.domain.i18n import tr
 from station.domain.records import HoldReview, RunRecord, RunSummary
 from station.domain.unit_state import UnitCalibration
 from station.results.storage import RunStore, StoreError
@@ -111,23 +112,32 @@ class UnitHistory:
         not released, no attempts left, calibrated as another product than
         ``part_number``, the station's)."""
         note = (
-            f"history of {self.serial} unavailable ({self.unavailable}): going on"
+            tr(
+                "history of {serial} unavailable ({why}): going on",
+                serial=self.serial,
+                why=self.unavailable,
+            )
             if self.unavailable
             else None
         )
         if self.runs and self.runs[-1].part_number != part_number:
-            text = (
-                f"{self.serial} was calibrated as {self.runs[-1].part_number}, scanned as "
-                f"{part_number}: set it aside for its own product's station; nothing was "
-                "recorded"
+            text = tr(
+                "{serial} was calibrated as {before}, scanned as {part_number}: set it aside "
+                "for its own product's station; nothing was recorded",
+                serial=self.serial,
+                before=self.runs[-1].part_number,
+                part_number=part_number,
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         decided = self.decided
         if decided is not None and decided.decision == "scrap":
-            text = (
-                f"{self.serial} was scrapped by {decided.reviewer} on "
-                f"{local_time(decided.reviewed_at)} ({decided.root_cause}): it is not "
-                "calibrated again"
+            text = tr(
+                "{serial} was scrapped by {reviewer} on {time} ({cause}): it is not "
+                "calibrated again",
+                serial=self.serial,
+                reviewer=decided.reviewer,
+                time=local_time(decided.reviewed_at),
+                cause=decided.root_cause,
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         runs = self.counted
@@ -136,29 +146,41 @@ class UnitHistory:
         state = UnitCalibration.of_history(runs)
         used = state.attempts >= attempts_allowed
         if state.verdict == "pass" and state.holds is not None:
-            passed = (
-                f"{self.serial} passed at {local_time(state.holds.written_at)} "
-                f"on {state.holds.station_id}"
+            passed = tr(
+                "{serial} passed at {time} on {station}",
+                serial=self.serial,
+                time=local_time(state.holds.written_at),
+                station=state.holds.station_id,
             )
             if used:
-                text = (
-                    f"{passed} and has had {state.attempts} attempts, the limit: "
-                    "ship it as it is, or send it to rework"
+                text = tr(
+                    "{passed} and has had {attempts} attempts, the limit: "
+                    "ship it as it is, or send it to rework",
+                    passed=passed,
+                    attempts=state.attempts,
                 )
                 return ScanDecision(ScanAction.REFUSE, text, note)
-            return ScanDecision(ScanAction.CONFIRM, f"{passed}: calibrate again? y/n", note)
+            return ScanDecision(
+                ScanAction.CONFIRM, tr("{passed}: calibrate again? y/n", passed=passed), note
+            )
         if used:
-            text = (
-                f"{self.serial} has failed {state.attempts} attempts "
-                f"(limit {attempts_allowed}): send it to rework, it is not calibrated again"
+            text = tr(
+                "{serial} has failed {attempts} attempts "
+                "(limit {limit}): send it to rework, it is not calibrated again",
+                serial=self.serial,
+                attempts=state.attempts,
+                limit=attempts_allowed,
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         if runs[-1].disposition == "rework":
-            failed = ", ".join(f.code for f in runs[-1].failures) or "failed"
-            text = (
-                f"{self.serial} was sent to rework at {local_time(runs[-1].finished_at)} "
-                f"({failed}): it is not calibrated until a quality review releases it "
-                f"(calstation review {self.serial} --decision retest …)"
+            failed = ", ".join(f.code for f in runs[-1].failures) or tr("failed")
+            text = tr(
+                "{serial} was sent to rework at {time} ({failed}): it is not calibrated "
+                "until a quality review releases it (calstation review {serial} --decision "
+                "retest …)",
+                serial=self.serial,
+                time=local_time(runs[-1].finished_at),
+                failed=failed,
             )
             return ScanDecision(ScanAction.REFUSE, text, note)
         return ScanDecision(ScanAction.START, note=note)

@@ -39,7 +39,7 @@ from station.run.acquisition import (
     judge_window,
 )
 from station.run.messages import MessageLog
-from station.run.operator_text import MOVED_EARLY, capture_refused, pose_words
+from station.run.operator_text import capture_refused, moved_early, pose_words
 
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128
@@ -177,7 +177,7 @@ class PoseCapture:
                 said = tr("moved during capture of {pose}: hold the putter still", pose=name)
                 self._messages.say("warn", said)
             elif self.live.progress >= 0.05 and self.live.matches:  # not the settling
-                refused = MOVED_EARLY
+                refused = moved_early()
             self._still_samples = 0
         if self._moved and not matches and not verdict.motion:
             self._say_wrong_pose(sensed, index, target)

@@ -25,6 +25,7 @@ from station.domain.arrays import FloatArray
 from station.domain.calibration import Calibration, Solution, apply
 from station.domain.gyro import GyroErrorModel, compensate
 from station.domain.gyro.motion import GyroMatrixFit, Move, fit_gyro_matrix
+from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile, check
 from station.domain.record_bounds import CONDITION_MAX
 from station.domain.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
@@ -96,9 +97,9 @@ class LiveGyro:
             self._rate_hz,
             settings.pose_timeout_s,
         )
-        return (
-            f"verification move: turn the putter {pose_words(settings.gyro_verification_pose)}"
-            " and hold it still"
+        return tr(
+            "verification move: turn the putter {pose} and hold it still",
+            pose=pose_words(settings.gyro_verification_pose),
         )
 
     def poll_verification(self, driver: PutterDriver) -> bool:

@@ -32,7 +32,7 @@ def _template_ids() -> set[str]:
 def test_the_template_holds_every_line_the_sources_translate() -> None:
     said = {
         message
-        for folder in ("station/run", "station/loop")
+        for folder in ("station/run", "station/loop", "station/cli")
         for _, _, message, _, _ in extract_from_dir(
             ROOT / folder, keywords={"tr": None}, comment_tags=()
         )

@@ -153,12 +153,27 @@ def test_a_demo_of_a_product_it_cannot_run_is_one_line_and_exit_2(
 def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_path: Path) -> None:
     env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path), "CALSTATION_LANGUAGE": "zh"}
     env.pop("CALSTATION_DATABASE_URL", None)
-    args = ("demo", "--units", "1", "--speed", "20", "--language", "ko")  # the flag wins
+    args = ("demo", "--units", "1", "--speed", "40", "--language", "ko")  # the flag wins
     result = run_cli(*args, env=env, timeout=180)
     assert result.returncode == 0, result.stderr
-    assert re.search(r"PT\d{6}: 교정 시작 \(실행 [0-9a-f-]{36}\)", result.stderr)
-    assert "측정 완료" in result.stderr
-    assert "calibration started" not in result.stderr
+    said = result.stdout + result.stderr
+    assert re.search(r"PT\d{6}: 교정 시작 \(실행 [0-9a-f-]{36}\)", said)
+    assert "데모: 가상 퍼터 1개, 스크립트 작업자가 각각 차례로 " in said
+    # Every pose, by its Korean name, and the verdict and where the unit goes.
+    for pose in ("페이스 위", "페이스 아래", "토우 위", "토우 아래", "샤프트 위", "샤프트 아래"):
+        assert re.search(rf"PT\d{{6}}: 자세 \d\({pose}\) 측정 완료", said), pose
+    assert re.search(r"PT\d{6}: 합격: 출하$", said, re.MULTILINE)
+    assert "유닛 1개 교정 완료; 전송 대기 0; 데이터베이스 " in said
+    assert "결과 데이터베이스: 연결됨" in said
+    for english in (
+        "calibration started",
+        "captured",
+        "PASS",
+        "ship",
+        "virtual putter",
+        "database:",
+    ):
+        assert english not in said, english
     refused = run_cli("demo", "--units", "1", "--language", "fr", env=env, timeout=60)
     assert refused.returncode == 2
     [said] = refused.stderr.strip().splitlines()

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from station.domain.quality.golden import GoldenUnit, disagreements, due
 from station.domain.records import RunRecord
 from station.loop.golden_lock import GoldenLock
-from station.loop.shift_checks import UNLOCK_USAGE, ShiftChecks
+from station.loop.shift_checks import ShiftChecks, unlock_usage
 from tests.db.records import make_record
 
 OFFSET = (2081.9, 2041.2, 1960.5)
@@ -84,7 +84,7 @@ def test_a_disagreeing_golden_unit_locks_the_station_across_a_restart(tmp_path: 
     assert again.lines() == [expected]
     assert again.at_scan("PT000001").said == expected
     assert again.at_scan("GU-001").said == expected
-    assert again.at_scan("unlock j.smith").said == UNLOCK_USAGE
+    assert again.at_scan("unlock j.smith").said == unlock_usage()
     unlocked = again.at_scan("unlock j.smith jig reseated, reference checked")
     assert unlocked.said == (
         "UNLOCKED by j.smith: jig reseated, reference checked (recorded in audit-st-1.jsonl)"
