@@ -436,7 +436,9 @@ async def get_certificate(
     stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
     gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
     profile = stored.get(run.limits.sha256)
-    return HTMLResponse(certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone))
+    reviews = await repository.run(lambda r: r.reviews(serial)) if run.verdict == "fail" else []
+    page = certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone, reviews)
+    return HTMLResponse(page)
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

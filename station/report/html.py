@@ -19,7 +19,7 @@ from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
-from station.domain.records import GyroFitRecord, RunSummary, StoredRun
+from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
@@ -201,13 +201,21 @@ def dashboard_page(
     )
 
 
-def unit_page(runs: Sequence[RunSummary], generated_at: datetime, zone: str = "UTC") -> str:
+def unit_page(
+    runs: Sequence[RunSummary],
+    generated_at: datetime,
+    zone: str = "UTC",
+    reviews: Sequence[HoldReview] = (),
+) -> str:
     """A unit's page: its state and every one of its ``runs`` (oldest first, at least one),
-    times in the plant's ``zone``."""
+    its quality ``reviews`` (oldest first) and, when it is on hold, the form to review
+    it; times in the plant's ``zone``."""
     unit = UnitCalibration.of_history(runs)
     return _env.get_template("unit.html").render(
         unit=unit,
         runs=runs,
+        reviews=reviews,
+        reviewed=any(review.run_id == runs[-1].run_id for review in reviews),
         generated_at=generated_at,
         zone=zone,
         document_title=DOCUMENT_TITLES[unit.verdict],
@@ -237,6 +245,7 @@ def certificate_page(
     gyro_fit: GyroFitRecord | None = None,
     earlier: Sequence[RunSummary] = (),
     zone: str = "UTC",
+    reviews: Sequence[HoldReview] = (),
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -245,6 +254,7 @@ def certificate_page(
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
     stations), which the page says. Times are in the plant's ``zone``, as on the unit's page.
+    ``reviews``: the unit's quality reviews (a failure report lists them).
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
     """
@@ -262,6 +272,7 @@ def certificate_page(
         gyro_fit=gyro_fit,
         earlier=earlier,
         zone=zone,
+        reviews=reviews,
         document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
     )
