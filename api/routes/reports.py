@@ -37,12 +37,19 @@ from db.holds import held_units
 from db.limits_profiles import stored_profiles
 from db.reports import ReportQueries, eol_report
 from db.run_export import HEADER, run_page
+from db.split import SPLIT_PARAMETERS, SPLIT_RUNS, split_report
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
+from station.domain.quality.split import SplitBy, SplitReport
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.html import certificate_page, dashboard_page, failing_runs_page
+from station.report.html import (
+    certificate_page,
+    dashboard_page,
+    failing_runs_page,
+    split_page,
+)
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 
@@ -295,6 +302,60 @@ def eol_body(
         shifts=plant.shifts,
     )
     return render(report, format)
+
+
+SPLIT_TITLE = "Analysis by split"
+SplitParameter = Annotated[
+    str,
+    Query(
+        pattern=f"^({'|'.join(SPLIT_PARAMETERS)})$",
+        description="the parameter: " + ", ".join(SPLIT_PARAMETERS),
+    ),
+]
+
+
+@router.get(
+    "/reports/split",
+    response_class=Response,
+    responses={
+        200: {
+            "model": SplitReport,
+            "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+            "description": "the parameter's box plots and figures per group (HTML, or JSON "
+            f"with `format=json`), from the latest {SPLIT_RUNS} runs of the period and filter",
+        },
+        422: {**problems(422)[422], **_REFUSED_PAGE},
+    },
+)
+@answers_pages(SPLIT_TITLE, "html", form=False)
+async def get_split(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    parameter: SplitParameter,
+    by: Annotated[SplitBy, Query(description="the run's column the runs are split by")],
+    format: Literal["json", "html"] = "html",
+) -> Response:
+    """A parameter's distribution and capability split by station, lot, operator, product
+    or software version: n, mean, sd, quartiles, Tukey whiskers and outliers, Cpk and
+    observed ppm per group (the latest runs of the period, bounded)."""
+    body = await repository.run(split_body, period.filter(zone), parameter, by, format, zone)
+    return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def split_body(
+    repository: RunRepository,
+    filter: ReportFilter,
+    parameter: str,
+    by: SplitBy,
+    format: str,
+    zone: str,
+) -> str:
+    """The split (in a report process: :mod:`api.report_pool`)."""
+    report = split_report(repository.session, filter, parameter, by)
+    if format == "json":
+        return report.model_dump_json(indent=2) + "\n"
+    return split_page(report, zone, SPLIT_PARAMETERS)
 
 
 #: The most runs the page of a Pareto bar lists (the latest).

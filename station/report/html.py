@@ -8,7 +8,7 @@ page links to the unit's page through one macro, ``serial_link`` in ``base.html`
 
 from collections.abc import Callable, Sequence
 from datetime import datetime
-from typing import Any
+from typing import Any, get_args
 from urllib.parse import urlencode
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -19,6 +19,7 @@ from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
+from station.domain.quality.split import SplitBy, SplitReport
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
@@ -61,6 +62,7 @@ _env.globals.update(
     histogram=lambda stats: Markup(svg.histogram(stats)),
     pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
     control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
+    box_plots=lambda report: Markup(svg.box_plots(report)),
 )
 
 
@@ -219,6 +221,24 @@ def unit_page(
         generated_at=generated_at,
         zone=zone,
         document_title=DOCUMENT_TITLES[unit.verdict],
+    )
+
+
+def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str:
+    """A parameter split by a run's column (:mod:`station.domain.quality.split`): box
+    plots and each group's figures, a form to choose another ``parameters`` or split."""
+    query = {"parameter": report.parameter, "by": report.by}
+    form = filter_query(report.filter, zone)
+    if report.filter.part_number:
+        form["part_number"] = report.filter.part_number
+    return _env.get_template("split.html").render(
+        report=report,
+        zone=zone,
+        parameters=parameters,
+        splits=get_args(SplitBy),
+        form=form,
+        report_query=urlencode({"format": "html", **form}),
+        json_query=urlencode({**query, **form, "format": "json"}),
     )
 
 
