@@ -43,10 +43,12 @@ from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
+from db.station_health import CYCLE_RUNS, station_health
 from station.domain.limits import load_profile
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import profile_bounds
-from station.report.html import certificate_page, unit_page
+from station.domain.quality.station_health import StationHealth
+from station.report.html import certificate_page, station_page, unit_page
 from station.report.render import render
 
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -138,6 +140,12 @@ SHIFTS = (clock(6), clock(14), clock(22))
 EVERY_UNIT_PAGE_RUNS = 100_000
 
 
+def _health(session: Any) -> StationHealth:
+    health = station_health(session, "line1-st1")
+    assert health is not None
+    return health
+
+
 def pages(session: Any, repeat: int, runs: int) -> None:
     """The HTML pages over the generated history: seconds to build, and kB."""
     repository = RunRepository(session)
@@ -196,6 +204,11 @@ def pages(session: Any, repeat: int, runs: int) -> None:
         (
             "split of offset_x by station (`/api/v1/reports/split`, the latest 20,000 runs)",
             lambda: split_body(repository, ReportFilter(), "offset_x", "station", "html", "UTC"),
+            repeat,
+        ),
+        (
+            "station health `/stations/line1-st1` (golden checks, the latest 2,000 runs)",
+            lambda: station_page(_health(session), "UTC", CYCLE_RUNS),
             repeat,
         ),
         (

@@ -20,6 +20,12 @@ from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.split import SplitBy, SplitReport
+from station.domain.quality.station_health import (
+    BASELINE_CHECKS,
+    OFFSET_TOLERANCE,
+    SENSITIVITY_TOLERANCE,
+    StationHealth,
+)
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
@@ -239,6 +245,52 @@ def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str
         form=form,
         report_query=urlencode({"format": "html", **form}),
         json_query=urlencode({**query, **form, "format": "json"}),
+    )
+
+
+def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
+    """A station's health page: golden-unit checks against their baseline (charts and
+    table), drift warnings, cycle times (box plot, figures), versions in use."""
+    checks = [c for c in health.golden if c.offset_deviation and c.sensitivity_deviation]
+    periods = [
+        (formatting.moment(c.started_at, zone)[5:16], formatting.moment(c.started_at, zone))
+        for c in checks
+    ]
+    golden_charts = []
+    for name, tolerance, attribute in (
+        ("offset Δ from baseline (counts)", OFFSET_TOLERANCE, "offset_deviation"),
+        ("sensitivity Δ from baseline (counts/g)", SENSITIVITY_TOLERANCE, "sensitivity_deviation"),
+    ):
+        series = [
+            (axis, [getattr(c, attribute)[i] for c in checks]) for i, axis in enumerate("xyz")
+        ]
+        chart = svg.trend_chart(name, periods, series, reference=("tolerance", tolerance))
+        golden_charts.append(Markup(chart))
+    cycle_chart = None
+    if health.cycle_seconds is not None:
+        cycle = SplitReport(
+            parameter="cycle time",
+            unit="s",
+            by="station",
+            filter=ReportFilter(station_id=health.station_id),
+            lower=None,
+            upper=None,
+            bounds_source="no limits",
+            sampled_runs=health.cycle_runs,
+            sample_limit=cycle_limit,
+            groups=[health.cycle_seconds.model_copy(update={"group": health.station_id})],
+            groups_total=1,
+        )
+        cycle_chart = Markup(svg.box_plots(cycle))
+    return _env.get_template("station.html").render(
+        health=health,
+        zone=zone,
+        golden_charts=golden_charts if checks else [],
+        cycle_chart=cycle_chart,
+        cycle_limit=cycle_limit,
+        baseline=BASELINE_CHECKS,
+        offset_tolerance=OFFSET_TOLERANCE,
+        sensitivity_tolerance=SENSITIVITY_TOLERANCE,
     )
 
 
