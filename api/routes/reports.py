@@ -35,7 +35,7 @@ from api.schemas import Problem
 from db import RunRepository
 from db.holds import held_units
 from db.limits_profiles import stored_profiles
-from db.reports import ReportQueries, eol_report
+from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.run_export import HEADER, run_page
 from db.split import SPLIT_PARAMETERS, SPLIT_RUNS, split_report
 from station.domain.errors import InputError
@@ -184,6 +184,17 @@ Listed = Annotated[
 ]
 PageSize = Annotated[int, Query(ge=1, le=MAX_PAGE_UNITS, description="units per page of the list")]
 PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page of the list")]
+#: The most runs a control chart may plot (the latest of the period).
+MAX_CHART_POINTS = 1000
+ChartPoints = Annotated[
+    int,
+    Query(
+        ge=10,
+        le=MAX_CHART_POINTS,
+        description="runs each control chart plots: the latest of the period (and station, "
+        "operator, lot); its limits come from every run of it",
+    ),
+]
 
 
 @router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
@@ -197,10 +208,11 @@ async def get_eol_report(
     listed: Listed = "held",
     units: PageSize = PAGE_UNITS,
     page: PageNumber = 1,
+    points: ChartPoints = CHART_POINTS,
 ) -> Response:
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
     (or all) units of a period."""
-    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units, points=points)
     plant = _Plant(zone, shifts)
     body = await repository.run(eol_body, period.filter(zone), pages, format, plant, None)
     return Response(body, media_type=MEDIA_TYPES[format])
@@ -272,6 +284,7 @@ class _Pages:
     held: bool
     size: int
     offset: int
+    points: int = CHART_POINTS
 
 
 @dataclass(frozen=True)
@@ -298,6 +311,7 @@ def eol_body(
         unit_limit=pages.size,
         unit_offset=pages.offset,
         held_only=pages.held,
+        chart_points=pages.points,
         zone=plant.zone,
         shifts=plant.shifts,
     )
