@@ -983,6 +983,7 @@ def eol_report(
     held_only: bool = False,
     unit_offset: int = 0,
     shifts: Sequence[time] = (),
+    open_holds: bool = True,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
@@ -992,7 +993,8 @@ def eol_report(
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest run failed), ``unit_offset`` skips the newest (pages).
+    held units (latest run failed), ``unit_offset`` skips the newest (pages);
+    ``open_holds``: count the open holds too.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -1072,5 +1074,5 @@ def eol_report(
         units_limit=unit_limit,
         what_if=what_if,
         near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
-        open_holds=queries.open_holds(generated_at),
+        open_holds=queries.open_holds(generated_at) if open_holds else None,
     )

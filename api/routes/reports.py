@@ -533,6 +533,7 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
         chart_points=DASHBOARD_CHART_POINTS,
         now=now,
         zone=zone,
+        open_holds=False,  # the dashboard lists the units on hold itself
     )
     held = held_units(repository.session, DASHBOARD_HELD)
     return dashboard_page(report, held.units, held.total, events=EVENTS_PATH)
