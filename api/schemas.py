@@ -116,6 +116,15 @@ class ReviewSubmission(BaseModel):
     ]
 
 
+class ReviewForm(ReviewSubmission):
+    """The review form of a unit's page (``POST /units/{serial}/reviews``): the review,
+    and the quality key typed into the form (checked as the API checks its bearer key)."""
+
+    key: Annotated[
+        str, Field(max_length=200, description="a quality engineer's API key, as typed")
+    ] = ""
+
+
 class ReviewList(BaseModel):
     """``GET /api/v1/units/{serial}/reviews``: the unit's reviews, oldest first."""
 

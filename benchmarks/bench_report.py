@@ -36,17 +36,19 @@ from typing import Any
 
 from sqlalchemy import insert, make_url, text
 
-from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body
+from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body, split_body
 from db import RunRepository, make_engine, open_database
 from db.chart_queries import first_moving_ranges, latest_chart_points
 from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
+from db.station_health import CYCLE_RUNS, station_health
 from station.domain.limits import load_profile
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import profile_bounds
-from station.report.html import certificate_page, unit_page
+from station.domain.quality.station_health import StationHealth
+from station.report.html import certificate_page, station_page, unit_page
 from station.report.render import render
 
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -61,7 +63,7 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
             received_at, software_version, algorithm, model, limits_name, limits_version,
             limits_sha256, verdict, offset_x, offset_y, offset_z, sensitivity_x,
             sensitivity_y, sensitivity_z, matrix, residual_rms_mg, residual_max_mg,
-            condition_number, verification_error_mg, gyro, record_sha256)
+            condition_number, verification_error_mg, gyro, record_sha256, part_number)
         SELECT g, md5(g::text)::uuid,
             'PT-' || lpad((g - (g % 10 = 0)::int)::text, 8, '0'),
             'line1-st' || (g % 4 + 1), 'op-' || (g % 7 + 1), 'lot-' || (g / 100000 % 3 + 1),
@@ -80,7 +82,7 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
                 'bias', jsonb_build_object('x', 2 * (random() - 0.5), 'y', 2 * (random() - 0.5),
                                            'z', 2 * (random() - 0.5)),
                 'noise', jsonb_build_object('x', 0.05, 'y', 0.05, 'z', 0.06)),
-            md5(g::text) || md5(g::text)
+            md5(g::text) || md5(g::text), 'DIXX-A12'
         FROM generate_series(1, :runs) AS g,
              LATERAL (SELECT timestamptz '2026-01-01 00:00Z' + g * interval '40 seconds') AS s(t)
         """),
@@ -138,6 +140,12 @@ SHIFTS = (clock(6), clock(14), clock(22))
 EVERY_UNIT_PAGE_RUNS = 100_000
 
 
+def _health(session: Any) -> StationHealth:
+    health = station_health(session, "line1-st1")
+    assert health is not None
+    return health
+
+
 def pages(session: Any, repeat: int, runs: int) -> None:
     """The HTML pages over the generated history: seconds to build, and kB."""
     repository = RunRepository(session)
@@ -193,6 +201,16 @@ def pages(session: Any, repeat: int, runs: int) -> None:
             repeat,
         ),
         (f"certificate of {serial} (earlier run listed)", certificate, repeat),
+        (
+            "split of offset_x by station (`/api/v1/reports/split`, the latest 20,000 runs)",
+            lambda: split_body(repository, ReportFilter(), "offset_x", "station", "html", "UTC"),
+            repeat,
+        ),
+        (
+            "station health `/stations/line1-st1` (golden checks, the latest 2,000 runs)",
+            lambda: station_page(_health(session), "UTC", CYCLE_RUNS),
+            repeat,
+        ),
         (
             "dashboard (one day, 50 latest of the units on hold)",
             lambda: dashboard_body(repository, at),

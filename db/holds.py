@@ -14,10 +14,12 @@ failing run.
 """
 
 from dataclasses import dataclass
+from typing import Any
 
-from sqlalchemy import func, select
+from sqlalchemy import ColumnElement, exists, func, select
 from sqlalchemy.orm import Session
 
+from db.models import HoldReview as ReviewRow
 from db.models import ReportCounts, Run, RunFacts, RunFailure, Unit
 from db.rollups import aborted
 from station.domain.unit_state import ABORTED, UnitCalibration
@@ -62,3 +64,9 @@ def abort_only_units(session: Session) -> int:
         .where(RunFailure.code == ABORTED, RunFacts.line_latest.is_(True))
     )
     return int(session.execute(stmt).scalar_one())
+
+
+def unreviewed(run: Any) -> ColumnElement[bool]:
+    """Whether no quality review closed the (failed) ``run`` (a :class:`Run`, or an alias
+    of it): no review of that run is stored. A hold that is open."""
+    return ~exists().where(ReviewRow.serial == run.serial, ReviewRow.run_id == run.run_id)

@@ -40,6 +40,7 @@ from db.chart_queries import (
     latest_chart_points,
     latest_values,
 )
+from db.holds import unreviewed
 from db.limits_profiles import stored_profiles
 from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
 from db.rollups import (
@@ -76,13 +77,16 @@ from station.domain.quality.capability import (
 from station.domain.quality.control import moving_range_sigma, western_electric
 from station.domain.quality.days import day_number, is_utc, midnight, plant_days
 from station.domain.quality.figures import (
+    HOLD_AGES,
     ChartPoint,
     CoefficientRisk,
     ControlChart,
     Distribution,
     EolReport,
     Histogram,
+    HoldCount,
     NearLimits,
+    OpenHolds,
     ParameterStats,
     ParetoEntry,
     ReportFilter,
@@ -416,6 +420,49 @@ class ReportQueries:
             facts.run_pk == latest.id,
             facts.line_latest.is_(True),
             aborted(latest.id),
+        )
+
+    def open_holds(self, now: datetime) -> OpenHolds:
+        """The held units the yield table counts whose failed latest run no review has
+        closed, counted by the age of that run at ``now`` and by its first failure reason:
+        one grouped statement (the held units' first runs, then each one's latest run)."""
+        latest = aliased(Run, name="latest")
+        latest_facts = aliased(RunFacts, name="latest_facts")
+        day, week = now - timedelta(days=1), now - timedelta(days=7)
+        young, middle, old = HOLD_AGES
+        age = case(
+            (latest.started_at >= day, young), (latest.started_at >= week, middle), else_=old
+        ).label("age")
+        code = func.coalesce(latest_facts.first_failure, "").label("code")
+        stmt = (
+            select(age, code, func.count().label("units"))
+            .select_from(Run)
+            .join(RunFacts, RunFacts.run_pk == Run.id)
+            .join(latest, latest.serial == Run.serial)
+            .join(
+                latest_facts,
+                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
+            )
+            .where(
+                *self._selected(True),
+                ~and_(aborted(Run.id), self._only_aborts()),
+                latest.verdict == "fail",
+                unreviewed(latest),
+            )
+            .group_by(age, code)
+        )
+        ages: Counter[str] = Counter()
+        causes: Counter[str] = Counter()
+        for row in self.session.execute(stmt):
+            ages[row.age] += row.units
+            causes[row.code or "unknown"] += row.units
+        return OpenHolds(
+            total=sum(ages.values()),
+            by_age=[HoldCount(label=label, units=ages[label]) for label in HOLD_AGES],
+            by_cause=[
+                HoldCount(label=label, units=n)
+                for label, n in sorted(causes.items(), key=lambda item: (-item[1], item[0]))
+            ],
         )
 
     def failing_runs(self, code: str, limit: int) -> Sequence[Any]:
@@ -936,6 +983,7 @@ def eol_report(
     held_only: bool = False,
     unit_offset: int = 0,
     shifts: Sequence[time] = (),
+    open_holds: bool = True,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
@@ -945,7 +993,8 @@ def eol_report(
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest run failed), ``unit_offset`` skips the newest (pages).
+    held units (latest run failed), ``unit_offset`` skips the newest (pages);
+    ``open_holds``: count the open holds too.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -994,8 +1043,9 @@ def eol_report(
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
     starts = [started_at for _, started_at in unattempted]
     trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
+    generated_at = now or datetime.now(UTC)
     return EolReport(
-        generated_at=now or datetime.now(UTC),
+        generated_at=generated_at,
         filter=filter,
         bounds_source=bounds_source,
         limits_profiles=used,
@@ -1024,4 +1074,5 @@ def eol_report(
         units_limit=unit_limit,
         what_if=what_if,
         near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
+        open_holds=queries.open_holds(generated_at) if open_holds else None,
     )

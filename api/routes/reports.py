@@ -35,15 +35,22 @@ from api.schemas import Problem
 from db import RunRepository
 from db.holds import held_units
 from db.limits_profiles import stored_profiles
-from db.reports import ReportQueries, eol_report
+from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.run_export import HEADER, run_page
+from db.split import SPLIT_PARAMETERS, SPLIT_RUNS, split_report
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.shifts import shift_start
+from station.domain.quality.split import SplitBy, SplitReport
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.html import certificate_page, dashboard_page, failing_runs_page
+from station.report.html import (
+    certificate_page,
+    dashboard_page,
+    failing_runs_page,
+    split_page,
+)
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 
@@ -178,6 +185,17 @@ Listed = Annotated[
 ]
 PageSize = Annotated[int, Query(ge=1, le=MAX_PAGE_UNITS, description="units per page of the list")]
 PageNumber = Annotated[int, Query(ge=1, le=MAX_LISTED_UNITS, description="page of the list")]
+#: The most runs a control chart may plot (the latest of the period).
+MAX_CHART_POINTS = 1000
+ChartPoints = Annotated[
+    int,
+    Query(
+        ge=10,
+        le=MAX_CHART_POINTS,
+        description="runs each control chart plots: the latest of the period (and station, "
+        "operator, lot); its limits come from every run of it",
+    ),
+]
 
 
 @router.get("/reports/eol", response_class=Response, responses=_REPORT_ANSWERS)
@@ -191,10 +209,11 @@ async def get_eol_report(
     listed: Listed = "held",
     units: PageSize = PAGE_UNITS,
     page: PageNumber = 1,
+    points: ChartPoints = CHART_POINTS,
 ) -> Response:
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
     (or all) units of a period."""
-    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units, points=points)
     plant = _Plant(zone, shifts)
     body = await repository.run(eol_body, period.filter(zone), pages, format, plant, None)
     return Response(body, media_type=MEDIA_TYPES[format])
@@ -266,6 +285,7 @@ class _Pages:
     held: bool
     size: int
     offset: int
+    points: int = CHART_POINTS
 
 
 @dataclass(frozen=True)
@@ -292,10 +312,65 @@ def eol_body(
         unit_limit=pages.size,
         unit_offset=pages.offset,
         held_only=pages.held,
+        chart_points=pages.points,
         zone=plant.zone,
         shifts=plant.shifts,
     )
     return render(report, format)
+
+
+SPLIT_TITLE = "Analysis by split"
+SplitParameter = Annotated[
+    str,
+    Query(
+        pattern=f"^({'|'.join(SPLIT_PARAMETERS)})$",
+        description="the parameter: " + ", ".join(SPLIT_PARAMETERS),
+    ),
+]
+
+
+@router.get(
+    "/reports/split",
+    response_class=Response,
+    responses={
+        200: {
+            "model": SplitReport,
+            "content": {MEDIA_TYPES["html"]: {"schema": {"type": "string"}}},
+            "description": "the parameter's box plots and figures per group (HTML, or JSON "
+            f"with `format=json`), from the latest {SPLIT_RUNS} runs of the period and filter",
+        },
+        422: {**problems(422)[422], **_REFUSED_PAGE},
+    },
+)
+@answers_pages(SPLIT_TITLE, "html", form=False)
+async def get_split(
+    repository: ReportPoolDep,
+    period: PeriodDep,
+    zone: PlantZoneDep,
+    parameter: SplitParameter,
+    by: Annotated[SplitBy, Query(description="the run's column the runs are split by")],
+    format: Literal["json", "html"] = "html",
+) -> Response:
+    """A parameter's distribution and capability split by station, lot, operator, product
+    or software version: n, mean, sd, quartiles, Tukey whiskers and outliers, Cpk and
+    observed ppm per group (the latest runs of the period, bounded)."""
+    body = await repository.run(split_body, period.filter(zone), parameter, by, format, zone)
+    return Response(body, media_type=MEDIA_TYPES[format])
+
+
+def split_body(
+    repository: RunRepository,
+    filter: ReportFilter,
+    parameter: str,
+    by: SplitBy,
+    format: str,
+    zone: str,
+) -> str:
+    """The split (in a report process: :mod:`api.report_pool`)."""
+    report = split_report(repository.session, filter, parameter, by)
+    if format == "json":
+        return report.model_dump_json(indent=2) + "\n"
+    return split_page(report, zone, SPLIT_PARAMETERS)
 
 
 #: The most runs the page of a Pareto bar lists (the latest).
@@ -441,9 +516,11 @@ async def get_certificate(
     profile = stored.get(run.limits.sha256)
     since = shift_start(run.started_at, zone, shifts)
     golden = await repository.run(lambda r: r.latest_golden(run.station_id, since, run.started_at))
-    return HTMLResponse(
-        certificate_page(run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden)
+    reviews = await repository.run(lambda r: r.reviews(serial)) if run.verdict == "fail" else []
+    page = certificate_page(
+        run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden, reviews
     )
+    return HTMLResponse(page)
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
@@ -463,6 +540,7 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
         chart_points=DASHBOARD_CHART_POINTS,
         now=now,
         zone=zone,
+        open_holds=False,  # the dashboard lists the units on hold itself
     )
     held = held_units(repository.session, DASHBOARD_HELD)
     return dashboard_page(report, held.units, held.total, events=EVENTS_PATH)

@@ -10,7 +10,7 @@ from datetime import UTC, datetime
 
 from fastapi import APIRouter, Response, status
 
-from api.deps import QualityDep, ReaderDep, RepositoryDep
+from api.deps import QualityDep, ReaderDep, Repository, RepositoryDep
 from api.responses import json_response, problems
 from api.routes.units import SerialPath
 from api.schemas import ReviewList, ReviewSubmission
@@ -51,10 +51,18 @@ async def submit_unit_review(
 ) -> Response:
     """Store a review of the unit's latest, failed run: its root cause, the repair, and
     whether the unit is calibrated again (``retest``) or scrapped."""
-    review = HoldReview(
-        serial=serial, reviewed_at=datetime.now(UTC), reviewer=reviewer, **dict(submission)
-    )
+    review = await store_review(serial, submission, reviewer, repository)
+    return json_response(review, status.HTTP_201_CREATED)
+
+
+async def store_review(
+    serial: str, submission: ReviewSubmission, reviewer: str, repository: Repository
+) -> HoldReview:
+    """Store ``reviewer``'s review of the unit (the API's and the unit page's form):
+    :class:`db.ReviewRefusedError` when its run is not the unit's latest, failed one."""
+    fields = submission.model_dump(include={"run_id", "root_cause", "repair_action", "decision"})
+    review = HoldReview(serial=serial, reviewed_at=datetime.now(UTC), reviewer=reviewer, **fields)
     async with repository.session.begin():
         await repository.run(lambda r: r.add_review(review))
     log.info("review of %s: %s by %s", serial, review.decision, reviewer)
-    return json_response(review, status.HTTP_201_CREATED)
+    return review

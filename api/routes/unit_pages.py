@@ -8,19 +8,31 @@ stays the unit's JSON. An unknown serial is a 404 page; a serial that is not one
 """
 
 from datetime import UTC, datetime
-from typing import Annotated
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Query, Response, status
+from fastapi import APIRouter, Form, HTTPException, Path, Query, Response, status
 from fastapi.responses import HTMLResponse, RedirectResponse
+from fastapi.security import HTTPAuthorizationCredentials
 from pydantic import BeforeValidator
 
-from api.deps import ReaderDep
+from api.deps import ReaderDep, ReportPoolDep, RepositoryDep, SessionsDep, require_quality
 from api.errors import answers_pages
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
+from api.routes.reviews import store_review
 from api.routes.units import SerialPath
-from station.domain.records import SERIAL_PATTERN
-from station.report.html import found_page, not_found_page, problem_page, unit_page
+from api.schemas import ReviewForm
+from db import ReviewRefusedError, RunRepository
+from db.station_health import CYCLE_RUNS, station_health
+from station.domain.quality.station_health import StationHealth
+from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
+from station.report.html import (
+    found_page,
+    not_found_page,
+    problem_page,
+    station_page,
+    unit_page,
+)
 
 router = APIRouter(tags=["pages"])
 
@@ -46,7 +58,101 @@ async def get_unit_page(
             not_found_page(f"No calibration run of serial {serial} is stored."),
             status_code=status.HTTP_404_NOT_FOUND,
         )
-    return HTMLResponse(unit_page(runs, datetime.now(UTC), zone))
+    reviews = await repository.run(lambda r: r.reviews(serial))
+    return HTMLResponse(unit_page(runs, datetime.now(UTC), zone, reviews))
+
+
+StationPath = Annotated[
+    str, Path(pattern=IDENTIFIER_PATTERN, description="the station's identifier")
+]
+
+
+@router.get(
+    "/stations/{station_id}",
+    response_class=Response,
+    responses={
+        200: {
+            "model": StationHealth,
+            "content": _HTML,
+            "description": "the station's health: golden-unit checks against their baseline, "
+            "drift warnings, cycle times, versions in use (HTML, or JSON with `format=json`)",
+        },
+        404: {"content": _HTML, "description": "no run of this station is stored (a page)"},
+        **problems(422),
+    },
+)
+async def get_station_page(
+    station_id: StationPath,
+    repository: ReportPoolDep,
+    zone: PlantZoneDep,
+    format: Literal["json", "html"] = "html",
+) -> Response:
+    """A station's health page: its latest golden-unit checks over time against their
+    baseline, drift warnings, the cycle time distribution of its latest runs and the
+    software and limits versions in use."""
+    health = await repository.run(station_health_of, station_id)
+    if health is None:
+        return HTMLResponse(
+            not_found_page(f"No calibration run of station {station_id} is stored."),
+            status_code=status.HTTP_404_NOT_FOUND,
+        )
+    if format == "json":
+        return Response(health.model_dump_json(indent=2), media_type="application/json")
+    return HTMLResponse(station_page(health, zone, CYCLE_RUNS))
+
+
+def station_health_of(repository: RunRepository, station_id: str) -> StationHealth | None:
+    """The station's health (in a report process: :mod:`api.report_pool`)."""
+    return station_health(repository.session, station_id)
+
+
+REVIEW_TITLE = "Review of a unit on hold"
+_REVIEW_PAGE = {"content": _HTML}
+
+
+@router.post(
+    "/units/{serial}/reviews",
+    response_class=HTMLResponse,
+    responses={
+        303: {"description": "the review is stored: the unit's page, at its reviews"},
+        401: {**_REVIEW_PAGE, "description": "no key typed, or an unknown or revoked one"},
+        403: {**_REVIEW_PAGE, "description": "the key is not a quality engineer's"},
+        409: {
+            **_REVIEW_PAGE,
+            "description": "the unit is not on hold, or the run is not its latest",
+        },
+        422: {**_REVIEW_PAGE, "description": "a field is missing or invalid (a page)"},
+    },
+)
+@answers_pages(REVIEW_TITLE, "html", form=False)
+async def post_unit_review(
+    serial: SerialPath,
+    form: Annotated[ReviewForm, Form()],
+    sessions: SessionsDep,
+    repository: RepositoryDep,
+) -> Response:
+    """The review form of a held unit's page: the review of ``POST
+    /api/v1/units/{serial}/reviews``, with the quality key typed into the form checked as
+    that route checks its bearer key. Refused: a page saying why in one line."""
+    try:
+        if not form.key.strip():
+            raise HTTPException(
+                status.HTTP_401_UNAUTHORIZED,
+                "a quality key is required: type yours into the form "
+                "(calstation keys create --quality ID)",
+            )
+        credentials = HTTPAuthorizationCredentials(scheme="Bearer", credentials=form.key.strip())
+        reviewer = await require_quality(credentials, sessions)
+        await store_review(serial, form, reviewer, repository)
+    except HTTPException as exc:
+        return _refused(exc.status_code, str(exc.detail))
+    except ReviewRefusedError as exc:
+        return _refused(status.HTTP_409_CONFLICT, str(exc))
+    return RedirectResponse(f"/units/{serial}#reviews", status_code=status.HTTP_303_SEE_OTHER)
+
+
+def _refused(status_code: int, message: str) -> HTMLResponse:
+    return HTMLResponse(problem_page(REVIEW_TITLE, message), status_code=status_code)
 
 
 #: The most serials a search lists (type more of the serial for fewer).

@@ -8,7 +8,7 @@ page links to the unit's page through one macro, ``serial_link`` in ``base.html`
 
 from collections.abc import Callable, Sequence
 from datetime import datetime
-from typing import Any
+from typing import Any, get_args
 from urllib.parse import urlencode
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -19,7 +19,14 @@ from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
-from station.domain.records import GyroFitRecord, RunSummary, StoredRun
+from station.domain.quality.split import SplitBy, SplitReport
+from station.domain.quality.station_health import (
+    BASELINE_CHECKS,
+    OFFSET_TOLERANCE,
+    SENSITIVITY_TOLERANCE,
+    StationHealth,
+)
+from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
 from station.report.certificate import check_rows, identity
@@ -62,6 +69,7 @@ _env.globals.update(
     histogram=lambda stats: Markup(svg.histogram(stats)),
     pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
     control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
+    box_plots=lambda report: Markup(svg.box_plots(report)),
 )
 
 
@@ -202,16 +210,88 @@ def dashboard_page(
     )
 
 
-def unit_page(runs: Sequence[RunSummary], generated_at: datetime, zone: str = "UTC") -> str:
+def unit_page(
+    runs: Sequence[RunSummary],
+    generated_at: datetime,
+    zone: str = "UTC",
+    reviews: Sequence[HoldReview] = (),
+) -> str:
     """A unit's page: its state and every one of its ``runs`` (oldest first, at least one),
-    times in the plant's ``zone``."""
+    its quality ``reviews`` (oldest first) and, when it is on hold, the form to review
+    it; times in the plant's ``zone``."""
     unit = UnitCalibration.of_history(runs)
     return _env.get_template("unit.html").render(
         unit=unit,
         runs=runs,
+        reviews=reviews,
+        reviewed=any(review.run_id == runs[-1].run_id for review in reviews),
         generated_at=generated_at,
         zone=zone,
         document_title=DOCUMENT_TITLES[unit.verdict],
+    )
+
+
+def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str:
+    """A parameter split by a run's column (:mod:`station.domain.quality.split`): box
+    plots and each group's figures, a form to choose another ``parameters`` or split."""
+    query = {"parameter": report.parameter, "by": report.by}
+    form = filter_query(report.filter, zone)
+    if report.filter.part_number:
+        form["part_number"] = report.filter.part_number
+    return _env.get_template("split.html").render(
+        report=report,
+        zone=zone,
+        parameters=parameters,
+        splits=get_args(SplitBy),
+        form=form,
+        report_query=urlencode({"format": "html", **form}),
+        json_query=urlencode({**query, **form, "format": "json"}),
+    )
+
+
+def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
+    """A station's health page: golden-unit checks against their baseline (charts and
+    table), drift warnings, cycle times (box plot, figures), versions in use."""
+    checks = [c for c in health.golden if c.offset_deviation and c.sensitivity_deviation]
+    periods = [
+        (formatting.moment(c.started_at, zone)[5:16], formatting.moment(c.started_at, zone))
+        for c in checks
+    ]
+    golden_charts = []
+    for name, tolerance, attribute in (
+        ("offset Δ from baseline (counts)", OFFSET_TOLERANCE, "offset_deviation"),
+        ("sensitivity Δ from baseline (counts/g)", SENSITIVITY_TOLERANCE, "sensitivity_deviation"),
+    ):
+        series = [
+            (axis, [getattr(c, attribute)[i] for c in checks]) for i, axis in enumerate("xyz")
+        ]
+        chart = svg.trend_chart(name, periods, series, reference=("tolerance", tolerance))
+        golden_charts.append(Markup(chart))
+    cycle_chart = None
+    if health.cycle_seconds is not None:
+        cycle = SplitReport(
+            parameter="cycle time",
+            unit="s",
+            by="station",
+            filter=ReportFilter(station_id=health.station_id),
+            lower=None,
+            upper=None,
+            bounds_source="no limits",
+            sampled_runs=health.cycle_runs,
+            sample_limit=cycle_limit,
+            groups=[health.cycle_seconds.model_copy(update={"group": health.station_id})],
+            groups_total=1,
+        )
+        cycle_chart = Markup(svg.box_plots(cycle))
+    return _env.get_template("station.html").render(
+        health=health,
+        zone=zone,
+        golden_charts=golden_charts if checks else [],
+        cycle_chart=cycle_chart,
+        cycle_limit=cycle_limit,
+        baseline=BASELINE_CHECKS,
+        offset_tolerance=OFFSET_TOLERANCE,
+        sensitivity_tolerance=SENSITIVITY_TOLERANCE,
     )
 
 
@@ -239,6 +319,7 @@ def certificate_page(
     earlier: Sequence[RunSummary] = (),
     zone: str = "UTC",
     golden: RunSummary | None = None,
+    reviews: Sequence[HoldReview] = (),
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -247,6 +328,7 @@ def certificate_page(
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
     stations), which the page says. Times are in the plant's ``zone``, as on the unit's page.
+    ``reviews``: the unit's quality reviews (a failure report lists them).
     ``gyro_fit``, the unit's latest gyro fit, adds its coefficients and, when its
     dwells were kept, the scale-factor error plot before and after compensation.
     ``golden``: that shift's golden-unit check at the run's station, its reference
@@ -266,6 +348,7 @@ def certificate_page(
         gyro_fit=gyro_fit,
         earlier=earlier,
         zone=zone,
+        reviews=reviews,
         document_title=DOCUMENT_TITLES[run.verdict],
         gyro_plot=Markup(plot) if plot is not None else None,
         identity=identity(run, golden),

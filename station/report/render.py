@@ -144,6 +144,12 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
             for key, value in risk.items():
                 if key != "name":
                     yield ("near_limits", f"risk:{risk['name']}", key, value)
+    holds = doc["open_holds"]
+    if holds is not None:
+        yield ("open_holds", "", "total", holds["total"])
+        for part in ("by_age", "by_cause"):
+            for count in holds[part]:
+                yield ("open_holds", part, count["label"], count["units"])
     yield ("units", "", "total", doc["units_total"])
     yield ("units", "", "listed", doc["units_listed"])
     yield ("units", "", "held", doc["units_held"])

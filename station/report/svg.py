@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 from xml.sax.saxutils import escape
 
 from station.domain.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
+from station.domain.quality.split import SplitReport
 from station.report.formatting import clock, number, percent
 
 WIDTH, HEIGHT, PAD = 360, 150, 28
@@ -382,3 +383,53 @@ def trend_chart(
             if len(run) > 1
         ]
     return _svg(title, body, HEIGHT, CHART_WIDTH)
+
+
+#: A box plot's size: room on the left for the groups' names, a row per group.
+BOX_WIDTH, BOX_LEFT, BOX_RIGHT, BOX_ROW, BOX_TOP = 640, 130, 20, 22, 24
+
+
+def box_plots(report: SplitReport) -> str:
+    """One horizontal Tukey box plot per group of ``report`` (box Q1–Q3, median, whiskers
+    within the fences, the outliers' count at the right), the limits as red lines."""
+    groups = report.groups
+    height = BOX_TOP + BOX_ROW * max(len(groups), 1) + 20
+    title = f"{report.parameter} by {report.by.replace('_', ' ')} ({report.unit})"
+    if not groups:
+        return _svg(title, [_text(BOX_LEFT, BOX_TOP, "no values")], height, BOX_WIDTH)
+    ends = [g.minimum for g in groups] + [g.maximum for g in groups]
+    ends += [v for v in (report.lower, report.upper) if v is not None]
+    low, high = min(ends), max(ends)
+    span = (high - low) or 1.0
+    low, high = low - 0.03 * span, high + 0.03 * span
+    right = BOX_WIDTH - BOX_RIGHT
+
+    def x(value: float) -> float:
+        return BOX_LEFT + (value - low) / (high - low) * (right - BOX_LEFT)
+
+    bottom = height - 20
+    body = [_text(BOX_LEFT, 12, title)]
+    for name, limit in (("LSL", report.lower), ("USL", report.upper)):
+        if limit is not None:
+            body.append(_line(x(limit), BOX_TOP - 6, x(limit), bottom, LIMIT_COLOUR, dash=True))
+            body.append(_text(x(limit), bottom + 12, f"{name} {number(limit)}", "middle"))
+    for i, g in enumerate(groups):
+        mid = BOX_TOP + BOX_ROW * i + BOX_ROW / 2
+        label = f"{g.group} (n {g.n})"
+        body.append(_text(BOX_LEFT - 6, mid + 3, label[:24], "end"))
+        body.append(_line(x(g.whisker_low), mid, x(g.q1), mid, AXIS_COLOUR))
+        body.append(_line(x(g.q3), mid, x(g.whisker_high), mid, AXIS_COLOUR))
+        for end in (g.whisker_low, g.whisker_high):
+            body.append(_line(x(end), mid - 4, x(end), mid + 4, AXIS_COLOUR))
+        body.append(
+            f'<rect class="box" x="{x(g.q1):.1f}" y="{mid - 7:.1f}" '
+            f'width="{max(x(g.q3) - x(g.q1), 1):.1f}" height="14" fill="#dce7f3" '
+            f'stroke="{BAR_COLOUR}"/>'
+        )
+        body.append(_line(x(g.median), mid - 7, x(g.median), mid + 7, BAR_COLOUR))
+        if g.outliers:
+            colour = ALARM_COLOUR
+            body.append(_text(right + 2, mid + 3, f"+{g.outliers}", "start", colour))
+    body.append(_text(BOX_LEFT, bottom + 12, number(low), "start", AXIS_COLOUR))
+    body.append(_text(right, bottom + 12, number(high), "end", AXIS_COLOUR))
+    return _svg(title, body, height, BOX_WIDTH)

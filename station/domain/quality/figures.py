@@ -91,6 +91,31 @@ class ParetoEntry(_FigurePart):
     by_operator: dict[str, int]
 
 
+#: The ages an open hold is counted by (since its latest run started), youngest first.
+HOLD_AGES = ("< 1 day", "1–7 days", "> 7 days")
+
+
+class HoldCount(_FigurePart):
+    """Open holds of one age or cause."""
+
+    label: str
+    units: int
+
+
+class OpenHolds(_FigurePart):
+    """The held units the report counts (their latest run failed) that no review has
+    closed: no quality review of that latest run (``hold_reviews``)."""
+
+    total: int
+    by_age: list[HoldCount] = Field(
+        description="per age of the failed run (since its start, at the report's time): "
+        + ", ".join(HOLD_AGES)
+    )
+    by_cause: list[HoldCount] = Field(
+        description="per first failure reason of the failed run, most first"
+    )
+
+
 class Histogram(_FigurePart):
     """Counts of ``bins`` equal bins from ``start``; outliers land in the end bins."""
 
@@ -294,6 +319,9 @@ class EolReport(_FigurePart):
         None,
         description="of those units, the held ones: their latest run (wherever and whenever "
         "it was) failed; the yield table's failed units",
+    )
+    open_holds: OpenHolds | None = Field(
+        None, description="the held units no review has closed yet, by age and by cause"
     )
     units_offset: int = Field(0, description="units before this page of the list, newest first")
     units_limit: int | None = Field(None, description="the most units a page of the list holds")

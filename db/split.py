@@ -1,0 +1,73 @@
+"""A parameter split by station, lot, operator, product or software version
+(:mod:`station.domain.quality.split`): the latest runs of the range, bounded.
+
+One walk of ``ix_runs_started_at`` backwards over the runs the report's filter selects,
+at most :data:`SPLIT_RUNS` of them, reading the parameter and the split's column only;
+the groups' figures are computed from that sample (the page says so). The limits are the
+report's (:func:`db.reports.report_bounds`).
+"""
+
+from collections import defaultdict
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from db.models import Run, RunFacts
+from db.reports import ReportQueries, report_bounds
+from db.rollups import PER_RUN
+from station.domain.quality.figures import ReportFilter
+from station.domain.quality.parameters import PARAMETERS
+from station.domain.quality.split import NO_VALUE, SplitBy, SplitReport, group_stats
+
+#: The most runs a split reads: the latest of the range.
+SPLIT_RUNS = 20_000
+#: The most groups a split shows (the largest).
+SPLIT_GROUPS = 24
+#: The run's column of each split.
+SPLIT_COLUMNS = {
+    "station": Run.station_id,
+    "lot": Run.lot,
+    "operator": Run.operator_id,
+    "part_number": Run.part_number,
+    "software_version": Run.software_version,
+}
+#: The parameters a split reads: one value per run.
+SPLIT_PARAMETERS = tuple(spec.name for spec in PARAMETERS if spec.name in PER_RUN)
+
+
+def split_report(
+    session: Session, filter: ReportFilter, parameter: str, by: SplitBy, runs: int = SPLIT_RUNS
+) -> SplitReport:
+    """``parameter`` (one of :data:`SPLIT_PARAMETERS`) over the latest ``runs`` runs
+    ``filter`` selects, split by ``by``."""
+    spec = next(spec for spec in PARAMETERS if spec.name == parameter)
+    queries = ReportQueries(session, filter)
+    bounds, bounds_source = report_bounds(session, queries.station_counts())
+    lower, upper = (None, None) if bounds is None else bounds[spec.family]
+    column = PER_RUN[parameter]
+    stmt = (
+        select(SPLIT_COLUMNS[by].label("group"), column.label("value"))
+        .join(RunFacts, RunFacts.run_pk == Run.id)
+        .where(*queries.conditions())
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(runs)
+    )
+    rows = session.execute(stmt).all()
+    values: dict[str, list[float]] = defaultdict(list)
+    for group, value in rows:
+        if value is not None:
+            values[NO_VALUE if group is None else str(group)].append(float(value))
+    largest = sorted(values.items(), key=lambda item: (-len(item[1]), item[0]))[:SPLIT_GROUPS]
+    return SplitReport(
+        parameter=parameter,
+        unit=spec.unit,
+        by=by,
+        filter=filter,
+        lower=lower,
+        upper=upper,
+        bounds_source=bounds_source,
+        sampled_runs=len(rows),
+        sample_limit=runs,
+        groups=[group_stats(name, v, lower, upper) for name, v in sorted(largest)],
+        groups_total=len(values),
+    )

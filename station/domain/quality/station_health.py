@@ -1,0 +1,130 @@
+"""A station's health: its golden-unit checks over time against their reference, drift
+warnings, its cycle times and the software and limits versions it runs.
+
+The results server does not hold a station's golden-unit configuration (its reference
+values live in the station's ``[golden]`` table, :mod:`station.domain.quality.golden`);
+each check's verdict is the station's own judgement against that reference. On the page,
+the reference each check is drawn against is the golden unit's **baseline**: the mean of
+its first :data:`BASELINE_CHECKS` checks with coefficients at the station in the window.
+A drift warning names an axis whose latest check is further from that baseline than the
+golden unit's default tolerance (:class:`GoldenUnit`: 5 counts offset, 2 counts/g
+sensitivity), or a latest check the station failed.
+"""
+
+from collections.abc import Sequence
+from datetime import datetime
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from station.domain.quality.golden import GoldenUnit
+from station.domain.quality.split import GroupStats
+from station.domain.sensor import AXES
+
+#: The golden unit's first checks that make its baseline.
+BASELINE_CHECKS = 3
+OFFSET_TOLERANCE: float = GoldenUnit.model_fields["offset_tolerance_counts"].default
+SENSITIVITY_TOLERANCE: float = GoldenUnit.model_fields["sensitivity_tolerance_counts_per_g"].default
+
+Triple = tuple[float, float, float]
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class GoldenCheck(_Part):
+    """One golden-unit check: its coefficients' distance from the baseline."""
+
+    run_id: str
+    started_at: datetime
+    serial: str
+    verdict: str
+    offset_deviation: Triple | None = Field(description="counts from the baseline, x y z")
+    sensitivity_deviation: Triple | None = Field(description="counts/g from the baseline")
+
+
+class VersionUse(_Part):
+    """Runs of one software version and limits profile, first and last seen."""
+
+    software_version: str
+    limits: str
+    runs: int
+    first: datetime
+    last: datetime
+
+
+class StationHealth(_Part):
+    """A station's health over its latest runs (:mod:`db.station_health`)."""
+
+    station_id: str
+    golden: list[GoldenCheck] = Field(description="the latest golden checks, oldest first")
+    golden_limit: int
+    drift: list[str] = Field(description="drift warnings, in words")
+    cycle_seconds: GroupStats | None = Field(description="cycle time of production runs")
+    cycle_runs: int = Field(description="production runs the cycle times come from (the latest)")
+    versions: list[VersionUse]
+
+
+def golden_checks(
+    rows: Sequence[tuple[str, datetime, str, str, Triple | None, Triple | None]],
+) -> tuple[list[GoldenCheck], list[str]]:
+    """The checks of ``rows`` (run id, start, serial, verdict, offset, sensitivity; oldest
+    first) against each golden unit's baseline, and the drift warnings of its latest one."""
+    by_serial: dict[str, list[tuple[Triple, Triple]]] = {}
+    for *_, serial, _verdict, offset, sensitivity in rows:
+        if offset is not None and sensitivity is not None:
+            by_serial.setdefault(serial, []).append((offset, sensitivity))
+    baselines = {
+        serial: (
+            _mean([o for o, _ in found[:BASELINE_CHECKS]]),
+            _mean([s for _, s in found[:BASELINE_CHECKS]]),
+        )
+        for serial, found in by_serial.items()
+    }
+    checks = [
+        GoldenCheck(
+            run_id=run_id,
+            started_at=started_at,
+            serial=serial,
+            verdict=verdict,
+            offset_deviation=_less(offset, baselines[serial][0])
+            if serial in baselines and offset
+            else None,
+            sensitivity_deviation=(
+                _less(sensitivity, baselines[serial][1])
+                if serial in baselines and sensitivity
+                else None
+            ),
+        )
+        for run_id, started_at, serial, verdict, offset, sensitivity in rows
+    ]
+    latest: dict[str, GoldenCheck] = {check.serial: check for check in checks}
+    drift = []
+    for serial, check in sorted(latest.items()):
+        when = check.started_at.isoformat(timespec="minutes")
+        if check.verdict != "pass":
+            drift.append(f"golden unit {serial}: its latest check ({when}) failed at the station")
+        for name, deviation, tolerance, unit in (
+            ("offset", check.offset_deviation, OFFSET_TOLERANCE, "counts"),
+            ("sensitivity", check.sensitivity_deviation, SENSITIVITY_TOLERANCE, "counts/g"),
+        ):
+            for axis, value in zip(AXES, deviation or (), strict=False):
+                if abs(value) > tolerance:
+                    drift.append(
+                        f"golden unit {serial}: {name} {axis} {value:+.2f} {unit} from its "
+                        f"baseline at the latest check ({when}), beyond ± {tolerance:g}"
+                    )
+    return checks, drift
+
+
+def _mean(triples: Sequence[Triple]) -> Triple:
+    n = len(triples)
+    return (
+        sum(t[0] for t in triples) / n,
+        sum(t[1] for t in triples) / n,
+        sum(t[2] for t in triples) / n,
+    )
+
+
+def _less(value: Triple, reference: Triple) -> Triple:
+    return (value[0] - reference[0], value[1] - reference[1], value[2] - reference[2])

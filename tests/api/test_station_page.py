@@ -1,0 +1,84 @@
+"""A station's health page over a live server: golden checks against their baseline,
+the drift warning worked out here, cycle times and versions from the runs stored."""
+
+import re
+from datetime import timedelta
+
+import httpx
+import numpy as np
+
+from db import Database, RunRepository
+from tests.db.records import T0, make_record
+
+#: The golden unit's offset x per check: baseline the mean of the first three (2049).
+GOLDEN_X = [2048.0, 2049.0, 2050.0, 2051.0, 2057.0]
+#: Production runs: seconds from start to finish, software version.
+PRODUCTION = [(90, "1.4.0"), (95, "1.4.0"), (100, "1.5.0"), (130, "1.5.0")]
+
+
+def _store(database: Database, golden: list[float]) -> None:
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for i, x in enumerate(golden):
+            started = T0 + timedelta(hours=8 * i)
+            repository.submit(
+                make_record(
+                    serial="GOLD-01",
+                    station_id="line1-st1",
+                    started_at=started,
+                    offset=(x, 2041.2, 1960.5),
+                    purpose="golden",
+                )
+            )
+        for i, (cycle, version) in enumerate(PRODUCTION):
+            started = T0 + timedelta(hours=8 * i + 1)
+            repository.submit(
+                make_record(
+                    serial=f"PT{i:06d}",
+                    station_id="line1-st1",
+                    started_at=started,
+                    finished_at=(started + timedelta(seconds=cycle)).isoformat(),
+                    software_version=version,
+                )
+            )
+
+
+def test_a_station_page_shows_golden_drift_cycle_times_and_versions(
+    client: httpx.Client, database: Database
+) -> None:
+    _store(database, GOLDEN_X)
+    health = client.get("/stations/line1-st1", params={"format": "json"}).json()
+    baseline = np.mean(GOLDEN_X[:3])
+    deviations = [c["offset_deviation"][0] for c in health["golden"]]
+    assert np.allclose(deviations, [x - baseline for x in GOLDEN_X])
+    assert np.allclose(health["golden"][-1]["sensitivity_deviation"], 0.0, atol=1e-6)
+    assert len(health["drift"]) == 1
+    assert "offset x +8.00 counts" in health["drift"][0]
+    cycles = [c for c, _ in PRODUCTION]
+    cycle = health["cycle_seconds"]
+    assert cycle["n"] == len(cycles)
+    assert np.isclose(cycle["mean"], np.mean(cycles))
+    assert np.isclose(cycle["median"], np.median(cycles))
+    assert {(v["software_version"], v["runs"]) for v in health["versions"]} == {
+        ("1.4.0", 2),
+        ("1.5.0", 2),
+    }
+    page = client.get("/stations/line1-st1")
+    assert page.status_code == 200
+    assert page.text.count('<tr class="golden-check">') == len(GOLDEN_X)
+    assert len(re.findall(r'<p class="problem drift">', page.text)) == 1
+    assert page.text.count('<tr class="version">') == 2
+    assert '<rect class="box"' in page.text
+
+
+def test_a_station_within_tolerance_has_no_drift_and_an_unknown_one_is_a_404_page(
+    client: httpx.Client, database: Database
+) -> None:
+    _store(database, GOLDEN_X[:4])
+    page = client.get("/stations/line1-st1")
+    assert 'class="ok no-drift"' in page.text
+    assert client.get("/stations/line1-st1", params={"format": "json"}).json()["drift"] == []
+    missing = client.get("/stations/line9-st9")
+    assert missing.status_code == 404
+    assert missing.headers["content-type"].startswith("text/html")
+    assert client.get("/stations/bad station").status_code == 422
