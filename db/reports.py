@@ -150,6 +150,17 @@ def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
     return [*where, PRODUCTION, *dimensions(filter, Run)]
 
 
+def latest_run_aliases() -> tuple[type[Run], type[RunFacts]]:
+    """A unit's latest run and its facts, as aliases to join beside the runs selected."""
+    return aliased(Run, name="latest"), aliased(RunFacts, name="latest_facts")
+
+
+def latest_counted(latest: type[Run], facts: type[RunFacts]) -> ColumnElement[bool]:
+    """``facts`` are those of ``latest`` and it is its unit's latest run that counts
+    (:mod:`db.rollups`, ``line_latest``)."""
+    return and_(facts.run_pk == latest.id, facts.line_latest.is_(True))
+
+
 class ReportQueries:
     """The report's queries over the runs ``filter`` selects, in the caller's session.
 
@@ -385,8 +396,7 @@ class ReportQueries:
             .offset(offset or None)
             .subquery("page")
         )
-        latest = aliased(Run, name="latest")
-        latest_facts = aliased(RunFacts, name="latest_facts")
+        latest, latest_facts = latest_run_aliases()
         stmt = (
             select(
                 latest.id,
@@ -400,10 +410,7 @@ class ReportQueries:
                 latest_facts.first_failure.label("code"),
             )
             .join(latest, latest.serial == page.c.serial)
-            .join(
-                latest_facts,
-                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
-            )
+            .join(latest_facts, latest_counted(latest, latest_facts))
             .order_by(page.c.first_start.desc(), page.c.first_id.desc())
         )
         return [row for row in self.session.execute(stmt)]
@@ -417,8 +424,7 @@ class ReportQueries:
         facts = aliased(RunFacts, name="only_facts")
         return exists().where(
             latest.serial == Run.serial,
-            facts.run_pk == latest.id,
-            facts.line_latest.is_(True),
+            latest_counted(latest, facts),
             aborted(latest.id),
         )
 
@@ -426,8 +432,7 @@ class ReportQueries:
         """The held units the yield table counts whose failed latest run no review has
         closed, counted by the age of that run at ``now`` and by its first failure reason:
         one grouped statement (the held units' first runs, then each one's latest run)."""
-        latest = aliased(Run, name="latest")
-        latest_facts = aliased(RunFacts, name="latest_facts")
+        latest, latest_facts = latest_run_aliases()
         day, week = now - timedelta(days=1), now - timedelta(days=7)
         young, middle, old = HOLD_AGES
         age = case(
@@ -439,10 +444,7 @@ class ReportQueries:
             .select_from(Run)
             .join(RunFacts, RunFacts.run_pk == Run.id)
             .join(latest, latest.serial == Run.serial)
-            .join(
-                latest_facts,
-                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
-            )
+            .join(latest_facts, latest_counted(latest, latest_facts))
             .where(
                 *self._selected(True),
                 ~and_(aborted(Run.id), self._only_aborts()),
@@ -494,8 +496,7 @@ class ReportQueries:
         every run is an operator's abort, never attempted: the station and start of each
         one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
         walk over the runs."""
-        latest = aliased(Run, name="latest")
-        latest_facts = aliased(RunFacts, name="latest_facts")
+        latest, latest_facts = latest_run_aliases()
         stmt = (
             select(Run.station_id, Run.started_at)
             .distinct()
@@ -503,10 +504,7 @@ class ReportQueries:
             .join(Run, Run.id == RunFailure.run_pk)
             .join(RunFacts, RunFacts.run_pk == Run.id)
             .join(latest, latest.serial == Run.serial)
-            .join(
-                latest_facts,
-                and_(latest_facts.run_pk == latest.id, latest_facts.line_latest.is_(True)),
-            )
+            .join(latest_facts, latest_counted(latest, latest_facts))
             .where(
                 RunFailure.code == ABORTED,
                 RunFacts.line_first.is_(True),
