@@ -50,12 +50,22 @@ def _limit_check(failure: FailureReason, tr: Say) -> str:
     unit = _unit(failure.code, tr)
     value = f"{failure.measured:.6g}" + (f" {unit}" if unit else "")
     if bounds.contains(failure.measured):
+        if failure.uncertainty is None:  # stored before U was (revision 0016)
+            return tr(
+                "{subject} {value} within {limits} but nearer a limit than its uncertainty U "
+                "(guarded acceptance, w = U)",
+                subject=subject,
+                value=value,
+                limits=limits,
+            )
+        u = f"{failure.uncertainty:.3g}" + (f" {unit}" if unit else "")
         return tr(
-            "{subject} {value} within {limits} but nearer a limit than its uncertainty U "
-            "(guarded acceptance, w = U)",
+            "{subject} {value} within {limits} but nearer a limit than its uncertainty "
+            "U = {u} (guarded acceptance, w = U)",
             subject=subject,
             value=value,
             limits=limits,
+            u=u,
         )
     return tr("{subject} {value} outside {limits}", subject=subject, value=value, limits=limits)
 

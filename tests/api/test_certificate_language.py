@@ -110,3 +110,26 @@ def test_accept_language_picks_the_most_wanted_shipped_language(
         if tag in LANGUAGES and float(weight or 1) > 0
     ]
     assert preferred(header) == (max(wanted)[2] if wanted else "en")
+
+
+def test_a_guard_band_refusal_keeps_its_u_through_the_database(
+    client: httpx.Client, database: Database
+) -> None:
+    guarded = load_profile().model_copy(
+        update={"offset_counts": Bounds(lower=1900.0, upper=2200.0), "decision_rule": "guarded"}
+    )
+    failure = check(guarded, "offset", 2199.6, axis="y", uncertainty=0.8)
+    assert failure is not None
+    with database.session() as session:
+        RunRepository(session).submit(
+            make_record(serial=SERIAL, verdict="fail", failures=[failure.model_dump()])
+        )
+        session.commit()
+    stored = client.get(f"/api/v1/units/{SERIAL}").json()["latest"]["failures"]
+    assert stored[0]["uncertainty"] == 0.8
+    page = client.get(f"/api/v1/units/{SERIAL}/certificate", params={"lang": "ko"}).text
+    (row,) = _failures(page)
+    assert row[1] == (
+        "오프셋 y 2199.6 카운트: [1900, 2200] 안에 있으나 한계까지의 거리가 "
+        "불확도 U = 0.8 카운트보다 작음 (보호 대역 판정, w = U)"
+    )

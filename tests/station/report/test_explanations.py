@@ -80,6 +80,9 @@ def test_a_failed_limit_check_reads_in_the_operators_language(
     assert bounds.describe() in text
     if failure.measured is not None:
         assert f"{failure.measured:.6g}" in text
+        if bounds.contains(failure.measured):  # refused by the guard band: U is stored
+            assert failure.uncertainty is not None
+            assert f"U = {failure.uncertainty:.3g}" in text
     if failure.axis is not None:
         assert f" {failure.axis}" in text
     if failure.pose is not None:
