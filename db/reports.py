@@ -298,6 +298,20 @@ class ReportQueries:
         )
         return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
+    def only_product(self) -> str | None:
+        """The part number of the runs in range when they are all one product's, else
+        None (no run, or several products). Two index probes: one run in range, then any
+        run of another part number in range, which ``ix_runs_part_number_started_at``
+        answers without reading the first product's runs."""
+        first = self.session.scalars(
+            select(Run.part_number).where(*self.conditions()).limit(1)
+        ).first()
+        if first is None:
+            return None
+        other = or_(Run.part_number < first, Run.part_number > first)
+        several = self.session.scalar(select(exists().where(other, *self.conditions())))
+        return None if several else first
+
     def product_counts(self) -> list[Row[Any]]:
         """Per part number: the counts :meth:`station_counts` sums per station, and the
         runs the operator aborted, added up over the runs in range themselves (the
@@ -667,11 +681,20 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
 
 
 def _products(
-    rows: Sequence[Row[Any]], unattempted: Sequence[Row[str, str, datetime]], hours: float | None
+    queries: ReportQueries,
+    line: _Counts,
+    unattempted: Sequence[Row[str, str, datetime]],
+    hours: float | None,
 ) -> list[ProductSummary]:
-    """Each product's summary from its row of :meth:`ReportQueries.product_counts`, less
-    its ``unattempted`` units (nothing but aborts): a unit is one product's, so the rows
-    add up to the line's as the stations' do."""
+    """Each product's summary: a unit is one product's, so the rows add up to the
+    ``line``'s as the stations' do. The runs of one product are the line's runs, its row
+    the line's (no scan: the roll-ups have no product); of several, each one's row of
+    :meth:`ReportQueries.product_counts`, less its ``unattempted`` units (nothing but
+    aborts)."""
+    only = queries.only_product()
+    if only is not None:
+        return [ProductSummary(part_number=only, summary=_summary(line, hours))]
+    rows = queries.product_counts()
     abort_only = Counter(row.part_number for row in unattempted)
     return [
         ProductSummary(
@@ -1088,7 +1111,7 @@ def eol_report(
             )
             for station, rows_ in sorted(by_station.items())
         ],
-        products=_products(queries.product_counts(), unattempted, hours),
+        products=_products(queries, line, unattempted, hours),
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
