@@ -176,7 +176,9 @@ class Outbox:
                 tally.unreadable += 1
                 self.backoff.forget(path.name)
             else:
-                self.backoff.failed(path.name, f"unreadable and cannot be moved aside: {exc}")
+                self.backoff.failed(
+                    path.name, tr("unreadable and cannot be moved aside: {error}", error=exc)
+                )
             return
         self._send(store, record, tally, lambda: _remove(path), path)
 

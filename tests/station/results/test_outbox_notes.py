@@ -3,11 +3,15 @@ kept, the store's own words as it said them, no English word of the station's le
 
 import re
 from collections.abc import Iterator
+from pathlib import Path
+from uuid import uuid4
 
 import pytest
 
+from db import Database
 from station.domain.i18n import set_language
-from station.results.outbox import SyncResult
+from station.results.outbox import Outbox, SyncResult
+from station.results.storage import DatabaseStore
 
 #: Words that are no language: the command the operator types, the store's own error.
 KEPT = {"calstation", "outbox", "list", "HTTP"}
@@ -61,3 +65,22 @@ def test_english_notes_say_what_they_always_said() -> None:
         "retried with backoff, the others are sent · 2 refused and 1 unreadable set aside: "
         "see calstation outbox list"
     )
+
+
+@pytest.mark.parametrize(
+    ("language", "said"),
+    [("ko", "읽을 수 없고 따로 옮길 수도 없음: "), ("zh", "无法读取，也无法移到一旁：")],
+)
+def test_an_unreadable_file_that_cannot_be_set_aside_is_said_in_the_operators_language(
+    tmp_path: Path, database: Database, language: str, said: str
+) -> None:
+    outbox = Outbox(tmp_path / "outbox")
+    bad = outbox.directory / f"{uuid4()}.json"
+    bad.write_bytes(b"{")
+    outbox.unreadable_dir.write_text("a file where the folder would go\n")  # mkdir fails
+    set_language(language)
+    result = outbox.sync(DatabaseStore(database=database))
+    assert result.failing == 1
+    assert result.failure is not None
+    assert result.failure.startswith(said), result.failure
+    assert bad.read_bytes() == b"{"  # nothing lost: it stays in the queue
