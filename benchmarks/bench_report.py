@@ -277,6 +277,8 @@ def main() -> None:
             )
             sections: list[tuple[str, Callable[[], object]]] = [
                 ("counts, yields, limits profiles (per station and line)", q.station_counts),
+                ("one product in range? (two index probes)", q.only_product),
+                ("counts and yields per product, when several (from the runs)", q.product_counts),
                 ("failure Pareto", q.first_failures),
                 ("parameters: all 16 (statistics, histograms)", partial(q.parameters, bounds)),
                 (

@@ -124,6 +124,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
                 "upper": f.upper,
                 "axis": f.axis,
                 "pose": f.pose,
+                "uncertainty": f.uncertainty,
             }
             for f in failures
         ],

@@ -166,6 +166,8 @@ class RunFailure(Base):
     upper: Mapped[float | None] = mapped_column(Double())
     axis: Mapped[str | None] = mapped_column(String(1))
     pose: Mapped[int | None] = mapped_column(Integer())
+    #: The value's expanded uncertainty U when guarded acceptance refused it (0016).
+    uncertainty: Mapped[float | None] = mapped_column(Double())
 
     run: Mapped[Run] = relationship(back_populates="failures", lazy="raise")
 

@@ -50,6 +50,7 @@ from db.rollups import (
     LIMITS,
     MOMENT_VALUES,
     PARAMETER_VALUES,
+    PRODUCT_COUNT_VALUES,
     PRODUCTION,
     TREND_COUNT_VALUES,
     aborted,
@@ -89,6 +90,7 @@ from station.domain.quality.figures import (
     OpenHolds,
     ParameterStats,
     ParetoEntry,
+    ProductSummary,
     ReportFilter,
     StationSummary,
     Summary,
@@ -296,6 +298,33 @@ class ReportQueries:
         )
         return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
+    def only_product(self) -> str | None:
+        """The part number of the runs in range when they are all one product's, else
+        None (no run, or several products). Two index probes: one run in range, then any
+        run of another part number in range, which ``ix_runs_part_number_started_at``
+        answers without reading the first product's runs."""
+        first = self.session.scalars(
+            select(Run.part_number).where(*self.conditions()).limit(1)
+        ).first()
+        if first is None:
+            return None
+        other = or_(Run.part_number < first, Run.part_number > first)
+        several = self.session.scalar(select(exists().where(other, *self.conditions())))
+        return None if several else first
+
+    def product_counts(self) -> list[Row[Any]]:
+        """Per part number: the counts :meth:`station_counts` sums per station, and the
+        runs the operator aborted, added up over the runs in range themselves (the
+        roll-ups have no product): one grouped statement, by ``ix_runs_started_at``."""
+        stmt = count_contributions(
+            ["part_number"],
+            self.conditions(),
+            columns={"part_number": Run.part_number.expression},
+            values=PRODUCT_COUNT_VALUES,
+        )
+        rows = self.session.execute(stmt.order_by(Run.part_number)).all()
+        return list(rows)
+
     # -- failures ----------------------------------------------------------------------
 
     def first_failures(self) -> list[Row[Any]]:
@@ -491,14 +520,14 @@ class ReportQueries:
         )
         return self.session.execute(stmt).all()
 
-    def abort_only_units(self) -> list[Row[str, datetime]]:
+    def abort_only_units(self) -> list[Row[str, str, datetime]]:
         """The units the filter selects (first run on the line among its runs) whose
-        every run is an operator's abort, never attempted: the station and start of each
-        one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
+        every run is an operator's abort, never attempted: the station, product and start
+        of each one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
         walk over the runs."""
         latest, latest_facts = latest_run_aliases()
         stmt = (
-            select(Run.station_id, Run.started_at)
+            select(Run.station_id, Run.part_number, Run.started_at)
             .distinct()
             .select_from(RunFailure)
             .join(Run, Run.id == RunFailure.run_pk)
@@ -649,6 +678,31 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     if start is None or end is None or end <= start:
         return None
     return float((end - start).total_seconds() / 3600)
+
+
+def _products(
+    queries: ReportQueries,
+    line: _Counts,
+    unattempted: Sequence[Row[str, str, datetime]],
+    hours: float | None,
+) -> list[ProductSummary]:
+    """Each product's summary: a unit is one product's, so the rows add up to the
+    ``line``'s as the stations' do. The runs of one product are the line's runs, its row
+    the line's (no scan: the roll-ups have no product); of several, each one's row of
+    :meth:`ReportQueries.product_counts`, less its ``unattempted`` units (nothing but
+    aborts)."""
+    only = queries.only_product()
+    if only is not None:
+        return [ProductSummary(part_number=only, summary=_summary(line, hours))]
+    rows = queries.product_counts()
+    abort_only = Counter(row.part_number for row in unattempted)
+    return [
+        ProductSummary(
+            part_number=row.part_number,
+            summary=_summary(_counts([row], int(row.aborted), abort_only[row.part_number]), hours),
+        )
+        for row in rows
+    ]
 
 
 class _FailingRow(NamedTuple):
@@ -1036,10 +1090,10 @@ def eol_report(
     failures = queries.first_failures()
     aborts = _aborted(failures)
     unattempted = queries.abort_only_units() if aborts else []
-    abort_only = Counter(station for station, _ in unattempted)
+    abort_only = Counter(row.station_id for row in unattempted)
     line = _counts(counts, sum(aborts.values()), len(unattempted))
     what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
-    starts = [started_at for _, started_at in unattempted]
+    starts = [row.started_at for row in unattempted]
     trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
     generated_at = now or datetime.now(UTC)
     return EolReport(
@@ -1057,6 +1111,7 @@ def eol_report(
             )
             for station, rows_ in sorted(by_station.items())
         ],
+        products=_products(queries, line, unattempted, hours),
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],

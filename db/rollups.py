@@ -148,6 +148,23 @@ TREND_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")
 }
+#: The columns a product's summary reads (the runs themselves: the roll-ups have no
+#: product), with the runs the operator aborted.
+PRODUCT_COUNT_VALUES: dict[str, str] = {
+    **{
+        name: COUNT_VALUES[name]
+        for name in (
+            "runs",
+            "runs_passed",
+            "duration_ms",
+            "poses",
+            "line_units",
+            "line_first_pass",
+            "line_final_pass",
+        )
+    },
+    "aborted": "sum",
+}
 FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
 #: The columns a mean and spread (and Cpk) need, all added up.
 MOMENT_VALUES: dict[str, str] = {"n": "sum", "sum": "sum", "squares": "sum"}
@@ -429,6 +446,7 @@ def count_contributions(
         "first_pass": _count_if(and_(facts.station_first, passed)),
         "final_pass": _count_if(facts.station_final_pass),
         "charted": func.count(Run.offset_x),
+        "aborted": _count_if(facts.first_failure == _ABORTED),
         **{
             f"mr_{name}": func.coalesce(
                 func.sum(func.abs(getattr(Run, name) - getattr(previous, name))), _inline(0.0)

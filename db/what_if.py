@@ -134,6 +134,7 @@ def _judged(
                     upper=failure.upper,
                     axis=failure.axis,
                     pose=failure.pose,
+                    uncertainty=failure.uncertainty,
                 )
             )
         for row in rows:

@@ -30,6 +30,7 @@ from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from api.deps import ReaderDep, ReadersDep, ReportPoolDep
 from api.errors import answers_pages, invalid
+from api.language import LanguageDep
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
@@ -492,9 +493,10 @@ def certificate_run(
         200: {
             "content": {"text/html": {"schema": {"type": "string"}}},
             "description": "the calibration certificate; a unit whose latest run failed gets "
-            "its failure report instead (what failed, the values and their limits)",
+            "its failure report instead (what failed, the values and their limits), its "
+            "title and failures in the reader's language (`lang`, else Accept-Language)",
         },
-        **problems(404, _404="no run of this serial number"),
+        **problems(404, 422, _404="no run of this serial number", _422="an unknown language"),
     },
 )
 async def get_certificate(
@@ -502,11 +504,14 @@ async def get_certificate(
     repository: ReaderDep,
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
+    language: LanguageDep,
 ) -> HTMLResponse:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile, its reference (the latest golden-unit check
     of its station in the plant's shift, before it) and the unit's earlier runs; a failure
-    report for a unit whose latest run failed."""
+    report for a unit whose latest run failed. ``lang`` (en, ko, zh; else the
+    Accept-Language header's first shipped language, else en): the language of its title
+    and its failures (codes and values as stored)."""
     found = await repository.run(lambda r: certificate_run(r, serial))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
@@ -518,7 +523,7 @@ async def get_certificate(
     golden = await repository.run(lambda r: r.latest_golden(run.station_id, since, run.started_at))
     reviews = await repository.run(lambda r: r.reviews(serial)) if run.verdict == "fail" else []
     page = certificate_page(
-        run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden, reviews
+        run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden, reviews, language
     )
     return HTMLResponse(page)
 

@@ -335,9 +335,11 @@ def check(
         return None
     where = "".join([f" {axis}" if axis else "", f" (pose {pose + 1})" if pose is not None else ""])
     unit = f" {UNITS[code]}" if UNITS[code] else ""
+    guard = None
     if bounds.contains(measured):
         if profile.rule == "simple" or uncertainty is None or bounds.guarded(measured, uncertainty):
             return None
+        guard = uncertainty
         outcome = (
             f"within {bounds.describe()} but less than its U = {uncertainty:.3g}{unit} inside "
             "(guarded acceptance, w = U)"
@@ -352,6 +354,7 @@ def check(
         upper=bounds.upper,
         axis=axis,
         pose=pose,
+        uncertainty=guard,
     )
 
 

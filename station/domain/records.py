@@ -247,7 +247,14 @@ class PoseRecord(_Record):
 
 
 class FailureReason(_Record):
-    """Why a run failed: which check, what was measured, against which bounds."""
+    """Why a run failed: which check, what was measured, against which bounds.
+
+    ``message`` is the station's sentence as said (English, the record); the other
+    fields are what it was made of, from which a reader's language renders it
+    (:mod:`station.report.explanations`): ``uncertainty`` is the value's expanded
+    uncertainty U when guarded acceptance refused a value inside its bounds
+    (:func:`station.domain.limits.check`).
+    """
 
     code: Identifier
     message: Text
@@ -256,6 +263,7 @@ class FailureReason(_Record):
     upper: Measure | None = None
     axis: Axis | None = None
     pose: Count | None = None
+    uncertainty: Measure | None = None
 
 
 def _matrix_3x3(rows: tuple[tuple[float, ...], ...]) -> tuple[tuple[float, ...], ...]:

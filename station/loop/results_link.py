@@ -158,7 +158,9 @@ class ResultsLink:
                 Text(tr("waiting for the results store: the history of {serial}…", serial=serial))
             )
         if self._sync is not None and time.monotonic() - self._sync_started > SAY_WAITING_AFTER_S:
-            lines.append(Text(f"waiting for the results store: {waiting(self.backlog)}…"))
+            lines.append(
+                Text(tr("waiting for the results store: {waiting}…", waiting=waiting(self.backlog)))
+            )
         return lines
 
     # -- runs out ------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from rich.text import Text
 from station.domain.i18n import tr
 from station.domain.poses import Pose
 from station.domain.records import RunRecord
+from station.report.explanations import explanation
 from station.run.operator_text import (
     pose_instruction,
     pose_words,
@@ -244,7 +245,7 @@ def verdict_screen(record: RunRecord) -> RenderableType:
             )
         lines.append(Align.center(table))
     for failure in record.failures:
-        lines.append(Text(f"✗ {failure.code}: {failure.message}", style="red"))
+        lines.append(Text(f"✗ {failure.code}: {explanation(failure)}", style="red"))
     if record.disposition is not None:
         step, colour = next_step(record.disposition)
         lines.append(Text(tr("next: {step}", step=step), style=f"bold {colour}", justify="center"))

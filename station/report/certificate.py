@@ -11,6 +11,7 @@ The page (``templates/certificate.html`` and its ``identity.html``) lays it out.
 import math
 from dataclasses import dataclass
 
+from station.domain.i18n import Say
 from station.domain.limits import CHECKS, UNITS, Bounds, LimitsProfile
 from station.domain.records import RunRecord, RunSummary
 
@@ -188,3 +189,21 @@ def identity(run: RunRecord, golden: RunSummary | None) -> Identity:
         method=method(run),
         golden=golden,
     )
+
+
+def failure_words(tr: Say) -> dict[str, str]:
+    """The words of the document's title and of its failures (the failure report's "what
+    failed"), in the reader's language (``tr``: :func:`station.domain.i18n.speaker`)."""
+    return {
+        "pass": tr("Calibration certificate"),
+        "fail": tr("Failure report"),
+        "on_hold": tr("the unit's latest run failed: it is on hold, not certified"),
+        "what_failed": tr("What failed"),
+        "code": tr("code"),
+        "explanation": tr("explanation"),
+        "measured": tr("measured"),
+        "lower": tr("lower"),
+        "upper": tr("upper"),
+        "none": tr("none"),
+        "failure_reasons": tr("failure reasons"),
+    }

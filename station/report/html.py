@@ -15,6 +15,7 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
+from station.domain.i18n import Language, speaker
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
@@ -29,7 +30,8 @@ from station.domain.quality.station_health import (
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
-from station.report.certificate import check_rows, identity
+from station.report.certificate import check_rows, failure_words, identity
+from station.report.explanations import explanation
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
     CAPABILITY_HEADER,
@@ -90,9 +92,6 @@ _env.globals.update(
 # (Jinja's template modules expose their macros as attributes it does not declare).
 _base = _env.get_template("base.html").module
 _env.globals.update(serial_link=_base.serial_link)  # type: ignore[attr-defined]
-
-#: What the certificate page of a unit is called, by the verdict of its latest run.
-DOCUMENT_TITLES = {"pass": "Calibration certificate", "fail": "Failure report"}
 
 
 def trend_charts(
@@ -227,7 +226,7 @@ def unit_page(
         reviewed=any(review.run_id == runs[-1].run_id for review in reviews),
         generated_at=generated_at,
         zone=zone,
-        document_title=DOCUMENT_TITLES[unit.verdict],
+        document_title=failure_words(speaker("en"))[unit.verdict],
     )
 
 
@@ -320,10 +319,13 @@ def certificate_page(
     zone: str = "UTC",
     golden: RunSummary | None = None,
     reviews: Sequence[HoldReview] = (),
+    language: Language = "en",
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
     gets no certificate. ``earlier``: the unit's runs before ``run``, listed too.
+    ``language``: the reader's; the title and the failures (this run's and the earlier
+    runs') are in it (:mod:`station.report.explanations`), codes and values as stored.
 
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
@@ -340,6 +342,7 @@ def certificate_page(
         plot = svg_g_sensitivity(
             gyro_fit.dwells.to_log(), model, sense_axes_of(gyro_fit.report, model)
         )
+    words = failure_words(speaker(language))
     return _env.get_template("certificate.html").render(
         run=run,
         profile=profile,
@@ -349,7 +352,13 @@ def certificate_page(
         earlier=earlier,
         zone=zone,
         reviews=reviews,
-        document_title=DOCUMENT_TITLES[run.verdict],
+        document_title=words[run.verdict],
+        words=words,
+        page_language=language,
+        explain=lambda failure: explanation(failure, language),
+        failure_text=lambda failure: (
+            formatting.reason(failure) if language == "en" else explanation(failure, language)
+        ),
         gyro_plot=Markup(plot) if plot is not None else None,
         identity=identity(run, golden),
         checks=None if profile is None else check_rows(run, profile),

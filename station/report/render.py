@@ -88,6 +88,9 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     for station in doc["stations"]:
         for key, value in station["summary"].items():
             yield ("station", station["station_id"], key, value)
+    for product in doc["products"]:
+        for key, value in product["summary"].items():
+            yield ("product", product["part_number"], key, value)
     yield ("trend", "", "timezone", doc["timezone"])
     for day in doc["trend"]:
         yield from _trend_rows("trend", day["day"], day, {"day"})
@@ -204,6 +207,12 @@ def as_text(report: EolReport) -> str:
                 summary_cells("all", report.summary),
                 *(summary_cells(s.station_id, s.summary) for s in report.stations),
             ],
+        ),
+        "",
+        "Per product (part number)",
+        *_table(
+            ["part number", *SUMMARY_HEADER[1:]],
+            [summary_cells(p.part_number, p.summary) for p in report.products],
         ),
         "",
         f"Trend per day ({report.timezone}; units counted on the day of their first run)",

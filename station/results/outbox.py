@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+from station.domain.i18n import tr
 from station.domain.records import RunRecord
 from station.results.backoff import RecordBackoff
 from station.results.files import write_atomic
@@ -56,19 +57,26 @@ class SyncResult:
     failure: str | None = None
 
     def note(self) -> str | None:
-        """One plain line for the operator about this sync (None when all went well)."""
+        """One plain line for the operator about this sync (None when all went well), in
+        the operator's language; the store's own words (``error``, ``failure``) as said."""
         lines = []
         if self.error is not None:
             lines.append(f"{waiting(self.pending)}: {self.error}")
         if self.failing:
             lines.append(
-                f"the store keeps failing on {_runs(self.failing)} ({self.failure}): "
-                "retried with backoff, the others are sent"
+                tr(
+                    "the store keeps failing on {runs} ({failure}): retried with backoff, "
+                    "the others are sent",
+                    runs=_runs(self.failing),
+                    failure=self.failure,
+                )
             )
-        aside = [f"{self.refused} refused"] if self.refused else []
-        aside += [f"{self.unreadable} unreadable"] if self.unreadable else []
+        aside = [tr("{count} refused", count=self.refused)] if self.refused else []
+        aside += [tr("{count} unreadable", count=self.unreadable)] if self.unreadable else []
         if aside:
-            lines.append(f"{' and '.join(aside)} set aside: see calstation outbox list")
+            lines.append(
+                tr("{what} set aside: see calstation outbox list", what=tr(" and ").join(aside))
+            )
         return " · ".join(lines) or None
 
 
@@ -168,7 +176,9 @@ class Outbox:
                 tally.unreadable += 1
                 self.backoff.forget(path.name)
             else:
-                self.backoff.failed(path.name, f"unreadable and cannot be moved aside: {exc}")
+                self.backoff.failed(
+                    path.name, tr("unreadable and cannot be moved aside: {error}", error=exc)
+                )
             return
         self._send(store, record, tally, lambda: _remove(path), path)
 
@@ -235,12 +245,15 @@ class _Tally:
 
 
 def _runs(n: int) -> str:
-    return f"{n} run{'s' * (n != 1)}"
+    return tr("{count} run", count=n) if n == 1 else tr("{count} runs", count=n)
 
 
 def waiting(n: int) -> str:
-    """ "1 run waits in the outbox", "3 runs wait in the outbox": a note's first words."""
-    return f"{_runs(n)} wait{'s' * (n == 1)} in the outbox"
+    """ "1 run waits in the outbox", "3 runs wait in the outbox": a note's first words, in
+    the operator's language."""
+    if n == 1:
+        return tr("{count} run waits in the outbox", count=n)
+    return tr("{count} runs wait in the outbox", count=n)
 
 
 def _name(record: RunRecord) -> str:

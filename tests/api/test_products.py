@@ -1,9 +1,14 @@
 """Products over the API: every run names its part number; the run list, the unit's
 answer and the end-of-line report carry it and filter by it."""
 
+import csv
+import html
+import io
+import re
 from datetime import timedelta
 
 import httpx
+from sqlalchemy import text
 
 from db import Database, RunRepository
 from tests.db.records import T0, make_record
@@ -65,6 +70,79 @@ def test_the_eol_report_of_one_product(client: httpx.Client, database: Database)
     # Without a range too: the product's runs are read from the runs themselves.
     open_range = client.get("/api/v1/reports/eol", params={"part_number": "DIXX-D16"}).json()
     assert open_range["summary"]["runs"] == 2
+
+
+def _raw_product_counts(database: Database) -> dict[str, tuple[int, int, int, int, int]]:
+    """Per part number, from the stored runs by raw SQL: (runs, runs passed, units,
+    units whose first run passed, units whose latest run passed); no aborts stored."""
+    with database.session() as session:
+        stored = session.execute(
+            text("SELECT part_number, serial, verdict FROM runs ORDER BY started_at, id")
+        ).all()
+    counts = {}
+    for part in sorted({row.part_number for row in stored}):
+        runs = [(row.serial, row.verdict) for row in stored if row.part_number == part]
+        first = {serial: verdict for serial, verdict in reversed(runs)}
+        latest = dict(runs)
+        counts[part] = (
+            len(runs),
+            sum(verdict == "pass" for _, verdict in runs),
+            len(first),
+            sum(verdict == "pass" for verdict in first.values()),
+            sum(verdict == "pass" for verdict in latest.values()),
+        )
+    return counts
+
+
+def test_the_eol_report_has_a_row_per_product_in_json_csv_and_html(
+    client: httpx.Client, database: Database
+) -> None:
+    _store(database)
+    with database.session() as session:  # a retest of a D16 unit, now passing
+        RunRepository(session).submit(
+            make_record(
+                serial="PT-000102", part_number="DIXX-D16", started_at=T0 + timedelta(minutes=20)
+            )
+        )
+        session.commit()
+    expected = _raw_product_counts(database)
+    report = client.get("/api/v1/reports/eol", params=RANGE).json()
+    rows = {p["part_number"]: p["summary"] for p in report["products"]}
+    assert list(rows) == sorted(expected)
+    for part, summary in rows.items():
+        fields = ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed")
+        assert tuple(summary[f] for f in fields) == expected[part]
+    for field in ("runs", "runs_passed", "units_tested", "units_passed"):
+        assert sum(s[field] for s in rows.values()) == report["summary"][field]
+
+    answer = client.get("/api/v1/reports/eol", params={**RANGE, "format": "csv"})
+    cells = {
+        (row["section"], row["item"], row["metric"]): row["value"]
+        for row in csv.DictReader(io.StringIO(answer.text))
+    }
+    for part, summary in rows.items():
+        for key, value in summary.items():
+            assert cells["product", part, key] == ("" if value is None else str(value))
+
+    page = client.get("/api/v1/reports/eol", params={**RANGE, "format": "html"}).text
+    table = re.search(r'<table class="summary products">(.*?)</table>', page, re.S)
+    assert table is not None
+    shown = [
+        [html.unescape(cell) for cell in re.findall(r"<td>(.*?)</td>", row)]
+        for row in re.findall(r"<tr>(.*?)</tr>", table.group(1), re.S)[1:]
+    ]
+    assert [row[0] for row in shown] == sorted(expected)
+    for row in shown:
+        summary = rows[row[0]]
+        assert row[1:5] == [
+            str(summary[f]) for f in ("units_tested", "units_passed", "units_failed", "runs")
+        ]
+        for fraction, cell in zip(
+            (summary["report_yield"], summary["first_pass_yield"], summary["final_yield"]),
+            row[5:8],
+            strict=True,
+        ):
+            assert cell == f"{100 * fraction:.1f} %"
 
 
 def test_a_submitted_run_keeps_its_product_and_a_retry_is_the_same_run(

@@ -83,6 +83,7 @@ def test_a_failing_unit_shows_its_failure_reasons(client: httpx.Client, database
             "upper": 819.0,
             "axis": "z",
             "pose": None,
+            "uncertainty": None,
         }
     ]
 

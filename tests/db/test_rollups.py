@@ -33,6 +33,7 @@ from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
 DAY0 = T0.replace(hour=0)
+PRODUCTS = ("DIXX-A12", "DIXX-D16")
 MOMENTS = [None, DAY0, DAY0 + timedelta(days=1), T0 + timedelta(hours=20), DAY0 + timedelta(days=3)]
 
 
@@ -41,6 +42,7 @@ class Planned:
     """One run of a generated history."""
 
     serial: str
+    part_number: str
     station: str
     operator: str
     lot: str | None
@@ -56,14 +58,18 @@ class Planned:
 
 @st.composite
 def histories(draw: st.DrawFn) -> list[Planned]:
-    """Up to 12 runs of up to 4 units over three days, each start a distinct minute."""
+    """Up to 12 runs of up to 4 units (each of one of two products) over three days, each
+    start a distinct minute."""
     minutes = draw(st.lists(st.integers(0, 3 * 24 * 60), min_size=1, max_size=12, unique=True))
+    products = {s: draw(st.sampled_from(PRODUCTS)) for s in ("U1", "U2", "U3", "U4")}
     runs = []
     for minute in minutes:
         code = draw(st.sampled_from([None, None, "offset", "sensitivity", "aborted"]))
+        serial = draw(st.sampled_from(sorted(products)))
         runs.append(
             Planned(
-                serial=draw(st.sampled_from(["U1", "U2", "U3", "U4"])),
+                serial=serial,
+                part_number=products[serial],
                 station=draw(st.sampled_from(["st1", "st2"])),
                 operator=draw(st.sampled_from(["op-a", "op-b"])),
                 lot=draw(st.sampled_from([None, "L1", "L2"])),
@@ -91,6 +97,7 @@ def _record(run: Planned) -> Any:
     extra: dict[str, Any] = {} if run.charted else {"coefficients": None, "quality": None}
     return make_record(
         serial=run.serial,
+        part_number=run.part_number,
         station_id=run.station,
         verdict="pass" if run.passed else "fail",
         started_at=run.started_at,
@@ -170,6 +177,16 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     # So the rows add up to the "all" row, on a filtered page too.
     for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
         assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
+    products = {p.part_number: p.summary for p in report.products}
+    assert sorted(products) == sorted({r.part_number for r in chosen})
+    for part_number, summary in products.items():
+        # A product's row: its units (a unit is one product's) and its runs.
+        of = [r for r in chosen if r.part_number == part_number]
+        assert _counts_of(summary) == _expected_counts(history, of, unit)
+        aborts = sum(r.code == "aborted" for r in of)
+        assert summary.aborted_runs == aborts
+        assert summary.retests == max(0, len(of) - aborts - summary.units_tested)
+        assert summary.poses == 7 * len(of)
     _check_trend(report, history, chosen)
     # an operator's abort is no failure category
     codes = [r.code for r in chosen if r.code not in (None, "aborted")]

@@ -80,6 +80,13 @@ class StationSummary(_FigurePart):
     summary: Summary
 
 
+class ProductSummary(_FigurePart):
+    """The summary of one product: the runs of its part number."""
+
+    part_number: str
+    summary: Summary
+
+
 class ParetoEntry(_FigurePart):
     """Failing runs whose first failure reason is ``code``."""
 
@@ -293,6 +300,11 @@ class EolReport(_FigurePart):
     limits_profiles: list[LimitsRef] = Field(description="profiles the runs were judged by")
     summary: Summary
     stations: list[StationSummary]
+    products: list[ProductSummary] = Field(
+        default_factory=list,
+        description="per part number, its runs' summary: a unit is one product's, so the "
+        "products' rows add up to the line's",
+    )
     timezone: str = Field("UTC", description="the plant's time zone the pages show times in")
     trend: list[TrendDay] = Field(
         default_factory=list, description="per plant day of the range, the latest days"

@@ -16,6 +16,8 @@ from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr
 
 ROOT = Path(__file__).resolve().parents[3]
 TEMPLATE = ROOT / "station" / "domain" / "locale" / "calstation.pot"
+#: The folders ``pybabel extract`` reads (docs/station.md).
+EXTRACTED = ("station/run", "station/loop", "station/cli", "station/report", "station/results")
 PLACEHOLDER = re.compile(r"\{(\w+)\}")
 
 
@@ -32,7 +34,7 @@ def _template_ids() -> set[str]:
 def test_the_template_holds_every_line_the_sources_translate() -> None:
     said = {
         message
-        for folder in ("station/run", "station/loop", "station/cli")
+        for folder in EXTRACTED
         for _, _, message, _, _ in extract_from_dir(
             ROOT / folder, keywords={"tr": None}, comment_tags=()
         )

@@ -12,6 +12,7 @@ from rich.cells import cell_len
 from rich.console import Console, Group, RenderableType
 
 from station.domain.i18n import set_language
+from station.domain.limits import Bounds, check, load_profile
 from station.domain.orientation import Sensed
 from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.loop.fixture.screen import FixtureView, fixture_screen
@@ -204,3 +205,29 @@ def test_an_unknown_error_is_cut_by_cells() -> None:
     assert said.endswith("…")
     assert said.startswith("장치 오류")
     assert port_problem(OSError("x" * 100)) == "x" * (MAX_UNKNOWN - 1) + "…"
+
+
+#: A failed check's explanation on the verdict screen (code and serial as they are).
+EXPLAINED = {
+    "ko": "자세 잡음 x (자세 3) 8.59057 카운트: ≤ 8 벗어남",
+    "zh": "姿态噪声 x （姿态 3） 8.59057 计数：超出 ≤ 8",
+}
+
+
+@pytest.mark.parametrize("language", ["ko", "zh"])
+def test_the_failure_screen_explains_each_failure_in_the_operators_language(
+    language: str,
+) -> None:
+    profile = load_profile().model_copy(update={"pose_noise_counts": Bounds(upper=8.0)})
+    failure = check(profile, "pose_noise", 8.59057, axis="x", pose=2)
+    assert failure is not None
+    record = make_record(serial="PT000009", verdict="fail", failures=[failure.model_dump()])
+    set_language(language)
+    lines = _drawn(verdict_screen(record))
+    assert max(map(cell_len, lines)) <= 80
+    text = "\n".join(lines)
+    assert f"✗ pose_noise: {EXPLAINED[language]}" in text
+    assert "PT000009" in text
+    assert failure.message not in text  # the record's English sentence, kept as said
+    set_language("en")
+    assert f"✗ pose_noise: {failure.message}" in "\n".join(_drawn(verdict_screen(record)))

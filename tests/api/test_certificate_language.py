@@ -1,0 +1,135 @@
+"""The failure report (and certificate) in the reader's language: ``?lang=``, else the
+``Accept-Language`` header's first shipped language, else English; the failures rendered
+from their stored code and parameters, codes, serials and values as stored."""
+
+import html
+import re
+from datetime import timedelta
+
+import httpx
+from hypothesis import given
+from hypothesis import strategies as st
+
+from api.language import preferred
+from db import Database, RunRepository
+from station.domain.i18n import LANGUAGES
+from station.domain.limits import Bounds, check, load_profile
+from tests.db.records import T0, make_record
+
+SERIAL = "PT-000777"
+#: The failure as each language explains it, the page's title and its "what failed".
+EXPECTED = {
+    "ko": ("자세 잡음 x (자세 3) 8.59057 카운트: ≤ 8 벗어남", "불합격 보고서", "불합격 항목"),
+    "zh": ("姿态噪声 x （姿态 3） 8.59057 计数：超出 ≤ 8", "不合格报告", "不合格项"),
+}
+KEPT = {"mg", "ADC"}
+
+
+def _store(database: Database) -> str:
+    """Two failed runs of one unit, both with a stored pose noise failure; its message."""
+    profile = load_profile().model_copy(update={"pose_noise_counts": Bounds(upper=8.0)})
+    failure = check(profile, "pose_noise", 8.59057, axis="x", pose=2)
+    assert failure is not None
+    with database.session() as session:
+        repository = RunRepository(session)
+        for minutes in (0, 5):
+            repository.submit(
+                make_record(
+                    serial=SERIAL,
+                    verdict="fail",
+                    started_at=T0 + timedelta(minutes=minutes),
+                    failures=[failure.model_dump()],
+                )
+            )
+        session.commit()
+    return failure.message
+
+
+def _failures(page: str) -> list[list[str]]:
+    """The cells of the "what failed" table's rows."""
+    table = re.search(r'<table class="failures">(.*?)</table>', page, re.S)
+    assert table is not None
+    return [
+        [html.unescape(cell) for cell in re.findall(r"<td>(.*?)</td>", row)]
+        for row in re.findall(r"<tr>(.*?)</tr>", table.group(1), re.S)[1:]
+    ]
+
+
+def _earlier_reasons(page: str) -> list[str]:
+    return [
+        html.unescape(cell) for cell in re.findall(r'<td class="reasons">(.*?)</td>', page, re.S)
+    ]
+
+
+def test_the_failure_report_in_korean_and_chinese_by_lang_or_accept_language(
+    client: httpx.Client, database: Database
+) -> None:
+    message = _store(database)
+    url = f"/api/v1/units/{SERIAL}/certificate"
+    pages = {
+        "ko": client.get(url, params={"lang": "ko"}, headers={"Accept-Language": "zh"}).text,
+        "zh": client.get(url, headers={"Accept-Language": "fr-FR, zh-CN;q=0.9, ko;q=0.5"}).text,
+    }
+    for language, page in pages.items():
+        explained, title, what_failed = EXPECTED[language]
+        assert f'<html lang="{language}">' in page
+        assert f"<h1>{title}</h1>" in page
+        assert f'<h2 id="what-failed">{what_failed}</h2>' in page
+        (row,) = _failures(page)
+        assert row[:2] == ["pose_noise", explained]  # the code as stored
+        assert row[2] == "8.59057"
+        assert not set(re.findall(r"[A-Za-z]{2,}", " ".join(row[1:]))) - KEPT - {"pose_noise"}
+        assert _earlier_reasons(page) == [explained]  # the earlier run's failure too
+        assert SERIAL in page
+        assert message not in page  # the stored English sentence is not the reader's
+    english = client.get(url, headers={"Accept-Language": "fr"}).text
+    assert '<html lang="en">' in english
+    assert "<h1>Failure report</h1>" in english
+    assert _failures(english)[0][:2] == ["pose_noise", message]
+    refused = client.get(url, params={"lang": "fr"})
+    assert refused.status_code == 422
+    assert refused.headers["content-type"].startswith("application/")
+
+
+languages = st.sampled_from([*LANGUAGES, "fr", "de", "ja", "*"])
+regions = st.sampled_from(["", "-KR", "-CN", "-TW", "-US", "-Hans"])
+weights = st.sampled_from([None, "1", "0.9", "0.5", "0.25", "0.001", "0"])
+
+
+@given(st.lists(st.tuples(languages, regions, weights), max_size=6))
+def test_accept_language_picks_the_most_wanted_shipped_language(
+    entries: list[tuple[str, str, str | None]],
+) -> None:
+    header = ", ".join(
+        f"{tag}{region}" + ("" if weight is None else f";q={weight}")
+        for tag, region, weight in entries
+    )
+    wanted = [
+        (float(weight or 1), -position, tag)
+        for position, (tag, _, weight) in enumerate(entries)
+        if tag in LANGUAGES and float(weight or 1) > 0
+    ]
+    assert preferred(header) == (max(wanted)[2] if wanted else "en")
+
+
+def test_a_guard_band_refusal_keeps_its_u_through_the_database(
+    client: httpx.Client, database: Database
+) -> None:
+    guarded = load_profile().model_copy(
+        update={"offset_counts": Bounds(lower=1900.0, upper=2200.0), "decision_rule": "guarded"}
+    )
+    failure = check(guarded, "offset", 2199.6, axis="y", uncertainty=0.8)
+    assert failure is not None
+    with database.session() as session:
+        RunRepository(session).submit(
+            make_record(serial=SERIAL, verdict="fail", failures=[failure.model_dump()])
+        )
+        session.commit()
+    stored = client.get(f"/api/v1/units/{SERIAL}").json()["latest"]["failures"]
+    assert stored[0]["uncertainty"] == 0.8
+    page = client.get(f"/api/v1/units/{SERIAL}/certificate", params={"lang": "ko"}).text
+    (row,) = _failures(page)
+    assert row[1] == (
+        "오프셋 y 2199.6 카운트: [1900, 2200] 안에 있으나 한계까지의 거리가 "
+        "불확도 U = 0.8 카운트보다 작음 (보호 대역 판정, w = U)"
+    )
