@@ -67,17 +67,18 @@ class Bounds(BaseModel):
         return self
 
     def contains(self, value: float) -> bool:
-        """Whether ``value`` lies within the bounds (NaN never does)."""
+        """Whether ``value`` lies within the bounds (a NaN or an infinity never does: a
+        measurement is finite, and an open side is not a licence for ±∞)."""
         low = self.lower if self.lower is not None else -float("inf")
         high = self.upper if self.upper is not None else float("inf")
-        return low <= value <= high
+        return math.isfinite(value) and low <= value <= high
 
     def guarded(self, value: float, u: float) -> bool:
         """Whether ``value ± u`` lies within the bounds: guarded acceptance with a guard
         band w = u on each side (ILAC-G8:09/2019 4.2.2, JCGM 106:2012 8.3.3)."""
         low = self.lower if self.lower is not None else -float("inf")
         high = self.upper if self.upper is not None else float("inf")
-        return low + u <= value <= high - u
+        return math.isfinite(value) and low + u <= value <= high - u
 
     def margin(self, value: float) -> float:
         """How far ``value`` lies inside the nearer bound (negative: outside)."""

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from station.domain.errors import InputError
 from station.domain.limits import (
+    CHECKS,
     Bounds,
     check,
     load_profile,
@@ -93,6 +94,18 @@ def test_nan_always_fails() -> None:
     reason = check(load_profile(), "verification_error", math.nan)
     assert reason is not None
     assert reason.measured is None
+
+
+@pytest.mark.parametrize("rule", ["simple", "guarded"])
+@pytest.mark.parametrize(
+    "code", sorted(code for code, field in CHECKS.items() if getattr(load_profile(), field))
+)
+@pytest.mark.parametrize("value", [math.inf, -math.inf])
+def test_an_infinite_value_always_fails_even_against_a_one_sided_limit(
+    rule: str, code: str, value: float
+) -> None:
+    profile = load_profile().model_copy(update={"rule": rule})
+    assert check(profile, code, value, uncertainty=1.0) is not None
 
 
 @given(low=st.floats(-1e6, 1e6), width=st.floats(0, 1e6), value=st.floats(-3e6, 3e6))
