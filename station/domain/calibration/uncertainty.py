@@ -38,6 +38,9 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     the axis poses, so a first-order propagation would call it zero, and one-sided: it
     only ever raises the sensitivities there). The symmetric 95 % interval of the
     refitted coefficients' change, bias included ([JCGM101]_ 7.7), over k is the term.
+    The fitted directions already carry the unit's own coupling; when every pose lies
+    within the coupling's reach of an axis the sensitivities' term is taken along the
+    axes, not along them (:func:`_model_term`: else it counted the coupling twice).
     The nine-parameter model represents the coupling: zero.
 ``fit``
     Type A, the evidence of the fit. With redundant poses (N > p): when the residuals'
@@ -493,6 +496,41 @@ def _couplings(bound: float) -> FloatArray:
     return m
 
 
+def _along_axes(n: FloatArray, bound: float) -> FloatArray | None:
+    """The poses' axes (N, 3) when every fitted direction n_i lies within what the unit's
+    own coupling can do to a pose along an axis, else ``None``.
+
+    A coupling M with off-diagonal terms within ±bound turns a true direction u into
+    ∝ (I + M)·u, which moves component j by at most bound·Σ_{k≠j}|u_k|: a pose whose
+    every off-axis component is within that reach cannot be told from a pose exactly
+    along its axis that the coupling skewed.
+    """
+    magnitude = np.abs(n)
+    reach = bound * (magnitude.sum(axis=1, keepdims=True) - magnitude)
+    axis = np.argmax(magnitude, axis=1)
+    off = np.ones_like(n, dtype=bool)
+    off[np.arange(len(n)), axis] = False
+    if np.any(magnitude[off] > reach[off]):
+        return None
+    axes = np.zeros_like(n)
+    axes[np.arange(len(n)), axis] = np.sign(n[np.arange(len(n)), axis])
+    return axes
+
+
+def _coupling_shifts(
+    theta: FloatArray, directions: FloatArray, g: FloatArray, coupled: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The coefficients' changes (K', 6) when the poses o + diag(s)(I + M)·d_i along
+    ``directions`` d (N, 3) are refitted, one row per coupling (I + M) of ``coupled``
+    (K, 3, 3) that refits; and those refits' θ and couplings."""
+    offset, s = theta[:3], theta[3:6]
+    moved = offset + np.einsum("kij,nj->kni", coupled, directions) * s  # (K, N, 3)
+    thetas = _refit(theta, moved)
+    shift = (thetas - theta) @ g.T
+    solved = np.all(np.isfinite(shift), axis=1) & np.all(thetas[:, 3:] > 0, axis=1)
+    return shift[solved], thetas[solved], coupled[solved]
+
+
 def _model_term(
     theta: FloatArray,
     n: FloatArray,
@@ -505,25 +543,28 @@ def _model_term(
 
     For each drawn coupling M the poses ``o + diag(s)(I + M)·n_i`` along the fitted
     directions n_i are refitted with the six-parameter model (Gauss–Newton from the fit);
-    the change of the coefficients is what M does to them. The fitted
-    directions carry the unit's own coupling too, so on poses aligned with the axes to
-    better than ~1° (where the coupling acts in second order only) the term is
-    conservative by up to ~2×; on poses a hand or a jig tilts by a few degrees it is not
-    (``docs/benchmarks.md``).
+    the change of the coefficients is what M does to them. The fitted directions carry the
+    unit's own coupling c too, which the data cannot tell from the pose's tilt t. The
+    offsets move in first order, with t·M, and the c in n_i stands in for the tilt the
+    data cannot show: their term is taken along n_i. The sensitivities of poses along the
+    axes move in second order only, with |M|²/2, and along n_i = t + c the draw adds a
+    cross term c·M the unit does not have, twice the right term there
+    (``docs/benchmarks.md``); so when every pose lies within the coupling's reach of its
+    axis (:func:`_along_axes`) the sensitivities' term is taken along the axes.
     """
     offset, s = theta[:3], theta[3:6]
-    m = _couplings(bound)
-    coupled = np.eye(3) + m  # (K, 3, 3)
-    moved = offset + np.einsum("kij,nj->kni", coupled, n) * s  # (K, N, 3)
-    thetas = _refit(theta, moved)
-    shift = (thetas - theta) @ g.T
-    solved = np.all(np.isfinite(shift), axis=1) & np.all(thetas[:, 3:] > 0, axis=1)
-    if not np.any(solved):  # no draw refits: the coupling's own bound on every coefficient
+    shift, thetas, coupled = _coupling_shifts(theta, n, g, np.eye(3) + _couplings(bound))
+    if len(shift) == 0:  # no draw refits: the coupling's own bound on every coefficient
         return np.asarray(np.concatenate([s, s]) * bound, dtype=np.float64), None
-    shift, thetas, coupled = shift[solved], thetas[solved], coupled[solved]
     # JCGM 101 7.7: the symmetric 95 % interval of the (biased: one-sided on the axis
     # poses) changes, as the standard uncertainty that k turns back into it.
     term = np.quantile(np.abs(shift), _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR
+    axes = _along_axes(n, bound)
+    if axes is not None:
+        along, _, _ = _coupling_shifts(theta, axes, g, np.eye(3) + _couplings(bound))
+        if len(along):
+            term[3:] = np.quantile(np.abs(along[:, 3:]), _COVERAGE_PROBABILITY, axis=0)
+            term[3:] /= COVERAGE_FACTOR
     if verification_dir is None:
         return np.asarray(term, dtype=np.float64), None
     av = offset + np.einsum("kij,j->ki", coupled, verification_dir) * s
