@@ -31,6 +31,18 @@ def test_poses_along_the_axes_give_the_six_parameter_sensitivities_their_right_w
         assert 0.30 <= coverage.mean_ratio[group] <= 0.60, group
 
 
+def test_the_drift_with_temperature_across_the_poses_is_in_the_budget() -> None:
+    # Poses 10 s apart from power-up (0.4 °C of self-heating over the run), units with
+    # temperature coefficients anywhere within the datasheet's bounds: without the
+    # temperature term the offsets' truths lie outside ±U most of the time.
+    coverage = simulate_coverage(
+        "kxm52-production", 250, np.random.default_rng(27), 0.0, pose_interval_s=10.0
+    )
+    for group in GROUPS:
+        assert 0.90 <= coverage.fraction(group) <= 0.99, group
+        assert 0.30 <= coverage.mean_ratio[group] <= 0.60, group
+
+
 def test_the_gyro_matrix_truth_lies_within_its_expanded_uncertainty() -> None:
     # 40 whole units' streams, 360 elements of K: U(K) half the right size would leave
     # about a third outside and mean |e|/U near 0.8, twice it none outside and 0.2.
