@@ -196,8 +196,11 @@ def test_a_declared_whole_turn_gives_the_rotation_gravity_cannot_see(seed: int) 
     assert blind.known_turns == ()
     assert known.known_turns == (1,)  # the move after pose 1, and no other
     assert abs(known.known_turn_swept_deg[0] - 360.0) < 0.5
-    error_blind = float(np.abs(blind.scale_matrix - true_k).max())
-    error_known = float(np.abs(known.scale_matrix - true_k).max())
-    assert error_known < 5e-4
-    assert error_known < error_blind / 5
-    assert known.condition_number < blind.condition_number
+    # The turn's angle gives the scale about its axis (y here), which gravity cannot see;
+    # its axis is left free (a hand's turn is not exactly about the vertical), so how a
+    # y rotation leaks into the other gyros stays as the gravity directions give it.
+    error_blind = abs(blind.scale_matrix[1, 1] - true_k[1, 1])
+    error_known = abs(known.scale_matrix[1, 1] - true_k[1, 1])
+    assert error_blind > 4e-4  # the case at issue: the y scale unseen without the turn
+    assert error_known < 1e-4
+    assert error_known < error_blind / 4
