@@ -21,6 +21,13 @@ NOMINAL_SENSITIVITY_COUNTS_PER_G: Final = 819.2
 SENSITIVITY_TOLERANCE: Final = 0.05
 #: Typical cross-axis sensitivity of the KXM52.
 CROSS_AXIS_TYPICAL: Final = 0.02
+#: Largest temperature coefficient of the 0 g offset, counts/°C: the KXM52-1050 datasheet's
+#: ±100 mV drift over −40…85 °C ([Song2006]_ Table 1) reached 65 °C from room temperature
+#: (25 °C), 1.54 mV/°C, in counts (× 4096/3.3 V).
+OFFSET_TEMPCO_COUNTS_PER_C: Final = 0.100 / 65.0 * 4096 / SUPPLY_V
+#: Largest temperature coefficient of the sensitivity, per °C: the datasheet's ±3 % (max.)
+#: over −40…85 °C reached 65 °C from room temperature.
+SENSITIVITY_TEMPCO_PER_C: Final = 0.03 / 65.0
 #: Gyro rate resolution of the putter's reports: one count of the int16 field is 0.02 deg/s
 #: (±655 deg/s span).
 GYRO_DPS_PER_LSB: Final = 0.02

@@ -139,6 +139,15 @@ def pose_records(
     )
 
 
+def _temperatures(poses: list[PoseRecord]) -> Array | None:
+    """The poses' temperatures, °C, when every one recorded its own (else None: the
+    budget then has no temperature term)."""
+    values = [p.temperature_c for p in poses]
+    if any(v is None for v in values):
+        return None
+    return np.array(values, dtype=np.float64)
+
+
 def uncertainty_record(
     captures: Mapping[int, Capture],
     fit_count: int,
@@ -162,6 +171,8 @@ def uncertainty_record(
         verification=None if verify is None else np.array(verify.record.mean.as_tuple()),
         verification_spread=None if verify is None else np.array(verify.record.std.as_tuple()),
         verification_samples=None if verify is None else verify.record.sample_count,
+        temperatures=_temperatures([c.record for c in fit]),
+        verification_temperature=None if verify is None else verify.record.temperature_c,
     )
     uncertainty = Uncertainty.of_budget(budget)
     gyro_means = [c.record.gyro_mean for c in fit]

@@ -98,6 +98,9 @@ class StreamPlan:
     still_s: float = 2.0
     move_s: float = 1.5
     wobble_deg: float = 5.0
+    #: A whole turn's axis off the vertical (degrees, about a random horizontal axis): a
+    #: hand's Ferraris turn is not exactly about the vertical.
+    turn_tilt_deg: float = 0.0
     accel_noise_counts: float = 1.0
     gyro_noise_dps: float = 0.08
 
@@ -208,8 +211,8 @@ def recorded_stream(
     """The unit's raw stream over stills at ``orientations`` joined by moves.
 
     ``turns``: after the still at orientation ``i``, a turn of ``turns[i]`` degrees about
-    the vertical, then a still again (Ferraris' whole turns: 360° brings the unit back
-    where it was).
+    the vertical (``plan.turn_tilt_deg`` off it), then a still again (Ferraris' whole
+    turns: 360° about any axis brings the unit back where it was).
     """
     still_n = round(plan.still_s * plan.rate_hz)
     move_n = round(plan.move_s * plan.rate_hz) - 1
@@ -226,7 +229,12 @@ def recorded_stream(
         if turn_deg is None:
             phi = (current.inv() * orientations[i]).as_rotvec()
         else:
-            phi = np.radians(turn_deg) * current.inv().apply(_UP)
+            axis = _UP
+            if plan.turn_tilt_deg:
+                horizontal = np.cross(_UP, rng.standard_normal(3))
+                tilt = np.radians(plan.turn_tilt_deg) * horizontal / np.linalg.norm(horizontal)
+                axis = Rotation.from_rotvec(tilt).apply(_UP)
+            phi = np.radians(turn_deg) * current.inv().apply(axis)
         accel, gyro, current = _move_samples(truth, current, phi, move_n, plan, rng)
         accel_parts.append(accel)
         gyro_parts.append(gyro)

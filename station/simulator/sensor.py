@@ -19,7 +19,7 @@ with ``f_sense(i)`` the specific force along gyro i's sense (detection) axis,
 as the paper found on the centrifuge.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Final
 
 import numpy as np
@@ -90,6 +90,17 @@ class SensorTruth:
         of :attr:`matrix`): a unit at rest reads ``o + S · f``."""
         return np.asarray(
             np.diag(self.sensitivity_counts_per_g) @ self.cross_axis, dtype=np.float64
+        )
+
+    def at(self, temperature_c: float) -> "SensorTruth":
+        """The same unit with its offsets and sensitivities at ``temperature_c`` (module
+        docstring: ``o(T)``, ``s(T)``), its temperature coefficients unchanged."""
+        dt = temperature_c - REFERENCE_TEMPERATURE_C
+        return replace(
+            self,
+            offset_counts=self.offset_counts + self.offset_tempco_counts_per_c * dt,
+            sensitivity_counts_per_g=self.sensitivity_counts_per_g
+            * (1 + self.sensitivity_tempco_per_c * dt),
         )
 
     def still_counts(self, force_g: FloatArray) -> FloatArray:

@@ -38,6 +38,9 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     the axis poses, so a first-order propagation would call it zero, and one-sided: it
     only ever raises the sensitivities there). The symmetric 95 % interval of the
     refitted coefficients' change, bias included ([JCGM101]_ 7.7), over k is the term.
+    The fitted directions already carry the unit's own coupling; when every pose lies
+    within the coupling's reach of an axis the sensitivities' term is taken along the
+    axes, not along them (:func:`_model_term`: else it counted the coupling twice).
     The nine-parameter model represents the coupling: zero.
 ``fit``
     Type A, the evidence of the fit. With redundant poses (N > p): when the residuals'
@@ -46,6 +49,18 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     is the same unmodelled effect as ``model``, so the larger of the two counts, once.
     A verification pose (held out of the fit) whose misfit |r_v| exceeds k times its
     predicted standard deviation scales ``model`` and ``fit`` by |r_v|/(k·u(r_v)).
+``temperature``
+    Type B: the drift of the sensor while its poses were taken. The coefficients are
+    those at the mean temperature T̄ of the fitted poses; a pose taken at T_i reads
+    ``δa_ij = (T_i − T̄)·(κ_o,j + κ_s,j·(a_ij − o_j))`` more, with the unit's temperature
+    coefficients of offset κ_o (counts/°C) and sensitivity κ_s (/°C), unknown, rectangular
+    within the KXM52-1050 datasheet's bounds (:data:`OFFSET_TEMPCO_BOUND`,
+    :data:`SENSITIVITY_TEMPCO_BOUND`) and the same at every pose; propagated to first
+    order through J⁺ as the pose noise is, linear in κ; the symmetric 95 % interval of
+    the coefficients' change over :data:`TEMPCO_DRAWS` seeded draws of κ, over k
+    ([JCGM101]_ 7.7: the change is near rectangular when one κ dominates, which k·σ would
+    cover wholly); in θ's covariance each κ counts with its variance bound²/3
+    ([JCGM100]_ 4.3.7). Zero when the poses' temperatures are not known or all equal.
 ``tilt``
     Zero by construction, listed because a metrologist asks: the autocalibration uses
     only |g| = 1 at each pose, so the fixture's tilt does not enter ([Song2006]_); it
@@ -69,7 +84,10 @@ gravity directions are computed with is uncertain too (the covariance of θ from
 pose noise, quantisation and the fit's evidence, :attr:`AccelerometerBudget.covariance`),
 and its error turns every direction alike, which no residual shows; propagated to first
 order through ∂u/∂θ and the fit's ∂K/∂u
-(:attr:`station.domain.gyro.motion.GyroMatrixFit.direction_gain`).
+(:attr:`station.domain.gyro.motion.GyroMatrixFit.direction_gain`). With the
+six-parameter model, its unmodelled cross-axis coupling too (:func:`model_variance`):
+each drawn coupling of the ``model`` term turns every gravity direction, through the
+calibration it gives and the coupling itself.
 
 .. [JCGM100] JCGM 100:2008, Evaluation of measurement data — Guide to the expression of
    uncertainty in measurement (GUM).
@@ -90,7 +108,13 @@ from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
 from station.domain.calibration.residual import UPPER
 from station.domain.calibration.solution import Solution
-from station.domain.sensor import CROSS_AXIS_TYPICAL, GYRO_DPS_PER_LSB, SAMPLES_PER_POSE
+from station.domain.sensor import (
+    CROSS_AXIS_TYPICAL,
+    GYRO_DPS_PER_LSB,
+    OFFSET_TEMPCO_COUNTS_PER_C,
+    SAMPLES_PER_POSE,
+    SENSITIVITY_TEMPCO_PER_C,
+)
 
 if TYPE_CHECKING:  # the gyro package imports this module: a type only
     from station.domain.gyro.motion.matrix_fit import GyroMatrixFit
@@ -102,15 +126,21 @@ ADC_LSB_COUNTS: Final = 1.0
 #: The unmodelled cross-axis coupling of the six-parameter model: the KXM52-1050
 #: datasheet's typical cross-axis sensitivity, 2 % ([Song2006]_ Table 1).
 CROSS_AXIS_BOUND: Final = CROSS_AXIS_TYPICAL
+#: The temperature coefficients' half-widths: the KXM52-1050 datasheet's largest
+#: (:mod:`station.domain.sensor`), counts/°C and per °C.
+OFFSET_TEMPCO_BOUND: Final = OFFSET_TEMPCO_COUNTS_PER_C
+SENSITIVITY_TEMPCO_BOUND: Final = SENSITIVITY_TEMPCO_PER_C
 #: A pose's sample noise when the file gives means only: the KXM52 at the stream's
 #: bandwidth, ~2 counts RMS (``limits.toml``, pose_noise_counts).
 DEFAULT_SAMPLE_NOISE_COUNTS: Final = 2.0
 #: Seeded draws of the coupling matrix that propagate the model term (JCGM 101).
 MODEL_DRAWS: Final = 256
+#: Seeded draws of the temperature coefficients that propagate the temperature term.
+TEMPCO_DRAWS: Final = 4096
 #: Gauss–Newton iterations of each draw's refit (its steps shrink ~100× each).
 _REFITS: Final = 6
 #: The budget's terms, in the order they are listed.
-TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "tilt")
+TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "temperature", "tilt")
 _CHI2_QUANTILE: Final = 0.95
 #: The coverage probability k = 2 stands for ([JCGM100]_ 6.2.2).
 _COVERAGE_PROBABILITY: Final = 0.95
@@ -127,9 +157,12 @@ class AccelerometerBudget:
         verification_ratio: |r_v|/(k·u(r_v)) of the verification pose (``None`` without
             one); above 1 it scaled the ``model`` and ``fit`` terms.
         theta, model: the fit's parameters θ ((o, s) or (o, C_upper)) and its model.
-        covariance: shape (p, p), the covariance of θ from the pose noise, quantisation
-            and the fit's evidence (the gravity directions' uncertainty for the gyro
-            matrix, :func:`gyro_matrix_uncertainty`).
+        covariance: shape (p, p), the covariance of θ from the pose noise, quantisation,
+            the fit's evidence and the drift with temperature (the gravity directions'
+            uncertainty for the gyro matrix, :func:`gyro_matrix_uncertainty`).
+        model_draws: the six-parameter model's unmodelled coupling, draw by draw: the
+            couplings I + M (K, 3, 3) and the θ (K, 6) the fit gives under each
+            (:func:`_model_term`); ``None`` for the nine-parameter model.
     """
 
     terms: dict[str, FloatArray]
@@ -138,6 +171,7 @@ class AccelerometerBudget:
     theta: FloatArray | None = None
     model: Model = "six"
     covariance: FloatArray | None = None
+    model_draws: tuple[FloatArray, FloatArray] | None = None
 
     @property
     def combined(self) -> FloatArray:
@@ -211,6 +245,8 @@ def accelerometer_budget(
     verification: ArrayLike | None = None,
     verification_spread: ArrayLike | None = None,
     verification_samples: int | None = None,
+    temperatures: ArrayLike | None = None,
+    verification_temperature: float | None = None,
     cross_axis_bound: float = CROSS_AXIS_BOUND,
     k: float = COVERAGE_FACTOR,
 ) -> AccelerometerBudget:
@@ -224,6 +260,9 @@ def accelerometer_budget(
         samples: shape (N,), samples per pose (``None``: :data:`SAMPLES_PER_POSE`).
         verification: shape (3,), the verification pose's mean counts, if one was held out.
         verification_spread, verification_samples: its spread and sample count.
+        temperatures: shape (N,), each pose's temperature, °C (``None``: not known, no
+            temperature term).
+        verification_temperature: the verification pose's, °C.
         cross_axis_bound: the unmodelled coupling's half-width (six-parameter model).
         k: the coverage factor.
     """
@@ -252,9 +291,19 @@ def accelerometer_budget(
         "quantisation": np.sqrt(gp**2 @ w_quant),
         "model": np.zeros(6),
         "fit": np.zeros(6),
+        "temperature": np.zeros(6),
         "tilt": np.zeros(6),
     }
+    drift: FloatArray | None = None  # ∂r/∂κ of the fit poses
+    reference = 0.0  # the calibration's temperature T̄, °C
+    if temperatures is not None:
+        t = np.asarray(temperatures, dtype=np.float64).reshape(n_all)[keep]
+        reference = float(np.mean(t))
+        drift = _drift_jacobian(theta, model, a, dr_da, t - reference)
+        terms["temperature"] = _temperature_term(gp @ drift)
+        covariance = covariance + (pinv @ drift * _TEMPCO_VARIANCE) @ (pinv @ drift).T
     model_rv: FloatArray | None = None
+    model_draws: tuple[FloatArray, FloatArray] | None = None
     u_dir: FloatArray | None = None
     if verification is not None:
         av = np.asarray(verification, dtype=np.float64)
@@ -262,7 +311,7 @@ def accelerometer_budget(
         gv = c @ (av - offset)
         u_dir = gv / np.linalg.norm(gv)
     if model == "six" and cross_axis_bound > 0:
-        terms["model"], model_rv = _model_term(theta, n, g, cross_axis_bound, u_dir)
+        terms["model"], model_rv, model_draws = _model_term(theta, n, g, cross_axis_bound, u_dir)
 
     # The evidence of the residuals (redundant fits only).
     rows, p = jac.shape
@@ -271,6 +320,9 @@ def accelerometer_budget(
         residual = np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
         sigma2 = float(residual @ residual) / (rows - p)
         expected = float(np.mean(w_noise + w_quant))
+        if drift is not None:  # what the drift leaves in the residuals, (I − J·J⁺)·D·κ
+            left = drift - jac @ (pinv @ drift)
+            expected += float(np.sum(left**2 @ _TEMPCO_VARIANCE)) / (rows - p)
         from scipy.stats import chi2
 
         if sigma2 > expected * chi2.ppf(_CHI2_QUANTILE, rows - p) / (rows - p):
@@ -285,16 +337,26 @@ def accelerometer_budget(
 
     ratio: float | None = None
     if verification is not None and u_dir is not None:
+        av = np.asarray(verification, dtype=np.float64)
+        var_temperature = 0.0
+        if drift is not None and verification_temperature is not None:
+            # Its drift through θ and its own, the same κ: δr_v = (D_v − J_v·J⁺·D)·κ.
+            jv, dv, _ = _jacobians(theta, av[None, :], model)
+            delta_v = np.array([verification_temperature - reference])
+            row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
+            row = row - (jv @ pinv @ drift)[0]
+            var_temperature = float(row**2 @ _TEMPCO_VARIANCE)
         ratio = _verification_ratio(
             theta,
             model,
-            np.asarray(verification, dtype=np.float64),
+            av,
             verification_spread,
             verification_samples,
             pinv,
             w_noise + w_quant,
             model_rv,
             k,
+            var_temperature,
         )
         if ratio > 1.0:
             terms["model"] = terms["model"] * ratio
@@ -306,6 +368,7 @@ def accelerometer_budget(
         theta=theta,
         model=model,
         covariance=covariance,
+        model_draws=model_draws,
     )
 
 
@@ -359,13 +422,44 @@ def gyro_matrix_uncertainty(
     fit: "GyroMatrixFit", budget: AccelerometerBudget | None, k: float = COVERAGE_FACTOR
 ) -> FloatArray:
     """Expanded uncertainty (3, 3) of each element of the gyro matrix K (module docstring):
-    k·√(u_fit² + u_geometry²), u_fit the fit's standard errors ([Tedaldi2014]_), u_geometry
-    the accelerometer calibration's covariance carried into K through the gravity
-    directions (``budget`` None: the fit's term alone). [JCGM100]_ 5.1.2."""
+    k·√(max(u_fit², u_model²) + u_geometry²), u_fit the fit's standard errors
+    ([Tedaldi2014]_), u_model the six-parameter model's unmodelled coupling carried into K
+    through the gravity directions (:func:`model_variance`; the residuals hold part of it,
+    so the larger of the two counts), u_geometry the accelerometer calibration's
+    covariance carried the same way (``budget`` None: the fit's term alone).
+    [JCGM100]_ 5.1.2."""
     variance = fit.standard_errors**2
     if budget is not None:
+        # The coupling turns each move's directions differently, so the fit's residuals
+        # hold part of it already: the larger of the two counts, once (as the
+        # accelerometer's ``fit`` and ``model`` terms).
+        variance = np.maximum(variance, model_variance(fit, budget))
         variance = variance + geometry_variance(fit, budget)
     return np.asarray(k * np.sqrt(variance), dtype=np.float64)
+
+
+def model_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatArray:
+    """Variance (3, 3) of K from the six-parameter model's unmodelled cross-axis coupling
+    (zero for the nine-parameter model, which represents it). Under each drawn coupling M
+    of the accelerometer's ``model`` term a move's end along u reads
+    ``a = o + diag(s)(I + M)·u`` and the fit gives θ_M; the gravity direction computed
+    from it, ``diag(1/s_M)(a − o_M)`` normalised, is off u by δu, the same M at every
+    move, and K by ∂K/∂u·δu (:attr:`~station.domain.gyro.motion.GyroMatrixFit.direction_gain`).
+    As the ``model`` term: the symmetric 95 % interval of δK over the draws, over k
+    ([JCGM101]_ 7.7), squared."""
+    if budget.model_draws is None or budget.theta is None:
+        return np.zeros((3, 3))
+    coupled, thetas = budget.model_draws
+    offset, s = budget.theta[:3], budget.theta[3:6]
+    ends = fit.directions.reshape(-1, 3)  # (2M, 3)
+    counts = offset + np.einsum("kij,nj->kni", coupled, ends) * s  # (K, 2M, 3)
+    seen = (counts - thetas[:, None, :3]) / thetas[:, None, 3:6]
+    seen /= np.linalg.norm(seen, axis=2, keepdims=True)
+    moved = np.einsum(
+        "an,kn->ka", fit.direction_gain.reshape(9, -1), (seen - ends).reshape(len(seen), -1)
+    )
+    u = np.quantile(np.abs(moved), _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR
+    return np.asarray((u**2).reshape(3, 3), dtype=np.float64)
 
 
 def geometry_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatArray:
@@ -399,6 +493,34 @@ def geometry_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> Floa
     return np.asarray(
         np.clip(np.einsum("ij,jk,ik->i", a, cov, a), 0.0, None).reshape(3, 3), dtype=np.float64
     )
+
+
+def _drift_jacobian(
+    theta: FloatArray, model: Model, a: FloatArray, dr_da: FloatArray, delta: FloatArray
+) -> FloatArray:
+    """∂r/∂κ (N, 6) of poses a (N, 3) taken ``delta`` (N,) °C from the calibration's
+    temperature, κ = (κ_o, κ_s) the temperature coefficients (module docstring,
+    ``temperature``): δa_ij = Δ_i·(κ_o,j + κ_s,j·(a_ij − o_j)), δr_i = (∂r_i/∂a_i)·δa_i."""
+    offset, _ = _unpack(theta, model)
+    return np.hstack([dr_da * delta[:, None], dr_da * (a - offset) * delta[:, None]])
+
+
+def _temperature_term(gain: FloatArray) -> FloatArray:
+    """The temperature term (6,) from ∂y/∂κ (6, 6): the symmetric 95 % interval of
+    ``gain·κ`` over :data:`TEMPCO_DRAWS` seeded draws of κ, rectangular within the
+    datasheet's bounds, over k ([JCGM101]_ 7.7: where one rectangular κ dominates a
+    coefficient, k·σ would cover all of it, not 95 %)."""
+    rng = np.random.default_rng(20080903)
+    bound = np.repeat([OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND], 3)
+    kappa = rng.uniform(-1.0, 1.0, (TEMPCO_DRAWS, 6)) * bound
+    shift = np.abs(kappa @ gain.T)
+    return np.asarray(
+        np.quantile(shift, _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR, dtype=np.float64
+    )
+
+
+#: The variances of κ = (κ_o, κ_s): rectangular within the datasheet's bounds.
+_TEMPCO_VARIANCE: Final = np.repeat([OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND], 3) ** 2 / 3
 
 
 def _pose_variances(
@@ -493,42 +615,82 @@ def _couplings(bound: float) -> FloatArray:
     return m
 
 
+def _along_axes(n: FloatArray, bound: float) -> FloatArray | None:
+    """The poses' axes (N, 3) when every fitted direction n_i lies within what the unit's
+    own coupling can do to a pose along an axis, else ``None``.
+
+    A coupling M with off-diagonal terms within ±bound turns a true direction u into
+    ∝ (I + M)·u, which moves component j by at most bound·Σ_{k≠j}|u_k|: a pose whose
+    every off-axis component is within that reach cannot be told from a pose exactly
+    along its axis that the coupling skewed.
+    """
+    magnitude = np.abs(n)
+    reach = bound * (magnitude.sum(axis=1, keepdims=True) - magnitude)
+    axis = np.argmax(magnitude, axis=1)
+    off = np.ones_like(n, dtype=bool)
+    off[np.arange(len(n)), axis] = False
+    if np.any(magnitude[off] > reach[off]):
+        return None
+    axes = np.zeros_like(n)
+    axes[np.arange(len(n)), axis] = np.sign(n[np.arange(len(n)), axis])
+    return axes
+
+
+def _coupling_shifts(
+    theta: FloatArray, directions: FloatArray, g: FloatArray, coupled: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The coefficients' changes (K', 6) when the poses o + diag(s)(I + M)·d_i along
+    ``directions`` d (N, 3) are refitted, one row per coupling (I + M) of ``coupled``
+    (K, 3, 3) that refits; and those refits' θ and couplings."""
+    offset, s = theta[:3], theta[3:6]
+    moved = offset + np.einsum("kij,nj->kni", coupled, directions) * s  # (K, N, 3)
+    thetas = _refit(theta, moved)
+    shift = (thetas - theta) @ g.T
+    solved = np.all(np.isfinite(shift), axis=1) & np.all(thetas[:, 3:] > 0, axis=1)
+    return shift[solved], thetas[solved], coupled[solved]
+
+
 def _model_term(
     theta: FloatArray,
     n: FloatArray,
     g: FloatArray,
     bound: float,
     verification_dir: FloatArray | None,
-) -> tuple[FloatArray, FloatArray | None]:
-    """The model term (6,) and, with a verification pose, the misfit (K,) the coupling
-    leaves on it.
+) -> tuple[FloatArray, FloatArray | None, tuple[FloatArray, FloatArray] | None]:
+    """The model term (6,), with a verification pose the misfit (K,) the coupling leaves
+    on it, and the draws (the couplings I + M and the refitted θ,
+    :attr:`AccelerometerBudget.model_draws`).
 
     For each drawn coupling M the poses ``o + diag(s)(I + M)·n_i`` along the fitted
     directions n_i are refitted with the six-parameter model (Gauss–Newton from the fit);
-    the change of the coefficients is what M does to them. The fitted
-    directions carry the unit's own coupling too, so on poses aligned with the axes to
-    better than ~1° (where the coupling acts in second order only) the term is
-    conservative by up to ~2×; on poses a hand or a jig tilts by a few degrees it is not
-    (``docs/benchmarks.md``).
+    the change of the coefficients is what M does to them. The fitted directions carry the
+    unit's own coupling c too, which the data cannot tell from the pose's tilt t. The
+    offsets move in first order, with t·M, and the c in n_i stands in for the tilt the
+    data cannot show: their term is taken along n_i. The sensitivities of poses along the
+    axes move in second order only, with |M|²/2, and along n_i = t + c the draw adds a
+    cross term c·M the unit does not have, twice the right term there
+    (``docs/benchmarks.md``); so when every pose lies within the coupling's reach of its
+    axis (:func:`_along_axes`) the sensitivities' term is taken along the axes.
     """
     offset, s = theta[:3], theta[3:6]
-    m = _couplings(bound)
-    coupled = np.eye(3) + m  # (K, 3, 3)
-    moved = offset + np.einsum("kij,nj->kni", coupled, n) * s  # (K, N, 3)
-    thetas = _refit(theta, moved)
-    shift = (thetas - theta) @ g.T
-    solved = np.all(np.isfinite(shift), axis=1) & np.all(thetas[:, 3:] > 0, axis=1)
-    if not np.any(solved):  # no draw refits: the coupling's own bound on every coefficient
-        return np.asarray(np.concatenate([s, s]) * bound, dtype=np.float64), None
-    shift, thetas, coupled = shift[solved], thetas[solved], coupled[solved]
+    shift, thetas, coupled = _coupling_shifts(theta, n, g, np.eye(3) + _couplings(bound))
+    if len(shift) == 0:  # no draw refits: the coupling's own bound on every coefficient
+        return np.asarray(np.concatenate([s, s]) * bound, dtype=np.float64), None, None
     # JCGM 101 7.7: the symmetric 95 % interval of the (biased: one-sided on the axis
     # poses) changes, as the standard uncertainty that k turns back into it.
     term = np.quantile(np.abs(shift), _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR
+    axes = _along_axes(n, bound)
+    if axes is not None:
+        along, _, _ = _coupling_shifts(theta, axes, g, np.eye(3) + _couplings(bound))
+        if len(along):
+            term[3:] = np.quantile(np.abs(along[:, 3:]), _COVERAGE_PROBABILITY, axis=0)
+            term[3:] /= COVERAGE_FACTOR
+    term = np.asarray(term, dtype=np.float64)
     if verification_dir is None:
-        return np.asarray(term, dtype=np.float64), None
+        return term, None, (coupled, thetas)
     av = offset + np.einsum("kij,j->ki", coupled, verification_dir) * s
     rv = _residuals(thetas, av[:, None, :])[:, 0]
-    return np.asarray(term, dtype=np.float64), np.asarray(rv, dtype=np.float64)
+    return term, np.asarray(rv, dtype=np.float64), (coupled, thetas)
 
 
 def _verification_ratio(
@@ -541,9 +703,11 @@ def _verification_ratio(
     w_fit: FloatArray,
     model_rv: FloatArray | None,
     k: float,
+    var_temperature: float = 0.0,
 ) -> float:
     """|r_v| over k times its predicted standard deviation: the fit's noise through θ,
-    the verification pose's own noise, and the model's misfit."""
+    the verification pose's own noise, the model's misfit and the drift with temperature
+    (``var_temperature``)."""
     offset, c = _unpack(theta, model)
     gv = c @ (av - offset)
     rv = float(np.linalg.norm(gv) - 1.0)
@@ -558,7 +722,7 @@ def _verification_ratio(
     )
     var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
     var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
-    predicted = np.sqrt(var_fit + var_own + var_model)
+    predicted = np.sqrt(var_fit + var_own + var_model + var_temperature)
     return float(abs(rv) / (k * predicted)) if predicted > 0 else float("inf")
 
 

@@ -13,9 +13,10 @@ from scipy.spatial.transform import Rotation
 
 from station.device import DeviceCalibration, PutterDriver
 from station.domain.faults import Faults
-from station.domain.limits import load_profile
+from station.domain.limits import Bounds, LimitsProfile, load_profile
 from station.domain.orientation import POSE_TOLERANCE_DEG, sense
 from station.domain.poses import POSES
+from station.domain.records import RunRecord
 from station.domain.run_settings import RunSettings
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
@@ -37,6 +38,7 @@ class Bench:
         settings: RunSettings | None = None,
         noise_counts: float | None = None,
         truth: SensorTruth | None = None,
+        profile: LimitsProfile | None = None,
     ) -> None:
         self.putter = VirtualPutter(
             seed=seed,
@@ -62,7 +64,7 @@ class Bench:
             driver=self.open(),
             journal=journal,
             journal_file=self.journal_file,
-            profile=load_profile(),
+            profile=profile or load_profile(),
             settings=settings,
             reopen=self.open,
         )
@@ -163,6 +165,56 @@ def test_a_unit_at_the_datasheets_offset_bounds_is_taken_in_every_pose(tmp_path:
         assert not refusals
     finally:
         b.close()
+
+
+def test_a_unit_inside_a_limit_but_within_u_of_it_passes_simple_and_fails_guarded(
+    tmp_path: Path,
+) -> None:
+    # Without noise or drift the same unit gives the same sensitivities run after run to
+    # about a hundredth of a count/g, while their U, which holds the six-parameter model's
+    # unmodelled cross-axis coupling, is tenths: a limit half a U above the unit's x
+    # sensitivity is inside it, but within U of it, on every run.
+    unit = SensorTruth.draw(np.random.default_rng(8))
+    truth = replace(
+        unit,
+        sensitivity_counts_per_g=np.array([840.0, 815.0, 805.0]),
+        offset_tempco_counts_per_c=np.zeros(3),
+        sensitivity_tempco_per_c=np.zeros(3),
+    )
+
+    def run(name: str, profile: LimitsProfile | None = None) -> RunRecord:
+        (tmp_path / name).mkdir()
+        b = Bench(tmp_path / name, truth=truth, noise_counts=0.0, profile=profile)
+        try:
+            b.drive(done)
+            assert b.run.record is not None
+            return b.run.record
+        finally:
+            b.close()
+
+    first = run("first")
+    assert first.verdict == "pass", first.failures
+    assert first.coefficients is not None
+    assert first.uncertainty is not None
+    assert first.uncertainty.sensitivity is not None
+    value, u = first.coefficients.sensitivity.x, first.uncertainty.sensitivity.x
+    assert u > 0.1
+    shipped = load_profile()
+    limit = Bounds(lower=shipped.sensitivity_counts_per_g.lower, upper=value + u / 2)
+    edge = shipped.model_copy(update={"sensitivity_counts_per_g": limit})
+    simple = run("simple", edge)
+    assert simple.decision_rule == "simple"
+    assert simple.verdict == "pass", simple.failures
+    assert simple.coefficients is not None
+    assert simple.coefficients.sensitivity.x == pytest.approx(value, abs=u / 10)
+    guarded = run("guarded", edge.model_copy(update={"decision_rule": "guarded"}))
+    assert guarded.decision_rule == "guarded"
+    assert guarded.verdict == "fail"
+    assert [(f.code, f.axis) for f in guarded.failures] == [("sensitivity", "x")]
+    assert guarded.failures[0].upper == limit.upper
+    # The operator's words: inside the limit, but less than its U inside, by which rule.
+    assert "within" in guarded.failures[0].message
+    assert "guarded acceptance" in guarded.failures[0].message
 
 
 def test_the_pose_asked_for_but_tilted_past_the_tolerance_is_refused_with_its_angle(

@@ -21,13 +21,26 @@ def test_the_truth_lies_within_the_expanded_uncertainty_95_percent_of_the_time(
         assert 0.30 <= coverage.mean_ratio[group] <= 0.52, group
 
 
-def test_poses_along_the_axes_leave_the_six_parameter_sensitivities_conservative() -> None:
-    # On exactly aligned poses the unmodelled coupling acts in second order only and the
-    # model term, taken along the fitted (coupling-skewed) directions, is up to ~2× wide
-    # (docs/benchmarks.md): the truth is always inside, never outside more often.
-    coverage = simulate_coverage("kxm52-production", 100, np.random.default_rng(26), 0.0)
-    assert coverage.fraction("sensitivity") >= 0.97
-    assert 0.90 <= coverage.fraction("offset") <= 0.99
+def test_poses_along_the_axes_give_the_six_parameter_sensitivities_their_right_width() -> None:
+    # On exactly aligned poses the unmodelled coupling moves a sensitivity in second order
+    # only; a model term that added the draw's coupling to the unit's own (already in the
+    # fitted directions) was twice too wide there (100 % within, mean |e|/U 0.20).
+    coverage = simulate_coverage("kxm52-production", 250, np.random.default_rng(26), 0.0)
+    for group in GROUPS:
+        assert 0.90 <= coverage.fraction(group) <= 0.99, group
+        assert 0.30 <= coverage.mean_ratio[group] <= 0.60, group
+
+
+def test_the_drift_with_temperature_across_the_poses_is_in_the_budget() -> None:
+    # Poses 10 s apart from power-up (0.4 °C of self-heating over the run), units with
+    # temperature coefficients anywhere within the datasheet's bounds: without the
+    # temperature term the offsets' truths lie outside ±U most of the time.
+    coverage = simulate_coverage(
+        "kxm52-production", 250, np.random.default_rng(27), 0.0, pose_interval_s=10.0
+    )
+    for group in GROUPS:
+        assert 0.90 <= coverage.fraction(group) <= 0.99, group
+        assert 0.30 <= coverage.mean_ratio[group] <= 0.60, group
 
 
 def test_the_gyro_matrix_truth_lies_within_its_expanded_uncertainty() -> None:

@@ -196,8 +196,28 @@ def test_a_declared_whole_turn_gives_the_rotation_gravity_cannot_see(seed: int) 
     assert blind.known_turns == ()
     assert known.known_turns == (1,)  # the move after pose 1, and no other
     assert abs(known.known_turn_swept_deg[0] - 360.0) < 0.5
-    error_blind = float(np.abs(blind.scale_matrix - true_k).max())
-    error_known = float(np.abs(known.scale_matrix - true_k).max())
-    assert error_known < 5e-4
-    assert error_known < error_blind / 5
-    assert known.condition_number < blind.condition_number
+    # The turn's angle gives the scale about its axis (y here), which gravity cannot see;
+    # its axis is left free (a hand's turn is not exactly about the vertical), so how a
+    # y rotation leaks into the other gyros stays as the gravity directions give it.
+    error_blind = abs(blind.scale_matrix[1, 1] - true_k[1, 1])
+    error_known = abs(known.scale_matrix[1, 1] - true_k[1, 1])
+    assert error_blind > 4e-4  # the case at issue: the y scale unseen without the turn
+    assert error_known < 1e-4
+    assert error_known < error_blind / 4
+
+
+@pytest.mark.parametrize("seed", [7, 8])
+def test_a_hand_s_turn_a_degree_off_the_vertical_does_not_pull_k_off(seed: int) -> None:
+    # imucal's hand-held turns sweep about axes 0.4–0.9° off the vertical. Holding the
+    # turn's summed rotation vector to the vertical (three equations a turn) threw K off
+    # by 0.016 here; the swept angle alone keeps it where the moves put it.
+    rng = np.random.default_rng(seed)
+    truth = random_imu(rng, cross_axis=0.0)
+    plan = StreamPlan(wobble_deg=1.0, turn_tilt_deg=1.0)
+    stream = recorded_stream(rng, truth, _turns_about_x_and_z_only(), plan, turns={1: 360.0})
+    known = calibrate_stream(stream, "six", known_turn_deg=360.0).gyro
+    true_k = k_in_calibrated_frame(truth, "six")
+    assert known.known_turns == (1,)
+    assert abs(known.known_turn_swept_deg[0] - 360.0) < 0.5
+    assert abs(known.scale_matrix[1, 1] - true_k[1, 1]) < 2e-4
+    assert float(np.abs(known.scale_matrix - true_k).max()) < 4e-3
