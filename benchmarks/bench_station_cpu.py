@@ -1,6 +1,6 @@
 """The station's CPU per unit at real speed against its floor: parse, judge, solve.
 
-    python benchmarks/bench_station_cpu.py                 # 1 and 8 slots, two cycles at 1×
+    python benchmarks/bench_station_cpu.py                 # 1 and 8 slots, three cycles at 1×
     python benchmarks/bench_station_cpu.py --slots 1 --speed 2
 
 The **floor** is the work that follows the samples and nothing else, each part timed
@@ -13,10 +13,12 @@ one slot, the fixture for several), minus the virtual putters' own threads, per 
 Everything else the station does (the live view, journal, outbox, database) is in the
 station figure and not in the floor; the issue's target is a ratio of 5 or less.
 
-Each row runs two cycles of units. The first carries the station's start (its SQLite
-database created by the migrations, every statement compiled for the first time), the
-second is the station at work: it is timed from the moment its first unit is plugged in
-to the station's end, and its figure is the one compared with the floor.
+Each row runs three cycles of units (``--cycles``). The first carries the station's
+start (its SQLite database created by the migrations, the roll-ups built, statements
+compiled for the first time), the second still compiles the store's statements for a
+run added to existing roll-ups; the last is the station at work. Each is timed from
+the moment its first unit is plugged in, and the last one's figure is compared with the
+floor.
 """
 
 import argparse
@@ -97,23 +99,27 @@ def putter_cpu_s(putter: VirtualPutter) -> float:
     return time.clock_gettime(time.pthread_getcpuclockid(thread.ident))
 
 
-def measure(slots: int, speed: float) -> dict[str, float]:
-    """Two cycles of ``slots`` units at ``speed``: floor and station CPU per unit.
+def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
+    """``cycles`` cycles of ``slots`` units at ``speed``: floor and station CPU per unit.
 
-    The first cycle carries the station's start (the database created, its statements
-    compiled for the first time); the second is a station at work. The second cycle is
-    timed from the moment its first unit is plugged in to the end.
+    Each cycle is timed from the moment its first unit is plugged in (the first from the
+    station's start, the last to the station's end), the virtual putters' CPU in it
+    taken off.
     """
     events = Events()
     undo = instrument(events)
     serve_pty, close = VirtualPutter.serve_pty, VirtualPutter.close
     live: set[VirtualPutter] = set()
-    #: Process and putters' CPU when the second cycle's first unit is plugged in.
-    second: list[float] = []
+    #: Process CPU less the putters' CPU so far, at the start of each cycle.
+    marks: list[float] = []
+
+    def station_cpu() -> float:
+        putters = events.putter_cpu_s + sum(map(putter_cpu_s, live))
+        return time.process_time() - putters
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
-        if sum(map(len, events.units.values())) == slots and not second:
-            second.extend((time.process_time(), events.putter_cpu_s + sum(map(putter_cpu_s, live))))
+        if sum(map(len, events.units.values())) == len(marks) * slots:
+            marks.append(station_cpu())
         live.add(self)
         return serve_pty(self, alias)
 
@@ -125,17 +131,18 @@ def measure(slots: int, speed: float) -> dict[str, float]:
     VirtualPutter.close = closed  # type: ignore[method-assign]
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            start = time.process_time()
-            records = run_station(Path(tmp), slots, 2, "fixed", speed, ahead=False)
-            end = time.process_time()
+            start = station_cpu()
+            records = run_station(Path(tmp), slots, cycles, "fixed", speed, ahead=False)
+            marks.append(station_cpu())
     finally:
         VirtualPutter.serve_pty, VirtualPutter.close = serve_pty, close  # type: ignore[method-assign]
         undo()
-    assert len(records) == 2 * slots
+    assert len(records) == cycles * slots
     assert all(r.verdict == "pass" for r in records), [r.failures for r in records]
-    at, putters_at = second
-    first_cycle = (at - start - putters_at) / slots
-    second_cycle = (end - at - (events.putter_cpu_s - putters_at)) / slots
+    assert len(marks) == cycles + 1, marks
+    marks[0] = start
+    first_cycle = (marks[1] - marks[0]) / slots
+    last_cycle = (marks[-1] - marks[-2]) / slots
     frames = statistics.mean(
         unit.captures[-1] + 1 + UNIT_OUTPUT_SAMPLES
         for units in events.units.values()
@@ -150,8 +157,8 @@ def measure(slots: int, speed: float) -> dict[str, float]:
         "judge_solve": judge_solve,
         "floor": floor,
         "first": first_cycle,
-        "station": second_cycle,
-        "ratio": second_cycle / floor,
+        "station": last_cycle,
+        "ratio": last_cycle / floor,
     }
 
 
@@ -159,15 +166,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--slots", type=int, nargs="+", default=[1, 8])
     parser.add_argument("--speed", type=float, default=1.0, help="virtual clock (× real time)")
+    parser.add_argument("--cycles", type=int, default=3, help="cycles per row (at least 2)")
     args = parser.parse_args()
-    print(f"station CPU per unit at {args.speed:g}×, two cycles per row")
+    if args.cycles < 2:
+        parser.error("--cycles: at least 2 (the first carries the station's start)")
+    print(f"station CPU per unit at {args.speed:g}×, {args.cycles} cycles per row")
     print(
         "| slots | frames per unit | parse | judge + solve | floor "
-        "| station, first cycle | station, second cycle | × floor |"
+        "| station, first cycle | station, last cycle | × floor |"
     )
     print("|---|---|---|---|---|---|---|---|")
     for slots in args.slots:
-        m = measure(slots, args.speed)
+        m = measure(slots, args.speed, args.cycles)
         print(
             f"| {slots} | {m['frames']:.0f} | {m['parse'] * 1e3:.1f} ms "
             f"| {m['judge_solve'] * 1e3:.1f} ms | {m['floor'] * 1e3:.1f} ms "
