@@ -196,12 +196,15 @@ def test_a_move_inside_one_drained_block_is_seen(bench: Bench) -> None:
     bench.run.step()  # the samples before the move are taken in
     rate = bench.run.driver.rate_hz
     start_s = bench.putter.clock.now()
-    bench.putter.move_to(tilted, 0.5)
-    # Not polled until the move, its settling and half a second of stillness are in.
-    after_move = round((bench.putter.settled_at_s - start_s) * rate) + 256
+    first = bench.putter.move_to(tilted, 0.5)
+    assert first is not None
+    # Not polled until the link has received the move, its settling and half a second of
+    # stillness (sequence numbers count from the stream's start, as the samples received
+    # and lost do).
+    until = first + round((bench.putter.settled_at_s - start_s) * rate) + 256
     deadline = time.monotonic() + 60.0
-    while bench.run.driver.pending() < after_move:
-        assert time.monotonic() < deadline, bench.run.driver.pending()
+    while (link := bench.run.driver.stats).samples + link.lost_samples < until:
+        assert time.monotonic() < deadline, link
         time.sleep(0.01)
     bench.run.step()  # one poll drains the whole move and the stillness after it
     said = [m.text for m in bench.run.messages if m.text.startswith("tilted:")]
