@@ -30,10 +30,12 @@ log = logging.getLogger(__name__)
 #: :data:`PACE_S` before it reads again, so that the next read takes a batch. At the
 #: putter's 512 frames a second the port would otherwise wake the reader once per
 #: 20-byte frame, each wake costing some 30 times the frame's parsing (issue 28). A
-#: command waiting for its reply wakes it at once (:meth:`PutterLink.expect_reply`); a
+#: tenth of a second is the screen's redraw period: the station looks at the samples
+#: no more often than that, so one batch a redraw delays nothing it shows. A command
+#: waiting for its reply wakes the reader at once (:meth:`PutterLink.expect_reply`); a
 #: fast stream (a sped-up simulator) is never held back.
 PACE_BELOW_BYTES = 2048
-PACE_S = 0.05
+PACE_S = 0.1
 
 
 class PutterLink(Protocol):

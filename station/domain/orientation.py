@@ -13,6 +13,7 @@ what is known explains the reading within the placement tolerance; the operator 
 which pose the station sees and how far it is from the one asked for.
 """
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Final
@@ -33,6 +34,11 @@ POSE_TOLERANCE_DEG = 25.0
 #: How far from level (as a fraction of 1 g) an axis of a named pose may be and still
 #: read its own offset there: the axis poses' level axes are exactly level.
 _LEVEL: Final = 1e-6
+
+
+#: The named poses and their gravity directions (one row each), computed once.
+_NAMED: Final = tuple(POSES.values())
+_NAMED_GRAVITY: Final = np.stack([p.gravity_body for p in _NAMED])
 
 
 @dataclass(frozen=True)
@@ -72,7 +78,7 @@ def gravity_direction(accel_counts: FloatArray, zero_g: ZeroG | None = None) -> 
 
 def angle_deg(a: FloatArray, b: FloatArray) -> float:
     """Angle between two unit vectors, degrees."""
-    return float(np.degrees(np.arccos(np.clip(float(a @ b), -1.0, 1.0))))
+    return math.degrees(math.acos(min(1.0, max(-1.0, float(a @ b)))))
 
 
 @dataclass(frozen=True)
@@ -116,8 +122,9 @@ def sense(
         direction, slack = np.zeros(3), np.zeros(3)
     else:
         direction, slack = g / norm, known.doubt / NOMINAL_SENSITIVITY_COUNTS_PER_G / norm
-    pool = candidates if candidates is not None else tuple(POSES.values())
-    # One product for every pose (the live view asks ~40 times a second).
-    cosines = np.stack([p.gravity_body for p in pool]) @ direction
+    pool = candidates if candidates is not None else _NAMED
+    gravity = _NAMED_GRAVITY if candidates is None else np.stack([p.gravity_body for p in pool])
+    # One product for every pose (the live view asks ten times a second per slot).
+    cosines = gravity @ direction
     best = int(np.argmax(cosines))
     return Sensed(direction, pool[best], angle_deg(direction, pool[best].gravity_body), slack)

@@ -118,10 +118,18 @@ class SampleBlock:
         """
         if not len(self.rows):
             raise ValueError("an empty block of samples has no summary")
-        mean = self.rows.mean(axis=0)
-        std = self.rows.std(axis=0, ddof=1) if len(self.rows) > 1 else np.zeros_like(mean)
+        # What ndarray.mean and .std(ddof=1) compute, to the bit, without their wrappers'
+        # overhead (the live view summarises a window ten times a second per slot).
+        rows = self.rows
+        count = len(rows)
+        mean = rows.sum(axis=0) / count
+        if count > 1:
+            deviation = rows - mean
+            std = np.sqrt((deviation * deviation).sum(axis=0) / (count - 1))
+        else:
+            std = np.zeros_like(mean)
         return WindowSummary(
-            count=len(self.rows),
+            count=count,
             accel_mean=mean[_ACCEL],
             accel_std=std[_ACCEL],
             gyro_mean=mean[_GYRO],

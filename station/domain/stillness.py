@@ -20,6 +20,7 @@ windows starting every ``hop_samples`` rows of a whole stream and merges the sti
 that overlap into still segments (the poses of a recorded calibration).
 """
 
+import math
 import re
 from collections import Counter
 from dataclasses import dataclass
@@ -133,16 +134,16 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
-    saturated = tuple(
-        axis
-        for axis, column in zip(AXES, acc.T, strict=True)
-        if ((column <= ADC_MIN) | (column >= ADC_MAX)).any()
-    )
+    # Whole-array operations, then plain floats per axis: the live view judges a window
+    # ten times a second per slot, and numpy's per-call overhead is most of the cost.
+    at_rail = np.any((acc <= ADC_MIN) | (acc >= ADC_MAX), axis=0).tolist()
+    saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
     quarter = max(1, len(block) // 4)
-    drift = np.abs(acc[-quarter:].mean(axis=0) - acc[:quarter].mean(axis=0))
-    for axis, s, d in zip(AXES, summary.accel_std, drift, strict=True):
+    drift = np.abs(acc[-quarter:].sum(axis=0) / quarter - acc[:quarter].sum(axis=0) / quarter)
+    spreads = summary.accel_std.tolist()
+    for axis, s, d in zip(AXES, spreads, drift.tolist(), strict=True):
         if axis in saturated:
             continue
         if s > limits.accel_std_max_counts:
@@ -154,12 +155,12 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
             )
             motion = True
     nominal_g = (summary.accel_mean - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
-    magnitude = float(np.linalg.norm(nominal_g))
+    magnitude = math.sqrt(float(nominal_g @ nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
-    turning = summary.gyro_mean - np.asarray(limits.gyro_bias_dps)
-    for axis, rate, s in zip(AXES, turning, summary.gyro_std, strict=True):
+    turning = (summary.gyro_mean - limits.gyro_bias_dps).tolist()
+    for axis, rate, s in zip(AXES, turning, summary.gyro_std.tolist(), strict=True):
         if abs(rate) > limits.gyro_rate_max_dps:
             reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
             motion = True

@@ -31,9 +31,11 @@ from station.results.storage import RunStore
 
 #: Seconds between screen refreshes.
 DRAW_EVERY_S = 0.1
-#: Seconds between the loop's passes: keys, units, outbox. Two passes a redraw keep
-#: keys and captures prompt to the eye; more only burn the station's CPU (issue 28).
-TICK_S = DRAW_EVERY_S / 2
+#: Seconds between the loop's passes: keys, units, outbox. One pass a redraw: what a
+#: pass changes is seen only at the next redraw, and every pass more burns the
+#: station's CPU for nothing (issue 28); a capture's window is judged on its samples'
+#: sequence numbers, so its device time does not depend on when a pass comes.
+TICK_S = DRAW_EVERY_S
 
 
 class FrontEnd(ABC):

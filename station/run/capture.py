@@ -155,10 +155,31 @@ class PoseCapture:
         return result
 
     def _update_live(self, block: SampleBlock, index: int, target: Pose) -> Saturated | None:
+        """Judge every sample drained, in windows of :data:`LIVE_SAMPLES` oldest first.
+
+        The newest window ends at the newest sample, each earlier one where the next
+        begins, back to the first sample new to the view (the oldest window reaches
+        into the samples seen before, to be whole): a move made and finished between
+        two polls is seen, however many samples a poll takes in. The screen shows the
+        newest window.
+        """
         if len(block) == 0:
             return None
-        self._recent = SampleBlock.concat((self._recent, block))[-LIVE_SAMPLES:]
-        window = self._recent
+        held = SampleBlock.concat((self._recent, block))
+        self._recent = held[-LIVE_SAMPLES:]
+        seen = len(held) - len(block)
+        ends = range(len(held), seen, -LIVE_SAMPLES)[::-1]
+        for start, end in zip((seen, *ends[:-1]), ends, strict=True):
+            window = held[max(0, end - LIVE_SAMPLES) : end]
+            saturated = self._judge_live(window, end - start, index, target)
+            if saturated is not None:
+                return saturated
+        return None
+
+    def _judge_live(
+        self, window: SampleBlock, new: int, index: int, target: Pose
+    ) -> Saturated | None:
+        """Update the live view on one window whose last ``new`` samples are new to it."""
         verdict: WindowVerdict = judge_window(window, self.settings.stillness)
         summary = verdict.summary
         sensed = sense(summary.accel_mean, zero_g=self._zero_g())
@@ -170,7 +191,7 @@ class PoseCapture:
             self._moved = True
         refused = self.live.refused if self._still_samples else None
         if matches and not verdict.motion:
-            self._still_samples += len(block)
+            self._still_samples += new
         else:
             if was_capturing and matches:
                 name = pose_words(target.name)

@@ -169,7 +169,9 @@ def test_a_unit_with_the_wrong_serial_is_refused(unit: VirtualPutter, driver: Pu
 def test_pulling_the_cable_keeps_every_sample_taken_then_says_disconnected(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
-    unit.faults.disconnect_after = 1500
+    # The reader rests up to PACE_S (0.1 s: 1,024 samples at 20×) between small reads, so
+    # that many may be in flight when the cable goes: stream enough for more to arrive.
+    unit.faults.disconnect_after = 3000
     driver.start_stream()
     taken = []
     deadline = time.monotonic() + 5.0
