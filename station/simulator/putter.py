@@ -23,8 +23,8 @@ from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.faults import Faults
 from station.domain.poses import Pose, pose
-from station.domain.products import SensorSpec
 from station.domain.samples import SampleBlock
+from station.domain.sensor_spec import SensorSpec
 from station.simulator.clock import VirtualClock
 from station.simulator.firmware import Firmware
 from station.simulator.motion import Handling, MotionModel

@@ -212,7 +212,7 @@ def solve_paper(
             f"{batch.condition[0]:.3g} > {max_condition:.3g}): spread them over more directions"
         )
     if outcome is Outcome.NON_POSITIVE_SCALE:
-        refuse_beyond_datasheet(p)
+        refuse_beyond_datasheet(p, limits.sensor)
         raise NonPositiveScaleError(
             "no ellipsoid fits these poses though their geometry is sound (k1, k2 or s_x² is not "
             "positive): a pose was not still, or poses are mislabelled"

@@ -16,7 +16,9 @@ from station.domain.faults import Faults
 from station.domain.limits import load_profile
 from station.domain.orientation import POSE_TOLERANCE_DEG, sense
 from station.domain.poses import POSES
+from station.domain.products import Product
 from station.domain.run_settings import RunSettings
+from station.domain.sensor import ADC_MAX
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
@@ -37,6 +39,7 @@ class Bench:
         settings: RunSettings | None = None,
         noise_counts: float | None = None,
         truth: SensorTruth | None = None,
+        product: Product | None = None,
     ) -> None:
         self.putter = VirtualPutter(
             seed=seed,
@@ -45,7 +48,9 @@ class Bench:
             faults=faults,
             noise_counts=noise_counts,
             truth=truth,
+            sensor=product.sensor if product else None,
         )
+        self.adc_max = product.sensor.adc_max if product else ADC_MAX
         self.port = tmp / "putter"
         self.putter.serve_pty(self.port)
         settings = settings or RunSettings()
@@ -57,19 +62,20 @@ class Bench:
             operator_id="op",
             started_at=datetime.now(UTC),
             poses=(*settings.poses, settings.verification_pose),
+            **({"part_number": product.part_number} if product else {}),
         )
         self.run = UnitRun(
             driver=self.open(),
             journal=journal,
             journal_file=self.journal_file,
-            profile=load_profile(),
+            profile=load_profile(None, product.limits_profile if product else None),
             settings=settings,
             reopen=self.open,
         )
         self.moved_to: str | None = None
 
     def open(self) -> PutterDriver:
-        return open_unit(str(self.port), SERIAL)
+        return open_unit(str(self.port), SERIAL, self.adc_max)
 
     def drive(self, until: Callable[[UnitRun], bool], timeout: float = 60.0) -> None:
         """Step the run, moving the unit as asked, until ``until`` holds."""
