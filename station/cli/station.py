@@ -122,8 +122,6 @@ def run_command(
     units: Annotated[int | None, typer.Option(help="Stop after this many units.")] = None,
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
-    from station.domain.errors import InputError
-    from station.domain.i18n import tr
     from station.domain.limits import load_profile
     from station.loop.keyboard import TerminalKeys
     from station.loop.startup import check_port, prepare_data_dir
@@ -143,9 +141,6 @@ def run_command(
             "api_key": api_key,
         },
     )
-    why = config.product.not_calibrated()
-    if why is not None:
-        raise InputError(tr("run: {why}", why=why))
     limits_profile = load_profile(config.limits_file, config.limits_profile)
     prepare_data_dir(config.data_dir)
     if not config.slots:
@@ -196,7 +191,7 @@ def demo_command(
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     from station.domain.i18n import tr
     from station.domain.limits import load_profile
-    from station.loop.demo import CablePuller, ScriptedOperator, demo_sensor
+    from station.loop.demo import CablePuller, ScriptedOperator
     from station.loop.fixture.demo import FixtureOperator
     from station.loop.startup import prepare_data_dir
 
@@ -211,7 +206,7 @@ def demo_command(
             "language": language,
         },
     )
-    sensor = demo_sensor(config.product)
+    sensor = config.product.sensor
     prepare_data_dir(config.data_dir)
     first = _first_new_unit(config, seed)
     cables = CablePuller(rate=pull_cables, seed=seed)

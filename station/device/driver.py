@@ -47,6 +47,7 @@ from station.device.stats import LinkCounters
 from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.samples import SampleBlock
+from station.domain.sensor import ADC_MAX
 
 log = logging.getLogger(__name__)
 
@@ -73,12 +74,13 @@ class PutterDriver(Closing):
         reply_timeout: float = 0.5,
         retries: int = 1,
         buffer_rows: int = DEFAULT_BUFFER_ROWS,
+        adc_max: int = ADC_MAX,
     ) -> None:
         self._name = str(port.port)
         self.reply_timeout = reply_timeout
         self.retries = retries
         self._rate_hz = DEFAULT_RATE_HZ
-        self._link = PutterLink(self._name, buffer_rows)
+        self._link = PutterLink(self._name, buffer_rows, adc_max)
         self._command_lock = threading.Lock()
         # The stubs ask for serial.Serial; the thread needs only read, in_waiting,
         # cancel_read and write, which every pyserial port has.
@@ -97,18 +99,26 @@ class PutterDriver(Closing):
         reply_timeout: float = 0.5,
         retries: int = 1,
         buffer_rows: int = DEFAULT_BUFFER_ROWS,
+        adc_max: int = ADC_MAX,
     ) -> "PutterDriver":
         """Open the putter at ``url`` (any :func:`serial.serial_for_url` URL).
 
         ``read_timeout`` bounds how long the reader thread blocks in one read;
         ``reply_timeout`` is how long a command waits for its reply before it is sent
-        again, ``retries`` times.
+        again, ``retries`` times; ``adc_max``: the largest count the unit's accelerometer
+        sends (its product's sensor's, :mod:`station.domain.sensor_spec`).
         """
         try:
             port = open_port(url, baudrate=baudrate, timeout=read_timeout)
         except (serial.SerialException, OSError, ValueError) as exc:
             raise DeviceDisconnectedError(f"cannot open putter port {url}: {exc}") from exc
-        return cls(port, reply_timeout=reply_timeout, retries=retries, buffer_rows=buffer_rows)
+        return cls(
+            port,
+            reply_timeout=reply_timeout,
+            retries=retries,
+            buffer_rows=buffer_rows,
+            adc_max=adc_max,
+        )
 
     # -- lifetime ---------------------------------------------------------------------
 

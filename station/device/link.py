@@ -42,11 +42,13 @@ class PutterLink(Protocol):
     """Frames in, samples and replies out; the link's counters and its failure.
 
     ``name`` is the port, for messages; ``buffer_rows`` the capacity of each of the
-    raw and calibrated sample buffers.
+    raw and calibrated sample buffers; ``adc_max`` the largest count the unit's
+    accelerometer sends (a raw sample beyond it is corrupt and dropped).
     """
 
-    def __init__(self, name: str, buffer_rows: int) -> None:
+    def __init__(self, name: str, buffer_rows: int, adc_max: int = ADC_MAX) -> None:
         self.name = name
+        self.adc_max = adc_max
         self.raw = SampleBuffer(buffer_rows)
         self.calibrated = SampleBuffer(buffer_rows)
         self.replies: queue.Queue[Frame] = queue.Queue()
@@ -112,7 +114,7 @@ class PutterLink(Protocol):
         calibrated = [f.payload for f in frames if f.type == FrameType.CAL_SAMPLE]
         if raw:
             block = decode_samples(raw)
-            self._store(block[(block.accel <= ADC_MAX).all(axis=1)], self.raw)
+            self._store(block[(block.accel <= self.adc_max).all(axis=1)], self.raw)
         if calibrated:
             self._store(decode_samples(calibrated, calibrated=True), self.calibrated)
         for frame in frames:

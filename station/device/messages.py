@@ -14,7 +14,7 @@ from station.device.protocol import (
     encode_text,
 )
 from station.domain.arrays import FloatArray
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,11 +88,12 @@ class DeviceCalibration:
     __hash__ = None  # type: ignore[assignment]
 
     @classmethod
-    def factory_default(cls) -> "DeviceCalibration":
-        """What a fresh unit holds: nominal offset and sensitivity, not written."""
+    def factory_default(cls, sensor: SensorSpec = PUTTER_SENSOR) -> "DeviceCalibration":
+        """What a fresh unit of ``sensor`` (the putter's by default) holds: its nominal
+        zero g and sensitivity, not written."""
         return cls(
-            np.full(3, NOMINAL_OFFSET_COUNTS),
-            np.eye(3) / NOMINAL_SENSITIVITY_COUNTS_PER_G,
+            np.full(3, sensor.zero_g_counts),
+            np.eye(3) / sensor.counts_per_g,
             written=False,
         )
 

@@ -114,20 +114,20 @@ OffsetBounds = Annotated[
         _plausible(OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS, "a zero-g output's range", " counts")
     ),
 ]
-"""Zero-g output, counts: one ADC span beyond either rail (−4095…8190)."""
+"""Zero-g output, counts: one ADC span beyond either rail (−65535…131070)."""
 SensitivityBounds = Annotated[
     Bounds,
     AfterValidator(
         _plausible(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity's range", " counts/g")
     ),
 ]
-"""Sensitivity, counts/g: 0…4095 (more could not show ±1 g inside the ADC)."""
+"""Sensitivity, counts/g: 0…65535 (more could not show ±1 g inside the ADC)."""
 ErrorBounds = Annotated[
     Bounds, AfterValidator(_plausible(0, ERROR_MAX_MG, "an error's range", " mg"))
 ]
-"""An error, mg: 0…1e8 (the largest a record may hold)."""
+"""An error, mg: 0…1e9 (the largest a record may hold)."""
 NoiseBounds = Annotated[Bounds, AfterValidator(_plausible(0, ADC_SPAN, "the ADC span", " counts"))]
-"""A spread or residual of ADC readings, counts: 0…4095 (the ADC's span)."""
+"""A spread or residual of ADC readings, counts: 0…65535 (the widest ADC's span)."""
 GyroBiasBounds = Annotated[
     Bounds,
     AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s")),

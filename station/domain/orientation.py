@@ -1,7 +1,8 @@
 """Which way the putter lies, from its raw accelerometer counts.
 
-Before calibration only nominal scaling is known (offset 2048 counts, 819.2
-counts/g, [Song2006]_ Table 1). A unit at the datasheet's offset bounds (±207 counts,
+Before calibration only the sensor's nominal scaling is known (for the putter: offset
+2048 counts, 819.2 counts/g, [Song2006]_ Table 1; any product's:
+:meth:`ZeroG.datasheet`). A unit at the datasheet's offset bounds (±207 counts,
 ±0.25 g on every axis) reads up to ~27° from the pose it lies in on nominal offsets
 alone, more than the placement tolerance; refused there, a fixture's slot would wait
 for a pose it already holds. So the station judges a pose on what it knows of each
@@ -22,11 +23,7 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.poses import POSES, Pose
-from station.domain.sensor import (
-    NOMINAL_OFFSET_COUNTS,
-    NOMINAL_SENSITIVITY_COUNTS_PER_G,
-    OFFSET_SPREAD_COUNTS,
-)
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 #: How far (degrees) the sensed gravity may be from a pose's and still count as it.
 POSE_TOLERANCE_DEG = 25.0
@@ -43,14 +40,34 @@ _NAMED_GRAVITY: Final = np.stack([p.gravity_body for p in _NAMED])
 
 @dataclass(frozen=True)
 class ZeroG:
-    """Each axis' zero-g reading as known so far, and how far off it may be (counts)."""
+    """Each axis' zero-g reading as known so far, how far off it may be, and the sensor's
+    nominal sensitivity that turns the rest of a reading into g (counts, counts/g).
 
-    offset: FloatArray = field(default_factory=lambda: np.full(3, NOMINAL_OFFSET_COUNTS))
-    doubt: FloatArray = field(default_factory=lambda: np.full(3, OFFSET_SPREAD_COUNTS))
+    The default is the putter's datasheet (:data:`PUTTER_SENSOR`); :meth:`datasheet`
+    gives any product's sensor's.
+    """
+
+    offset: FloatArray = field(default_factory=lambda: np.full(3, PUTTER_SENSOR.zero_g_counts))
+    doubt: FloatArray = field(
+        default_factory=lambda: np.full(3, PUTTER_SENSOR.zero_g_spread_counts)
+    )
+    counts_per_g: float = PUTTER_SENSOR.counts_per_g
 
     @classmethod
-    def measured(cls, captured: Iterable[tuple[Pose, FloatArray]]) -> "ZeroG":
-        """Each axis' mean over the captured poses where it lies level, else the datasheet's.
+    def datasheet(cls, sensor: SensorSpec) -> "ZeroG":
+        """What ``sensor``'s datasheet says: its nominal zero g, within its spread."""
+        return cls(
+            offset=np.full(3, sensor.zero_g_counts),
+            doubt=np.full(3, sensor.zero_g_spread_counts),
+            counts_per_g=sensor.counts_per_g,
+        )
+
+    @classmethod
+    def measured(
+        cls, captured: Iterable[tuple[Pose, FloatArray]], sensor: SensorSpec = PUTTER_SENSOR
+    ) -> "ZeroG":
+        """Each axis' mean over the captured poses where it lies level, else ``sensor``'s
+        datasheet's.
 
         ``captured`` pairs a taken pose with its mean counts (3,).
         """
@@ -61,17 +78,18 @@ class ZeroG:
             sums += np.where(level, np.asarray(mean, dtype=np.float64), 0.0)
             counts += level
         known = counts > 0
-        nominal = cls()
+        nominal = cls.datasheet(sensor)
         return cls(
             offset=np.where(known, sums / np.maximum(counts, 1), nominal.offset),
             doubt=np.where(known, 0.0, nominal.doubt),
+            counts_per_g=sensor.counts_per_g,
         )
 
 
 def gravity_direction(accel_counts: FloatArray, zero_g: ZeroG | None = None) -> FloatArray:
     """Unit vector of the sensed gravity reaction (body axes) from mean raw counts (3,)."""
-    offset = (zero_g or ZeroG()).offset
-    g = (np.asarray(accel_counts, dtype=np.float64) - offset) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    known = zero_g or ZeroG()
+    g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
     norm = float(np.linalg.norm(g))
     return g / norm if norm > 0 else np.array([0.0, 0.0, 0.0])
 
@@ -114,14 +132,12 @@ def sense(
 ) -> Sensed:
     """The named pose (of ``candidates``, default all) nearest to the mean counts."""
     known = zero_g or ZeroG()
-    g = (
-        np.asarray(accel_counts, dtype=np.float64) - known.offset
-    ) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
     norm = float(np.linalg.norm(g))
     if norm == 0:
         direction, slack = np.zeros(3), np.zeros(3)
     else:
-        direction, slack = g / norm, known.doubt / NOMINAL_SENSITIVITY_COUNTS_PER_G / norm
+        direction, slack = g / norm, known.doubt / known.counts_per_g / norm
     pool = candidates if candidates is not None else _NAMED
     gravity = _NAMED_GRAVITY if candidates is None else np.stack([p.gravity_body for p in pool])
     # One product for every pose (the live view asks ten times a second per slot).

@@ -1,7 +1,8 @@
 """Products by part number, and the labels that name them.
 
 A :class:`Product` is what the line builds under one part number: its accelerometer and
-gyros (:class:`SensorSpec`), the limits profile it is judged by and the run plan it is
+gyros (:class:`station.domain.sensor_spec.SensorSpec`, whose counts the whole run
+follows), the limits profile it is judged by and the run plan it is
 run with. The shipped ``station/domain/profiles/products.toml`` holds **DIXX-A12** (the
 putter: the KXM52 behind a 12-bit ADC, :mod:`station.domain.sensor`) and **DIXX-D16** (a
 16-bit digital accelerometer, ±4 g, 8192 counts/g); a plant may give its own file.
@@ -16,64 +17,18 @@ then a regular expression with named groups ``serial`` (required), ``part_number
 
 import re
 import tomllib
+from functools import cache
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Self
+from typing import Self
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 
-from station.domain.constants import MAX_RATE_HZ, Identifier, PartNumber
+from station.domain.constants import Identifier, PartNumber
 from station.domain.errors import InputError, validation_problem
 from station.domain.limits import LimitsProfile
-from station.domain.record_bounds import WIRE_COUNTS_MAX
 from station.domain.run_settings import shipped_plan
-from station.domain.sensor import ADC_MAX
-
-
-class SensorSpec(BaseModel):
-    """A product's accelerometer and gyros, as the station sees them on the wire.
-
-    ``adc_bits``: the accelerometer's counts are ``0 … 2**adc_bits − 1`` (a signed
-    digital sensor is sent offset binary); ``zero_g_counts`` and ``counts_per_g``: its
-    nominal zero-g output and sensitivity; ``range_g``: its full scale, ± g;
-    ``gyro_dps_per_lsb``: one count of the gyro rate field; ``sample_rate_hz``: the rate
-    the unit streams at.
-    """
-
-    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
-
-    adc_bits: Annotated[int, Field(ge=8, le=WIRE_COUNTS_MAX.bit_length())]
-    zero_g_counts: Annotated[float, Field(ge=0)]
-    counts_per_g: Annotated[float, Field(gt=0)]
-    range_g: Annotated[float, Field(gt=0, le=200)]
-    gyro_dps_per_lsb: Annotated[float, Field(gt=0, le=1)]
-    sample_rate_hz: Annotated[int, Field(ge=1, le=MAX_RATE_HZ)]
-    #: Datasheet spreads a unit's zero g (± g) and sensitivity (± fraction) lie within.
-    zero_g_spread_g: Annotated[float, Field(ge=0, le=1)] = 0.25
-    sensitivity_tolerance: Annotated[float, Field(ge=0, lt=1)] = 0.05
-    #: White noise of a reading, g rms.
-    noise_g: Annotated[float, Field(ge=0, le=1)] = 0.0012
-
-    @property
-    def adc_max(self) -> int:
-        """The largest count the accelerometer sends."""
-        return (1 << self.adc_bits) - 1
-
-    @model_validator(mode="after")
-    def _range_fits_the_adc(self) -> Self:
-        if self.zero_g_counts > self.adc_max:
-            raise ValueError(
-                f"zero_g_counts {self.zero_g_counts:g} beyond the ADC's {self.adc_max}"
-            )
-        reach = self.range_g * self.counts_per_g
-        low, high = self.zero_g_counts - reach, self.zero_g_counts + reach
-        if low < 0 or high > self.adc_max + 1:
-            raise ValueError(
-                f"±{self.range_g:g} g at {self.counts_per_g:g} counts/g around "
-                f"{self.zero_g_counts:g} spans {low:g}…{high:g}, beyond the "
-                f"{self.adc_bits}-bit ADC's 0…{self.adc_max}"
-            )
-        return self
+from station.domain.sensor_spec import SensorSpec
 
 
 class Product(BaseModel):
@@ -128,17 +83,6 @@ class Product(BaseModel):
                 f"{where}: its sensor contradicts limits profile {profile.name}: {why}"
             )
 
-    def not_calibrated(self) -> str | None:
-        """Why the station cannot calibrate this product yet (None: it can): its capture,
-        solve and records read the 12-bit ADC's counts, 0…4095, so far."""
-        s = self.sensor
-        if s.adc_max == ADC_MAX:
-            return None
-        return (
-            f"{self.part_number}'s {s.adc_bits}-bit accelerometer is not calibrated by this "
-            f"station yet (it reads 0…{ADC_MAX} counts)"
-        )
-
     @property
     def run_plan(self) -> str:
         """The name whose shipped run plan the product runs (its plan, else its profile's)."""
@@ -192,6 +136,13 @@ def load_products(path: Path | None = None) -> Products:
     except OSError as exc:
         raise InputError(f"{path}: cannot read the products: {exc.strerror}") from None
     return parse_products(text, str(path))
+
+
+@cache
+def shipped_sensor(part_number: str) -> SensorSpec | None:
+    """The sensor of the shipped product ``part_number`` (None: not a shipped one)."""
+    product = load_products().products.get(part_number)
+    return None if product is None else product.sensor
 
 
 class Label(BaseModel):

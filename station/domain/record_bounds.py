@@ -25,7 +25,7 @@ from station.domain.sensor import ADC_MIN, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
 WIRE_COUNTS_MAX: Final = 65535
 
 #: The widest ADC span of the products' sensors, counts: no spread of readings within
-#: 0…65535 exceeds it (0…4095 for the 12-bit ADC the pose means are bounded by today).
+#: 0…65535 exceeds it (the pose means are bounded by the same 0…65535, any product's).
 ADC_SPAN: Final = float(WIRE_COUNTS_MAX)
 
 #: Largest gyro rate the putter can report, deg/s: the protocol's int16 rate field at
@@ -52,12 +52,12 @@ SENSITIVITY_MAX_COUNTS_PER_G: Final = ADC_SPAN
 #: counts; nominal 1/819.2 ≈ 0.0012).
 MATRIX_MAX_G_PER_COUNT: Final = 1.0
 
-#: An error or residual, mg. A record's pose means lie within the 12-bit ADC's 0…4095
+#: An error or residual, mg. A record's pose means lie within the wire's 0…65535
 #: (``station.domain.records.Counts3``), so an offset computed from them lies within
-#: −4095…8190 and a calibrated reading is at most 3 × 1 g/count × (offset − raw ≤ 8190
-#: counts) ≈ 24,570 g per axis, √3 × that ≈ 42,600 g in magnitude: 4.3e7 mg. 1e8 mg keeps
-#: every record computed from in-range counts valid.
-ERROR_MAX_MG: Final = 1e8
+#: −65535…131070 and a calibrated reading is at most 3 × 1 g/count × (|offset − raw| ≤
+#: 131,070 counts) ≈ 393,210 g per axis, √3 × that ≈ 681,060 g in magnitude: 6.8e8 mg.
+#: 1e9 mg keeps every record computed from in-range counts valid.
+ERROR_MAX_MG: Final = 1e9
 
 #: The solve's condition number of a fit the station accepts is at most
 #: :data:`station.domain.calibration.residual.MAX_CONDITION` (1e3); a record may say up to 1e6.

@@ -4,9 +4,10 @@ The station builds a :class:`RunRecord` at the end of every run (pass or fail) a
 it to a :class:`station.results.storage.RunStore`; the results server accepts the same model on
 ``POST /api/v1/runs`` and the database stores it field for field. One model, three places.
 
-Units: accelerometer values in ADC counts (0…4095), sensitivities in counts/g, the
-matrix maps counts to g (``g = matrix @ (raw − offset)``), gyro rates in deg/s,
-temperatures in °C, residuals and errors in mg (1 mg = 0.001 g), times in UTC.
+Units: accelerometer values in the product sensor's ADC counts (0…4095 for the putter,
+0…65535 at most), sensitivities in counts/g, the matrix maps counts to g
+(``g = matrix @ (raw − offset)``), gyro rates in deg/s, temperatures in °C, residuals
+and errors in mg (1 mg = 0.001 g), times in UTC.
 """
 
 import hashlib
@@ -51,6 +52,7 @@ from station.domain.record_bounds import (
     OFFSET_MIN_COUNTS,
     RUN_MAX_DAYS,
     SENSITIVITY_MAX_COUNTS_PER_G,
+    WIRE_COUNTS_MAX,
     ConditionNumber,
     ErrorMg,
     Measure,
@@ -60,7 +62,7 @@ from station.domain.record_bounds import (
     printable,
 )
 from station.domain.samples import WindowSummary
-from station.domain.sensor import ADC_MAX, ADC_MIN, Axis
+from station.domain.sensor import ADC_MIN, Axis
 
 __all__ = [
     "IDENTIFIER_PATTERN",
@@ -163,8 +165,9 @@ def _within(
     return check
 
 
-Counts3 = Annotated[Vector3, AfterValidator(_within(ADC_MIN, ADC_MAX, "the ADC range"))]
-"""One ADC reading per axis, within the converter's range (counts)."""
+Counts3 = Annotated[Vector3, AfterValidator(_within(ADC_MIN, WIRE_COUNTS_MAX, "the ADC range"))]
+"""One ADC reading per axis, within the widest converter's range (counts): the wire's
+0…65535, which the 16-bit product fills (the 12-bit putter's 0…4095 within it)."""
 
 Spread3 = Annotated[Vector3, AfterValidator(_within(0, ADC_SPAN, "the ADC span"))]
 """A spread of ADC readings per axis (counts)."""
@@ -494,6 +497,16 @@ class _RunHeader(_Record):
         return self
 
 
+def _adc_max_of(part_number: str) -> int:
+    """The largest count of ``part_number``'s sensor if it is a shipped product, else the
+    wire's."""
+    # Imported here: the products name their limits profiles, whose bounds are these.
+    from station.domain.products import shipped_sensor
+
+    sensor = shipped_sensor(part_number)
+    return WIRE_COUNTS_MAX if sensor is None else sensor.adc_max
+
+
 class RunRecord(_RunHeader):
     """One calibration attempt of one unit at one station: what the station submits."""
 
@@ -504,6 +517,23 @@ class RunRecord(_RunHeader):
         indexes = sorted(pose.index for pose in self.poses)
         if indexes != list(range(len(indexes))):
             raise ValueError("pose indexes must be 0…N-1, each once")
+        return self
+
+    @model_validator(mode="after")
+    def _counts_of_its_sensor(self) -> Self:
+        """Every pose mean within the ADC range of the record's product's sensor: a shipped
+        product's (the putter's 0…4095); another product's, the wire's (:data:`Counts3`)."""
+        top = _adc_max_of(self.part_number)
+        for i, pose in enumerate(self.poses):
+            means = [("mean", pose.mean)]
+            means += [(f"replaced.{j}.mean", r.mean) for j, r in enumerate(pose.replaced)]
+            for where, mean in means:
+                for axis, value in zip("xyz", mean.as_tuple(), strict=True):
+                    if value > top:
+                        raise ValueError(
+                            f"poses.{i}.{where}: {axis} {value:.6g} outside the ADC range "
+                            f"0…{top} of {self.part_number}"
+                        )
         return self
 
     def fit_poses(self) -> tuple[PoseRecord, ...]:

@@ -23,6 +23,7 @@ from station.domain.limits import LimitsProfile
 from station.domain.orientation import POSE_TOLERANCE_DEG
 from station.domain.pose_plan import check_gyro_plan, check_plan
 from station.domain.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
+from station.domain.sensor_spec import SensorSpec
 from station.domain.stillness import StillnessThresholds
 
 
@@ -54,6 +55,11 @@ class RunSettings(BaseModel):
     gyro_verification_pose: str = Field(
         "face_up", description="where the verification move takes the unit (with gyro)"
     )
+
+    @property
+    def sensor(self) -> SensorSpec:
+        """The product's sensor whose counts the run judges (its stillness thresholds')."""
+        return self.stillness.sensor
 
     def window_policy(self, profile: LimitsProfile) -> WindowPolicy:
         """How long a pose's still window is, under ``profile``'s limits."""

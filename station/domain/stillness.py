@@ -24,25 +24,53 @@ import math
 import re
 from collections import Counter
 from dataclasses import dataclass
+from typing import Any, Final
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.domain.samples import SampleBlock, WindowSummary
-from station.domain.sensor import (
-    ADC_MAX,
-    ADC_MIN,
-    AXES,
-    NOMINAL_OFFSET_COUNTS,
-    NOMINAL_SENSITIVITY_COUNTS_PER_G,
-    SAMPLES_PER_POSE,
-)
+from station.domain.sensor import ADC_MIN, AXES, SAMPLES_PER_POSE
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+
+#: A hand moving or a tremor shows as a spread of 5 mg and more: a still window's spread
+#: stays below 4.9 mg (4 counts of the putter's 819.2 counts/g) ...
+MOTION_SPREAD_G: Final = 0.0048828125
+#: ... and, on a noisier sensor, below 4 times its white noise (4 counts of the
+#: putter's 1 count rms: the two bounds agree on it).
+MOTION_SPREAD_NOISES: Final = 4.0
+#: A window's first-to-last-quarter change of an axis' mean: 2.4 mg is 0.14 degree of
+#: tilt (2 counts of the putter).
+DRIFT_G: Final = 0.00244140625
+
+
+def spread_limit_counts(sensor: SensorSpec) -> float:
+    """The largest per-axis spread of a still window in ``sensor``'s counts: the motion
+    bound in g or four times the sensor's noise, whichever is larger."""
+    return sensor.counts(max(MOTION_SPREAD_G, MOTION_SPREAD_NOISES * sensor.noise_g))
+
+
+def drift_limit_counts(sensor: SensorSpec) -> float:
+    """The largest drift of a still window's mean in ``sensor``'s counts."""
+    return sensor.counts(DRIFT_G)
 
 
 class StillnessThresholds(BaseModel):
-    """Limits a window must meet to count as still; defaults with their reasons."""
+    """Limits a window must meet to count as still; defaults with their reasons.
+
+    The accelerometer's limits are in the counts of ``sensor`` (the product's, set by the
+    station's configuration): those not given are derived from it
+    (:func:`spread_limit_counts`, :func:`drift_limit_counts`); its rails and nominal
+    zero g and sensitivity judge saturation and gravity.
+    """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+    sensor: SensorSpec = Field(
+        PUTTER_SENSOR,
+        description="the product's sensor, whose counts the window is in (set from the "
+        "station's product, station.domain.products)",
+    )
 
     window_samples: int = Field(
         SAMPLES_PER_POSE,
@@ -56,17 +84,19 @@ class StillnessThresholds(BaseModel):
         "10 % acceptance-latency budget, and 32 times less work than every sample",
     )
     accel_std_max_counts: float = Field(
-        4.0,
+        spread_limit_counts(PUTTER_SENSOR),
         gt=0,
-        description="per-axis spread: the sensor's noise is ~1 count (1.2 mg) rms; a hand "
-        "moving or a tremor of 5 mg and more shows as 4 counts (4.9 mg)",
+        description="per-axis spread: a hand moving or a tremor of 5 mg and more shows as "
+        "4.9 mg (4 counts of the putter, whose noise is ~1 count, 1.2 mg, rms); at least 4 "
+        "times the sensor's noise; default: the sensor's (spread_limit_counts)",
     )
     accel_drift_max_counts: float = Field(
-        2.0,
+        drift_limit_counts(PUTTER_SENSOR),
         gt=0,
-        description="first-to-last-quarter change of an axis' mean: 2 counts is 0.14 degree "
-        "of tilt and moves the window's mean by under 0.1 % of the sensitivity; noise "
-        "contributes 0.1 count",
+        description="first-to-last-quarter change of an axis' mean: 2.4 mg (2 counts of "
+        "the putter) is 0.14 degree of tilt and moves the window's mean by under 0.1 % of "
+        "the sensitivity; noise contributes 0.1 count; default: the sensor's "
+        "(drift_limit_counts)",
     )
     gravity_tolerance_g: float = Field(
         0.5,
@@ -102,6 +132,19 @@ class StillnessThresholds(BaseModel):
         "trust the window's statistics",
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _in_the_sensors_counts(cls, data: Any) -> Any:
+        """The accelerometer limits not given, in the given sensor's counts."""
+        if not isinstance(data, dict) or "sensor" not in data:
+            return data
+        sensor = SensorSpec.model_validate(data["sensor"])
+        return {
+            "accel_std_max_counts": spread_limit_counts(sensor),
+            "accel_drift_max_counts": drift_limit_counts(sensor),
+            **data,
+        }
+
 
 @dataclass(frozen=True)
 class WindowVerdict:
@@ -136,7 +179,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
     # Whole-array operations, then plain floats per axis: the live view judges a window
     # ten times a second per slot, and numpy's per-call overhead is most of the cost.
-    at_rail = np.any((acc <= ADC_MIN) | (acc >= ADC_MAX), axis=0).tolist()
+    at_rail = np.any((acc <= ADC_MIN) | (acc >= limits.sensor.adc_max), axis=0).tolist()
     saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
@@ -154,7 +197,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
                 f"accel {axis} drifted {d:.1f} counts > {limits.accel_drift_max_counts:g}"
             )
             motion = True
-    nominal_g = (summary.accel_mean - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    nominal_g = (summary.accel_mean - limits.sensor.zero_g_counts) / limits.sensor.counts_per_g
     magnitude = math.sqrt(float(nominal_g @ nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")

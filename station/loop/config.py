@@ -69,19 +69,25 @@ class StationConfig(BaseSettings):
     @model_validator(mode="before")
     @classmethod
     def _plan_of_the_profile(cls, data: Any) -> Any:
-        """The shipped run plan of the limits profile, under the configured ``[run]`` keys."""
+        """The shipped run plan of the limits profile, under the configured ``[run]`` keys,
+        judging the product's sensor's counts (``[run.stillness]``'s sensor is always the
+        product's: its limits not given are derived from it)."""
         if not isinstance(data, dict):
             return data
+        product = _products_of(data).get(str(data.get("part_number") or DEFAULT_PART_NUMBER))
         if data.get("part_number") and not data.get("limits_profile"):
-            product = _products_of(data).get(str(data["part_number"]))
             data = {**data, "limits_profile": product.limits_profile}
             plan = shipped_plan(product.run_plan)
         else:
             plan = shipped_plan(data.get("limits_profile"))
         run = data.get("run", {})
-        if plan is None or not isinstance(run, dict):
+        if not isinstance(run, dict):
             return data
-        return {**data, "run": {**plan, **run}}
+        run = {**(plan or {}), **run}
+        stillness = run.get("stillness", {})
+        if isinstance(stillness, dict):
+            run["stillness"] = {**stillness, "sensor": product.sensor}
+        return {**data, "run": run}
 
     @model_validator(mode="after")
     def _product_fits_its_limits(self) -> Self:

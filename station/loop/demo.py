@@ -13,8 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from station.domain.errors import InputError
-from station.domain.products import Product, SensorSpec
+from station.domain.sensor_spec import SensorSpec
 from station.simulator.putter import VirtualPutter
 
 #: Simulated seconds an operator takes to turn the putter into the next pose.
@@ -37,18 +36,6 @@ class DemoUnit:
             "sensitivity": dict(zip("xyz", map(float, t.sensitivity_counts_per_g), strict=True)),
             "gyro_matrix": t.gyro_matrix.tolist(),
         }
-
-
-def demo_sensor(product: Product) -> SensorSpec:
-    """The sensor the demo's virtual putters of ``product`` are built with; a product
-    whose accelerometer is not read through a 12-bit ADC is refused in one line: the
-    station's capture, solve and records read the 12-bit ADC's counts (0…4095) so far."""
-    why = product.not_calibrated()
-    if why is not None:
-        raise InputError(
-            f"demo: {why}: its virtual putters exist (station.simulator), its runs do not"
-        )
-    return product.sensor
 
 
 def demo_serial(seed: int, number: int) -> str:

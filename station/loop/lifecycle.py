@@ -279,7 +279,7 @@ class UnitLifecycle:
         if port is None:
             return Unreachable(tr("no putter port configured (--port)"))
         try:
-            driver = open_unit(port, serial)
+            driver = open_unit(port, serial, self.product.sensor.adc_max)
         except SerialNumberMismatchError as exc:
             return WrongUnit(exc.reported, str(exc))
         except DeviceError as exc:
@@ -298,7 +298,7 @@ class UnitLifecycle:
             journal_file=slot.journal_file,
             profile=self.profile,
             settings=settings,
-            reopen=lambda: open_unit(port, serial),
+            reopen=lambda: open_unit(port, serial, self.product.sensor.adc_max),
             purpose=Purpose(earlier=history.counted, golden=golden),
             g_sensitivity=known.g_sensitivity,
         )

@@ -92,7 +92,7 @@ class PoseCapture:
         self._wrong_pose_said: str | None = None
         #: What the poses taken tell of the offsets, and which captures told it.
         self._zero_g_of: tuple[tuple[int, object], ...] | None = None
-        self._known_zero_g = ZeroG()
+        self._known_zero_g = ZeroG.datasheet(settings.sensor)
         #: Whether the unit moved since the last capture (before it has, it still lies
         #: in the pose just taken, which is no mistake).
         self._moved = False
@@ -281,7 +281,8 @@ class PoseCapture:
         if taken != self._zero_g_of:
             self._zero_g_of = taken
             self._known_zero_g = ZeroG.measured(
-                (POSES[self._names[i]], mean) for i, mean in self._captured_means()
+                ((POSES[self._names[i]], mean) for i, mean in self._captured_means()),
+                self.settings.sensor,
             )
         return self._known_zero_g
 

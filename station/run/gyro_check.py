@@ -20,7 +20,6 @@ import numpy as np
 from station.device import PutterDriver
 from station.domain.gyro.motion import Move, integrate_rates
 from station.domain.samples import SampleBlock
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 from station.domain.stillness import StillnessThresholds, judge_window
 from station.run.unit_output import CalibratedSamples
 
@@ -73,10 +72,11 @@ class VerificationMove:
         return None
 
     def _still(self, window: SampleBlock) -> bool:
-        """The station's one stillness judge, on the calibrated window read as nominal
-        counts (the judge's thresholds are in counts)."""
+        """The station's one stillness judge, on the calibrated window read as the sensor's
+        nominal counts (the judge's thresholds are in its counts)."""
+        sensor = self._stillness.sensor
         counts = SampleBlock(window.rows.copy())
-        counts.accel[:] = NOMINAL_OFFSET_COUNTS + NOMINAL_SENSITIVITY_COUNTS_PER_G * window.accel
+        counts.accel[:] = sensor.zero_g_counts + sensor.counts_per_g * window.accel
         return judge_window(counts, self._stillness).still
 
     def _angle(self, samples: SampleBlock) -> MoveOutcome:

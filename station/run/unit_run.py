@@ -28,13 +28,14 @@ from station.device import (
     PutterDriver,
 )
 from station.domain.arrays import FloatArray
-from station.domain.calibration import CalibrationError, Solution, solve
+from station.domain.calibration import CalibrationError, GeometryLimits, Solution, solve
 from station.domain.gyro.motion import GyroMatrixError
 from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile, check
 from station.domain.poses import Pose, pose
 from station.domain.records import PoseRecord, PoseRole, RunRecord
 from station.domain.run_settings import RunSettings
+from station.domain.sensor import ADC_MAX
 from station.results.journal import JournalFile, RunJournal
 from station.run import record
 from station.run.acquisition import PoseResult
@@ -58,9 +59,10 @@ from station.run.view import RunView
 from station.run.writeback import write_and_read_back
 
 
-def open_unit(port: str, serial: str) -> PutterDriver:
-    """Open the unit on ``port``, check it is ``serial``, start its raw stream."""
-    driver = PutterDriver.open(port)
+def open_unit(port: str, serial: str, adc_max: int = ADC_MAX) -> PutterDriver:
+    """Open the unit on ``port``, check it is ``serial``, start its raw stream (of
+    accelerometer counts up to ``adc_max``, its product's sensor's)."""
+    driver = PutterDriver.open(port, adc_max=adc_max)
     try:
         driver.identify(expected_serial=serial)
         driver.start_stream()
@@ -277,7 +279,10 @@ class UnitRun:
         try:
             means = record.fit_means(self.journal.captures, self.fit_count)
             self.solution = solve(
-                means, self.settings.model, max_residual_counts=self.profile.max_residual_counts
+                means,
+                self.settings.model,
+                GeometryLimits(sensor=self.settings.sensor),
+                max_residual_counts=self.profile.max_residual_counts,
             )
         except CalibrationError as exc:
             self._failures.add(calibration_failed(exc))

@@ -54,13 +54,19 @@ class Firmware:
 
     ``identity`` says who the unit claims to be at the time of asking (a fault can
     change its serial number); ``calibration`` and ``gyro_calibration`` (bias and
-    K⁻¹, applied to the gyros of the calibrated stream) are what its flash holds.
+    K⁻¹, applied to the gyros of the calibrated stream) are what its flash holds, from
+    ``factory`` on (default: the putter's nominal, :meth:`DeviceCalibration.factory_default`).
     """
 
-    def __init__(self, stream: SampleStream, identity: Callable[[], Identity]) -> None:
+    def __init__(
+        self,
+        stream: SampleStream,
+        identity: Callable[[], Identity],
+        factory: DeviceCalibration | None = None,
+    ) -> None:
         self.stream = stream
         self.identity = identity
-        self.calibration = DeviceCalibration.factory_default()
+        self.calibration = factory or DeviceCalibration.factory_default()
         self.gyro_calibration = DeviceCalibration.gyro_default()
 
     def answer(self, frame: Frame) -> bytes:

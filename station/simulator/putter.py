@@ -23,8 +23,8 @@ from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.faults import Faults
 from station.domain.poses import Pose, pose
-from station.domain.products import SensorSpec
 from station.domain.samples import SampleBlock
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 from station.simulator.clock import VirtualClock
 from station.simulator.firmware import Firmware
 from station.simulator.motion import Handling, MotionModel
@@ -84,7 +84,9 @@ class VirtualPutter(Closing):
             rate_hz,
         )
         self._firmware = Firmware(
-            self._stream, lambda: Identity(self.reported_serial, FIRMWARE_VERSION, SENSOR_PART)
+            self._stream,
+            lambda: Identity(self.reported_serial, FIRMWARE_VERSION, SENSOR_PART),
+            DeviceCalibration.factory_default(sensor or PUTTER_SENSOR),
         )
         self._link: Link | None = None
         self._make_link: Callable[[], Link] | None = None

@@ -25,7 +25,6 @@ from typing import Any, Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.products import SensorSpec
 from station.domain.sensor import (
     ADC_MAX,
     ADC_MIN,
@@ -35,6 +34,7 @@ from station.domain.sensor import (
     OFFSET_SPREAD_COUNTS,
     SENSITIVITY_TOLERANCE,
 )
+from station.domain.sensor_spec import SensorSpec
 
 #: Sense axis of each gyro (x, y, z): the tuning forks detect along y, z and x.
 GYRO_SENSE_AXIS: Final = (1, 2, 0)

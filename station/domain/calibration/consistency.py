@@ -18,8 +18,10 @@ h_i the pose's leverage; :mod:`station.domain.calibration.solution`) is compared
   raw residual would often blame the wrong pose).
 
 The limit L comes from the limits profile (``fit_residual_counts``) or, by default, from
-the noise (:data:`DEFAULT_RESIDUAL_LIMIT_COUNTS`): a pose mean's noise σ is at most the
-sample spread the stillness check lets through, 8 counts, over the 1024 samples of a pose,
+the noise (:func:`residual_limit`, in the sensor's counts; the putter's is
+:data:`DEFAULT_RESIDUAL_LIMIT_COUNTS`): a pose mean's noise σ is at most the sample
+spread the stillness check lets through, 8 counts of the putter (twice its limit,
+:func:`station.domain.stillness.spread_limit_counts`), over the 1024 samples of a pose,
 σ = 0.25 counts; L = 8σ = 2 counts gives a false alarm on a clean pose with probability
 2·(1 − Φ(8)) ≈ 1e-15 at that worst noise (fewer at the sensor's real ~1 count). The
 six-parameter model cannot represent the KXM52's ~2 % cross-axis coupling, which alone
@@ -28,6 +30,7 @@ leaves up to 2·0.02·860 ≈ 34 counts (largest of 300 simulated units with 8�
 catches 2-count ones.
 """
 
+import math
 from contextlib import suppress
 from dataclasses import replace
 
@@ -41,22 +44,34 @@ from station.domain.calibration.model import Model, apply
 from station.domain.calibration.residual import MAX_CONDITION
 from station.domain.calibration.solution import Solution
 from station.domain.sensor import SAMPLES_PER_POSE
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.stillness import spread_limit_counts
 
-#: A pose mean's noise at the largest sample spread a still pose may have (8 counts).
-POSE_MEAN_NOISE_COUNTS = 8.0 / np.sqrt(SAMPLES_PER_POSE)
+#: The largest sample spread a still pose may have, in the stillness limit's spreads:
+#: twice it (8 counts of the putter).
+POSE_SPREAD_LIMITS = 2.0
 #: The noise limit in σ of a pose mean: 2·(1 − Φ(8)) ≈ 1.2e-15 false alarms per pose.
 NOISE_SIGMAS = 8.0
-#: Default limit on |studentised residual|, counts: 8σ of a pose mean, 2 counts.
-DEFAULT_RESIDUAL_LIMIT_COUNTS = NOISE_SIGMAS * POSE_MEAN_NOISE_COUNTS
+
+
+def pose_mean_noise_counts(sensor: SensorSpec = PUTTER_SENSOR) -> float:
+    """A pose mean's noise at the largest sample spread a still pose of ``sensor`` may
+    have, counts (the putter: 8 counts over 1024 samples, 0.25 counts)."""
+    return POSE_SPREAD_LIMITS * spread_limit_counts(sensor) / math.sqrt(SAMPLES_PER_POSE)
+
+
+#: Default limit on |studentised residual| of the putter, counts: 8σ of a pose mean, 2 counts.
+DEFAULT_RESIDUAL_LIMIT_COUNTS = NOISE_SIGMAS * pose_mean_noise_counts()
 #: Spare equations needed to find and leave out one pose (N ≥ p + 2).
 EXCLUSION_MIN_SPARE = 2
 #: Candidates tried, largest |studentised residual| first.
 CANDIDATES = 3
 
 
-def residual_limit(configured: float | None) -> float:
-    """The limit on |studentised residual| in counts: ``configured`` or the default."""
-    return DEFAULT_RESIDUAL_LIMIT_COUNTS if configured is None else configured
+def residual_limit(configured: float | None, sensor: SensorSpec = PUTTER_SENSOR) -> float:
+    """The limit on |studentised residual| in ``sensor``'s counts: ``configured`` or the
+    default, 8σ of a pose mean."""
+    return NOISE_SIGMAS * pose_mean_noise_counts(sensor) if configured is None else configured
 
 
 def check_model(model: Model, poses: int) -> Model:
@@ -79,7 +94,7 @@ def solve_consistent(
             does not explain it, or too few poses to say which.
         CalibrationError: any refusal of :func:`solve_least_squares`.
     """
-    limit = residual_limit(max_residual_counts)
+    limit = residual_limit(max_residual_counts, limits.sensor)
     fit = solve_least_squares(poses, model, limits, max_condition)
     judge, judged = model, fit
     if (wider := check_model(model, len(poses))) != model:
@@ -98,7 +113,7 @@ def solve_consistent(
     )
     hint = " (or cross-axis coupling: try the nine-parameter model)" if judge == "six" else ""
     if spare < EXCLUSION_MIN_SPARE:
-        refuse_beyond_datasheet(poses)  # the likelier cause, where one pose shows it
+        refuse_beyond_datasheet(poses, limits.sensor)  # the likelier cause, where one pose shows it
         raise InconsistentPosesError(
             f"{head}; with {n} poses ({spare} spare) one bad pose cannot be told from the "
             f"others{hint}: take the poses again, or add {EXCLUSION_MIN_SPARE - spare} or more"
@@ -122,7 +137,7 @@ def solve_consistent(
             else solve_least_squares(poses[keep], model, limits, max_condition)
         )
         return _judged(_excluding(final, pose, poses), _excluding(refit, pose, poses), judge, limit)
-    refuse_beyond_datasheet(poses)
+    refuse_beyond_datasheet(poses, limits.sensor)
     if explained:
         named = " or ".join(f"pose {c + 1}" for c, _ in explained)
         raise InconsistentPosesError(

@@ -4,14 +4,18 @@ Every check is vectorised over units: poses come as a (K, N, 3) array of mean co
 (K units, N poses each), and every one takes memory linear in N (the closest pose of
 each pose comes from a k-d tree beyond a few dozen poses, never from an N×N table).
 
+Every bound in counts is the sensor's (:class:`GeometryLimits`' ``sensor``,
+:mod:`station.domain.sensor_spec`; the putter's by default).
+
 The values are checked first, each refusal naming its real cause:
 
 * **not counts** — every value within ±:data:`NOT_COUNTS_BELOW`: acceleration in g or
-  m/s² (|a| ≈ 1 or 9.8), not ADC counts (0…4095);
-* **at the rail** — a mean within :data:`RAIL_MARGIN_COUNTS` of 0 or 4095: samples of
-  that axis sat at the converter's end, the mean is clipped;
-* **beyond the datasheet** — an axis further from 2048 than any KXM52 can read at 1 g
-  (:data:`DATASHEET_REACH_COUNTS`): the unit was moving, or the sensor is out of spec.
+  m/s² (|a| ≈ 1 or 9.8), not ADC counts (0…4095 for the putter);
+* **at the rail** — a mean within :func:`rail_margin_counts` of 0 or the ADC's largest
+  count: samples of that axis sat at the converter's end, the mean is clipped;
+* **beyond the datasheet** — an axis further from its nominal zero g than any unit of the
+  sensor can read at 1 g (:func:`datasheet_reach_counts`): the unit was moving, or the
+  sensor is out of spec.
   Not a refusal of its own (an out-of-spec unit still calibrates, and fails on its
   limits with the values measured), but the cause named when the poses are refused
   (:func:`refuse_beyond_datasheet`).
@@ -21,13 +25,14 @@ depend on the unknown offsets:
 
 * **angle between poses** — two still poses i, j with gravity directions u_i, u_j are
   |a_i − a_j| ≈ s·|u_i − u_j| = 2·s·sin(θ/2) counts apart, so
-  θ = 2·asin(|a_i − a_j| / 2s) with the nominal sensitivity s;
+  θ = 2·asin(|a_i − a_j| / 2s) with the sensor's nominal sensitivity s;
 * **coverage** — √(λ_min/λ_max) of the covariance of the pose means: 1 when the
   poses span all directions equally (e.g. ±1 g on each axis), 0 when they lie in one
   plane, where an ellipsoid through them is not unique (the system of [Song2006]_
   eq. 10 degenerates when the poses do not span the sphere).
 """
 
+import math
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -45,31 +50,39 @@ from station.domain.calibration.errors import (
     RailValueError,
     TooFewPosesError,
 )
-from station.domain.sensor import (
-    ADC_MAX,
-    ADC_MIN,
-    AXES,
-    NOMINAL_OFFSET_COUNTS,
-    NOMINAL_SENSITIVITY_COUNTS_PER_G,
-    OFFSET_SPREAD_COUNTS,
-    SENSITIVITY_TOLERANCE,
-)
+from station.domain.sensor import ADC_MIN, AXES
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 #: Default minimum angle between two poses' gravity directions, degrees.
 MIN_POSE_ANGLE_DEG = 10.0
 #: Default minimum coverage √(λ_min/λ_max) of the pose set.
 MIN_COVERAGE = 0.2
-#: A pose mean this close to 0 or 4095 counts is clipped: with the 8-counts sample spread
-#: the stillness limit allows, samples 2σ above such a mean sat at the rail.
-RAIL_MARGIN_COUNTS = 16.0
-#: Farthest an axis can read from 2048 counts at 1 g: the datasheet's offset spread
-#: (±207) plus its largest sensitivity (819.2 · 1.05) with 5 % cross-axis
-#: (·√(1 + 2·0.05²)), plus the rail margin for noise: 1 110 counts.
-DATASHEET_REACH_COUNTS = round(
-    OFFSET_SPREAD_COUNTS
-    + NOMINAL_SENSITIVITY_COUNTS_PER_G * (1 + SENSITIVITY_TOLERANCE) * np.sqrt(1 + 2 * 0.05**2)
-    + RAIL_MARGIN_COUNTS
-)
+#: A pose mean this close to a rail is clipped: with the 9.8 mg sample spread the
+#: stillness limit allows (8 counts of the putter), samples 2σ above such a mean sat at
+#: the rail. 19.5 mg: 16 counts of the putter's 819.2 counts/g.
+RAIL_MARGIN_G = 0.01953125
+#: Largest cross-axis coupling of a unit the datasheet allows for: 5 %.
+CROSS_AXIS_MAX = 0.05
+
+
+def rail_margin_counts(sensor: SensorSpec) -> float:
+    """How close to a rail of ``sensor``'s ADC a pose mean is clipped, counts."""
+    return sensor.counts(RAIL_MARGIN_G)
+
+
+def datasheet_reach_counts(sensor: SensorSpec) -> int:
+    """Farthest an axis of ``sensor`` can read from its nominal zero g at 1 g, counts: the
+    datasheet's zero-g spread plus its largest sensitivity with the largest cross-axis
+    (:data:`CROSS_AXIS_MAX`, ·√(1 + 2·0.05²)), plus the rail margin for noise (the
+    putter: 207 + 819.2 · 1.05 · 1.0025 + 16 = 1 085 counts)."""
+    largest = sensor.counts_per_g * (1 + sensor.sensitivity_tolerance)
+    return round(
+        sensor.zero_g_spread_counts
+        + largest * math.sqrt(1 + 2 * CROSS_AXIS_MAX**2)
+        + rail_margin_counts(sensor)
+    )
+
+
 #: Every value within ± this: the file holds g or m/s², never counts of a still pose.
 NOT_COUNTS_BELOW = 20.0
 #: Up to this many poses the closest pair comes from all pairs at once (vectorised over
@@ -79,10 +92,12 @@ PAIRWISE_MAX_POSES = 32
 
 @dataclass(frozen=True)
 class GeometryLimits:
-    """Bounds on a pose set's spacing and coverage."""
+    """Bounds on a pose set's spacing and coverage, and the sensor whose counts the poses
+    are (its rails, nominal zero g and sensitivity, datasheet spreads)."""
 
     min_angle_deg: float = MIN_POSE_ANGLE_DEG
     min_coverage: float = MIN_COVERAGE
+    sensor: SensorSpec = PUTTER_SENSOR
 
 
 class Finding(IntEnum):
@@ -116,16 +131,22 @@ class Screen:
     near: NDArray[np.int64]
 
 
-def chord_to_angle_deg(chord: FloatArray) -> FloatArray:
-    """Angle (degrees) between two poses' gravity directions from their distance in counts."""
-    half = np.clip(chord / (2.0 * NOMINAL_SENSITIVITY_COUNTS_PER_G), 0.0, 1.0)
+def chord_to_angle_deg(
+    chord: FloatArray, counts_per_g: float = PUTTER_SENSOR.counts_per_g
+) -> FloatArray:
+    """Angle (degrees) between two poses' gravity directions from their distance in counts
+    of a sensor of ``counts_per_g``."""
+    half = np.clip(chord / (2.0 * counts_per_g), 0.0, 1.0)
     return np.asarray(np.degrees(2.0 * np.arcsin(half)), dtype=np.float64)
 
 
-def pair_angles_deg(poses: FloatArray) -> FloatArray:
-    """Angles (degrees) between every two poses' gravity directions, shape (..., N, N)."""
+def pair_angles_deg(
+    poses: FloatArray, counts_per_g: float = PUTTER_SENSOR.counts_per_g
+) -> FloatArray:
+    """Angles (degrees) between every two poses' gravity directions, shape (..., N, N),
+    from counts of a sensor of ``counts_per_g``."""
     chord = np.linalg.norm(poses[..., :, None, :] - poses[..., None, :, :], axis=-1)
-    return chord_to_angle_deg(chord)
+    return chord_to_angle_deg(chord, counts_per_g)
 
 
 def coverage(poses: FloatArray) -> FloatArray:
@@ -148,6 +169,7 @@ def screen(
     (eq. 10 with six poses degenerates on it) or only counted in ``near`` (least squares).
     """
     k, n, _ = poses.shape
+    sensor = limits.sensor
     units = np.arange(k)
     finding = np.zeros(k, dtype=np.int64)
     where = np.full(k, -1, dtype=np.int64)
@@ -168,22 +190,23 @@ def screen(
         bad = ~finite
         first = bad.argmax(axis=1)
         mark(Finding.NON_FINITE, bad[units, first], first // 3, first % 3)
-        flat = np.where(finite, flat, NOMINAL_OFFSET_COUNTS)
+        flat = np.where(finite, flat, sensor.zero_g_counts)
     small = np.all(np.abs(flat) < NOT_COUNTS_BELOW, axis=1)
     mark(Finding.NOT_COUNTS, small, none, none)
-    rail = (flat <= ADC_MIN + RAIL_MARGIN_COUNTS) | (flat >= ADC_MAX - RAIL_MARGIN_COUNTS)
+    margin = rail_margin_counts(sensor)
+    rail = (flat <= ADC_MIN + margin) | (flat >= sensor.adc_max - margin)
     first = rail.argmax(axis=1)
     mark(Finding.AT_RAIL, rail[units, first], first // 3, first % 3)
     if rail.any():  # values beyond the ADC's range would only overflow what follows
-        flat = np.where(rail, NOMINAL_OFFSET_COUNTS, flat)
+        flat = np.where(rail, sensor.zero_g_counts, flat)
 
     clean = flat.reshape(k, n, 3)
     nearest, neighbour = _nearest(clean, finding != Finding.OK)
     closest = nearest.argmin(axis=1)
     pair = np.stack([closest, neighbour[units, closest]], axis=1)
     pair.sort(axis=1)
-    min_angle = chord_to_angle_deg(nearest[units, closest])
-    near = (chord_to_angle_deg(nearest) < limits.min_angle_deg).sum(axis=1)
+    min_angle = chord_to_angle_deg(nearest[units, closest], sensor.counts_per_g)
+    near = (chord_to_angle_deg(nearest, sensor.counts_per_g) < limits.min_angle_deg).sum(axis=1)
     if refuse_duplicates:
         mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, pair[:, 1], pair[:, 0])
 
@@ -257,12 +280,13 @@ def screen_error(
     if code is Finding.NOT_COUNTS:
         return NotCountsError(
             f"the values look like acceleration in g or m/s² (all within ±{NOT_COUNTS_BELOW:g}), "
-            f"not ADC counts ({ADC_MIN}…{ADC_MAX}): give the raw counts of each pose"
+            f"not ADC counts ({ADC_MIN}…{limits.sensor.adc_max}): give the raw counts of each pose"
         )
     if code is Finding.AT_RAIL:
         return RailValueError(
-            f"pose {pose + 1}: {AXES[other]} is at the ADC rail (within {RAIL_MARGIN_COUNTS:g} "
-            f"counts of {ADC_MIN} or {ADC_MAX}): the axis is saturated, its mean clipped",
+            f"pose {pose + 1}: {AXES[other]} is at the ADC rail (within "
+            f"{rail_margin_counts(limits.sensor):g} counts of {ADC_MIN} or "
+            f"{limits.sensor.adc_max}): the axis is saturated, its mean clipped",
             pose=pose,
         )
     if code is Finding.DUPLICATE:
@@ -310,16 +334,18 @@ def check_poses(
     return result
 
 
-def refuse_beyond_datasheet(poses: FloatArray) -> None:
+def refuse_beyond_datasheet(poses: FloatArray, sensor: SensorSpec = PUTTER_SENSOR) -> None:
     """Raise :class:`BeyondDatasheetError` for the first pose (N, 3) with an axis further
-    from 2048 counts than any KXM52 reads at 1 g: called before refusing the poses for
-    another reason, as it is the likelier cause (a moving unit, or an out-of-spec sensor)."""
-    beyond = np.abs(poses - NOMINAL_OFFSET_COUNTS) > DATASHEET_REACH_COUNTS
+    from ``sensor``'s zero g than any unit of it reads at 1 g: called before refusing the
+    poses for another reason, as it is the likelier cause (a moving unit, or an
+    out-of-spec sensor)."""
+    reach = datasheet_reach_counts(sensor)
+    beyond = np.abs(poses - sensor.zero_g_counts) > reach
     if beyond.any():
         pose, axis = (int(i) for i in np.argwhere(beyond)[0])
         raise BeyondDatasheetError(
             f"pose {pose + 1}: {AXES[axis]} reads beyond the datasheet's reach at 1 g "
-            f"({NOMINAL_OFFSET_COUNTS:g} ± {DATASHEET_REACH_COUNTS} counts): the unit was "
+            f"({sensor.zero_g_counts:g} ± {reach} counts): the unit was "
             "moving, or the sensor is out of spec",
             pose=pose,
         )

@@ -138,7 +138,7 @@ def solve_least_squares(
         theta0 = param.pack(*algebraic_start(v, model))
     except NonPositiveScaleError:
         _refuse_degenerate_geometry(v, model, max_condition)
-        refuse_beyond_datasheet(p)
+        refuse_beyond_datasheet(p, limits.sensor)
         raise
     # Imported here: scipy.optimize takes ~0.5 s to load, and the server imports this
     # module at start while most six-pose runs never reach this solver.
@@ -153,7 +153,7 @@ def solve_least_squares(
     offset_n, c_n = param.unpack(fit.x)
     if np.any(np.diag(c_n) <= 0):
         _refuse_degenerate_geometry(v, model, max_condition)
-        refuse_beyond_datasheet(p)
+        refuse_beyond_datasheet(p, limits.sensor)
         raise NonPositiveScaleError(
             "the fit found a non-positive scale though the geometry is sound: a pose was not still"
         )
@@ -164,7 +164,7 @@ def solve_least_squares(
         # Sound poses whose fit lands on a degenerate solution: a pose no sensor could
         # read is the likelier cause, as for a non-positive scale.
         _refuse_degenerate_geometry(v, model, max_condition)
-        refuse_beyond_datasheet(p)
+        refuse_beyond_datasheet(p, limits.sensor)
         raise _degenerate(condition, model, max_condition)
 
     calibration = Calibration(
@@ -175,7 +175,9 @@ def solve_least_squares(
     return Solution(
         calibration=calibration,
         method="least-squares",
-        quality=quality_of(calibration, p, condition, screened, leverage(jac)),
+        quality=quality_of(
+            calibration, p, condition, screened, leverage(jac), limits.sensor.counts_per_g
+        ),
         standard_errors=_standard_errors(jac, fit.fun, c_n, model),
         k=_k(calibration) if model == "six" else None,
     )

@@ -49,7 +49,7 @@ from station.domain.calibration.residual import (
     normalise,
 )
 from station.domain.calibration.solution import Solution, quality_of
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensor import NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 PAPER_POSES = 6
 #: Units solved together: bounds the batch path's memory and keeps it in cache.
@@ -160,14 +160,14 @@ def _solve_chunk(p: FloatArray, limits: GeometryLimits, max_condition: float) ->
     with np.errstate(invalid="ignore", divide="ignore"):
         sx = np.sqrt(sx2)
         sensitivity = np.stack([sx, sx / np.sqrt(k[:, 0]), sx / np.sqrt(k[:, 1])], axis=1)
-    # cond(J) at the solution; units without one are measured at the nominal sensor.
+    # cond(J) at the solution; units without one are measured at the nominal sensor
+    # (the product's: its zero g and counts per g, in normalised counts).
     nominal = ~positive[:, None]
+    sensor = limits.sensor
     condition = condition_number(
         jacobian_six(
-            np.where(
-                nominal, 0.0, (offset - NOMINAL_OFFSET_COUNTS) / NOMINAL_SENSITIVITY_COUNTS_PER_G
-            ),
-            np.where(nominal, 1.0, sensitivity / NOMINAL_SENSITIVITY_COUNTS_PER_G),
+            np.where(nominal, normalise(np.full(3, sensor.zero_g_counts)), normalise(offset)),
+            np.where(nominal, sensor.counts_per_g, sensitivity) / NOMINAL_SENSITIVITY_COUNTS_PER_G,
             normalise(work),
         )
     )
@@ -212,7 +212,7 @@ def solve_paper(
             f"{batch.condition[0]:.3g} > {max_condition:.3g}): spread them over more directions"
         )
     if outcome is Outcome.NON_POSITIVE_SCALE:
-        refuse_beyond_datasheet(p)
+        refuse_beyond_datasheet(p, limits.sensor)
         raise NonPositiveScaleError(
             "no ellipsoid fits these poses though their geometry is sound (k1, k2 or s_x² is not "
             "positive): a pose was not still, or poses are mislabelled"

@@ -16,7 +16,7 @@ import numpy as np
 from station.domain.arrays import FloatArray
 from station.domain.calibration.geometry import Screen
 from station.domain.calibration.model import Calibration, Model, apply
-from station.domain.sensor import NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensor_spec import PUTTER_SENSOR
 
 Method = Literal["paper-eq10", "least-squares"]
 
@@ -144,17 +144,19 @@ def quality_of(
     condition_number: float,
     screened: Screen,
     leverage: FloatArray | None = None,
+    counts_per_g: float = PUTTER_SENSOR.counts_per_g,
 ) -> Quality:
     """Residuals of ``calibration`` over ``poses`` (N, 3) plus the geometry measures.
 
-    ``leverage`` (N,) of a redundant fit gives the studentised residuals.
+    ``leverage`` (N,) of a redundant fit gives the studentised residuals, in counts of a
+    sensor of ``counts_per_g`` (nominal).
     """
     pose_g = np.linalg.norm(apply(calibration, poses), axis=1)
     residual_mg = (pose_g - 1.0) * 1000.0
     studentised = None
     if leverage is not None and len(poses) > round(float(leverage.sum())):
         spare = np.clip(1.0 - leverage, 0.0, None)
-        counts = (pose_g - 1.0) * NOMINAL_SENSITIVITY_COUNTS_PER_G
+        counts = (pose_g - 1.0) * counts_per_g
         studentised = np.divide(
             counts, np.sqrt(spare), out=np.zeros_like(counts), where=spare > LEVERAGE_FLOOR
         )

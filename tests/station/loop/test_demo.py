@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from station.domain.products import load_products
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 
@@ -135,7 +136,6 @@ def test_a_demo_of_a_product_records_its_part_number(run_cli: CliRunner, tmp_pat
     ("part_number", "line"),
     [
         ("DIXX-Z9", "unknown part number 'DIXX-Z9'; known: DIXX-A12, DIXX-D16"),
-        ("DIXX-D16", "demo: DIXX-D16's 16-bit accelerometer is not calibrated by this station"),
         ("dixx a12", "unknown part number 'dixx a12'"),
     ],
 )
@@ -180,16 +180,28 @@ def test_a_demo_in_korean_says_the_runs_lines_in_korean(run_cli: CliRunner, tmp_
     assert said.startswith("calstation: error: station configuration: language: ")
 
 
-def test_a_station_set_to_a_product_it_cannot_calibrate_stops_in_one_line(
+def test_a_demo_of_dixx_d16_calibrates_its_16_bit_units_and_passes_them(
     run_cli: CliRunner, tmp_path: Path
 ) -> None:
     env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
     env.pop("CALSTATION_DATABASE_URL", None)
-    args = ("run", "--port", str(tmp_path / "putter"), "--part-number", "DIXX-D16")
-    result = run_cli(*args, env=env, timeout=60)
-    assert result.returncode == 2
-    [said] = result.stderr.strip().splitlines()
-    assert said == (
-        "calstation: error: run: DIXX-D16's 16-bit accelerometer is not calibrated by this "
-        "station yet (it reads 0…4095 counts)"
-    )
+    args = ("demo", "--units", "2", "--json", "--speed", "20", "--part-number", "DIXX-D16")
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    units = json.loads(result.stdout)
+    assert len(units) == 2
+    assert len(re.findall(r"PT\d{6}: PASS: ship$", result.stderr, re.MULTILINE)) == 2
+    per_g = load_products().get("DIXX-D16").sensor.counts_per_g
+    for unit in units:
+        assert unit["verdict"] == "pass", unit["failures"]
+        truth, estimate = unit["truth"], unit["estimate"]
+        for axis in "xyz":
+            # The 12-bit demo's bounds in g (1 count of 819.2 counts/g, 0.1 %).
+            assert abs(estimate["offset"][axis] - truth["offset"][axis]) < per_g / 819.2
+            ratio = estimate["sensitivity"][axis] / truth["sensitivity"][axis]
+            assert abs(ratio - 1) < 1e-3
+    with sqlite3.connect(tmp_path / "calstation.sqlite3") as db:
+        stored = db.execute("select part_number, limits_name from runs").fetchall()
+        means = db.execute("select mean_x, mean_y, mean_z from poses").fetchall()
+    assert stored == [("DIXX-D16", "dixx-d16-production")] * 2
+    assert max(map(max, means)) > 4095  # the record holds the 16-bit sensor's counts

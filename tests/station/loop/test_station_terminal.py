@@ -23,6 +23,8 @@ from sqlalchemy import make_url, text
 
 from db import Database, RunRepository, make_engine, open_database
 from station.domain.faults import Faults
+from station.domain.products import load_products
+from station.domain.sensor_spec import SensorSpec
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url
@@ -46,6 +48,7 @@ class Station:
         database_url: str | None = None,
         limits: Path | None = None,
         speed: float = SPEED,
+        sensor: SensorSpec | None = None,
     ) -> None:
         self.tmp = tmp
         self.serial = serial
@@ -53,7 +56,9 @@ class Station:
         self.database = tmp / "results.sqlite3"
         self.database_url = database_url or f"sqlite:///{self.database}"
         self.limits = limits
-        self.putter = VirtualPutter(seed=seed, serial=serial, speed=speed, faults=faults)
+        self.putter = VirtualPutter(
+            seed=seed, serial=serial, speed=speed, faults=faults, sensor=sensor
+        )
         self.putter.serve_pty(self.port)
         self.child: pexpect.spawn | None = None
         self.asked: str | None = None
@@ -168,6 +173,27 @@ def test_a_full_passing_unit(station: Station) -> None:
     truth = station.putter.truth.offset_counts
     assert max(abs(float(a) - b) for a, b in zip(stored, truth, strict=True)) < 1.0  # type: ignore[arg-type]
     assert station.putter.stored_calibration.written
+
+
+def test_a_dixx_d16_station_calibrates_a_dixx_d16_unit_in_its_16_bit_counts(
+    tmp_path: Path,
+) -> None:
+    d16 = load_products().get("DIXX-D16")
+    station = Station(tmp_path, sensor=d16.sensor)
+    try:
+        station.start(extra=("--part-number", "DIXX-D16"))
+        station.scan()
+        assert station.follow() == "PASS"
+        rows = station.rows("select part_number, verdict, limits_name from runs")
+        assert rows == [("DIXX-D16", "pass", "dixx-d16-production")]
+        stored = station.rows("select offset_x, offset_y, offset_z from runs")[0]
+        truth = station.putter.truth.offset_counts
+        # The A12 test's bound in g: 1 count of 819.2 counts/g, here 10 counts.
+        bound = d16.sensor.counts_per_g / 819.2
+        assert max(abs(float(a) - b) for a, b in zip(stored, truth, strict=True)) < bound  # type: ignore[arg-type]
+        assert station.putter.stored_calibration.written
+    finally:
+        station.close()
 
 
 def test_a_unit_out_of_sensitivity_limits_fails_and_is_stored(tmp_path: Path) -> None:

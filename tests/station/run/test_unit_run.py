@@ -16,8 +16,10 @@ from station.domain.faults import Faults
 from station.domain.limits import Bounds, LimitsProfile, load_profile
 from station.domain.orientation import POSE_TOLERANCE_DEG, sense
 from station.domain.poses import POSES
+from station.domain.products import Product
 from station.domain.records import RunRecord
 from station.domain.run_settings import RunSettings
+from station.domain.sensor import ADC_MAX
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
@@ -39,6 +41,7 @@ class Bench:
         noise_counts: float | None = None,
         truth: SensorTruth | None = None,
         profile: LimitsProfile | None = None,
+        product: Product | None = None,
     ) -> None:
         self.putter = VirtualPutter(
             seed=seed,
@@ -47,7 +50,9 @@ class Bench:
             faults=faults,
             noise_counts=noise_counts,
             truth=truth,
+            sensor=product.sensor if product else None,
         )
+        self.adc_max = product.sensor.adc_max if product else ADC_MAX
         self.port = tmp / "putter"
         self.putter.serve_pty(self.port)
         settings = settings or RunSettings()
@@ -59,19 +64,20 @@ class Bench:
             operator_id="op",
             started_at=datetime.now(UTC),
             poses=(*settings.poses, settings.verification_pose),
+            **({"part_number": product.part_number} if product else {}),
         )
         self.run = UnitRun(
             driver=self.open(),
             journal=journal,
             journal_file=self.journal_file,
-            profile=profile or load_profile(),
+            profile=profile or load_profile(None, product.limits_profile if product else None),
             settings=settings,
             reopen=self.open,
         )
         self.moved_to: str | None = None
 
     def open(self) -> PutterDriver:
-        return open_unit(str(self.port), SERIAL)
+        return open_unit(str(self.port), SERIAL, self.adc_max)
 
     def drive(self, until: Callable[[UnitRun], bool], timeout: float = 60.0) -> None:
         """Step the run, moving the unit as asked, until ``until`` holds."""
