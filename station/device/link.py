@@ -12,6 +12,7 @@ as a reply for the command waiting on it. When the thread ends,
 import logging
 import queue
 import threading
+import time
 
 import serial
 from serial.threaded import Protocol
@@ -32,10 +33,16 @@ log = logging.getLogger(__name__)
 #: 20-byte frame, each wake costing some 30 times the frame's parsing (issue 28). A
 #: tenth of a second is the screen's redraw period: the station looks at the samples
 #: no more often than that, so one batch a redraw delays nothing it shows. A command
-#: waiting for its reply wakes the reader at once (:meth:`PutterLink.expect_reply`); a
-#: fast stream (a sped-up simulator) is never held back.
+#: waiting for its reply wakes the reader at once (:meth:`PutterLink.expect_reply`).
 PACE_BELOW_BYTES = 2048
 PACE_S = 0.1
+#: A stream faster than this (bytes a second; the putter's own is 10 kB/s) is a sped-up
+#: simulator's, and is read as it comes, never paced: a read drains at most what the
+#: port's buffer holds (4 kB on a pty), so one read a rest would fall behind it and the
+#: putter would drop what it cannot send. Judged over :data:`RATE_WINDOW_S`; a new link
+#: starts paced.
+UNPACED_ABOVE_BYTES_PER_S = PACE_BELOW_BYTES / PACE_S
+RATE_WINDOW_S = 0.5
 
 
 class PutterLink(Protocol):
@@ -60,6 +67,9 @@ class PutterLink(Protocol):
         self._failure: DeviceError | None = None
         #: Set while a command waits for its reply: the reader does not rest then.
         self._reply_due = threading.Event()
+        self._paced = True
+        self._rate_since: float | None = None
+        self._rate_bytes = 0
 
     @property
     def failure(self) -> DeviceError | None:
@@ -120,8 +130,20 @@ class PutterLink(Protocol):
         for frame in frames:
             if frame.type not in (FrameType.SAMPLE, FrameType.CAL_SAMPLE):
                 self.replies.put(frame)
-        if len(data) < PACE_BELOW_BYTES and not self.closing:
+        if self._pace(len(data)) and not self.closing:
             self._reply_due.wait(PACE_S)
+
+    def _pace(self, size: int) -> bool:
+        """Whether to rest after a chunk of ``size`` bytes: a small one, from a stream
+        no faster than :data:`UNPACED_ABOVE_BYTES_PER_S` over the last window."""
+        now = time.monotonic()
+        if self._rate_since is None:
+            self._rate_since = now
+        self._rate_bytes += size
+        if (elapsed := now - self._rate_since) >= RATE_WINDOW_S:
+            self._paced = self._rate_bytes / elapsed <= UNPACED_ABOVE_BYTES_PER_S
+            self._rate_since, self._rate_bytes = now, 0
+        return self._paced and size < PACE_BELOW_BYTES
 
     def connection_lost(self, exc: BaseException | None) -> None:
         """The reader thread ended: by :meth:`PutterDriver.close`, or the link failed."""

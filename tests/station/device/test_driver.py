@@ -30,6 +30,9 @@ from station.simulator.putter import FIRMWARE_VERSION, SENSOR_PART
 
 SPEED = 20.0
 
+#: A hang guard, not a speed requirement: waits end on the samples, not on the clock.
+HANG_S = 60.0
+
 
 @pytest.fixture(params=["pty", "socket"])
 def transport(request: pytest.FixtureRequest) -> str:
@@ -75,7 +78,7 @@ def test_stream_delivers_contiguous_samples_that_match_the_truth(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
     driver.start_stream()
-    rows = driver.wait_samples(3000, timeout=5.0)
+    rows = driver.wait_samples(3000, timeout=HANG_S)
     np.testing.assert_array_equal(rows.seq, np.arange(3000))
     np.testing.assert_allclose(rows.accel.mean(axis=0), static_reading(unit, "face_up"), atol=0.5)
     # Still: the gyros read their bias (g-sensitivity needs a rate, paper 2).
@@ -94,7 +97,7 @@ def test_set_rate_changes_the_device_time_between_samples(
     assert driver.rate_hz == 200
     start = unit.clock.now()
     driver.start_stream()
-    block = driver.wait_samples(1000, timeout=30.0)
+    block = driver.wait_samples(1000, timeout=HANG_S)
     elapsed = unit.clock.now() - start
     # Samples 0…last were made within ``elapsed`` of the unit's time: at 200 samples/s
     # at most 200·elapsed + 1 of them (at the old 500, 2.5 times as many). Reading late
@@ -121,7 +124,7 @@ def test_calibration_written_is_read_back_and_applied_in_calibrated_mode(
     np.testing.assert_array_equal(back.offset, written.offset)
     np.testing.assert_array_equal(back.matrix, written.matrix)
     driver.start_stream(calibrated=True)
-    rows = driver.wait_samples(2000, timeout=5.0, calibrated=True)
+    rows = driver.wait_samples(2000, timeout=HANG_S, calibrated=True)
     # The unit applies its calibration: a still unit reads gravity, within noise/temperature.
     np.testing.assert_allclose(rows.accel.mean(axis=0), pose("face_up").gravity_body, atol=3e-3)
     assert len(driver.drain()) == 0
@@ -139,13 +142,13 @@ def test_gyro_coefficients_are_read_back_and_applied_to_the_calibrated_gyros(
     # The accelerometer's coefficients are another set: untouched.
     assert driver.read_calibration() == DeviceCalibration.factory_default()
     driver.start_stream(calibrated=True)
-    rows = driver.wait_samples(2000, timeout=5.0, calibrated=True)
+    rows = driver.wait_samples(2000, timeout=HANG_S, calibrated=True)
     # Still, the gyros read their true bias: the unit reports K⁻¹·(bias − written bias).
     expected = inverse_k @ (unit.truth.gyro_bias_dps - bias)
     np.testing.assert_allclose(rows.gyro.mean(axis=0), expected, atol=0.02)
     driver.stop_stream()
     driver.start_stream()
-    raw = driver.wait_samples(2000, timeout=5.0)
+    raw = driver.wait_samples(2000, timeout=HANG_S)
     np.testing.assert_allclose(raw.gyro.mean(axis=0), unit.truth.gyro_bias_dps, atol=0.02)
 
 
@@ -169,12 +172,11 @@ def test_a_unit_with_the_wrong_serial_is_refused(unit: VirtualPutter, driver: Pu
 def test_pulling_the_cable_keeps_every_sample_taken_then_says_disconnected(
     unit: VirtualPutter, driver: PutterDriver
 ) -> None:
-    # The reader rests up to PACE_S (0.1 s: 1,024 samples at 20×) between small reads, so
-    # that many may be in flight when the cable goes: stream enough for more to arrive.
-    unit.faults.disconnect_after = 3000
+    # The cable goes once the station holds 1,000 samples, whatever the reader's pace.
     driver.start_stream()
-    taken = []
-    deadline = time.monotonic() + 5.0
+    taken = [driver.wait_samples(1000, timeout=HANG_S)]
+    unit.unplug()
+    deadline = time.monotonic() + HANG_S
     failure: DeviceDisconnectedError | None = None
     while failure is None and time.monotonic() < deadline:
         try:
@@ -186,7 +188,7 @@ def test_pulling_the_cable_keeps_every_sample_taken_then_says_disconnected(
     assert "disconnected" in str(failure)
     rows = SampleBlock.concat(taken)
     # Bytes in flight when the cable goes are lost; every sample received is handed out.
-    assert len(rows) == driver.stats.samples > 1000
+    assert len(rows) == driver.stats.samples >= 1000
     np.testing.assert_array_equal(rows.seq, np.arange(len(rows)))
     assert not driver.connected
     with pytest.raises(DeviceDisconnectedError):

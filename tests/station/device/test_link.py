@@ -1,4 +1,5 @@
-"""The reader's pacing: it rests between small chunks, never while a reply is due."""
+"""The reader's pacing: it rests between small chunks, never while a reply is due nor on
+a stream faster than the putter's own (a sped-up simulator)."""
 
 import threading
 import time
@@ -53,5 +54,21 @@ def test_a_reply_due_or_a_big_chunk_never_rests_the_reader() -> None:
         for i in range(link_module.PACE_BELOW_BYTES // 20 + 1)
     )
     reader = feed_in_thread(link, big)
+    reader.join(JOIN_S)
+    assert not reader.is_alive()
+
+
+@pytest.mark.usefixtures("resting_forever")
+def test_a_stream_faster_than_the_putters_own_is_read_unpaced() -> None:
+    link = PutterLink("pty", 1 << 16)
+    chunk = b"".join(encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(50))
+    assert len(chunk) < link_module.PACE_BELOW_BYTES  # small: a paced reader rests after it
+    link.expect_reply(True)  # keeps the reader from resting while the rate is measured
+    start = time.monotonic()
+    # 1 kB a call: far above 20 kB/s however busy the machine, unless a call took 50 ms.
+    while time.monotonic() - start <= link_module.RATE_WINDOW_S:
+        link.data_received(chunk)
+    link.expect_reply(False)
+    reader = feed_in_thread(link, chunk)
     reader.join(JOIN_S)
     assert not reader.is_alive()

@@ -19,7 +19,7 @@ from station.domain.poses import POSES
 from station.domain.products import Product
 from station.domain.records import RunRecord
 from station.domain.run_settings import RunSettings
-from station.domain.sensor import ADC_MAX
+from station.domain.sensor import ADC_MAX, OFFSET_TEMPCO_COUNTS_PER_C
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
@@ -142,9 +142,13 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     assert u.offset is not None
     assert u.sensitivity is not None
     assert u.gyro_bias_dps is not None
-    # 1024 samples of ~1 count noise: the offsets to a few hundredths of a count; the
-    # sensitivities carry the six-parameter model's unmodelled cross-axis (~0.1-0.5).
-    assert all(0.0 < v < 0.2 for v in u.offset.as_tuple())
+    # 1024 samples of ~1 count noise: the offsets to a few hundredths of a count, plus
+    # the drift the datasheet allows over the poses' temperatures (the virtual putter
+    # warms while it waits, longer on a busy machine); the sensitivities carry the
+    # six-parameter model's unmodelled cross-axis (~0.1-0.5).
+    temperatures = [p.temperature_c for p in record.poses if p.temperature_c is not None]
+    drift = OFFSET_TEMPCO_COUNTS_PER_C * (max(temperatures) - min(temperatures))
+    assert all(0.0 < v < 0.2 + 2 * drift for v in u.offset.as_tuple())
     assert all(0.0 < v < 1.5 for v in u.sensitivity.as_tuple())
     assert all(0.0 < v < 0.05 for v in u.gyro_bias_dps)
 
