@@ -7,7 +7,7 @@ page links to the unit's page through one macro, ``serial_link`` in ``base.html`
 """
 
 from collections.abc import Callable, Sequence
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any, get_args
 from urllib.parse import urlencode
 
@@ -17,6 +17,7 @@ from markupsafe import Markup
 from station import __version__
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import CAPABLE_CPK
+from station.domain.quality.days import midnight
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.split import SplitBy, SplitReport
@@ -181,6 +182,56 @@ def failing_runs_page(
     )
 
 
+#: A unit's page (``serial_link`` in ``base.html``).
+UNIT_PATH = "/units/"
+ONE_DAY = timedelta(days=1)
+
+
+def _chart_runs(runs: Sequence[str], span: tuple[float, float], href: str) -> Markup:
+    """The attributes that make a block of charts open the runs behind a point: ``runs``,
+    one token per point in order (``/``-separated parts), the x of the first and last
+    point in the charts' own units, and ``href`` with ``{0}``, ``{1}`` for a token's parts.
+
+    One list for the block, not a link per point: a report's control charts plot the same
+    runs, and a link on each of their points would outweigh the page's 300 kB budget
+    (docs/benchmarks.md "report"); the script of ``base.html`` turns a click into the
+    address of the nearest point."""
+    return Markup(" ").join(
+        Markup('data-{}="{}"').format(name, value)
+        for name, value in (
+            ("runs", " ".join(runs)),
+            ("x", f"{span[0]:.1f} {span[1]:.1f}"),
+            ("href", href),
+        )
+    )
+
+
+def control_chart_runs(report: EolReport) -> Markup:
+    """A control chart's point opens its run's unit page (every chart plots the same runs)."""
+    points = report.control_charts[0].points if report.control_charts else []
+    span = (svg.control_x(0, len(points)), svg.control_x(len(points) - 1, len(points)))
+    return _chart_runs([p.serial for p in points], span, UNIT_PATH + "{0}")
+
+
+def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) -> Markup:
+    """A trend chart's period (a day or a shift, ``periods`` their start and end) opens the
+    report of that period, every unit listed: the units its points count (their first run
+    on the line in the period and the report's range, station, operator and lot)."""
+    f, zone = report.filter, report.timezone
+    tokens = [
+        formatting.field(max(start, f.since) if f.since else start, zone)
+        + "/"
+        + formatting.field(min(end, f.until) if f.until else end, zone)
+        for start, end in periods
+    ]
+    query = {
+        name: value for name, value in filter_query(f, zone).items() if name not in ("from", "to")
+    }
+    href = "?" + urlencode({"format": "html", "list": "all", **query}) + "&from={0}&to={1}"
+    span = (svg.trend_x(0, len(periods)), svg.trend_x(len(periods) - 1, len(periods)))
+    return _chart_runs(tokens, span, href)
+
+
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
@@ -192,6 +243,15 @@ def report_page(report: EolReport) -> str:
         shift_charts=(
             [Markup(chart) for chart in shift_charts(report)] if report.shift_trend else []
         ),
+        control_runs=control_chart_runs(report),
+        day_runs=trend_runs(
+            report,
+            [
+                (midnight(d.day, report.timezone), midnight(d.day + ONE_DAY, report.timezone))
+                for d in report.trend
+            ],
+        ),
+        shift_runs=trend_runs(report, [(s.start, s.end) for s in report.shift_trend]),
     )
 
 
@@ -207,6 +267,7 @@ def dashboard_page(
         held_total=held_total,
         events=events,
         runs_link=runs_link(report.filter, report.timezone),
+        control_runs=control_chart_runs(report),
     )
 
 
