@@ -149,6 +149,8 @@ def shift_charts(report: EolReport) -> list[str]:
     return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
 
 
+#: The report (``GET``), and where a what-if is answered again by its profile's SHA-256.
+REPORT_PATH = "/api/v1/reports/eol"
 #: Where a Pareto bar's runs are listed (:func:`failing_runs_page`).
 FAILING_RUNS_PATH = "/api/v1/reports/eol/failures"
 
@@ -232,9 +234,23 @@ def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) 
     return _chart_runs(tokens, span, href)
 
 
+def what_if_link(report: EolReport) -> str | None:
+    """The address that answers the report's what-if again: its filter and its candidate
+    profile by SHA-256 (stored by the what-if)."""
+    if report.what_if is None:
+        return None
+    query = {
+        "format": "html",
+        "what_if": report.what_if.limits.sha256,
+        **filter_query(report.filter, report.timezone),
+    }
+    return f"{REPORT_PATH}?{urlencode(query)}"
+
+
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
+        what_if_link=what_if_link(report),
         report=report,
         runs_link=runs_link(report.filter, report.timezone),
         export_query=urlencode(filter_query(report.filter, report.timezone)),
