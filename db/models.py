@@ -65,6 +65,8 @@ class Run(Base):
     lot: Mapped[str | None] = mapped_column(String(NAME))
     #: The unit's product (runs from before products: DIXX-A12, migration 0014).
     part_number: Mapped[str] = mapped_column(String(NAME))
+    #: The fixture's slot (1 on a one-port station); None on runs stored before 0015.
+    fixture_slot: Mapped[int | None] = mapped_column(Integer())
     started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     finished_at: Mapped[datetime] = mapped_column(UtcDateTime())
     received_at: Mapped[datetime] = mapped_column(UtcDateTime())

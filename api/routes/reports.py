@@ -378,9 +378,9 @@ async def get_split(
     by: Annotated[SplitBy, Query(description="the run's column the runs are split by")],
     format: Literal["json", "html"] = "html",
 ) -> Response:
-    """A parameter's distribution and capability split by station, lot, operator, product
-    or software version: n, mean, sd, quartiles, Tukey whiskers and outliers, Cpk and
-    observed ppm per group (the latest runs of the period, bounded)."""
+    """A parameter's distribution and capability split by station, lot, operator, fixture
+    slot, product or software version: n, mean, sd, quartiles, Tukey whiskers and outliers,
+    Cpk and observed ppm per group (the latest runs of the period, bounded)."""
     body = await repository.run(split_body, period.filter(zone), parameter, by, format, zone)
     return Response(body, media_type=MEDIA_TYPES[format])
 
