@@ -16,6 +16,7 @@ from markupsafe import Markup
 
 from station import __version__
 from station.domain.limits import LimitsProfile
+from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.days import midnight
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
@@ -305,6 +306,27 @@ def unit_page(
         generated_at=generated_at,
         zone=zone,
         document_title=DOCUMENT_TITLES[unit.verdict],
+    )
+
+
+def alert_runs_link(alert: Alert, zone: str) -> str:
+    """The report of the units behind an alert: every unit from the first of its window
+    on (at its station), listed."""
+    since = alert.evidence.get("since")
+    query = {"format": "html", "list": "all"}
+    if isinstance(since, str):
+        query["from"] = formatting.field(datetime.fromisoformat(since), zone)
+    station = alert.evidence.get("station")
+    if isinstance(station, str):
+        query["station"] = station
+    return f"{REPORT_PATH}?{urlencode(query)}"
+
+
+def alerts_page(alerts: Sequence[Alert], zone: str, rounds: int | None) -> str:
+    """The latest ``alerts``, times in the plant's ``zone``; ``rounds``: the alert loop's
+    rounds in this server process (None: no rules configured)."""
+    return _env.get_template("alerts.html").render(
+        alerts=alerts, zone=zone, rounds=rounds, runs_link=lambda a: alert_runs_link(a, zone)
     )
 
 

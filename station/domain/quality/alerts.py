@@ -1,0 +1,80 @@
+"""Alerts a plant sets in its configuration, and the alerts that fired.
+
+A rule watches the line; while its condition holds it has one open alert, which fired
+once (its ``event_key``) and is posted to the plant's webhook once; when the condition
+no longer holds the alert clears, and the next time it holds is a new event. Rules:
+
+- ``yield``: the first-pass yield of the last ``units`` units (their first run on the
+  line, at ``station`` or anywhere) below ``goal``, once ``units`` units are there.
+
+The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
+
+    webhook = "https://chat.example/hooks/line2"
+
+    [[yield]]
+    station = "line2-st1"   # optional: the whole line without it
+    units = 20
+    goal = 0.9
+"""
+
+import tomllib
+from datetime import datetime
+from typing import Annotated, Literal
+
+from pydantic import AnyHttpUrl, BaseModel, ConfigDict, Field, JsonValue, ValidationError
+
+from station.domain.constants import Identifier
+from station.domain.errors import InputError, validation_problem
+
+
+class _Rules(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class YieldRule(_Rules):
+    """First-pass yield of the last ``units`` units below ``goal``."""
+
+    station: Identifier | None = None
+    units: Annotated[int, Field(ge=1, le=10_000)]
+    goal: Annotated[float, Field(gt=0, le=1)]
+
+    @property
+    def scope(self) -> str:
+        """What the rule watches: its station, or the line."""
+        return self.station or "line"
+
+
+class AlertRules(_Rules):
+    """The plant's alert rules and where their alerts go."""
+
+    webhook: AnyHttpUrl
+    yield_rules: list[YieldRule] = Field(default_factory=list, alias="yield")
+
+
+def parse_alert_rules(text: str, shown: str) -> AlertRules:
+    """The rules of a TOML file (``shown``: its name in a problem), or an
+    :class:`InputError` naming what is wrong."""
+    try:
+        return AlertRules.model_validate(tomllib.loads(text))
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{shown}: not TOML: {exc}") from None
+    except ValidationError as exc:
+        raise InputError(f"{shown}: {validation_problem(exc)}") from None
+
+
+class Alert(BaseModel):
+    """An alert that fired: its rule and scope, when, the evidence and the runs behind it."""
+
+    model_config = ConfigDict(frozen=True)
+
+    event_key: str = Field(description="the event, unique: posted to the webhook once")
+    rule: Literal["yield"]
+    scope: str = Field(description="the station the rule watches, or `line`")
+    message: str
+    fired_at: datetime
+    cleared_at: datetime | None = Field(description="when the condition stopped holding")
+    delivered_at: datetime | None = Field(description="when the webhook took it")
+    attempts: int = Field(description="posts to the webhook so far")
+    evidence: dict[str, JsonValue] = Field(
+        description="what fired it: the figures and the first runs of the units behind them"
+    )
