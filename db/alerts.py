@@ -10,6 +10,7 @@ post, each held for the retry interval (an ``UPDATE`` that only one process wins
 once the hold ends, the alert's row unchanged but for its attempts.
 """
 
+from dataclasses import dataclass, replace
 from datetime import datetime, timedelta
 from typing import Any
 
@@ -19,7 +20,7 @@ from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
 from db.models import Run, RunFacts, StoredAlert
-from station.domain.quality.alerts import Alert, AlertRules, YieldRule
+from station.domain.quality.alerts import Alert, AlertRules, RuleKind, SilentRule, YieldRule
 
 _INSERT = {
     name: dialect.insert(StoredAlert).on_conflict_do_nothing()
@@ -27,14 +28,24 @@ _INSERT = {
 }
 
 
-def _watch(rule: YieldRule) -> str:
-    """The rule's identity: its kind, scope and thresholds (another goal: another rule)."""
-    return f"yield:{rule.scope}:{rule.units}:{rule.goal}"
+@dataclass(frozen=True)
+class _Check:
+    """A rule checked now: its kind, scope and identity (``watch``: its kind, scope and
+    thresholds; another goal is another rule), and its evidence and message if it holds."""
+
+    rule: RuleKind
+    scope: str
+    watch: str
+    evidence: dict[str, Any] | None = None
+    message: str = ""
+    #: What names the event among the rule's: the run that tipped it.
+    tipped_by: str = ""
 
 
-def _yield_event(session: Session, rule: YieldRule) -> dict[str, Any] | None:
-    """The evidence of ``rule`` holding now, or None: the first runs of the last
-    ``units`` units (production runs, not golden-unit checks), their first-pass yield."""
+def _yield_check(session: Session, rule: YieldRule) -> _Check:
+    """The first runs of the last ``units`` units (production runs, not golden-unit
+    checks) and their first-pass yield, below the goal or not."""
+    check = _Check("yield", rule.scope, f"yield:{rule.scope}:{rule.units}:{rule.goal}")
     stmt = (
         select(Run.run_id, Run.serial, Run.started_at, Run.verdict)
         .join(RunFacts, RunFacts.run_pk == Run.id)
@@ -47,49 +58,74 @@ def _yield_event(session: Session, rule: YieldRule) -> dict[str, Any] | None:
     rows = session.execute(stmt).all()
     passed = sum(row.verdict == "pass" for row in rows)
     if len(rows) < rule.units or passed / rule.units >= rule.goal:
-        return None
-    return {
+        return check
+    evidence = {
         "units": rule.units,
         "passed": passed,
         "first_pass_yield": passed / rule.units,
         "goal": rule.goal,
         "station": rule.station,
         "since": min(row.started_at for row in rows).isoformat(),
-        "latest_run": str(rows[0].run_id),
         "failed": [row.serial for row in rows if row.verdict != "pass"],
     }
+    message = (
+        f"first-pass yield {passed / rule.units:.1%} of the last {rule.units} units at "
+        f"{rule.scope}, below the goal {rule.goal:.1%}"
+    )
+    return replace(check, evidence=evidence, message=message, tipped_by=str(rows[0].run_id))
+
+
+def _silent_check(session: Session, rule: SilentRule, now: datetime) -> _Check:
+    """The station's last run, if it started longer than ``minutes`` ago."""
+    check = _Check("silent", rule.scope, f"silent:{rule.scope}:{rule.minutes}")
+    last = session.execute(
+        select(Run.run_id, Run.serial, Run.started_at)
+        .where(Run.station_id == rule.station)
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(1)
+    ).first()
+    if last is None or now - last.started_at < timedelta(minutes=rule.minutes):
+        return check
+    silent = (now - last.started_at).total_seconds() / 60
+    evidence = {
+        "station": rule.station,
+        "minutes": rule.minutes,
+        "since": last.started_at.isoformat(),
+        "last_serial": last.serial,
+        "silent_minutes": round(silent, 1),
+    }
+    message = f"no run from {rule.station} for {silent:.0f} min (rule: {rule.minutes:g} min)"
+    return replace(check, evidence=evidence, message=message, tipped_by=str(last.run_id))
 
 
 def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
     """Fire the alerts whose rule holds and has none open; clear those that no longer
     hold."""
-    for rule in rules.yield_rules:
-        watch = _watch(rule)
-        evidence = _yield_event(session, rule)
+    checks = [
+        *(_yield_check(session, rule) for rule in rules.yield_rules),
+        *(_silent_check(session, rule, now) for rule in rules.silent_rules),
+    ]
+    for check in checks:
         open_alert = session.scalars(
             select(StoredAlert.id).where(
-                StoredAlert.watch == watch, StoredAlert.cleared_at.is_(None)
+                StoredAlert.watch == check.watch, StoredAlert.cleared_at.is_(None)
             )
         ).first()
-        if evidence is None and open_alert is not None:
+        if check.evidence is None and open_alert is not None:
             session.execute(
                 update(StoredAlert).where(StoredAlert.id == open_alert).values(cleared_at=now)
             )
-        elif evidence is not None and open_alert is None:
-            message = (
-                f"first-pass yield {evidence['first_pass_yield']:.1%} of the last "
-                f"{rule.units} units at {rule.scope}, below the goal {rule.goal:.1%}"
-            )
+        elif check.evidence is not None and open_alert is None:
             session.execute(
                 for_dialect(session, _INSERT),
                 {
                     # The run that tipped it: every process that sees the event names it so.
-                    "event_key": f"{watch}:{evidence['latest_run']}",
-                    "watch": watch,
-                    "rule": "yield",
-                    "scope": rule.scope,
-                    "message": message,
-                    "evidence": evidence,
+                    "event_key": f"{check.watch}:{check.tipped_by}",
+                    "watch": check.watch,
+                    "rule": check.rule,
+                    "scope": check.scope,
+                    "message": check.message,
+                    "evidence": check.evidence,
                     "fired_at": now,
                     "attempts": 0,
                     "next_attempt_at": now,
@@ -98,17 +134,7 @@ def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
 
 
 def _alert(row: StoredAlert) -> Alert:
-    return Alert(
-        event_key=row.event_key,
-        rule="yield",
-        scope=row.scope,
-        message=row.message,
-        fired_at=row.fired_at,
-        cleared_at=row.cleared_at,
-        delivered_at=row.delivered_at,
-        attempts=row.attempts,
-        evidence=row.evidence,
-    )
+    return Alert.model_validate({name: getattr(row, name) for name in Alert.model_fields})
 
 
 def claim_due(session: Session, now: datetime, hold: timedelta) -> list[Alert]:

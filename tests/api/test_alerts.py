@@ -8,7 +8,7 @@ import json
 import os
 import threading
 from collections.abc import Iterator
-from datetime import timedelta
+from datetime import UTC, datetime, timedelta
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
@@ -180,6 +180,36 @@ def test_an_alert_the_webhook_refused_is_posted_again_once_it_is_back(
     assert len(receiver.received) == 1
     assert receiver.received[0]["event_key"] == delivered["event_key"]
     assert delivered["delivered_at"] is not None
+
+
+def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
+    database: Database, database_url: str, receiver: Receiver, tmp_path: Path
+) -> None:
+    rules = tmp_path / "alerts.toml"
+    rules.write_text(f'webhook = "{receiver.url}"\n[[silent]]\nstation = "st2"\nminutes = 60\n')
+    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+    with serving(database_url, **settings) as base:
+        with database.session() as session, session.begin():
+            # Its last run weeks ago (the history's T0); st1 ran since, st2 did not.
+            repository = RunRepository(session)
+            repository.submit(make_record(serial="PT000001", station_id="st2"))
+            repository.submit(
+                make_record(serial="PT000002", station_id="st1", started_at=datetime.now(UTC))
+            )
+        receiver.wait("alert", lambda: receiver.received)
+        (posted,) = receiver.received
+        assert (posted["rule"], posted["scope"]) == ("silent", "st2")
+        assert posted["evidence"]["last_serial"] == "PT000001"
+        assert posted["evidence"]["silent_minutes"] > 60
+        with database.session() as session, session.begin():
+            RunRepository(session).submit(
+                make_record(serial="PT000003", station_id="st2", started_at=datetime.now(UTC))
+            )
+        shown = _rounds_later(base)
+        assert shown["alerts"][0]["cleared_at"] is not None
+        page = httpx.get(f"{base}/alerts").text
+        assert 'last run: <a class="serial" href="/units/PT000001">' in page
+    assert len(receiver.received) == 1
 
 
 @pytest.mark.parametrize(

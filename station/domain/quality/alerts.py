@@ -6,6 +6,8 @@ no longer holds the alert clears, and the next time it holds is a new event. Rul
 
 - ``yield``: the first-pass yield of the last ``units`` units (their first run on the
   line, at ``station`` or anywhere) below ``goal``, once ``units`` units are there.
+- ``silent``: no run from ``station`` for ``minutes`` (60 by default) since its last
+  run (a station that never stored a run is not watched).
 
 The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
 
@@ -15,6 +17,10 @@ The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
     station = "line2-st1"   # optional: the whole line without it
     units = 20
     goal = 0.9
+
+    [[silent]]
+    station = "line2-st1"
+    minutes = 60
 """
 
 import tomllib
@@ -25,6 +31,9 @@ from pydantic import AnyHttpUrl, BaseModel, ConfigDict, Field, JsonValue, Valida
 
 from station.domain.constants import Identifier
 from station.domain.errors import InputError, validation_problem
+
+#: The kinds of rule.
+RuleKind = Literal["yield", "silent"]
 
 
 class _Rules(BaseModel):
@@ -44,11 +53,24 @@ class YieldRule(_Rules):
         return self.station or "line"
 
 
+class SilentRule(_Rules):
+    """No run from ``station`` for ``minutes`` since its last one."""
+
+    station: Identifier
+    minutes: Annotated[float, Field(gt=0, le=7 * 24 * 60)] = 60.0
+
+    @property
+    def scope(self) -> str:
+        """What the rule watches: its station."""
+        return self.station
+
+
 class AlertRules(_Rules):
     """The plant's alert rules and where their alerts go."""
 
     webhook: AnyHttpUrl
     yield_rules: list[YieldRule] = Field(default_factory=list, alias="yield")
+    silent_rules: list[SilentRule] = Field(default_factory=list, alias="silent")
 
 
 def parse_alert_rules(text: str, shown: str) -> AlertRules:
@@ -68,7 +90,7 @@ class Alert(BaseModel):
     model_config = ConfigDict(frozen=True)
 
     event_key: str = Field(description="the event, unique: posted to the webhook once")
-    rule: Literal["yield"]
+    rule: RuleKind
     scope: str = Field(description="the station the rule watches, or `line`")
     message: str
     fired_at: datetime
