@@ -12,6 +12,7 @@ once the hold ends, the alert's row unchanged but for its attempts.
 
 from dataclasses import dataclass, replace
 from datetime import datetime, timedelta
+from itertools import pairwise
 from typing import Any
 
 from sqlalchemy import select, update
@@ -20,7 +21,16 @@ from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
 from db.models import Run, RunFacts, StoredAlert
-from station.domain.quality.alerts import Alert, AlertRules, RuleKind, SilentRule, YieldRule
+from station.domain.quality.alerts import (
+    Alert,
+    AlertRules,
+    RuleKind,
+    SilentRule,
+    WesternElectricRule,
+    YieldRule,
+)
+from station.domain.quality.capability import D2
+from station.domain.quality.control import western_electric
 
 _INSERT = {
     name: dialect.insert(StoredAlert).on_conflict_do_nothing()
@@ -98,12 +108,60 @@ def _silent_check(session: Session, rule: SilentRule, now: datetime) -> _Check:
     return replace(check, evidence=evidence, message=message, tipped_by=str(last.run_id))
 
 
+def _western_electric_check(session: Session, rule: WesternElectricRule) -> _Check:
+    """The last ``runs`` production runs' ``parameter`` as an individuals chart (centre
+    x̄, σ = MR̄/d₂ of those runs, Montgomery's I-MR chart): whether the latest completes a
+    Western Electric rule."""
+    check = _Check(
+        "western_electric",
+        rule.scope,
+        f"western_electric:{rule.scope}:{rule.parameter}:{rule.runs}",
+    )
+    column = getattr(Run, rule.parameter)
+    stmt = (
+        select(Run.run_id, Run.serial, Run.started_at, column.label("value"))
+        .where(column.is_not(None), Run.purpose.is_(None))
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(rule.runs)
+    )
+    if rule.station is not None:
+        stmt = stmt.where(Run.station_id == rule.station)
+    rows = list(reversed(session.execute(stmt).all()))
+    if len(rows) < 2:
+        return check
+    values = [float(row.value) for row in rows]
+    centre = sum(values) / len(values)
+    mr_bar = sum(abs(b - a) for a, b in pairwise(values)) / (len(values) - 1)
+    sigma = mr_bar / D2
+    rules = western_electric(values, centre, sigma)[-1]
+    if not rules:
+        return check
+    latest = rows[-1]
+    evidence = {
+        "parameter": rule.parameter,
+        "station": rule.station,
+        "runs": len(rows),
+        "rules": rules,
+        "value": values[-1],
+        "centre": centre,
+        "sigma": sigma,
+        "serial": latest.serial,
+        "since": rows[0].started_at.isoformat(),
+    }
+    message = (
+        f"{rule.parameter} of {latest.serial} at {rule.scope} completes Western Electric "
+        f"rule {', '.join(map(str, rules))} (x̄ {centre:.4g}, σ {sigma:.3g}, last {len(rows)} runs)"
+    )
+    return replace(check, evidence=evidence, message=message, tipped_by=str(latest.run_id))
+
+
 def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
     """Fire the alerts whose rule holds and has none open; clear those that no longer
     hold."""
     checks = [
         *(_yield_check(session, rule) for rule in rules.yield_rules),
         *(_silent_check(session, rule, now) for rule in rules.silent_rules),
+        *(_western_electric_check(session, rule) for rule in rules.western_electric_rules),
     ]
     for check in checks:
         open_alert = session.scalars(

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import numpy as np
 import pytest
 
 from db import Database, RunRepository
@@ -210,6 +211,49 @@ def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
         page = httpx.get(f"{base}/alerts").text
         assert 'last run: <a class="serial" href="/units/PT000001">' in page
     assert len(receiver.received) == 1
+
+
+def test_a_western_electric_signal_on_the_latest_run_fires_once(
+    database: Database, database_url: str, receiver: Receiver, tmp_path: Path
+) -> None:
+    rules = tmp_path / "alerts.toml"
+    rules.write_text(
+        f'webhook = "{receiver.url}"\n[[western_electric]]\nparameter = "offset_x"\n'
+        'station = "st1"\nruns = 20\n'
+    )
+    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+
+    def store(values: list[float], start: int) -> None:
+        with database.session() as session, session.begin():
+            repository = RunRepository(session)
+            for i, value in enumerate(values):
+                repository.submit(
+                    make_record(
+                        serial=f"PT{start + i:06d}",
+                        station_id="st1",
+                        started_at=T0 + timedelta(minutes=start + i),
+                        offset=(value, 2041.2, 1960.5),
+                    )
+                )
+
+    in_control = [2079.0, 2083.0] * 6  # alternating about the centre, within 1σ
+    with serving(database_url, **settings) as base:
+        store(in_control, 0)
+        assert _rounds_later(base)["alerts"] == []
+        store([2100.0], 20)
+        receiver.wait("alert", lambda: receiver.received)
+        store([2081.0], 30)  # back in control: the alert clears
+        shown = _rounds_later(base)
+    # By hand: the chart of the 13 runs up to the spike, x̄ and σ = MR̄/d₂ (d₂ = 1.128).
+    values = np.array([*in_control, 2100.0])
+    sigma = np.abs(np.diff(values)).mean() / 1.128
+    assert values[-1] - values.mean() > 3 * sigma  # rule 1
+    (posted,) = receiver.received
+    assert (posted["rule"], posted["scope"]) == ("western_electric", "st1")
+    assert posted["evidence"]["serial"] == "PT000020"
+    assert 1 in posted["evidence"]["rules"]
+    assert np.isclose(posted["evidence"]["sigma"], sigma)
+    assert shown["alerts"][0]["cleared_at"] is not None
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,10 @@ no longer holds the alert clears, and the next time it holds is a new event. Rul
   line, at ``station`` or anywhere) below ``goal``, once ``units`` units are there.
 - ``silent``: no run from ``station`` for ``minutes`` (60 by default) since its last
   run (a station that never stored a run is not watched).
+- ``western_electric``: the latest run's ``parameter`` (a coefficient) completes a
+  Western Electric rule (:mod:`station.domain.quality.control`) on the individuals
+  chart of the last ``runs`` runs (at ``station`` or anywhere), its centre and σ = MR̄/d₂
+  from those runs.
 
 The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
 
@@ -21,6 +25,10 @@ The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
     [[silent]]
     station = "line2-st1"
     minutes = 60
+
+    [[western_electric]]
+    parameter = "offset_x"
+    runs = 50
 """
 
 import tomllib
@@ -31,9 +39,10 @@ from pydantic import AnyHttpUrl, BaseModel, ConfigDict, Field, JsonValue, Valida
 
 from station.domain.constants import Identifier
 from station.domain.errors import InputError, validation_problem
+from station.domain.quality.parameters import COEFFICIENTS
 
 #: The kinds of rule.
-RuleKind = Literal["yield", "silent"]
+RuleKind = Literal["yield", "silent", "western_electric"]
 
 
 class _Rules(BaseModel):
@@ -65,12 +74,29 @@ class SilentRule(_Rules):
         return self.station
 
 
+class WesternElectricRule(_Rules):
+    """The latest run's ``parameter`` completes a Western Electric rule on the chart of
+    the last ``runs`` runs."""
+
+    parameter: Literal[COEFFICIENTS]  # type: ignore[valid-type]
+    station: Identifier | None = None
+    runs: Annotated[int, Field(ge=10, le=1000)] = 50
+
+    @property
+    def scope(self) -> str:
+        """What the rule watches: its station, or the line."""
+        return self.station or "line"
+
+
 class AlertRules(_Rules):
     """The plant's alert rules and where their alerts go."""
 
     webhook: AnyHttpUrl
     yield_rules: list[YieldRule] = Field(default_factory=list, alias="yield")
     silent_rules: list[SilentRule] = Field(default_factory=list, alias="silent")
+    western_electric_rules: list[WesternElectricRule] = Field(
+        default_factory=list, alias="western_electric"
+    )
 
 
 def parse_alert_rules(text: str, shown: str) -> AlertRules:
