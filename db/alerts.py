@@ -13,24 +13,29 @@ once the hold ends, the alert's row unchanged but for its attempts.
 from dataclasses import dataclass, replace
 from datetime import datetime, timedelta
 from itertools import pairwise
+from statistics import fmean, stdev
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import Row, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
+from db.limits_profiles import stored_profiles
 from db.models import Run, RunFacts, StoredAlert
 from station.domain.quality.alerts import (
     Alert,
     AlertRules,
+    CpkRule,
+    ParameterWindow,
     RuleKind,
     SilentRule,
     WesternElectricRule,
     YieldRule,
 )
-from station.domain.quality.capability import D2
+from station.domain.quality.capability import D2, cpk
 from station.domain.quality.control import western_electric
+from station.domain.quality.parameters import PARAMETERS, profile_bounds
 
 _INSERT = {
     name: dialect.insert(StoredAlert).on_conflict_do_nothing()
@@ -108,6 +113,61 @@ def _silent_check(session: Session, rule: SilentRule, now: datetime) -> _Check:
     return replace(check, evidence=evidence, message=message, tipped_by=str(last.run_id))
 
 
+def _latest_values(session: Session, rule: ParameterWindow) -> list[Row[Any]]:
+    """The last ``runs`` production runs with the rule's coefficient (at its station),
+    oldest first: run id, serial, start, limits profile and ``value``."""
+    column = getattr(Run, rule.parameter)
+    stmt = (
+        select(Run.run_id, Run.serial, Run.started_at, Run.limits_sha256, column.label("value"))
+        .where(column.is_not(None), Run.purpose.is_(None))
+        .order_by(Run.started_at.desc(), Run.id.desc())
+        .limit(rule.runs)
+    )
+    if rule.station is not None:
+        stmt = stmt.where(Run.station_id == rule.station)
+    return list(reversed(session.execute(stmt).all()))
+
+
+def _cpk_check(session: Session, rule: CpkRule) -> _Check:
+    """The Cpk of the last ``runs`` runs' ``parameter`` against the limits profile of the
+    latest of them (mean and sample sd of those values), below the target or not."""
+    check = _Check(
+        "cpk", rule.scope, f"cpk:{rule.scope}:{rule.parameter}:{rule.runs}:{rule.target}"
+    )
+    rows = _latest_values(session, rule)
+    if len(rows) < rule.runs:
+        return check
+    latest = rows[-1]
+    profile = stored_profiles(session, [latest.limits_sha256]).get(latest.limits_sha256)
+    if profile is None:  # a run from before stored profiles: no limits to judge by
+        return check
+    family = next(spec.family for spec in PARAMETERS if spec.name == rule.parameter)
+    lower, upper = profile_bounds(profile)[family]
+    values = [float(row.value) for row in rows]
+    mean, sd = fmean(values), stdev(values)
+    value = cpk(mean, sd, lower, upper)
+    if value is None or value >= rule.target:
+        return check
+    evidence = {
+        "parameter": rule.parameter,
+        "station": rule.station,
+        "runs": len(rows),
+        "cpk": value,
+        "target": rule.target,
+        "mean": mean,
+        "sd": sd,
+        "lower": lower,
+        "upper": upper,
+        "limits": f"{profile.name} v{profile.version}",
+        "since": rows[0].started_at.isoformat(),
+    }
+    message = (
+        f"Cpk of {rule.parameter} {value:.2f} over the last {len(rows)} runs at {rule.scope}, "
+        f"below the target {rule.target:g}"
+    )
+    return replace(check, evidence=evidence, message=message, tipped_by=str(latest.run_id))
+
+
 def _western_electric_check(session: Session, rule: WesternElectricRule) -> _Check:
     """The last ``runs`` production runs' ``parameter`` as an individuals chart (centre
     x̄, σ = MR̄/d₂ of those runs, Montgomery's I-MR chart): whether the latest completes a
@@ -117,16 +177,7 @@ def _western_electric_check(session: Session, rule: WesternElectricRule) -> _Che
         rule.scope,
         f"western_electric:{rule.scope}:{rule.parameter}:{rule.runs}",
     )
-    column = getattr(Run, rule.parameter)
-    stmt = (
-        select(Run.run_id, Run.serial, Run.started_at, column.label("value"))
-        .where(column.is_not(None), Run.purpose.is_(None))
-        .order_by(Run.started_at.desc(), Run.id.desc())
-        .limit(rule.runs)
-    )
-    if rule.station is not None:
-        stmt = stmt.where(Run.station_id == rule.station)
-    rows = list(reversed(session.execute(stmt).all()))
+    rows = _latest_values(session, rule)
     if len(rows) < 2:
         return check
     values = [float(row.value) for row in rows]
@@ -162,6 +213,7 @@ def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
         *(_yield_check(session, rule) for rule in rules.yield_rules),
         *(_silent_check(session, rule, now) for rule in rules.silent_rules),
         *(_western_electric_check(session, rule) for rule in rules.western_electric_rules),
+        *(_cpk_check(session, rule) for rule in rules.cpk_rules),
     ]
     for check in checks:
         open_alert = session.scalars(

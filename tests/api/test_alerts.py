@@ -256,6 +256,49 @@ def test_a_western_electric_signal_on_the_latest_run_fires_once(
     assert shown["alerts"][0]["cleared_at"] is not None
 
 
+def test_a_cpk_below_its_target_fires_once_and_clears_when_capable_again(
+    database: Database, database_url: str, receiver: Receiver, tmp_path: Path
+) -> None:
+    rules = tmp_path / "alerts.toml"
+    rules.write_text(
+        f'webhook = "{receiver.url}"\n[[cpk]]\nparameter = "offset_x"\nruns = 10\ntarget = 1.33\n'
+    )
+    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+
+    def store(values: list[float], start: int) -> None:
+        with database.session() as session, session.begin():
+            repository = RunRepository(session)
+            for i, value in enumerate(values):
+                repository.submit(
+                    make_record(
+                        serial=f"PT{start + i:06d}",
+                        started_at=T0 + timedelta(minutes=start + i),
+                        offset=(value, 2041.2, 1960.5),
+                    )
+                )
+
+    capable = [2046.0, 2050.0] * 5
+    spread = [1900.0, 2200.0] * 5
+    with serving(database_url, **settings) as base:
+        store(capable, 0)
+        assert _rounds_later(base)["alerts"] == []
+        store(spread, 10)
+        receiver.wait("alert", lambda: receiver.received)
+        store(capable, 20)  # the last 10 capable again: the alert clears
+        shown = _rounds_later(base)
+    # By hand, against the shipped production limits of offsets, 1841 … 2255 counts.
+    values = np.array(spread)
+    mean, sd = values.mean(), values.std(ddof=1)
+    expected = min(2255.0 - mean, mean - 1841.0) / (3 * sd)
+    assert expected < 1.33
+    (posted,) = receiver.received
+    assert (posted["rule"], posted["scope"]) == ("cpk", "line")
+    assert np.isclose(posted["evidence"]["cpk"], expected)
+    assert (posted["evidence"]["lower"], posted["evidence"]["upper"]) == (1841.0, 2255.0)
+    assert shown["alerts"][0]["cleared_at"] is not None
+    assert len(receiver.received) == 1
+
+
 @pytest.mark.parametrize(
     ("content", "named"),
     [

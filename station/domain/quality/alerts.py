@@ -12,6 +12,9 @@ no longer holds the alert clears, and the next time it holds is a new event. Rul
   Western Electric rule (:mod:`station.domain.quality.control`) on the individuals
   chart of the last ``runs`` runs (at ``station`` or anywhere), its centre and σ = MR̄/d₂
   from those runs.
+- ``cpk``: the Cpk of ``parameter`` (a coefficient) over the last ``runs`` runs (at
+  ``station`` or anywhere), against the limits profile of the latest of them, below
+  ``target`` (1.33 by default, :data:`station.domain.quality.capability.CAPABLE_CPK`).
 
 The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
 
@@ -29,6 +32,11 @@ The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
     [[western_electric]]
     parameter = "offset_x"
     runs = 50
+
+    [[cpk]]
+    parameter = "sensitivity_z"
+    runs = 100
+    target = 1.33
 """
 
 import tomllib
@@ -39,10 +47,11 @@ from pydantic import AnyHttpUrl, BaseModel, ConfigDict, Field, JsonValue, Valida
 
 from station.domain.constants import Identifier
 from station.domain.errors import InputError, validation_problem
+from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.parameters import COEFFICIENTS
 
 #: The kinds of rule.
-RuleKind = Literal["yield", "silent", "western_electric"]
+RuleKind = Literal["yield", "silent", "western_electric", "cpk"]
 
 
 class _Rules(BaseModel):
@@ -74,9 +83,8 @@ class SilentRule(_Rules):
         return self.station
 
 
-class WesternElectricRule(_Rules):
-    """The latest run's ``parameter`` completes a Western Electric rule on the chart of
-    the last ``runs`` runs."""
+class ParameterWindow(_Rules):
+    """A rule over a coefficient's values of the last ``runs`` runs (at ``station``)."""
 
     parameter: Literal[COEFFICIENTS]  # type: ignore[valid-type]
     station: Identifier | None = None
@@ -88,6 +96,17 @@ class WesternElectricRule(_Rules):
         return self.station or "line"
 
 
+class WesternElectricRule(ParameterWindow):
+    """The latest run's ``parameter`` completes a Western Electric rule on the chart of
+    the last ``runs`` runs."""
+
+
+class CpkRule(ParameterWindow):
+    """The Cpk of ``parameter`` over the last ``runs`` runs below ``target``."""
+
+    target: Annotated[float, Field(gt=0, le=10)] = CAPABLE_CPK
+
+
 class AlertRules(_Rules):
     """The plant's alert rules and where their alerts go."""
 
@@ -97,6 +116,7 @@ class AlertRules(_Rules):
     western_electric_rules: list[WesternElectricRule] = Field(
         default_factory=list, alias="western_electric"
     )
+    cpk_rules: list[CpkRule] = Field(default_factory=list, alias="cpk")
 
 
 def parse_alert_rules(text: str, shown: str) -> AlertRules:
