@@ -9,6 +9,7 @@ from fastapi.responses import HTMLResponse, Response
 from pydantic import BaseModel, Field
 
 from api.deps import ReaderDep
+from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from db.alerts import recent_alerts
 from station.domain.quality.alerts import Alert
@@ -39,7 +40,8 @@ class AlertsAnswer(BaseModel):
             "content": {"text/html": {"schema": {"type": "string"}}},
             "description": "the latest alerts: what fired, when, the evidence, a link to "
             "the units behind it (HTML, or JSON with `format=json`)",
-        }
+        },
+        **problems(422),
     },
 )
 async def get_alerts(

@@ -178,11 +178,11 @@ _REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
         "description": "the report in the requested format",
     },
 }
+Sha256 = Annotated[str, Query(pattern="^[0-9a-f]{64}$")]
 WhatIfId = Annotated[
-    str | None,
+    Sha256 | None,
     Blank,
     Query(
-        pattern="^[0-9a-f]{64}$",
         description="a what-if's candidate limits profile by its SHA-256, as the what-if "
         "(`POST`) stored it: the report re-judged against it, as that what-if answered",
     ),

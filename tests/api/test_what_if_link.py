@@ -86,3 +86,7 @@ def test_a_link_to_a_what_if_never_stored_is_refused_in_one_line(client: httpx.C
     page = client.get("/api/v1/reports/eol", params={"what_if": unknown, "format": "html"})
     assert page.status_code == 422
     assert f"no stored limits profile {unknown}" in page.text
+    # An empty field of a form is no what-if, as every empty filter field.
+    plain = client.get("/api/v1/reports/eol", params={"what_if": "", "format": "json"})
+    assert plain.status_code == 200, plain.text
+    assert plain.json()["what_if"] is None
