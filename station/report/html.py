@@ -190,19 +190,31 @@ UNIT_PATH = "/units/"
 ONE_DAY = timedelta(days=1)
 
 
-def _chart_runs(runs: Sequence[str], span: tuple[float, float], href: str) -> Markup:
-    """The attributes that make a block of charts open the runs behind a point: ``runs``,
-    one token per point in order (``/``-separated parts), the x of the first and last
-    point in the charts' own units, and ``href`` with ``{0}``, ``{1}`` for a token's parts.
+def _chart_runs(tokens: Sequence[str], span: tuple[float, float], href: str) -> Markup:
+    """The attributes that make a block of charts open the runs behind a point: the
+    points' ``tokens`` in order (their common start once, as ``data-prefix``), the x of
+    the first and last point in the charts' own units, and ``href``, the address with
+    ``{0}`` for a point's token; with ``{1}`` too, the tokens are the boundaries of
+    contiguous periods (one more than the points), ``{0}`` a period's start and ``{1}``
+    its end (the next one's start).
 
     One list for the block, not a link per point: a report's control charts plot the same
     runs, and a link on each of their points would outweigh the page's 300 kB budget
     (docs/benchmarks.md "report"); the script of ``base.html`` turns a click into the
     address of the nearest point."""
+    prefix = ""
+    if len(tokens) > 1:  # the common start of all is that of the first and last in order
+        low, high = min(tokens), max(tokens)
+        same = next(
+            (i for i, (a, b) in enumerate(zip(low, high, strict=False)) if a != b), len(low)
+        )
+        # Each token keeps a character: an empty one would vanish from the list.
+        prefix = low[: min(same, min(len(t) for t in tokens) - 1)]
     return Markup(" ").join(
         Markup('data-{}="{}"').format(name, value)
         for name, value in (
-            ("runs", " ".join(runs)),
+            ("runs", " ".join(t[len(prefix) :] for t in tokens)),
+            ("prefix", prefix),
             ("x", f"{span[0]:.1f} {span[1]:.1f}"),
             ("href", href),
         )
@@ -217,22 +229,22 @@ def control_chart_runs(report: EolReport) -> Markup:
 
 
 def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) -> Markup:
-    """A trend chart's period (a day or a shift, ``periods`` their start and end) opens the
-    report of that period, every unit listed: the units its points count (their first run
-    on the line in the period and the report's range, station, operator and lot)."""
+    """A trend chart's period (a day or a shift, ``periods`` their start and end, each
+    ending where the next starts) opens the report of that period, every unit listed: the
+    units its points count (their first run on the line in the period and the report's
+    range, station, operator and lot)."""
     f, zone = report.filter, report.timezone
-    tokens = [
-        formatting.field(max(start, f.since) if f.since else start, zone)
-        + "/"
-        + formatting.field(min(end, f.until) if f.until else end, zone)
-        for start, end in periods
-    ]
+    bounds = [start for start, _ in periods] + [end for _, end in periods[-1:]]
+    if bounds and f.since:
+        bounds[0] = max(bounds[0], f.since)
+    if bounds and f.until:
+        bounds[-1] = min(bounds[-1], f.until)
     query = {
         name: value for name, value in filter_query(f, zone).items() if name not in ("from", "to")
     }
     href = "?" + urlencode({"format": "html", "list": "all", **query}) + "&from={0}&to={1}"
     span = (svg.trend_x(0, len(periods)), svg.trend_x(len(periods) - 1, len(periods)))
-    return _chart_runs(tokens, span, href)
+    return _chart_runs([formatting.field(b, zone) for b in bounds], span, href)
 
 
 def what_if_link(report: EolReport) -> str | None:
