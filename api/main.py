@@ -1,5 +1,7 @@
 """The results server's application factory (``uvicorn --factory api.main:create_app``)."""
 
+import asyncio
+import contextlib
 import gc
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -9,6 +11,7 @@ from fastapi_offline import FastAPIOffline
 from sqlalchemy.ext.asyncio import async_sessionmaker
 from sqlalchemy.orm import configure_mappers
 
+from api.alerts import AlertLoop
 from api.deps import require_key
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
@@ -16,7 +19,7 @@ from api.metrics import install_metrics
 from api.redoc import add_redoc
 from api.report_pool import ReportPool
 from api.responses import json_problems, problems
-from api.routes import events, gyro, health, reports, reviews, runs, unit_pages, units
+from api.routes import alerts, events, gyro, health, reports, reviews, runs, unit_pages, units
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
@@ -33,6 +36,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     if needed; a server database must already be at the current schema.
     """
     settings = settings or ApiSettings()
+    rules = settings.alert_rules()
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -77,9 +81,20 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # 574-578 lookups/s against 683-690/s (back to back twice, on a loaded machine).
         gc.collect()
         gc.freeze()
+        alerting = None
+        if rules is not None:
+            loop = AlertLoop(
+                app.state.sessions, rules, settings.alert_interval_s, settings.alert_retry_s
+            )
+            app.state.alert_loop = loop
+            alerting = asyncio.create_task(loop.run())
         try:
             yield
         finally:
+            if alerting is not None:
+                alerting.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await alerting
             await lookups.close()
             await writer.dispose()
             await reader.dispose()
@@ -99,6 +114,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)
+    app.state.alert_loop = None
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)
     reads = [Depends(require_key)] if settings.read_requires_key else []
@@ -119,6 +135,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     app.include_router(v1)
     app.include_router(reports.dashboard, dependencies=reads)
     app.include_router(unit_pages.router, dependencies=reads, responses=keyed)
+    app.include_router(alerts.router, dependencies=reads, responses=keyed)
     # Last: its middleware is the outermost, so it sees every answer (a 413 too).
     server_metrics = install_metrics(app)
     return app

@@ -1,11 +1,13 @@
 """Settings of the results server, read from ``CALSTATION_*`` environment variables."""
 
+from pathlib import Path
 from typing import Annotated
 
 from pydantic import AfterValidator, Field
 
 from db.settings import DatabaseSettings
 from station.domain.errors import InputError
+from station.domain.quality.alerts import AlertRules, parse_alert_rules
 from station.domain.quality.shifts import parse_shifts, shift_name
 from station.report.period import plant_zone
 
@@ -15,6 +17,18 @@ def _shifts(text: str) -> str:
         return ",".join(shift_name(at) for at in parse_shifts(text))
     except InputError as exc:
         raise ValueError(str(exc)) from None
+
+
+def _alert_rules(path: Path | None) -> Path | None:
+    """The rules file, if it can be read and holds rules (checked at start-up)."""
+    if path is not None:
+        try:
+            parse_alert_rules(path.read_text("utf-8"), str(path))
+        except OSError as exc:
+            raise ValueError(f"{path}: {exc.strerror}") from None
+        except (InputError, UnicodeDecodeError) as exc:
+            raise ValueError(str(exc)) from None
+    return path
 
 
 def _zone(name: str) -> str:
@@ -42,7 +56,10 @@ class ApiSettings(DatabaseSettings):
     shifts' start times in that zone; the report adds a trend per shift.
     ``event_listeners`` (``CALSTATION_EVENT_LISTENERS``): the most event streams
     (``GET /api/v1/events``) each server process serves at once; one more is answered
-    503 with ``Retry-After`` (:mod:`api.routes.events`).
+    503 with ``Retry-After`` (:mod:`api.routes.events`). ``alerts_file``
+    (``CALSTATION_ALERTS_FILE``): the plant's alert rules and webhook (TOML,
+    :mod:`station.domain.quality.alerts`), checked every ``alert_interval_s``; a post the
+    webhook refused is tried again after ``alert_retry_s`` (:mod:`api.alerts`).
     """
 
     read_requires_key: bool = False
@@ -55,3 +72,12 @@ class ApiSettings(DatabaseSettings):
     plant_timezone: Annotated[str, AfterValidator(_zone)] = "UTC"
     plant_shifts: Annotated[str, AfterValidator(_shifts)] = ""
     event_listeners: Annotated[int, Field(ge=1)] = 64
+    alerts_file: Annotated[Path | None, AfterValidator(_alert_rules)] = None
+    alert_interval_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
+    alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
+
+    def alert_rules(self) -> AlertRules | None:
+        """The plant's alert rules (``alerts_file``), if it has any."""
+        if self.alerts_file is None:
+            return None
+        return parse_alert_rules(self.alerts_file.read_text("utf-8"), str(self.alerts_file))

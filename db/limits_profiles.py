@@ -4,7 +4,9 @@ A run's submission carries its profile (:attr:`station.domain.records.LimitsRef.
 :func:`store_profile` keeps its canonical JSON the first time a run uses it (one
 ``INSERT … ON CONFLICT DO NOTHING`` on the primary key). The report, the certificate
 and the dashboard read profiles from here (:func:`stored_profiles`), never from a
-limits file.
+limits file. A what-if's candidate profile is kept here too (:func:`keep_profile`), so
+a link to the what-if names it by its SHA-256 and reproduces it; a profile no run
+refers to is in no report's list of profiles (those are the runs' own).
 """
 
 from collections.abc import Collection
@@ -33,7 +35,14 @@ def store_profile(session: Session, ref: LimitsRef) -> None:
     """
     profile = profile_of(ref)
     if profile is not None:
-        session.execute(for_dialect(session, _INSERT), profile_row(profile))
+        keep_profile(session, profile)
+
+
+def keep_profile(session: Session, profile: LimitsProfile) -> str:
+    """Store ``profile`` unless its SHA-256 is stored already; its SHA-256."""
+    row = profile_row(profile)
+    session.execute(for_dialect(session, _INSERT), row)
+    return row["sha256"]
 
 
 def profile_row(profile: LimitsProfile) -> dict[str, str]:

@@ -26,6 +26,7 @@ from sqlalchemy import (
     Text,
     UniqueConstraint,
     Uuid,
+    text,
 )
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
@@ -65,6 +66,8 @@ class Run(Base):
     lot: Mapped[str | None] = mapped_column(String(NAME))
     #: The unit's product (runs from before products: DIXX-A12, migration 0014).
     part_number: Mapped[str] = mapped_column(String(NAME))
+    #: The fixture's slot (1 on a one-port station); None on runs stored before 0015.
+    fixture_slot: Mapped[int | None] = mapped_column(Integer())
     started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     finished_at: Mapped[datetime] = mapped_column(UtcDateTime())
     received_at: Mapped[datetime] = mapped_column(UtcDateTime())
@@ -385,3 +388,38 @@ class ReportBounds(Base):
     family: Mapped[str] = mapped_column(String(NAME), primary_key=True)
     lower: Mapped[float | None] = mapped_column(Double())
     upper: Mapped[float | None] = mapped_column(Double())
+
+
+class StoredAlert(Base):
+    """An alert that fired (:mod:`station.domain.quality.alerts`, :mod:`db.alerts`).
+
+    ``event_key`` is unique: an event is stored once, however many server processes see
+    it. ``watch`` names the rule (its kind, scope and thresholds); at most one alert of a
+    rule is open (``cleared_at`` NULL), a partial unique index. ``delivered_at``: when the
+    webhook took it; ``next_attempt_at``: not posted again before it (a process posting
+    it holds it until then, a refused post is tried again then)."""
+
+    __tablename__ = "alerts"
+    __table_args__ = (
+        Index(
+            "ux_alerts_open_watch",
+            "watch",
+            unique=True,
+            sqlite_where=text("cleared_at IS NULL"),
+            postgresql_where=text("cleared_at IS NULL"),
+        ),
+        Index("ix_alerts_fired_at", "fired_at", "id"),
+    )
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    event_key: Mapped[str] = mapped_column(String(255), unique=True)
+    watch: Mapped[str] = mapped_column(String(255))
+    rule: Mapped[str] = mapped_column(String(16))
+    scope: Mapped[str] = mapped_column(String(NAME))
+    message: Mapped[str] = mapped_column(Text())
+    evidence: Mapped[dict[str, Any]] = mapped_column(JsonDocument)
+    fired_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    cleared_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
+    delivered_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
+    attempts: Mapped[int] = mapped_column(Integer())
+    next_attempt_at: Mapped[datetime] = mapped_column(UtcDateTime())

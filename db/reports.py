@@ -962,6 +962,8 @@ def _what_if(
         parameters=parameters,
         pass_to_fail=judged.pass_to_fail,
         fail_to_pass=judged.fail_to_pass,
+        flips=judged.flips,
+        flips_total=judged.flips_total,
     )
 
 

@@ -1,4 +1,4 @@
-"""A parameter split by station, lot, operator, product or software version
+"""A parameter split by station, lot, operator, fixture slot, product or software version
 (:mod:`station.domain.quality.split`): the latest runs of the range, bounded.
 
 One walk of ``ix_runs_started_at`` backwards over the runs the report's filter selects,
@@ -29,6 +29,7 @@ SPLIT_COLUMNS = {
     "lot": Run.lot,
     "operator": Run.operator_id,
     "part_number": Run.part_number,
+    "fixture_slot": Run.fixture_slot,
     "software_version": Run.software_version,
 }
 #: The parameters a split reads: one value per run.

@@ -8,7 +8,8 @@ at a time and judged again by
 counted on the way: the runs that pass, the units whose first run on the line is in
 range (the report's cohort) with their first and final passes — a unit's latest run may
 lie after the range, so those runs are judged too — the failing runs by their new first
-failure reason, and the verdicts that change.
+failure reason, the verdicts that change, and the cohort's units whose latest run's
+verdict flips.
 """
 
 from collections import Counter
@@ -22,10 +23,13 @@ from sqlalchemy.orm import Session
 from db.models import Run, RunFacts, RunFailure, RunPose
 from station.domain.judging import Measured, rejudge
 from station.domain.limits import LimitsProfile
+from station.domain.quality.figures import VerdictFlip
 from station.domain.records import FailureReason
 
 #: Runs judged per page.
 PAGE = 2000
+#: The most flipped units a what-if lists (the first by serial; all are counted).
+LISTED_FLIPS = 200
 
 
 @dataclass
@@ -41,6 +45,9 @@ class Rejudged:
     fail_to_pass: int = 0
     #: Failing runs per (first failure code, station, operator).
     failures: Counter[tuple[str, str, str]] = field(default_factory=Counter)
+    #: The cohort's units whose latest run's verdict flips (the first by serial).
+    flips: list[VerdictFlip] = field(default_factory=list)
+    flips_total: int = 0
 
 
 def _triple(row: Row[Any], prefix: str, source: str = "") -> tuple[float, float, float] | None:
@@ -69,13 +76,45 @@ def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, floa
     return triples
 
 
+@dataclass(frozen=True)
+class _Judged:
+    """A run as stored (``row``, its ``stored`` failures) and its ``failures`` under the
+    candidate."""
+
+    row: Row[Any]
+    stored: list[FailureReason]
+    failures: list[FailureReason]
+
+    @property
+    def passed_before(self) -> bool:
+        return bool(self.row.verdict == "pass")
+
+    @property
+    def passed(self) -> bool:
+        return not self.failures
+
+    def flip(self) -> VerdictFlip | None:
+        """The run's verdict flipping, if it does."""
+        if self.passed == self.passed_before:
+            return None
+        deciding = self.stored if self.passed else self.failures
+        return VerdictFlip(
+            serial=self.row.serial,
+            run_id=str(self.row.run_id),
+            before="pass" if self.passed_before else "fail",
+            after="pass" if self.passed else "fail",
+            check=deciding[0].code if deciding else None,
+        )
+
+
 def _judged(
     session: Session, where: Sequence[ColumnElement[bool]], candidate: LimitsProfile
-) -> Iterator[tuple[Row[Any], bool, list[FailureReason]]]:
-    """Each run ``where`` selects, whether it passed as stored, and its failures under
-    ``candidate``; in start order, a page at a time."""
+) -> Iterator[_Judged]:
+    """Each run ``where`` selects, as stored and judged against ``candidate``; in start
+    order, a page at a time."""
     columns = (
         Run.id,
+        Run.run_id,
         Run.started_at,
         Run.serial,
         Run.verdict,
@@ -149,7 +188,8 @@ def _judged(
                 gyro_bias=_triple(row, "gyro_bias"),
                 uncertainty=_uncertainty(row.uncertainty),
             )
-            yield row, row.verdict == "pass", rejudge(failures.get(row.id, []), candidate, measured)
+            stored = failures.get(row.id, [])
+            yield _Judged(row, stored, rejudge(stored, candidate, measured))
         after = (rows[-1].started_at, rows[-1].id)
 
 
@@ -159,21 +199,21 @@ def rejudged(
     """The runs ``where`` selects (the report's range) re-judged against ``candidate``."""
     counts = Rejudged()
     cohort: set[str] = set()
-    final: dict[str, bool] = {}
-    for row, passed_before, reasons in _judged(session, where, candidate):
-        passed = not reasons
+    final: dict[str, _Judged] = {}
+    for run in _judged(session, where, candidate):
+        row, passed = run.row, run.passed
         counts.runs += 1
         counts.runs_passed += passed
-        counts.pass_to_fail += passed_before and not passed
-        counts.fail_to_pass += passed and not passed_before
-        if reasons:
-            counts.failures[(reasons[0].code, row.station_id, row.operator_id)] += 1
+        counts.pass_to_fail += run.passed_before and not passed
+        counts.fail_to_pass += passed and not run.passed_before
+        if run.failures:
+            counts.failures[(run.failures[0].code, row.station_id, row.operator_id)] += 1
         if row.line_first:
             cohort.add(row.serial)
             counts.units += 1
             counts.first_pass += passed
         if row.line_latest:
-            final[row.serial] = passed
+            final[row.serial] = run
     # The cohort's latest runs outside the selection (after the range, or of another
     # station, operator or lot); those in it are judged already.
     first_in_range = (
@@ -183,7 +223,11 @@ def rejudged(
         .correlate(None)  # the runs of the range, not the outer query's run
     )
     latest = [RunFacts.line_latest.is_(True), Run.serial.in_(first_in_range)]
-    for row, _, reasons in _judged(session, latest, candidate):
-        final.setdefault(row.serial, not reasons)
-    counts.final_pass = sum(final.get(serial, False) for serial in cohort)
+    for run in _judged(session, latest, candidate):
+        final.setdefault(run.row.serial, run)
+    counts.final_pass = sum(final[serial].passed for serial in cohort if serial in final)
+    flips = [
+        flip for serial in sorted(cohort) if serial in final and (flip := final[serial].flip())
+    ]
+    counts.flips, counts.flips_total = flips[:LISTED_FLIPS], len(flips)
     return counts

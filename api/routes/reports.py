@@ -28,14 +28,14 @@ from fastapi.responses import HTMLResponse, Response, StreamingResponse
 from pydantic import BeforeValidator
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from api.deps import ReaderDep, ReadersDep, ReportPoolDep
+from api.deps import ReaderDep, ReadersDep, ReportPoolDep, SessionsDep
 from api.errors import answers_pages, invalid
 from api.language import LanguageDep
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
 from db.holds import held_units
-from db.limits_profiles import stored_profiles
+from db.limits_profiles import keep_profile, stored_profiles
 from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.run_export import HEADER, run_page
 from db.split import SPLIT_PARAMETERS, SPLIT_RUNS, split_report
@@ -179,6 +179,15 @@ _REPORT_ANSWERS: dict[int | str, dict[str, Any]] = {
         "description": "the report in the requested format",
     },
 }
+Sha256 = Annotated[str, Query(pattern="^[0-9a-f]{64}$")]
+WhatIfId = Annotated[
+    Sha256 | None,
+    Blank,
+    Query(
+        description="a what-if's candidate limits profile by its SHA-256, as the what-if "
+        "(`POST`) stored it: the report re-judged against it, as that what-if answered",
+    ),
+]
 Format = Literal["json", "csv", "html"]
 Listed = Annotated[
     Literal["held", "all"],
@@ -203,6 +212,7 @@ ChartPoints = Annotated[
 @answers_pages(REPORT_TITLE, "json")
 async def get_eol_report(
     repository: ReportPoolDep,
+    reader: ReaderDep,
     period: PeriodDep,
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
@@ -211,12 +221,24 @@ async def get_eol_report(
     units: PageSize = PAGE_UNITS,
     page: PageNumber = 1,
     points: ChartPoints = CHART_POINTS,
+    what_if: WhatIfId = None,
 ) -> Response:
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
-    (or all) units of a period."""
+    (or all) units of a period; with ``what_if``, a stored what-if's candidate limits
+    beside them (the link a what-if's page gives)."""
     pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units, points=points)
     plant = _Plant(zone, shifts)
-    body = await repository.run(eol_body, period.filter(zone), pages, format, plant, None)
+    report_filter = period.filter(zone)
+    candidate = None
+    if what_if is not None:
+        stored = await reader.run(lambda r: stored_profiles(r.session, [what_if]))
+        if what_if not in stored:
+            raise invalid(
+                ("query", "what_if"),
+                f"no stored limits profile {what_if}: run the what-if with its file again",
+            )
+        candidate = stored[what_if]
+    body = await repository.run(eol_body, report_filter, pages, format, plant, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -240,6 +262,7 @@ async def get_eol_report(
 @answers_pages(REPORT_TITLE, "html")
 async def post_eol_what_if(
     repository: ReportPoolDep,
+    sessions: SessionsDep,
     period: PeriodDep,
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
@@ -260,9 +283,13 @@ async def post_eol_what_if(
     page: PageNumber = 1,
 ) -> Response:
     """The report of ``GET /reports/eol`` with its runs re-judged against a candidate
-    limits profile (uploaded): yields, Pareto and capability beside the current ones.
-    Nothing is stored: not the profile, not a verdict."""
+    limits profile (uploaded): yields, Pareto and capability beside the current ones, and
+    the units whose verdict would flip. No verdict is stored; the candidate profile is
+    kept by its SHA-256, so ``GET /reports/eol?what_if=SHA256`` (the page's link)
+    answers this what-if again."""
     candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
+    async with sessions() as session, session.begin():
+        await session.run_sync(keep_profile, candidate)
     pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
     plant = _Plant(zone, shifts)
     body = await repository.run(eol_body, period.filter(zone), pages, format, plant, candidate)
@@ -352,9 +379,9 @@ async def get_split(
     by: Annotated[SplitBy, Query(description="the run's column the runs are split by")],
     format: Literal["json", "html"] = "html",
 ) -> Response:
-    """A parameter's distribution and capability split by station, lot, operator, product
-    or software version: n, mean, sd, quartiles, Tukey whiskers and outliers, Cpk and
-    observed ppm per group (the latest runs of the period, bounded)."""
+    """A parameter's distribution and capability split by station, lot, operator, fixture
+    slot, product or software version: n, mean, sd, quartiles, Tukey whiskers and outliers,
+    Cpk and observed ppm per group (the latest runs of the period, bounded)."""
     body = await repository.run(split_body, period.filter(zone), parameter, by, format, zone)
     return Response(body, media_type=MEDIA_TYPES[format])
 

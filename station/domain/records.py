@@ -36,6 +36,7 @@ from station.domain.calibration.model import Model
 from station.domain.constants import (
     DEFAULT_PART_NUMBER,
     IDENTIFIER_PATTERN,
+    MAX_SLOTS,
     Identifier,
     PartNumber,
     ReviewDecision,
@@ -457,6 +458,9 @@ class _RunHeader(_Record):
     #: The unit's product (``station.domain.products``); records from before products
     #: existed were all of the default one.
     part_number: PartNumber = DEFAULT_PART_NUMBER
+    #: The fixture's slot the unit was calibrated in, from 1 (a one-port station is a
+    #: fixture of one slot: 1); None on records from before slots were recorded.
+    fixture_slot: int | None = Field(None, ge=1, le=MAX_SLOTS)
     started_at: UtcDatetime
     finished_at: UtcDatetime
     software_version: Identifier

@@ -130,9 +130,9 @@ def verdict_line(record: RunRecord) -> str:
     return f"{record.serial}: {verdict}" + (f" ({failed})" if failed else "") + then
 
 
-def _new_journal(config: StationConfig, label: Label, part_number: str) -> RunJournal:
+def _new_journal(config: StationConfig, label: Label, part_number: str, slot: int) -> RunJournal:
     """The journal of a new run of the unit ``label`` names (its lot, else the
-    station's) on the station ``config`` describes."""
+    station's) on the station ``config`` describes, in its fixture's ``slot``."""
     return RunJournal(
         run_id=uuid.uuid4(),
         serial=label.serial,
@@ -140,6 +140,7 @@ def _new_journal(config: StationConfig, label: Label, part_number: str) -> RunJo
         operator_id=config.operator_id,
         lot=label.lot or config.lot,
         part_number=part_number,
+        fixture_slot=slot,
         started_at=datetime.now(UTC),
         poses=(*config.run.poses, config.run.verification_pose),
     )
@@ -286,7 +287,7 @@ class UnitLifecycle:
             return Unreachable(port_problem(exc))
         if journal is None:
             label = self._labels.pop(serial, None) or Label(serial=serial)
-            journal = _new_journal(self.config, label, self.product.part_number)
+            journal = _new_journal(self.config, label, self.product.part_number, slot.number)
             # A disk that refuses does not stop the unit: the journal owes the write and
             # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             slot.journal_file.save(journal)

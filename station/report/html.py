@@ -7,7 +7,7 @@ page links to the unit's page through one macro, ``serial_link`` in ``base.html`
 """
 
 from collections.abc import Callable, Sequence
-from datetime import datetime
+from datetime import datetime, timedelta
 from typing import Any, get_args
 from urllib.parse import urlencode
 
@@ -17,7 +17,9 @@ from markupsafe import Markup
 from station import __version__
 from station.domain.i18n import Language, speaker
 from station.domain.limits import LimitsProfile
+from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
+from station.domain.quality.days import midnight
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.split import SplitBy, SplitReport
@@ -147,6 +149,8 @@ def shift_charts(report: EolReport) -> list[str]:
     return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
 
 
+#: The report (``GET``), and where a what-if is answered again by its profile's SHA-256.
+REPORT_PATH = "/api/v1/reports/eol"
 #: Where a Pareto bar's runs are listed (:func:`failing_runs_page`).
 FAILING_RUNS_PATH = "/api/v1/reports/eol/failures"
 
@@ -180,9 +184,85 @@ def failing_runs_page(
     )
 
 
+#: A unit's page (``serial_link`` in ``base.html``).
+UNIT_PATH = "/units/"
+ONE_DAY = timedelta(days=1)
+
+
+def _chart_runs(tokens: Sequence[str], span: tuple[float, float], href: str) -> Markup:
+    """The attributes that make a block of charts open the runs behind a point: the
+    points' ``tokens`` in order (their common start once, as ``data-prefix``), the x of
+    the first and last point in the charts' own units, and ``href``, the address with
+    ``{0}`` for a point's token; with ``{1}`` too, the tokens are the boundaries of
+    contiguous periods (one more than the points), ``{0}`` a period's start and ``{1}``
+    its end (the next one's start).
+
+    One list for the block, not a link per point: a report's control charts plot the same
+    runs, and a link on each of their points would outweigh the page's 300 kB budget
+    (docs/benchmarks.md "report"); the script of ``base.html`` turns a click into the
+    address of the nearest point."""
+    prefix = ""
+    if len(tokens) > 1:  # the common start of all is that of the first and last in order
+        low, high = min(tokens), max(tokens)
+        same = next(
+            (i for i, (a, b) in enumerate(zip(low, high, strict=False)) if a != b), len(low)
+        )
+        # Each token keeps a character: an empty one would vanish from the list.
+        prefix = low[: min(same, min(len(t) for t in tokens) - 1)]
+    return Markup(" ").join(
+        Markup('data-{}="{}"').format(name, value)
+        for name, value in (
+            ("runs", " ".join(t[len(prefix) :] for t in tokens)),
+            ("prefix", prefix),
+            ("x", f"{span[0]:.1f} {span[1]:.1f}"),
+            ("href", href),
+        )
+    )
+
+
+def control_chart_runs(report: EolReport) -> Markup:
+    """A control chart's point opens its run's unit page (every chart plots the same runs)."""
+    points = report.control_charts[0].points if report.control_charts else []
+    span = (svg.control_x(0, len(points)), svg.control_x(len(points) - 1, len(points)))
+    return _chart_runs([p.serial for p in points], span, UNIT_PATH + "{0}")
+
+
+def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) -> Markup:
+    """A trend chart's period (a day or a shift, ``periods`` their start and end, each
+    ending where the next starts) opens the report of that period, every unit listed: the
+    units its points count (their first run on the line in the period and the report's
+    range, station, operator and lot)."""
+    f, zone = report.filter, report.timezone
+    bounds = [start for start, _ in periods] + [end for _, end in periods[-1:]]
+    if bounds and f.since:
+        bounds[0] = max(bounds[0], f.since)
+    if bounds and f.until:
+        bounds[-1] = min(bounds[-1], f.until)
+    query = {
+        name: value for name, value in filter_query(f, zone).items() if name not in ("from", "to")
+    }
+    href = "?" + urlencode({"format": "html", "list": "all", **query}) + "&from={0}&to={1}"
+    span = (svg.trend_x(0, len(periods)), svg.trend_x(len(periods) - 1, len(periods)))
+    return _chart_runs([formatting.field(b, zone) for b in bounds], span, href)
+
+
+def what_if_link(report: EolReport) -> str | None:
+    """The address that answers the report's what-if again: its filter and its candidate
+    profile by SHA-256 (stored by the what-if)."""
+    if report.what_if is None:
+        return None
+    query = {
+        "format": "html",
+        "what_if": report.what_if.limits.sha256,
+        **filter_query(report.filter, report.timezone),
+    }
+    return f"{REPORT_PATH}?{urlencode(query)}"
+
+
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
     return _env.get_template("report.html").render(
+        what_if_link=what_if_link(report),
         report=report,
         runs_link=runs_link(report.filter, report.timezone),
         export_query=urlencode(filter_query(report.filter, report.timezone)),
@@ -191,6 +271,15 @@ def report_page(report: EolReport) -> str:
         shift_charts=(
             [Markup(chart) for chart in shift_charts(report)] if report.shift_trend else []
         ),
+        control_runs=control_chart_runs(report),
+        day_runs=trend_runs(
+            report,
+            [
+                (midnight(d.day, report.timezone), midnight(d.day + ONE_DAY, report.timezone))
+                for d in report.trend
+            ],
+        ),
+        shift_runs=trend_runs(report, [(s.start, s.end) for s in report.shift_trend]),
     )
 
 
@@ -206,6 +295,7 @@ def dashboard_page(
         held_total=held_total,
         events=events,
         runs_link=runs_link(report.filter, report.timezone),
+        control_runs=control_chart_runs(report),
     )
 
 
@@ -227,6 +317,27 @@ def unit_page(
         generated_at=generated_at,
         zone=zone,
         document_title=failure_words(speaker("en"))[unit.verdict],
+    )
+
+
+def alert_runs_link(alert: Alert, zone: str) -> str:
+    """The report of the units behind an alert: every unit from the first of its window
+    on (at its station), listed."""
+    since = alert.evidence.get("since")
+    query = {"format": "html", "list": "all"}
+    if isinstance(since, str):
+        query["from"] = formatting.field(datetime.fromisoformat(since), zone)
+    station = alert.evidence.get("station")
+    if isinstance(station, str):
+        query["station"] = station
+    return f"{REPORT_PATH}?{urlencode(query)}"
+
+
+def alerts_page(alerts: Sequence[Alert], zone: str, rounds: int | None) -> str:
+    """The latest ``alerts``, times in the plant's ``zone``; ``rounds``: the alert loop's
+    rounds in this server process (None: no rules configured)."""
+    return _env.get_template("alerts.html").render(
+        alerts=alerts, zone=zone, rounds=rounds, runs_link=lambda a: alert_runs_link(a, zone)
     )
 
 

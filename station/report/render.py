@@ -16,11 +16,13 @@ from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
     CAPABILITY_HEADER,
+    FLIP_HEADER,
     PARAMETER_HEADER,
     RISK_HEADER,
     SUMMARY_HEADER,
     WHAT_IF_HEADER,
     capability_cells,
+    flip_cells,
     listed,
     near_limits_line,
     parameter_cells,
@@ -128,8 +130,11 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     if what_if is not None:
         for key, value in what_if["limits"].items():
             yield ("what_if", "limits", key, value)
-        for key in ("pass_to_fail", "fail_to_pass"):
+        for key in ("pass_to_fail", "fail_to_pass", "flips_total"):
             yield ("what_if", "", key, what_if[key])
+        for flip in what_if["flips"]:
+            for key in ("before", "after", "check"):
+                yield ("what_if", f"flip:{flip['serial']}", key, flip[key])
         for key, value in what_if["summary"].items():
             yield ("what_if", "summary", key, value)
         for entry in what_if["pareto"]:
@@ -315,6 +320,9 @@ def _what_if_text(report: EolReport) -> list[str]:
         ),
         "",
         *_table(CAPABILITY_HEADER, capability_cells(report)),
+        "",
+        f"Units whose verdict would flip: {w.flips_total}",
+        *_table(FLIP_HEADER, flip_cells(report)),
         "",
     ]
 

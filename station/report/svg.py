@@ -239,15 +239,28 @@ def _panel(
     return body
 
 
+def control_x(i: int, count: int) -> float:
+    """Where the ``i``-th of ``count`` runs of a control chart lies along its axis."""
+    return CHART_LEFT + (CHART_WIDTH - CHART_LEFT - CHART_RIGHT) * (i / max(count - 1, 1))
+
+
+#: A trend chart's plot, left and right edge.
+TREND_LEFT, TREND_RIGHT = 44, CHART_WIDTH - 12
+
+
+def trend_x(i: int, count: int) -> float:
+    """Where the ``i``-th of ``count`` periods of a trend chart lies along its axis."""
+    return TREND_LEFT + (TREND_RIGHT - TREND_LEFT) * (i + 0.5) / max(count, 1)
+
+
 def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
     """Individuals (top) and moving ranges (bottom) of the latest runs with their limits,
     a time axis under each (the runs in order, ticks at their start in ``zone``)."""
     points = chart.points
-    plot_w = CHART_WIDTH - CHART_LEFT - CHART_RIGHT
     height = 18 + 2 * PANEL
 
     def x_of(i: int) -> float:
-        return CHART_LEFT + plot_w * (i / max(len(points) - 1, 1))
+        return control_x(i, len(points))
 
     latest = "latest " if len(points) < chart.count else ""
     plotted = f"{latest}{len(points)} of {chart.count} runs in range plotted"
@@ -311,7 +324,7 @@ def trend_chart(
     time axis below, a value axis on the left from 0 with its range labelled (a
     ``percent_axis`` zoomed on its values, :func:`percent_range`), and a ``reference``
     line (a target such as Cpk 1.33)."""
-    left, right, top, bottom = 44, CHART_WIDTH - 12, 24, HEIGHT - 22
+    left, right, top, bottom = TREND_LEFT, TREND_RIGHT, 24, HEIGHT - 22
     levels = [v for _, values in series for v in values if v is not None]
     if reference is not None:
         levels.append(reference[1] * 1.2)
@@ -324,7 +337,7 @@ def trend_chart(
         high = low + (abs(low) or 1.0)
 
     def x_of(i: int) -> float:
-        return left + (right - left) * (i + 0.5) / max(len(periods), 1)
+        return trend_x(i, len(periods))
 
     def y_of(value: float) -> float:
         return bottom - (bottom - top) * (value - low) / (high - low)

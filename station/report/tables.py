@@ -113,6 +113,19 @@ def what_if_cells(report: EolReport) -> list[list[str]]:
     ]
 
 
+FLIP_HEADER = ["serial (verdict would flip)", "verdict", "check"]
+
+
+def flip_cells(report: EolReport) -> list[list[str]]:
+    """The units whose verdict would flip under the candidate (text)."""
+    w = report.what_if
+    return (
+        []
+        if w is None
+        else [[f.serial, f"{f.before} → {f.after}", f.check or "–"] for f in w.flips]
+    )
+
+
 def capability_cells(report: EolReport) -> list[list[str]]:
     """Each parameter's Cpk and values out of limits, now and under the candidate."""
     w = report.what_if

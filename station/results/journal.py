@@ -56,6 +56,8 @@ class RunJournal(BaseModel):
     lot: str | None = None
     #: The unit's product (journals from before products: the default one).
     part_number: str = DEFAULT_PART_NUMBER
+    #: The fixture's slot of the run (journals from before slots were recorded: None).
+    fixture_slot: int | None = None
     started_at: datetime
     poses: tuple[str, ...]
     captures: dict[int, Capture] = {}

@@ -241,6 +241,7 @@ def run_record(
         operator_id=journal.operator_id,
         lot=journal.lot,
         part_number=journal.part_number,
+        fixture_slot=journal.fixture_slot,
         started_at=journal.started_at,
         # A wall clock stepped back during the run (NTP, a technician) must not make
         # a run that ends before it began: it ends no earlier than it started.

@@ -101,3 +101,37 @@ def test_a_refused_split_answers_a_page_and_no_runs_say_so(
     )
     assert empty.status_code == 200
     assert 'id="no-runs"' in empty.text
+
+
+def test_a_split_by_fixture_slot_groups_the_runs_by_their_recorded_slot(
+    client: httpx.Client, database: Database
+) -> None:
+    #: (offset_x, slot) per run; None: a run recorded before slots were.
+    runs = [(2080.0, 1), (2082.0, 2), (2081.0, 1), (2095.0, 2), (2084.0, 2), (2083.0, None)]
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for i, (value, slot) in enumerate(runs):
+            repository.submit(
+                make_record(
+                    serial=f"PT{i:06d}",
+                    started_at=T0 + timedelta(minutes=10 * i),
+                    offset=(value, 2041.2, 1960.5),
+                    fixture_slot=slot,
+                )
+            )
+    split = client.get(
+        "/api/v1/reports/split",
+        params={"parameter": "offset_x", "by": "fixture_slot", "format": "json"},
+    ).json()
+    groups = {g["group"]: (g["n"], g["mean"]) for g in split["groups"]}
+    expected: dict[str, list[float]] = {}
+    for value, slot in runs:
+        expected.setdefault("(none)" if slot is None else str(slot), []).append(value)
+    assert set(groups) == set(expected)
+    for name, values in expected.items():
+        assert groups[name][0] == len(values)
+        assert np.isclose(groups[name][1], np.mean(values))
+    page = client.get(
+        "/api/v1/reports/split", params={"parameter": "offset_x", "by": "fixture_slot"}
+    ).text
+    assert '<option value="fixture_slot" selected>fixture slot</option>' in page

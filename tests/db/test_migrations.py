@@ -115,6 +115,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
             del row["excluded_poses"]  # a column of revision 0010
             del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
             del row["part_number"]  # a column of revision 0014
+            del row["fixture_slot"]  # a column of revision 0015
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
@@ -186,12 +187,14 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             del row["excluded_poses"]
             del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
             del row["part_number"]  # a column of revision 0014
+            del row["fixture_slot"]  # a column of revision 0015
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
         upgrade(engine)
         with Session(engine) as session:
             (stored,) = RunRepository(session).history(record.serial)
             assert stored.disposition is None
+            assert stored.fixture_slot is None  # never guessed (revision 0015)
             assert stored.failures == record.failures
             assert session.scalar(select(func.count()).select_from(RunFailure)) == 1
     finally:
@@ -255,6 +258,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
                 del row["excluded_poses"]  # a column of revision 0010
                 del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
                 del row["part_number"]  # a column of revision 0014
+                del row["fixture_slot"]  # a column of revision 0015
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

@@ -252,9 +252,23 @@ class UnitVerdict(_FigurePart):
     failure: str | None = Field(description="first failure reason of the latest run")
 
 
+class VerdictFlip(_FigurePart):
+    """A unit of the report whose latest run would be judged otherwise."""
+
+    serial: str
+    run_id: str = Field(description="the unit's latest run")
+    before: Verdict = Field(description="its verdict as stored")
+    after: Verdict = Field(description="its verdict under the candidate profile")
+    check: str | None = Field(
+        description="the check that decides: the candidate's first failure reason of a run "
+        "that would fail, the stored one of a run that would pass"
+    )
+
+
 class WhatIf(_FigurePart):
     """The report's runs re-judged against a candidate limits profile, nothing stored
-    changed: yields, Pareto and capability as they would have been."""
+    changed: yields, Pareto and capability as they would have been, and the units whose
+    verdict would flip."""
 
     limits: LimitsRef = Field(description="the candidate profile")
     summary: Summary
@@ -262,6 +276,12 @@ class WhatIf(_FigurePart):
     parameters: list[ParameterStats] = Field(description="capability against the candidate")
     pass_to_fail: int = Field(description="runs that passed and would fail")
     fail_to_pass: int = Field(description="runs that failed and would pass")
+    flips: list[VerdictFlip] = Field(
+        default_factory=list,
+        description="units the report counts whose latest run's verdict would flip (the "
+        "first of them by serial, `flips_total` in all)",
+    )
+    flips_total: int = Field(0, description="units whose verdict would flip")
 
 
 class CoefficientRisk(_FigurePart):

@@ -1,5 +1,5 @@
 """A parameter's distribution and capability split by a run's station, lot, operator,
-product or software version: one box plot and one row of figures per group.
+fixture slot, product or software version: one box plot and one row of figures per group.
 
 Box plots after Tukey: the box from the first to the third quartile (linear interpolation
 between order statistics, Hyndman & Fan type 7) with the median, whiskers to the most
@@ -18,7 +18,7 @@ from station.domain.quality.capability import capability_warning, cpk, observed_
 from station.domain.quality.figures import ReportFilter
 
 #: What a parameter may be split by: a run's column each.
-SplitBy = Literal["station", "lot", "operator", "part_number", "software_version"]
+SplitBy = Literal["station", "lot", "operator", "fixture_slot", "part_number", "software_version"]
 #: Tukey's inner fences: Q1 − k·IQR, Q3 + k·IQR.
 FENCE = 1.5
 #: The label of the runs without a value of the split (a run without a lot).

@@ -130,6 +130,11 @@ def stored(fixture: Fixture) -> dict[str, tuple[str, str | None]]:
     return {serial: (verdict, disposition) for serial, verdict, disposition in rows}
 
 
+def stored_slots(fixture: Fixture) -> dict[str, int | None]:
+    with sqlite3.connect(fixture.tmp / "data" / "results.sqlite3") as db:
+        return dict(db.execute("select serial, fixture_slot from runs").fetchall())
+
+
 @pytest.mark.timeout(90)
 def test_a_pulled_cable_and_a_saturated_unit_never_hold_up_the_unit_that_passes(
     make_fixture: Callable[[int], Fixture],
@@ -278,6 +283,9 @@ def test_each_slot_resumes_at_its_own_pose_after_a_restart(
     for record in second.records:
         assert [p.index for p in record.poses] == list(range(7))
     assert stored(fixture) == {"PT000301": ("pass", "ship"), "PT000302": ("pass", "ship")}
+    # Each run records its slot, kept in the slot's journal across the restart.
+    assert {r.serial: r.fixture_slot for r in second.records} == {"PT000301": 1, "PT000302": 2}
+    assert stored_slots(fixture) == {"PT000301": 1, "PT000302": 2}
 
 
 def test_a_fixture_waiting_for_its_golden_unit_starts_no_slot(

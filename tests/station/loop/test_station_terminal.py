@@ -166,8 +166,11 @@ def test_a_full_passing_unit(station: Station) -> None:
     child = station.child
     assert child is not None
     child.expect("Scan the next unit's serial number")
-    rows = station.rows("select serial, verdict, station_id, operator_id, limits_name from runs")
-    assert rows == [("PT000042", "pass", "st-1", "op-7", "kxm52-production")]
+    rows = station.rows(
+        "select serial, verdict, station_id, operator_id, limits_name, fixture_slot from runs"
+    )
+    # The one-port station is a fixture of one slot: its runs record slot 1.
+    assert rows == [("PT000042", "pass", "st-1", "op-7", "kxm52-production", 1)]
     assert station.rows("select count(*) from poses") == [(7,)]
     stored = station.rows("select offset_x, offset_y, offset_z from runs")[0]
     truth = station.putter.truth.offset_counts

@@ -1,0 +1,73 @@
+"""The alert loop of a server process: the plant's rules checked, their alerts posted.
+
+Every ``interval`` the rules are evaluated against the stored runs and the due alerts
+posted to the webhook as JSON (httpx) (:mod:`db.alerts`: stored once per event, held by
+one process while it posts). A webhook that does not answer 2xx, or not at all, gets the
+alert again after the retry interval; it is never stored twice. Any number of server
+processes may run the loop at once.
+"""
+
+import asyncio
+import logging
+from datetime import UTC, datetime, timedelta
+
+import httpx
+from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
+
+from db.alerts import claim_due, evaluate, mark_delivered
+from station.domain.quality.alerts import AlertRules
+
+log = logging.getLogger(__name__)
+
+#: The longest a webhook may take to answer a post.
+POST_TIMEOUT_S = 10.0
+
+
+class AlertLoop:
+    """Evaluates ``rules`` and posts their alerts every ``interval_s``; ``rounds``: the
+    rounds done (the alerts page shows it: a reader sees the loop going)."""
+
+    def __init__(
+        self,
+        sessions: async_sessionmaker[AsyncSession],
+        rules: AlertRules,
+        interval_s: float,
+        retry_s: float,
+    ) -> None:
+        self.sessions = sessions
+        self.rules = rules
+        self.interval_s = interval_s
+        self.retry = timedelta(seconds=retry_s)
+        self.rounds = 0
+
+    async def run(self) -> None:
+        """Rounds until cancelled; a round that fails (the database away) is logged and
+        the next one tries again."""
+        async with httpx.AsyncClient(timeout=POST_TIMEOUT_S) as client:
+            while True:
+                try:
+                    await self.round(client)
+                except Exception:  # the loop outlives a database or network fault
+                    log.exception("alert round failed; the next one tries again")
+                await asyncio.sleep(self.interval_s)
+
+    async def round(self, client: httpx.AsyncClient) -> None:
+        """Evaluate the rules, then post each due alert this process won."""
+        now = datetime.now(UTC)
+        async with self.sessions() as session, session.begin():
+            await session.run_sync(evaluate, self.rules, now)
+        async with self.sessions() as session, session.begin():
+            due = await session.run_sync(claim_due, now, self.retry)
+        for alert in due:
+            try:
+                answer = await client.post(
+                    str(self.rules.webhook), json=alert.model_dump(mode="json")
+                )
+                taken = answer.is_success
+            except httpx.HTTPError as exc:
+                log.warning("webhook did not take alert %s: %s", alert.event_key, exc)
+                taken = False
+            if taken:
+                async with self.sessions() as session, session.begin():
+                    await session.run_sync(mark_delivered, alert.event_key, datetime.now(UTC))
+        self.rounds += 1
