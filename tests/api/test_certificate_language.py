@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from api.language import preferred
 from db import Database, RunRepository
+from station.domain.gyro import fit_log, paper_truth, simulate_log
 from station.domain.i18n import LANGUAGES
 from station.domain.limits import Bounds, check, load_profile
-from station.domain.records import HoldReview
+from station.domain.records import GyroFitRecord, HoldReview
 from station.report.certificate import document_number
 from tests.db.records import T0, make_record
 
@@ -176,6 +177,11 @@ def _english_words(page: str, stored: set[str]) -> set[str]:
 def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
     client: httpx.Client, database: Database
 ) -> None:
+    """A passing certificate (nine-parameter model, gyro matrix, uncertainty, guarded
+    rule, that shift's golden-unit check, a lab's gyro fit) and a failure report (an
+    earlier run, a review) in ko and zh: no word in Latin letters but the record's own
+    values and the allowed tokens; the English page has some (the check can fail)."""
+    golden = make_record(serial="GU-001", purpose="golden", started_at=T0 - timedelta(minutes=10))
     passed = make_record(
         serial="PT-000778",
         model="nine",
@@ -188,8 +194,16 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
     failed = make_record(serial=SERIAL, verdict="fail")
     with database.session() as session:
         repository = RunRepository(session)
-        for run in (passed, earlier, failed):
+        for run in (golden, passed, earlier, failed):
             repository.submit(run)
+        repository.add_gyro_fit(
+            GyroFitRecord(
+                serial=passed.serial,
+                fitted_at=T0 - timedelta(days=1),
+                source="centrifuge.csv",
+                report=fit_log(simulate_log(paper_truth(), seed=3)[0]),
+            )
+        )
         repository.add_review(
             HoldReview(
                 serial=SERIAL,
@@ -204,7 +218,7 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
         session.commit()
     stored = {
         value
-        for run in (passed, earlier, failed)
+        for run in (golden, passed, earlier, failed)
         for value in (
             str(run.run_id),
             str(run.run_id)[:8],  # a review names its run so
@@ -222,7 +236,7 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
             *(p.name for p in run.poses),
         )
         if value
-    } | {"qe-3", "PCB-7", "R-12"}  # the review's own words, as its reviewer wrote them
+    } | {"qe-3", "PCB-7", "R-12", "centrifuge.csv"}  # a reviewer's words, a lab's file
     for run in (passed, failed):
         url = f"/api/v1/units/{run.serial}/certificate"
         english = client.get(url).text
@@ -233,4 +247,6 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
             assert _english_words(page, stored) == set(), (run.verdict, language)
             assert run.serial in page
             assert str(run.run_id) in page
+            assert ("centrifuge.csv" in page) == (run is passed)  # the lab's gyro fit's
+            assert "GU-001" in page  # that shift's golden-unit check, the reference
             assert "{" not in page.split("<body>", 1)[1].split("<style>")[0]  # placeholders filled
