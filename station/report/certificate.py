@@ -11,9 +11,10 @@ The page (``templates/certificate.html`` and its ``identity.html``) lays it out.
 import math
 from dataclasses import dataclass
 
-from station.domain.i18n import Say
-from station.domain.limits import CHECKS, UNITS, Bounds, LimitsProfile
+from station.domain.i18n import Say, speaker
+from station.domain.limits import CHECKS, Bounds, LimitsProfile
 from station.domain.records import RunRecord, RunSummary
+from station.report.explanations import check_name, unit_words
 
 #: The document's number prefix by the run's verdict: a certificate, or a failure report.
 NUMBER_PREFIXES = {"pass": "CAL", "fail": "FR"}
@@ -23,23 +24,8 @@ NUMBER_PREFIXES = {"pass": "CAL", "fail": "FR"}
 #: runs (n²/2⁴⁹); 8 digits (32 bits) would collide about once in 100,000 runs.
 NUMBER_DIGITS = 12
 
-#: Each check's name on the page, in the order of the limits profile.
-CHECK_NAMES = {
-    "offset": "offset",
-    "sensitivity": "sensitivity",
-    "verification_error": "verification pose error",
-    "pose_noise": "pose noise (std)",
-    "gyro_bias": "gyro bias",
-    "link_loss": "link loss",
-    "writeback": "write-back relative error",
-    "unit_output": "unit's own output after write-back",
-    "gyro_scale": "gyro scale error K_ii − 1",
-    "gyro_misalignment": "gyro misalignment K_ij",
-    "gyro_verification": "gyro verification move",
-}
-
-#: Units of the checks that :data:`station.domain.limits.UNITS` leaves bare: fractions.
-FRACTION = "fraction"
+#: The page's words in English, the sources' own (a document's default reader).
+ENGLISH = speaker("en")
 
 
 def document_number(run: RunRecord | RunSummary) -> str:
@@ -59,36 +45,48 @@ def mean_temperature(run: RunRecord) -> float | None:
     return math.fsum(values) / len(values) if values else None
 
 
-def method(run: RunRecord) -> list[tuple[str, str]]:
-    """The methods that produced the run's results, each with its source."""
+def method(run: RunRecord, tr: Say = ENGLISH) -> list[tuple[str, str]]:
+    """The methods that produced the run's results, each with its source, in the
+    reader's language (``tr``: :func:`station.domain.i18n.speaker`)."""
     rule = run.decision_rule or "simple"
     lines = [
         (
-            "accelerometer",
-            "six-position autocalibration: offset and sensitivity per axis from |g| = 1 [Song2006]"
+            tr("accelerometer"),
+            tr(
+                "six-position autocalibration: offset and sensitivity per axis from |g| = 1 "
+                "[Song2006]"
+            )
             if run.model == "six"
-            else "six-position autocalibration [Song2006] with the nine-parameter model "
-            "(offset, sensitivity, axis misalignment) fitted by least squares [Tedaldi2014]",
+            else tr(
+                "six-position autocalibration [Song2006] with the nine-parameter model "
+                "(offset, sensitivity, axis misalignment) fitted by least squares [Tedaldi2014]"
+            ),
         ),
     ]
     if run.gyro is not None:
-        lines.append(("gyro bias", "mean rate of the still poses"))
+        lines.append((tr("gyro bias"), tr("mean rate of the still poses")))
     if run.gyro_matrix is not None:
-        lines.append(("gyro matrix K", "fitted from the moves between still poses [Tedaldi2014]"))
+        lines.append(
+            (tr("gyro matrix K"), tr("fitted from the moves between still poses [Tedaldi2014]"))
+        )
     lines.append(
         (
-            "uncertainty",
-            "expanded uncertainty U = k·u_c, k = 2, evaluated per JCGM 100:2008 (GUM), "
-            "validated by Monte Carlo per JCGM 101:2008",
+            tr("uncertainty"),
+            tr(
+                "expanded uncertainty U = k·u_c, k = 2, evaluated per JCGM 100:2008 (GUM), "
+                "validated by Monte Carlo per JCGM 101:2008"
+            ),
         )
     )
     lines.append(
         (
-            "decision rule",
-            "simple acceptance: a value within its limits conforms (ILAC-G8:09/2019 §4.2.1)"
+            tr("decision rule"),
+            tr("simple acceptance: a value within its limits conforms (ILAC-G8:09/2019 §4.2.1)")
             if rule == "simple"
-            else "guarded acceptance, guard band w = U: a value conforms when value ± U lies "
-            "within its limits (ILAC-G8:09/2019 §4.2.2, JCGM 106:2012)",
+            else tr(
+                "guarded acceptance, guard band w = U: a value conforms when value ± U lies "
+                "within its limits (ILAC-G8:09/2019 §4.2.2, JCGM 106:2012)"
+            ),
         )
     )
     return lines
@@ -112,7 +110,7 @@ def _triple(values: tuple[float, float, float]) -> str:
     return ", ".join(f"{axis} {value:.6g}" for axis, value in zip("xyz", values, strict=True))
 
 
-def _measured(run: RunRecord, code: str) -> str:
+def _measured(run: RunRecord, code: str, tr: Say) -> str:
     """What the run measured for check ``code``, as the check judged it; "" if nothing."""
     cal, matrix = run.coefficients, run.gyro_matrix
     if code == "offset" and cal is not None:
@@ -123,7 +121,7 @@ def _measured(run: RunRecord, code: str) -> str:
         value = run.quality.verification_error_mg
         return "" if value is None else f"{value:.6g}"
     if code == "pose_noise":
-        return f"largest {max(max(p.std.as_tuple()) for p in run.poses):.6g}"
+        return tr("largest {value}", value=f"{max(max(p.std.as_tuple()) for p in run.poses):.6g}")
     if code == "gyro_bias" and run.gyro is not None:
         return _triple(run.gyro.bias.as_tuple())
     if code == "gyro_scale" and matrix is not None:
@@ -131,24 +129,31 @@ def _measured(run: RunRecord, code: str) -> str:
         return _triple((k[0][0] - 1, k[1][1] - 1, k[2][2] - 1))
     if code == "gyro_misalignment" and matrix is not None:
         off = [abs(matrix.matrix[i][j]) for i in range(3) for j in range(3) if i != j]
-        return f"largest |K_ij| {max(off):.6g}"
+        return tr("largest {value}", value=f"|K_ij| {max(off):.6g}")
     if code == "gyro_verification" and matrix is not None and matrix.verification_deg is not None:
         return f"{matrix.verification_deg:.6g}"
     return ""
 
 
-def check_rows(run: RunRecord, profile: LimitsProfile) -> list[CheckRow]:
+def _quantities(tr: Say) -> dict[str, str]:
+    """Each check's quantity after its name on the page, where the name alone does not
+    say which (:func:`check_rows`)."""
+    return {"pose_noise": tr("(std)"), "gyro_scale": "K_ii − 1", "gyro_misalignment": "K_ij"}
+
+
+def check_rows(run: RunRecord, profile: LimitsProfile, tr: Say = ENGLISH) -> list[CheckRow]:
     """Every check ``profile`` bounds, with its unit, its bounds, what the run measured
     and its result (ISO/IEC 17025 7.8.6: the statement of conformity of each
     quantity): ``fail`` when the run failed it, ``pass`` when the run passed or
-    measured it without failing it, else ``not reached`` (the run stopped before)."""
+    measured it without failing it, else ``not reached`` (the run stopped before): a
+    code. Names, units and what was measured in the reader's language (``tr``)."""
     failed = {f.code for f in run.failures}
     rows = []
     for code, field in CHECKS.items():
         bounds: Bounds | None = getattr(profile, field)
         if bounds is None:
             continue
-        measured = _measured(run, code)
+        measured = _measured(run, code, tr)
         result = (
             "fail"
             if code in failed
@@ -158,8 +163,8 @@ def check_rows(run: RunRecord, profile: LimitsProfile) -> list[CheckRow]:
         )
         rows.append(
             CheckRow(
-                name=CHECK_NAMES[code],
-                unit=UNITS[code] or FRACTION,
+                name=" ".join(filter(None, (check_name(code, tr), _quantities(tr).get(code)))),
+                unit=unit_words(code, tr) or tr("fraction"),
                 lower=bounds.lower,
                 upper=bounds.upper,
                 measured=measured,
@@ -180,13 +185,14 @@ class Identity:
     golden: RunSummary | None
 
 
-def identity(run: RunRecord, golden: RunSummary | None) -> Identity:
+def identity(run: RunRecord, golden: RunSummary | None, tr: Say = ENGLISH) -> Identity:
     """The identity block of ``run``'s document; ``golden``: the latest golden-unit run
-    of its station in its shift before it (``db.RunRepository.latest_golden``)."""
+    of its station in its shift before it (``db.RunRepository.latest_golden``); its
+    method in the reader's language (``tr``)."""
     return Identity(
         number=document_number(run),
         temperature_c=mean_temperature(run),
-        method=method(run),
+        method=method(run, tr),
         golden=golden,
     )
 
@@ -206,4 +212,20 @@ def failure_words(tr: Say) -> dict[str, str]:
         "upper": tr("upper"),
         "none": tr("none"),
         "failure_reasons": tr("failure reasons"),
+    }
+
+
+def code_words(tr: Say) -> dict[str, str]:
+    """The stored codes the documents show as words, in the reader's language: verdicts,
+    a check's result, a pose's role, a review's decision, a decision rule."""
+    return {
+        "pass": tr("pass"),
+        "fail": tr("fail"),
+        "not reached": tr("not reached"),
+        "fit": tr("fit"),
+        "verify": tr("verify"),
+        "retest": tr("retest"),
+        "scrap": tr("scrap"),
+        "simple": tr("simple acceptance"),
+        "guarded": tr("guarded acceptance"),
     }

@@ -40,14 +40,14 @@ def _limit_check(failure: FailureReason, tr: Say) -> str:
     profile's rule is guarded acceptance (ILAC-G8:09/2019 §4.2.2)."""
     subject = " ".join(
         part
-        for part in (_check_name(failure.code, tr), failure.axis or "", _where(failure, tr))
+        for part in (check_name(failure.code, tr), failure.axis or "", _where(failure, tr))
         if part
     )
     bounds = Bounds(lower=failure.lower, upper=failure.upper)
     limits = bounds.describe()
     if failure.measured is None:
         return tr("{subject}: no finite value, limits {limits}", subject=subject, limits=limits)
-    unit = _unit(failure.code, tr)
+    unit = unit_words(failure.code, tr)
     value = f"{failure.measured:.6g}" + (f" {unit}" if unit else "")
     if bounds.contains(failure.measured):
         if failure.uncertainty is None:  # stored before U was (revision 0016)
@@ -70,7 +70,7 @@ def _limit_check(failure: FailureReason, tr: Say) -> str:
     return tr("{subject} {value} outside {limits}", subject=subject, value=value, limits=limits)
 
 
-def _check_name(code: str, tr: Say) -> str:
+def check_name(code: str, tr: Say) -> str:
     """A limit check's name (:data:`station.domain.limits.CHECKS`); its code if unknown."""
     names = {
         "offset": tr("offset"),
@@ -88,7 +88,7 @@ def _check_name(code: str, tr: Say) -> str:
     return names.get(code, code)
 
 
-def _unit(code: str, tr: Say) -> str:
+def unit_words(code: str, tr: Say) -> str:
     """A check's unit (:data:`station.domain.limits.UNITS`) as the operator reads it."""
     units = {
         "counts": tr("counts"),

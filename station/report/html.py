@@ -32,7 +32,7 @@ from station.domain.quality.station_health import (
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 from station.report import formatting, svg
-from station.report.certificate import check_rows, failure_words, identity
+from station.report.certificate import ENGLISH, check_rows, code_words, failure_words, identity
 from station.report.explanations import explanation
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
@@ -69,6 +69,10 @@ _env.filters.update(
     reason=formatting.reason,
 )
 _env.globals.update(
+    # The page's words: English unless a page is rendered for a reader of another
+    # language (:func:`certificate_page`); ``pybabel extract`` reads the templates' calls.
+    tr=ENGLISH,
+    said=lambda code: code,
     version=__version__,
     histogram=lambda stats: Markup(svg.histogram(stats)),
     pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
@@ -435,8 +439,9 @@ def certificate_page(
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
     gets no certificate. ``earlier``: the unit's runs before ``run``, listed too.
-    ``language``: the reader's; the title and the failures (this run's and the earlier
-    runs') are in it (:mod:`station.report.explanations`), codes and values as stored.
+    ``language``: the reader's; every word of the page is in it, the failures (this
+    run's and the earlier runs') rendered from their code and parameters
+    (:mod:`station.report.explanations`); codes, serials and values as stored.
 
     ``profile`` is the run's limits profile as the results database stores it, shown
     next to the coefficients; ``None`` when the run's station never sent it (older
@@ -453,7 +458,9 @@ def certificate_page(
         plot = svg_g_sensitivity(
             gyro_fit.dwells.to_log(), model, sense_axes_of(gyro_fit.report, model)
         )
-    words = failure_words(speaker(language))
+    tr = speaker(language)
+    words = failure_words(tr)
+    codes = code_words(tr)
     return _env.get_template("certificate.html").render(
         run=run,
         profile=profile,
@@ -466,11 +473,13 @@ def certificate_page(
         document_title=words[run.verdict],
         words=words,
         page_language=language,
+        tr=tr,
+        said=lambda code: codes.get(code, code),
         explain=lambda failure: explanation(failure, language),
         failure_text=lambda failure: (
             formatting.reason(failure) if language == "en" else explanation(failure, language)
         ),
         gyro_plot=Markup(plot) if plot is not None else None,
-        identity=identity(run, golden),
-        checks=None if profile is None else check_rows(run, profile),
+        identity=identity(run, golden, tr),
+        checks=None if profile is None else check_rows(run, profile, tr),
     )

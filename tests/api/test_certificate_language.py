@@ -12,8 +12,11 @@ from hypothesis import strategies as st
 
 from api.language import preferred
 from db import Database, RunRepository
+from station.domain.gyro import fit_log, paper_truth, simulate_log
 from station.domain.i18n import LANGUAGES
 from station.domain.limits import Bounds, check, load_profile
+from station.domain.records import GyroFitRecord, HoldReview
+from station.report.certificate import document_number
 from tests.db.records import T0, make_record
 
 SERIAL = "PT-000777"
@@ -133,3 +136,117 @@ def test_a_guard_band_refusal_keeps_its_u_through_the_database(
         "오프셋 y 2199.6 카운트: [1900, 2200] 안에 있으나 한계까지의 거리가 "
         "불확도 U = 0.8 카운트보다 작음 (보호 대역 판정, w = U)"
     )
+
+
+#: Tokens in Latin letters a page in Korean or Chinese keeps: units, the names of
+#: standards and sources it cites, symbols, the program's and the record's formats.
+ALLOWED = {
+    *("mg", "ppm", "deg", "sha", "UTC", "ADC", "JSON", "calstation", "RMS"),
+    *("ISO", "IEC", "JCGM", "GUM", "ILAC", "Song", "Tedaldi", "Monte", "Carlo"),
+    *("u_c", "K_ii", "K_ij"),
+}
+#: A whole unit's gyro matrix and the uncertainty of its coefficients, as a run records them.
+GYRO_MATRIX = {
+    "matrix": [[1.004, 0.002, -0.001], [0.001, 0.997, 0.003], [-0.002, 0.001, 1.002]],
+    "standard_errors": [[6e-5, 5e-5, 5e-5], [5e-5, 6e-5, 5e-5], [5e-5, 5e-5, 6e-5]],
+    "bias_dps": {"x": 0.01, "y": -0.02, "z": 0.005},
+    "residual_rms_deg": 0.01,
+    "condition_number": 3.0,
+    "verification_deg": 0.2,
+}
+UNCERTAINTY = {
+    "k": 2.0,
+    "offset": {"x": 0.5, "y": 0.5, "z": 0.6},
+    "sensitivity": {"x": 0.4, "y": 0.4, "z": 0.5},
+    "gyro_matrix": [[0.000171, 0.000132, 0.000133]] * 3,
+}
+
+
+def _english_words(page: str, stored: set[str]) -> set[str]:
+    """The words in Latin letters of the page's body (its text, tags and styles left
+    out) that are neither a stored value of the record (serials, ids, codes, names) nor
+    an allowed token."""
+    body = page.split("<body>", 1)[1]
+    body = re.sub(r"<style>.*?</style>", " ", body, flags=re.S)
+    text = html.unescape(re.sub(r"<[^>]+>", " ", body))
+    for value in sorted(stored, key=len, reverse=True):
+        text = text.replace(value, " ")
+    return set(re.findall(r"[A-Za-z_]{2,}", text)) - ALLOWED
+
+
+def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
+    client: httpx.Client, database: Database
+) -> None:
+    """A passing certificate (nine-parameter model, gyro matrix, uncertainty, guarded
+    rule, that shift's golden-unit check, a lab's gyro fit) and a failure report (an
+    earlier run, a review) in ko and zh: no word in Latin letters but the record's own
+    values and the allowed tokens; the English page has some (the check can fail)."""
+    golden = make_record(serial="GU-001", purpose="golden", started_at=T0 - timedelta(minutes=10))
+    passed = make_record(
+        serial="PT-000778",
+        model="nine",
+        lot="L-2611",
+        gyro_matrix=GYRO_MATRIX,
+        uncertainty=UNCERTAINTY,
+        decision_rule="guarded",
+    )
+    earlier = make_record(serial=SERIAL, verdict="fail", started_at=T0 - timedelta(hours=1))
+    failed = make_record(serial=SERIAL, verdict="fail")
+    with database.session() as session:
+        repository = RunRepository(session)
+        for run in (golden, passed, earlier, failed):
+            repository.submit(run)
+        repository.add_gyro_fit(
+            GyroFitRecord(
+                serial=passed.serial,
+                fitted_at=T0 - timedelta(days=1),
+                source="centrifuge.csv",
+                report=fit_log(simulate_log(paper_truth(), seed=3)[0]),
+            )
+        )
+        repository.add_review(
+            HoldReview(
+                serial=SERIAL,
+                run_id=failed.run_id,
+                reviewed_at=T0 + timedelta(hours=1),
+                reviewer="qe-3",
+                root_cause="PCB-7",
+                repair_action="R-12",
+                decision="retest",
+            )
+        )
+        session.commit()
+    stored = {
+        value
+        for run in (golden, passed, earlier, failed)
+        for value in (
+            str(run.run_id),
+            str(run.run_id)[:8],  # a review names its run so
+            document_number(run),
+            run.serial,
+            run.part_number or "",
+            run.station_id,
+            run.operator_id,
+            run.software_version,
+            run.algorithm,
+            run.model,
+            run.limits.name,
+            run.limits.sha256,
+            *(f.code for f in run.failures),
+            *(p.name for p in run.poses),
+        )
+        if value
+    } | {"qe-3", "PCB-7", "R-12", "centrifuge.csv"}  # a reviewer's words, a lab's file
+    for run in (passed, failed):
+        url = f"/api/v1/units/{run.serial}/certificate"
+        english = client.get(url).text
+        assert _english_words(english, stored)  # the English page has English words
+        for language in ("ko", "zh"):
+            page = client.get(url, params={"lang": language}).text
+            assert f'<html lang="{language}">' in page
+            assert _english_words(page, stored) == set(), (run.verdict, language)
+            assert run.serial in page
+            assert str(run.run_id) in page
+            assert ("centrifuge.csv" in page) == (run is passed)  # the lab's gyro fit's
+            assert "GU-001" in page  # that shift's golden-unit check, the reference
+            assert "{" not in page.split("<body>", 1)[1].split("<style>")[0]  # placeholders filled

@@ -66,7 +66,13 @@ def test_a_unit_page_fits_a_1400_px_window(
 ) -> None:
     _store_today(database)
     assert browser.evaluate("window.innerWidth") == WIDTH
-    for page in ("/units/PT-WIDE-001", "/api/v1/units/PT-WIDE-001/certificate"):
+    certificate = "/api/v1/units/PT-WIDE-001/certificate"
+    for page in (
+        "/units/PT-WIDE-001",
+        certificate,
+        f"{certificate}?lang=ko",
+        f"{certificate}?lang=zh",
+    ):
         assert browser.load(f"{live_url}{page}").errors == []
         assert browser.evaluate(OVERFLOW) <= 0, page
         assert browser.evaluate(UNSCROLLED) == 0, page

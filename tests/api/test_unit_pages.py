@@ -1,6 +1,7 @@
 """A unit's page, its certificate or failure report, and the line's event stream, on a live
 server on both backends."""
 
+import html
 import json
 import re
 from collections.abc import Iterator
@@ -184,8 +185,9 @@ def test_the_dashboard_lists_the_units_on_hold_with_what_they_hold(
 
 
 def _identity(page: str) -> str:
-    """The identity block and method of a certificate or failure report."""
-    return page.split('<table class="identity">')[1].split("<h2>Limits</h2>")[0]
+    """The identity block and method of a certificate or failure report (its text
+    unescaped: a translated line's apostrophe is escaped as any text is)."""
+    return html.unescape(page.split('<table class="identity">')[1].split("<h2>Limits</h2>")[0])
 
 
 @pytest.fixture

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from babel.messages.extract import extract_from_dir
+from babel.messages.frontend import parse_mapping_cfg
 from babel.messages.pofile import read_po
 
 from station.domain import i18n
@@ -16,6 +17,8 @@ from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr
 
 ROOT = Path(__file__).resolve().parents[3]
 TEMPLATE = ROOT / "station" / "domain" / "locale" / "calstation.pot"
+#: How ``pybabel extract -F babel.cfg`` reads each file: the sources and the page templates.
+METHODS, OPTIONS = parse_mapping_cfg(io.StringIO((ROOT / "babel.cfg").read_text(encoding="utf-8")))
 #: The folders ``pybabel extract`` reads (docs/station.md).
 EXTRACTED = ("station/run", "station/loop", "station/cli", "station/report", "station/results")
 PLACEHOLDER = re.compile(r"\{(\w+)\}")
@@ -36,7 +39,11 @@ def test_the_template_holds_every_line_the_sources_translate() -> None:
         message
         for folder in EXTRACTED
         for _, _, message, _, _ in extract_from_dir(
-            ROOT / folder, keywords={"tr": None}, comment_tags=()
+            ROOT / folder,
+            method_map=METHODS,
+            options_map=OPTIONS,
+            keywords={"tr": None},
+            comment_tags=(),
         )
     }
     assert said == _template_ids()
