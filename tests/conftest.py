@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
-pytest_plugins = ["tests.databases", "tests.servers"]
+pytest_plugins = ["tests.databases", "tests.servers", "tests.browser"]
 
 # Locally every run explores new examples; CI replays a fixed set, so a submission's
 # verdict does not hang on a draw (a failure found locally is shrunk and kept there).
