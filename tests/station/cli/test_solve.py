@@ -12,7 +12,7 @@ from station.domain.errors import InputError
 from station.domain.posefile import read_pose_file
 from station.simulator.recording import pose_means, random_directions, spread_directions
 from station.simulator.sensor import SensorTruth
-from tests.conftest import REPO_ROOT, CliRunner
+from tests.conftest import REPO_ROOT, CliRunner, examples
 
 PAPER_CSV = REPO_ROOT / "examples" / "paper_table2.csv"
 
@@ -134,7 +134,7 @@ def test_missing_file(run_cli: CliRunner, tmp_path: Path) -> None:
     assert "none.csv: no such file" in result.stderr
 
 
-@settings(max_examples=200)
+@settings(max_examples=examples(200))
 @given(text=st.text(alphabet="ax yz,0123456789.-e\n\"'", max_size=200))
 def test_pose_reader_never_crashes_on_garbage(
     tmp_path_factory: pytest.TempPathFactory, text: str
