@@ -7,7 +7,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner as ClickRunner
 from hypothesis import settings
+
+from station.cli.main import main
 
 pytest_plugins = ["tests.databases", "tests.servers", "tests.browser"]
 
@@ -63,6 +66,46 @@ def run_cli() -> CliRunner:
             env=env,
             check=False,
             **kwargs,
+        )
+
+    return run
+
+
+@pytest.fixture
+def call_cli(monkeypatch: pytest.MonkeyPatch) -> CliRunner:
+    """Run ``calstation ARGS...`` in this process, through its real entry point
+    (:func:`station.cli.main.main`) under Click's test isolation, for tests of what a
+    command computes and says rather than of its process: the interpreter and the
+    command's libraries are loaded once per test process, not once per call.
+
+    Answers as :func:`run_cli` does (a completed process: exit status, standard output
+    and standard error apart); ``input=``, ``env=`` (the whole environment, as for a
+    process) and ``cwd=`` as there.
+    """
+
+    def run(
+        *args: str,
+        input: str | None = None,
+        env: dict[str, str] | None = None,
+        cwd: Path | str | None = None,
+    ) -> subprocess.CompletedProcess[str]:
+        environment: dict[str, str | None] = {name: None for name in os.environ}
+        environment.update(env or os.environ)
+        if cwd is not None:
+            monkeypatch.chdir(cwd)
+        monkeypatch.setattr(sys, "argv", ["calstation", *args])
+        with ClickRunner().isolation(input=input, env=environment) as (stdout, stderr, _):
+            try:
+                main()
+                status = 0
+            except SystemExit as stop:
+                status = stop.code if isinstance(stop.code, int) else int(stop.code is not None)
+            finally:
+                sys.stdout.flush()
+                sys.stderr.flush()
+            output, errors = stdout.getvalue(), stderr.getvalue()
+        return subprocess.CompletedProcess(
+            ["calstation", *args], status, output.decode(), errors.decode()
         )
 
     return run
