@@ -4,7 +4,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench clean
+.PHONY: demo test test-nightly lint format bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +18,9 @@ demo: $(STAMP)  ## the main job on the embedded defaults
 test: $(STAMP)  ## the whole test suite, one worker per core (pytest -n 0 for one process)
 	@start=$$(date +%s); $(PY) -m pytest -n auto; status=$$?; \
 	echo "make test: $$(( $$(date +%s) - start )) s wall, exit $$status"; exit $$status
+
+test-nightly: $(STAMP)  ## the whole suite at the nightly sizes of its properties and API fuzzing
+	HYPOTHESIS_PROFILE=nightly $(MAKE) test
 
 lint: $(STAMP)  ## ruff (lint and format check), strict mypy and the import contracts (layers)
 	$(VENV)/bin/ruff check .

@@ -186,9 +186,9 @@ OFFLINE = ("--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",)
 
 
 @contextmanager
-def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
+def chromium_process(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[int]:
     """A headless Chromium with its profile in ``profile``, on a blank page; ``flags`` are
-    added to its command line (:data:`OFFLINE`)."""
+    added to its command line (:data:`OFFLINE`). Yields its DevTools port."""
     binary = chromium_binary()
     process = subprocess.Popen(
         [
@@ -203,11 +203,7 @@ def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
         stderr=subprocess.DEVNULL,
     )
     try:
-        port = _devtools_port(profile, process)
-        targets = httpx.get(f"http://127.0.0.1:{port}/json/list", timeout=10).json()
-        page = next(t for t in targets if t["type"] == "page")
-        with connect(page["webSocketDebuggerUrl"], max_size=None) as socket:
-            yield Browser(socket)
+        yield _devtools_port(profile, process)
     finally:
         process.terminate()
         try:
@@ -215,3 +211,50 @@ def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+@contextmanager
+def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
+    """A Chromium of its own (:func:`chromium_process`), its first page."""
+    with chromium_process(profile, flags) as port:
+        targets = httpx.get(f"http://127.0.0.1:{port}/json/list", timeout=10).json()
+        page = next(t for t in targets if t["type"] == "page")
+        with connect(page["webSocketDebuggerUrl"], max_size=None) as socket:
+            yield Browser(socket)
+
+
+@contextmanager
+def fresh_page(port: int) -> Iterator[Browser]:
+    """A new page of the Chromium at ``port``, in a browser context of its own (its own
+    cookies, storage and cache, like a fresh profile), closed with its context after."""
+    version = httpx.get(f"http://127.0.0.1:{port}/json/version", timeout=10).json()
+    with connect(version["webSocketDebuggerUrl"], max_size=None) as socket:
+        control = Browser(socket)
+        context = control.call("Target.createBrowserContext")["browserContextId"]
+        try:
+            target = control.call(
+                "Target.createTarget",
+                url="about:blank",
+                browserContextId=context,
+                width=WIDTH,
+                height=1000,
+            )["targetId"]
+            page = f"ws://127.0.0.1:{port}/devtools/page/{target}"
+            with connect(page, max_size=None) as page_socket:
+                yield Browser(page_socket)
+        finally:
+            control.call("Target.disposeBrowserContext", browserContextId=context)
+
+
+@pytest.fixture(scope="session")
+def chromium_port(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
+    """One Chromium for the session (each test gets a fresh page: :func:`browser`)."""
+    with chromium_process(tmp_path_factory.mktemp("chromium")) as port:
+        yield port
+
+
+@pytest.fixture
+def browser(chromium_port: int) -> Iterator[Browser]:
+    """A fresh page, in a browser context of its own, of the session's Chromium."""
+    with fresh_page(chromium_port) as browser:
+        yield browser

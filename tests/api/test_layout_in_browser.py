@@ -1,14 +1,10 @@
 """The pages keep to the window (issue 27): wide tables and charts scroll in their own
 box, in headless Chromium: a unit page at 1,400 px, the dashboard at 420 px."""
 
-from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
-from pathlib import Path
-
-import pytest
 
 from db import Database, RunRepository
-from tests.browser import WIDTH, Browser, chromium, chromium_binary
+from tests.browser import WIDTH, Browser
 from tests.db.records import make_record
 
 #: How far the page reaches past the window's right edge (px; 0 when it fits).
@@ -32,13 +28,6 @@ LONG_REASON = {
     "measured": 8.59057,
     "upper": 8.0,
 }
-
-
-@pytest.fixture
-def browser(tmp_path: Path) -> Iterator[Browser]:
-    chromium_binary()
-    with chromium(tmp_path / "chromium") as browser:
-        yield browser
 
 
 def _store_today(database: Database) -> None:

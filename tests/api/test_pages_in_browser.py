@@ -4,7 +4,6 @@ Each page is served by the live server, loaded by Chromium, checked for its char
 for console errors, and saved as a screenshot under ``artifacts/``.
 """
 
-from collections.abc import Iterator
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -12,7 +11,7 @@ import httpx
 import pytest
 
 from db import Database, RunRepository
-from tests.browser import OFFLINE, Browser, chromium, chromium_binary
+from tests.browser import OFFLINE, Browser, chromium
 from tests.db.eol_data import insert_line_history
 from tests.db.records import make_record
 
@@ -21,13 +20,6 @@ DRAWN_CHARTS = (
     "Array.from(document.querySelectorAll('svg.chart'))"
     ".filter(s => s.getBoundingClientRect().width > 100).length"
 )
-
-
-@pytest.fixture
-def browser(tmp_path: Path) -> Iterator[Browser]:
-    chromium_binary()
-    with chromium(tmp_path / "chromium") as browser:
-        yield browser
 
 
 def _today(database: Database) -> None:

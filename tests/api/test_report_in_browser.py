@@ -1,12 +1,7 @@
 """The report page's charts, axes and filter form in a real headless Chromium."""
 
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
-
 from db import Database
-from tests.browser import Browser, chromium, chromium_binary
+from tests.browser import Browser
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.servers import serving
 
@@ -21,13 +16,6 @@ Array.from(document.querySelectorAll('svg.chart')).flatMap(svg => {
   }).map(t => t.textContent);
 })
 """
-
-
-@pytest.fixture
-def browser(tmp_path: Path) -> Iterator[Browser]:
-    chromium_binary()
-    with chromium(tmp_path / "chromium") as browser:
-        yield browser
 
 
 def test_trend_and_control_charts_have_their_axes_and_no_label_is_cut(

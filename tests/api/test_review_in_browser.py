@@ -1,24 +1,15 @@
 """A held unit reviewed from its page in a real headless Chromium: the form typed in and
 submitted, the page back with the review listed; a wrong key answers a page in one line."""
 
-from collections.abc import Iterator
 from datetime import timedelta
-from pathlib import Path
 
 import pytest
 
 from db import Database, RunRepository
-from tests.browser import Browser, chromium, chromium_binary
+from tests.browser import Browser
 from tests.db.records import T0, make_record
 
 FAILED = {"verdict": "fail", "failures": [{"code": "offset", "message": "offset x high"}]}
-
-
-@pytest.fixture
-def browser(tmp_path: Path) -> Iterator[Browser]:
-    chromium_binary()
-    with chromium(tmp_path / "chromium") as browser:
-        yield browser
 
 
 def _fill(browser: Browser, key: str) -> None:

@@ -2,8 +2,9 @@
 and PostgreSQL, with generated valid and invalid requests; no answer may be a 5xx, and
 every answer must be documented (status, media type, body schema).
 
-Bounded and repeatable: a fixed number of examples per operation, derandomized, no
-example database; a few seconds per backend. The line's event stream
+Bounded and repeatable: a fixed number of examples per operation (:data:`EXAMPLES` in
+the nightly profile, fewer in ``make test``: ``tests.conftest.examples``), derandomized,
+no example database; a few seconds per backend. The line's event stream
 (``GET /api/v1/events``) never ends, so no call to it can be checked whole here: it takes
 no input, and ``tests/api/test_unit_pages.py`` reads its answer (status, media type, a
 pushed run's ``RunEvent``).
@@ -26,6 +27,7 @@ from schemathesis.specs.openapi.checks import (
 
 from api.main import create_app
 from api.settings import ApiSettings
+from tests.conftest import examples
 from tests.db.records import make_record
 from tests.servers import STATION
 
@@ -47,7 +49,8 @@ CHECKS = [
     content_type_conformance,
     response_schema_conformance,
 ]
-#: Examples per operation and generation mode: enough to reach every parameter's edges.
+#: Examples per operation and generation mode at night: enough to reach every
+#: parameter's edges.
 EXAMPLES = 25
 
 
@@ -75,7 +78,7 @@ def test_no_5xx_and_every_answer_documented(
     base_url = str(client.base_url)
 
     @settings(
-        max_examples=EXAMPLES,
+        max_examples=examples(EXAMPLES),
         derandomize=True,
         database=None,
         deadline=None,

@@ -9,6 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from db import Database, RunRepository
+from tests.conftest import examples
 from tests.db.records import make_record
 
 RUNS = "/api/v1/runs"
@@ -161,7 +162,9 @@ json_values = st.recursive(
 
 
 @settings(
-    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=examples(60),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(
     field=st.sampled_from(list(make_record().model_dump(mode="json"))),
@@ -189,7 +192,9 @@ any_count = st.one_of(
 
 
 @settings(
-    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=examples(40),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(means=st.lists(st.tuples(any_count, any_count, any_count), min_size=7, max_size=7))
 def test_any_pose_means_get_an_answer_never_a_5xx(

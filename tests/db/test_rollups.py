@@ -29,6 +29,7 @@ from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.domain.limits import Bounds, load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import PARAMETERS
+from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
@@ -340,7 +341,7 @@ def rollup_rows(session: Session) -> dict[str, set[tuple[Any, ...]]]:
 
 @pytest.mark.timeout(400)  # a safety net: 30 histories, each with its trend and what-if
 @settings(
-    max_examples=30,
+    max_examples=examples(30),
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
     phases=[Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink],
@@ -389,7 +390,7 @@ def test_late_runs_and_retests_keep_the_report_exact(
         assert rollup_rows(session) == kept
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(
     value=st.one_of(
         st.floats(allow_nan=False, allow_infinity=False),

@@ -12,6 +12,7 @@ from sqlalchemy.orm import Session
 from db import Database, RunRepository
 from db.models import Run, Unit
 from db.units import answer_json
+from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import OUTCOMES, T0, make_record
 
@@ -32,7 +33,7 @@ def units_of(session: Session, serials: set[str]) -> dict[str, tuple[int, str]]:
 
 
 @settings(
-    max_examples=30,
+    max_examples=examples(30),
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
 )

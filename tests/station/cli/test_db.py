@@ -1,4 +1,5 @@
-"""``calstation db upgrade`` and ``calstation keys create`` as real processes."""
+"""``calstation db upgrade`` and ``calstation keys create`` through their entry point in
+the test's process (``call_cli``)."""
 
 import os
 from datetime import timedelta
@@ -23,25 +24,25 @@ def _env(**variables: str) -> dict[str, str]:
 
 
 def test_db_upgrade_creates_the_embedded_database_in_the_data_dir(
-    run_cli: CliRunner, tmp_path: Path
+    call_cli: CliRunner, tmp_path: Path
 ) -> None:
-    result = run_cli("db", "upgrade", env=_env(CALSTATION_DATA_DIR=str(tmp_path / "data")))
+    result = call_cli("db", "upgrade", env=_env(CALSTATION_DATA_DIR=str(tmp_path / "data")))
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "data" / "calstation.sqlite3").is_file()
     assert f"at schema revision {head_revision()}" in result.stdout
 
 
 def test_db_upgrade_is_idempotent_on_a_migrated_database(
-    run_cli: CliRunner, migrated_database: Database, database_url: str
+    call_cli: CliRunner, migrated_database: Database, database_url: str
 ) -> None:
-    result = run_cli("db", "upgrade", "--database-url", database_url, env=_env())
+    result = call_cli("db", "upgrade", "--database-url", database_url, env=_env())
     assert result.returncode == 0, result.stderr
     assert f"at schema revision {head_revision()}" in result.stdout
 
 
-def test_an_unreachable_database_is_one_line_and_exit_2(run_cli: CliRunner) -> None:
+def test_an_unreachable_database_is_one_line_and_exit_2(call_cli: CliRunner) -> None:
     for command in (("db", "upgrade"), ("keys", "create", "--station", "st1"), ("serve",)):
-        result = run_cli(*command, "--database-url", UNREACHABLE, env=_env())
+        result = call_cli(*command, "--database-url", UNREACHABLE, env=_env())
         assert result.returncode == 2, (command, result.stderr)
         assert result.stderr.startswith("calstation: error: ")
         assert "unavailable" in result.stderr
@@ -51,9 +52,9 @@ def test_an_unreachable_database_is_one_line_and_exit_2(run_cli: CliRunner) -> N
 
 
 def test_keys_create_prints_a_key_stored_only_as_its_hash(
-    run_cli: CliRunner, database: Database, database_url: str
+    call_cli: CliRunner, database: Database, database_url: str
 ) -> None:
-    result = run_cli(
+    result = call_cli(
         "keys", "create", "--station", "line3-st2", "--database-url", database_url, env=_env()
     )
     assert result.returncode == 0, result.stderr
@@ -65,8 +66,8 @@ def test_keys_create_prints_a_key_stored_only_as_its_hash(
         assert key not in session.scalars(select(StationKey.key_sha256)).one()
 
 
-def test_keys_create_refuses_a_bad_station_id(run_cli: CliRunner, tmp_path: Path) -> None:
-    result = run_cli(
+def test_keys_create_refuses_a_bad_station_id(call_cli: CliRunner, tmp_path: Path) -> None:
+    result = call_cli(
         "keys", "create", "--station", "line 3", env=_env(CALSTATION_DATA_DIR=str(tmp_path))
     )
     assert result.returncode == 2
@@ -74,9 +75,9 @@ def test_keys_create_refuses_a_bad_station_id(run_cli: CliRunner, tmp_path: Path
 
 
 def test_keys_create_lab_makes_a_key_for_gyro_fits(
-    run_cli: CliRunner, database: Database, database_url: str
+    call_cli: CliRunner, database: Database, database_url: str
 ) -> None:
-    result = run_cli(
+    result = call_cli(
         "keys", "create", "--lab", "gyro-lab", "--database-url", database_url, env=_env()
     )
     assert result.returncode == 0, result.stderr
@@ -85,7 +86,7 @@ def test_keys_create_lab_makes_a_key_for_gyro_fits(
         assert RunRepository(session).key_holder(result.stdout.strip()) == KeyHolder(
             "gyro-lab", "lab"
         )
-    revoked = run_cli(
+    revoked = call_cli(
         "keys", "revoke", "--lab", "gyro-lab", "--database-url", database_url, env=_env()
     )
     assert "revoked 1 API key(s) of lab gyro-lab" in revoked.stdout
@@ -95,9 +96,9 @@ def test_keys_create_lab_makes_a_key_for_gyro_fits(
     "given", [[], ["--station", "line3-st2", "--lab", "gyro-lab"]], ids=["neither", "both"]
 )
 def test_keys_create_needs_exactly_one_holder(
-    run_cli: CliRunner, tmp_path: Path, given: list[str]
+    call_cli: CliRunner, tmp_path: Path, given: list[str]
 ) -> None:
-    result = run_cli("keys", "create", *given, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
+    result = call_cli("keys", "create", *given, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
     assert result.returncode == 2
     assert "--station/--lab/--quality: name one holder" in result.stderr
     assert "Traceback" not in result.stderr
@@ -105,13 +106,13 @@ def test_keys_create_needs_exactly_one_holder(
 
 
 def test_keys_revoke_stops_every_key_of_the_station(
-    run_cli: CliRunner, database: Database, database_url: str
+    call_cli: CliRunner, database: Database, database_url: str
 ) -> None:
     with database.session() as session, session.begin():
         repository = RunRepository(session)
         keys = [repository.create_key("line3-st2") for _ in range(2)]
         other = repository.create_key("line3-st3")
-    result = run_cli(
+    result = call_cli(
         "keys", "revoke", "--station", "line3-st2", "--database-url", database_url, env=_env()
     )
     assert result.returncode == 0, result.stderr
@@ -123,7 +124,7 @@ def test_keys_revoke_stops_every_key_of_the_station(
 
 
 def test_db_rebuild_report_restores_the_roll_ups_from_the_runs(
-    run_cli: CliRunner, database: Database, database_url: str
+    call_cli: CliRunner, database: Database, database_url: str
 ) -> None:
     with database.session() as session:
         for minute in range(3):
@@ -132,7 +133,7 @@ def test_db_rebuild_report_restores_the_roll_ups_from_the_runs(
             )
         session.execute(delete(ReportCounts))
         session.commit()
-    result = run_cli("db", "rebuild-report", "--database-url", database_url, env=_env())
+    result = call_cli("db", "rebuild-report", "--database-url", database_url, env=_env())
     assert result.returncode == 0, result.stderr
     assert "rebuilt from 3 runs, parameters binned against kxm52-production" in result.stdout
     with database.session() as session:

@@ -1,4 +1,5 @@
-"""``calstation outbox``: list, show, resend and send what was set aside, as real processes."""
+"""``calstation outbox``: list, show, resend and send what was set aside, through its entry
+point in the test's process (``call_cli``)."""
 
 import os
 from pathlib import Path
@@ -36,8 +37,8 @@ def env(outbox: Outbox) -> dict[str, str]:
     return {**clean, "CALSTATION_DATA_DIR": str(outbox.directory.parent)}
 
 
-def test_list_names_every_run_and_why_it_was_set_aside(run_cli: CliRunner, outbox: Outbox) -> None:
-    result = run_cli("outbox", "list", env=env(outbox))
+def test_list_names_every_run_and_why_it_was_set_aside(call_cli: CliRunner, outbox: Outbox) -> None:
+    result = call_cli("outbox", "list", env=env(outbox))
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].split()[::2] == ["waiting", "PT000003"]
@@ -48,13 +49,13 @@ def test_list_names_every_run_and_why_it_was_set_aside(run_cli: CliRunner, outbo
     assert lines[3] == f"1 waiting, 1 unreadable, 1 refused in {outbox.directory}"
 
 
-def test_show_gives_the_record_and_the_reason(run_cli: CliRunner, outbox: Outbox) -> None:
+def test_show_gives_the_record_and_the_reason(call_cli: CliRunner, outbox: Outbox) -> None:
     refused = next(outbox.refused_dir.glob("*.json"))
-    result = run_cli("outbox", "show", refused.stem[:8], env=env(outbox))
+    result = call_cli("outbox", "show", refused.stem[:8], env=env(outbox))
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith(f"refused: {refused}\nreason: ")
     assert '"operator_id": "someone-else"' in result.stdout
-    unknown = run_cli("outbox", "show", "PT999999", env=env(outbox))
+    unknown = call_cli("outbox", "show", "PT999999", env=env(outbox))
     assert unknown.returncode == 2
     assert unknown.stderr == "calstation: error: no run 'PT999999' in " + (
         f"{outbox.directory} (see calstation outbox list)\n"
@@ -62,21 +63,21 @@ def test_show_gives_the_record_and_the_reason(run_cli: CliRunner, outbox: Outbox
 
 
 def test_resend_puts_back_what_reads_and_keeps_what_does_not(
-    run_cli: CliRunner, outbox: Outbox
+    call_cli: CliRunner, outbox: Outbox
 ) -> None:
     torn = outbox.unreadable_dir / "torn.json"
-    result = run_cli("outbox", "resend", "--all", env=env(outbox))
+    result = call_cli("outbox", "resend", "--all", env=env(outbox))
     assert result.returncode == 0, result.stderr
     assert "run torn still unreadable (not JSON" in result.stdout
     assert result.stdout.endswith("1 run back in the outbox\n")
     assert torn.exists()
     assert outbox.set_aside() == (1, 0)
     assert outbox.count() == 2
-    single = run_cli("outbox", "resend", "torn", env=env(outbox))
+    single = call_cli("outbox", "resend", "torn", env=env(outbox))
     assert (single.returncode, single.stdout) == (2, "")
     assert "still unreadable" in single.stderr
     torn.write_text(make_record(serial="PT000004").model_dump_json())  # repaired by hand
-    repaired = run_cli("outbox", "resend", "torn", env=env(outbox))
+    repaired = call_cli("outbox", "resend", "torn", env=env(outbox))
     assert repaired.returncode == 0, repaired.stderr
     assert outbox.set_aside() == (0, 0)
     assert outbox.count() == 3
@@ -85,16 +86,16 @@ def test_resend_puts_back_what_reads_and_keeps_what_does_not(
 
 @pytest.mark.parametrize("args", [(), ("PT000003", "--all")])
 def test_resend_with_bad_input_is_one_line_and_exit_2(
-    run_cli: CliRunner, outbox: Outbox, args: tuple[str, ...]
+    call_cli: CliRunner, outbox: Outbox, args: tuple[str, ...]
 ) -> None:
-    result = run_cli("outbox", "resend", *args, env=env(outbox))
+    result = call_cli("outbox", "resend", *args, env=env(outbox))
     assert result.returncode == 2
     assert len(result.stderr.splitlines()) == 1
     assert result.stderr.startswith("calstation: error: ")
 
 
 def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
-    run_cli: CliRunner, tmp_path: Path, live_url: str, database: Database, station_key: str
+    call_cli: CliRunner, tmp_path: Path, live_url: str, database: Database, station_key: str
 ) -> None:
     """Issue 24 #3: a run queued under the station's former name used to get 403 (read as
     a bad key, "fix api_key") and stop every run behind it, forever."""
@@ -106,7 +107,7 @@ def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
     with HttpStore(live_url, station_key, station_id=STATION) as store:
         result = outbox.sync(store)
     assert (result.stored, result.refused, result.pending, result.error) == (1, 1, 0, None)
-    listed = run_cli("outbox", "list", env=env(outbox))
+    listed = call_cli("outbox", "list", env=env(outbox))
     assert listed.returncode == 0, listed.stderr
     refused = listed.stdout.splitlines()[0]
     assert refused.split()[:3] == ["refused", str(former.run_id), "PT000010"]
@@ -116,7 +117,7 @@ def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
     )
     with database.session() as session, session.begin():
         former_key = RunRepository(session).create_key("line0-old")
-    wrong = run_cli(
+    wrong = call_cli(
         "outbox",
         "send",
         str(former.run_id),
@@ -129,7 +130,7 @@ def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
     assert wrong.returncode == 2
     assert wrong.stderr.startswith(f"calstation: error: run {former.run_id} not stored: ")
     assert "belongs to station line1-st1, the run to line0-old" in wrong.stderr
-    sent = run_cli(
+    sent = call_cli(
         "outbox",
         "send",
         str(former.run_id)[:8],

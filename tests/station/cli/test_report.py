@@ -1,4 +1,5 @@
-"""``calstation report`` as a real process, on both backends."""
+"""``calstation report`` through its entry point in the test's process (``call_cli``), on
+both backends."""
 
 import json
 import os
@@ -27,9 +28,9 @@ def line(database: Database) -> None:
 
 @pytest.mark.usefixtures("line")
 def test_text_report_reads_the_database_from_the_environment(
-    run_cli: CliRunner, database_url: str
+    call_cli: CliRunner, database_url: str
 ) -> None:
-    result = run_cli("report", *RANGE, env=_env(CALSTATION_DATABASE_URL=database_url))
+    result = call_cli("report", *RANGE, env=_env(CALSTATION_DATABASE_URL=database_url))
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert lines[0].startswith("End-of-line report (from 2026-11-02 08:00:00 UTC")
@@ -41,10 +42,10 @@ def test_text_report_reads_the_database_from_the_environment(
 
 @pytest.mark.usefixtures("line")
 def test_json_to_a_file_with_station_and_operator_filters(
-    run_cli: CliRunner, database_url: str, tmp_path: Path
+    call_cli: CliRunner, database_url: str, tmp_path: Path
 ) -> None:
     target = tmp_path / "eol.json"
-    result = run_cli(
+    result = call_cli(
         "report",
         *RANGE,
         "--station",
@@ -69,9 +70,9 @@ def test_json_to_a_file_with_station_and_operator_filters(
 
 @pytest.mark.usefixtures("line")
 def test_lot_filter_leaves_out_the_runs_without_a_lot(
-    run_cli: CliRunner, database_url: str
+    call_cli: CliRunner, database_url: str
 ) -> None:
-    result = run_cli("report", *RANGE, "--lot", "L-7", "--database-url", database_url, env=_env())
+    result = call_cli("report", *RANGE, "--lot", "L-7", "--database-url", database_url, env=_env())
     assert result.returncode == 0, result.stderr
     assert "lot L-7" in result.stdout.splitlines()[0]
     all_row = next(line for line in result.stdout.splitlines() if line.startswith("all "))
@@ -79,8 +80,8 @@ def test_lot_filter_leaves_out_the_runs_without_a_lot(
 
 
 @pytest.mark.usefixtures("line")
-def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) -> None:
-    result = run_cli(
+def test_the_widest_period_is_reported(call_cli: CliRunner, database_url: str) -> None:
+    result = call_cli(
         "report", "--from", "0001-01-02", "--to", "9999-12-31", "--database-url", database_url
     )
     assert result.returncode == 0, result.stderr
@@ -107,9 +108,9 @@ def test_the_widest_period_is_reported(run_cli: CliRunner, database_url: str) ->
     ],
 )
 def test_bad_options_are_one_line_and_exit_2(
-    run_cli: CliRunner, tmp_path: Path, arguments: tuple[str, ...], message: str
+    call_cli: CliRunner, tmp_path: Path, arguments: tuple[str, ...], message: str
 ) -> None:
-    result = run_cli("report", *arguments, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
+    result = call_cli("report", *arguments, env=_env(CALSTATION_DATA_DIR=str(tmp_path)))
     assert result.returncode == 2
     assert result.stderr.startswith("calstation: error: ")
     assert message in result.stderr
@@ -118,11 +119,11 @@ def test_bad_options_are_one_line_and_exit_2(
 
 @pytest.mark.usefixtures("line")
 def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
-    run_cli: CliRunner, database_url: str
+    call_cli: CliRunner, database_url: str
 ) -> None:
     """UTC+14: the history's runs (08:00–09:00 and 13:00 UTC on 11-02) are 22:00–23:00
     on 11-02 and 03:00 on 11-03 in the plant; its 11-03 holds U9's run only."""
-    result = run_cli(
+    result = call_cli(
         "report",
         "--from",
         "2026-11-03",
@@ -140,8 +141,8 @@ def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
 
 
 @pytest.mark.usefixtures("line")
-def test_the_plants_shifts_give_a_trend_per_shift(run_cli: CliRunner, database_url: str) -> None:
-    result = run_cli(
+def test_the_plants_shifts_give_a_trend_per_shift(call_cli: CliRunner, database_url: str) -> None:
+    result = call_cli(
         "report",
         *RANGE,
         "--database-url",
@@ -161,7 +162,7 @@ def test_the_plants_shifts_give_a_trend_per_shift(run_cli: CliRunner, database_u
 
 @pytest.mark.usefixtures("line")
 def test_limits_re_judge_the_runs_beside_the_current_figures(
-    run_cli: CliRunner, database_url: str, tmp_path: Path
+    call_cli: CliRunner, database_url: str, tmp_path: Path
 ) -> None:
     shipped = resources.files("station.domain.profiles").joinpath("limits.toml")
     candidate = tmp_path / "candidate.toml"
@@ -172,7 +173,7 @@ def test_limits_re_judge_the_runs_beside_the_current_figures(
         ),
         encoding="utf-8",
     )
-    result = run_cli(
+    result = call_cli(
         "report", *RANGE, "--limits", str(candidate), "--database-url", database_url, env=_env()
     )
     assert result.returncode == 0, result.stderr

@@ -1,4 +1,5 @@
-"""``calstation solve``: the JSON contract and bad input, run as a real process."""
+"""``calstation solve``: the JSON contract and bad input, through the command's entry point
+in the test's process (``call_cli``; ``tests/test_cli_entry.py`` runs it as a process)."""
 
 import json
 from pathlib import Path
@@ -12,13 +13,13 @@ from station.domain.errors import InputError
 from station.domain.posefile import read_pose_file
 from station.simulator.recording import pose_means, random_directions, spread_directions
 from station.simulator.sensor import SensorTruth
-from tests.conftest import REPO_ROOT, CliRunner
+from tests.conftest import REPO_ROOT, CliRunner, examples
 
 PAPER_CSV = REPO_ROOT / "examples" / "paper_table2.csv"
 
 
-def test_json_contract_on_the_paper_example(run_cli: CliRunner) -> None:
-    result = run_cli("solve", str(PAPER_CSV), "--json")
+def test_json_contract_on_the_paper_example(call_cli: CliRunner) -> None:
+    result = call_cli("solve", str(PAPER_CSV), "--json")
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert {
@@ -41,9 +42,9 @@ def test_json_contract_on_the_paper_example(run_cli: CliRunner) -> None:
 
 
 def test_json_carries_the_expanded_uncertainty_of_each_coefficient(
-    run_cli: CliRunner, tmp_path: Path
+    call_cli: CliRunner, tmp_path: Path
 ) -> None:
-    paper = json.loads(run_cli("solve", str(PAPER_CSV), "--json").stdout)["uncertainty"]
+    paper = json.loads(call_cli("solve", str(PAPER_CSV), "--json").stdout)["uncertainty"]
     assert set(paper) == {"k", "offset", "sensitivity"}  # no gyro in a pose file
     assert paper["k"] == 2
     assert all(paper["offset"][a] > 0 and paper["sensitivity"][a] > 0 for a in "xyz")
@@ -57,27 +58,27 @@ def test_json_carries_the_expanded_uncertainty_of_each_coefficient(
     noisy.write_text(
         "\n".join([lines[0] + ",sx,sy,sz,n"] + [f"{r},30,30,30,16" for r in lines[1:]])
     )
-    low = json.loads(run_cli("solve", str(quiet), "--json").stdout)["uncertainty"]
-    high = json.loads(run_cli("solve", str(noisy), "--json").stdout)["uncertainty"]
+    low = json.loads(call_cli("solve", str(quiet), "--json").stdout)["uncertainty"]
+    high = json.loads(call_cli("solve", str(noisy), "--json").stdout)["uncertainty"]
     for key in ("offset", "sensitivity"):
         for a in "xyz":
             assert low[key][a] <= paper[key][a] < high[key][a]
 
 
-def test_readable_table(run_cli: CliRunner) -> None:
-    result = run_cli("solve", str(PAPER_CSV))
+def test_readable_table(call_cli: CliRunner) -> None:
+    result = call_cli("solve", str(PAPER_CSV))
     assert result.returncode == 0, result.stderr
     assert "2081.9275" in result.stdout
     assert "k1 = 0.995797" in result.stdout
 
 
-def test_nine_model_on_a_generated_file(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_nine_model_on_a_generated_file(call_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     poses = pose_means(unit, spread_directions(18), 0.05, rng)
     path = tmp_path / "poses.csv"
     path.write_text("temp,ax,ay,az,note\n" + "".join(f"25.0,{x},{y},{z},ok\n" for x, y, z in poses))
-    result = run_cli("solve", str(path), "--model", "nine", "--json")
+    result = call_cli("solve", str(path), "--model", "nine", "--json")
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["model"] == "nine"
@@ -104,11 +105,11 @@ def test_nine_model_on_a_generated_file(run_cli: CliRunner, tmp_path: Path) -> N
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(
-    run_cli: CliRunner, tmp_path: Path, content: str, message: str
+    call_cli: CliRunner, tmp_path: Path, content: str, message: str
 ) -> None:
     path = tmp_path / "bad.csv"
     path.write_text(content)
-    result = run_cli("solve", str(path))
+    result = call_cli("solve", str(path))
     assert result.returncode == 2
     assert result.stdout == ""
     lines = result.stderr.strip().splitlines()
@@ -117,24 +118,24 @@ def test_bad_input_is_one_line_and_exit_2(
     assert message in lines[0]
 
 
-def test_a_degenerate_pose_is_named_by_its_line(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_a_degenerate_pose_is_named_by_its_line(call_cli: CliRunner, tmp_path: Path) -> None:
     rows = PAPER_CSV.read_text().splitlines()
     rows[4] = rows[4].replace("2040,2853,2028", "4095,2853,2028")  # pose 4 on line 5
     path = tmp_path / "rail.csv"
     path.write_text("\n".join(rows) + "\n")
-    result = run_cli("solve", str(path))
+    result = call_cli("solve", str(path))
     assert result.returncode == 2
     assert f"{path}:5: pose 4: x is at the ADC rail" in result.stderr
     assert "Traceback" not in result.stderr
 
 
-def test_missing_file(run_cli: CliRunner, tmp_path: Path) -> None:
-    result = run_cli("solve", str(tmp_path / "none.csv"))
+def test_missing_file(call_cli: CliRunner, tmp_path: Path) -> None:
+    result = call_cli("solve", str(tmp_path / "none.csv"))
     assert result.returncode == 2
     assert "none.csv: no such file" in result.stderr
 
 
-@settings(max_examples=200)
+@settings(max_examples=examples(200))
 @given(text=st.text(alphabet="ax yz,0123456789.-e\n\"'", max_size=200))
 def test_pose_reader_never_crashes_on_garbage(
     tmp_path_factory: pytest.TempPathFactory, text: str
@@ -157,14 +158,14 @@ def _write(path: Path, poses: np.ndarray) -> Path:
     return path
 
 
-def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_an_inconsistent_pose_is_excluded_and_named(call_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(12)
     unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     directions = spread_directions(12)
     poses = pose_means(unit, directions, 0.05, rng)
     poses[2] += 100.0 * directions[2]  # pose 3, line 4
     path = _write(tmp_path / "poses.csv", poses)
-    result = run_cli("solve", str(path), "--model", "nine", "--json")
+    result = call_cli("solve", str(path), "--model", "nine", "--json")
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["excluded"] == [3]
@@ -172,12 +173,12 @@ def test_an_inconsistent_pose_is_excluded_and_named(run_cli: CliRunner, tmp_path
     assert data["sensitivity_convention"].startswith("1/diag(C), C upper-triangular")
     assert data["standard_errors"]["dof"] == 11 - 9
     np.testing.assert_allclose([data["offset"][a] for a in "xyz"], unit.offset_counts, atol=0.5)
-    text = run_cli("solve", str(path), "--model", "nine")
+    text = call_cli("solve", str(path), "--model", "nine")
     assert f"EXCLUDED pose 3 ({path}:4)" in text.stdout
     assert "no ± shown: 2 degree(s) of freedom" in text.stdout
 
 
-def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_a_profile_sets_the_residual_limit(call_cli: CliRunner, tmp_path: Path) -> None:
     rng = np.random.default_rng(13)
     unit = SensorTruth.draw_accelerometer(rng)
     directions = spread_directions(12)
@@ -188,8 +189,8 @@ def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -
     shipped = (REPO_ROOT / "station" / "domain" / "profiles" / "limits.toml").read_text()
     header = "[profiles.kxm52-production]\n"  # the default profile (not the file's last)
     limits.write_text(shipped.replace(header, header + "fit_residual_counts = { upper = 50.0 }\n"))
-    loose = json.loads(run_cli("solve", str(path), "--limits", str(limits), "--json").stdout)
-    strict = json.loads(run_cli("solve", str(path), "--json").stdout)
+    loose = json.loads(call_cli("solve", str(path), "--limits", str(limits), "--json").stdout)
+    strict = json.loads(call_cli("solve", str(path), "--json").stdout)
     assert (loose["excluded"], loose["residual_limit_counts"]) == ([], 50.0)
     assert strict["excluded"] == [6]
 
@@ -206,23 +207,23 @@ def test_a_profile_sets_the_residual_limit(run_cli: CliRunner, tmp_path: Path) -
     ],
 )
 def test_refusals_name_the_real_cause(
-    run_cli: CliRunner, tmp_path: Path, rows: str, message: str
+    call_cli: CliRunner, tmp_path: Path, rows: str, message: str
 ) -> None:
     path = tmp_path / "bad.csv"
     path.write_text("ax,ay,az\n" + rows)
-    result = run_cli("solve", str(path))
+    result = call_cli("solve", str(path))
     assert result.returncode == 2
     assert message in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
 
 
 @pytest.mark.timeout(300)
-def test_100000_poses_solve_or_refuse_in_one_line(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_100000_poses_solve_or_refuse_in_one_line(call_cli: CliRunner, tmp_path: Path) -> None:
     # Memory linear in the poses: no N×N table (1e5² would be 75 GiB of float64).
     rng = np.random.default_rng(14)
     unit = SensorTruth.draw_accelerometer(rng, cross_axis=0.02)
     poses = pose_means(unit, random_directions(rng, 100_000), 0.05, rng)
-    result = run_cli(
+    result = call_cli(
         "solve", str(_write(tmp_path / "many.csv", poses)), "--model", "nine", "--json"
     )
     assert result.returncode == 0, result.stderr
@@ -230,7 +231,7 @@ def test_100000_poses_solve_or_refuse_in_one_line(run_cli: CliRunner, tmp_path: 
     assert data["poses"] == 100_000
     assert data["excluded"] == []
     assert data["near_duplicates"] > 0  # reported, not refused
-    in_g = run_cli("solve", str(_write(tmp_path / "g.csv", (poses - 2048) / 819.2)))
+    in_g = call_cli("solve", str(_write(tmp_path / "g.csv", (poses - 2048) / 819.2)))
     assert in_g.returncode == 2
     assert "Traceback" not in in_g.stderr
     assert len(in_g.stderr.strip().splitlines()) == 1

@@ -39,11 +39,11 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[SensorTruth, np.
 
 
 def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     imu, rows = recorded
     path = _write(tmp_path / "log.csv", rows)
-    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json")
+    result = call_cli("solve", str(path), "--stream", "--model", "nine", "--json")
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert {"model", "method", "offset", "sensitivity", "matrix", "residual_rms_mg"} <= set(data)
@@ -71,7 +71,7 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
 
 
 def test_lost_samples_make_a_move_unusable_and_say_so(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)
@@ -80,7 +80,7 @@ def test_lost_samples_make_a_move_unusable_and_say_so(
         tmp_path / "gap.csv",
         np.delete(rows, range(middle_of_third_move, middle_of_third_move + 5), axis=0),
     )
-    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json")
+    result = call_cli("solve", str(path), "--stream", "--model", "nine", "--json")
     assert result.returncode == 0, result.stderr
     gyro = json.loads(result.stdout)["gyro"]
     assert [u["move"] for u in gyro["unusable_moves"]] == [2]
@@ -89,18 +89,18 @@ def test_lost_samples_make_a_move_unusable_and_say_so(
 
 
 def test_text_output_names_k_and_the_residuals(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     path = _write(tmp_path / "log.csv", rows)
-    result = run_cli("solve", str(path), "--stream", "--model", "nine")
+    result = call_cli("solve", str(path), "--stream", "--model", "nine")
     assert result.returncode == 0, result.stderr
     assert "12 still poses at 200 samples/s" in result.stdout
     assert "gyro K z:" in result.stdout
 
 
-def _refused(run_cli: CliRunner, path: Path, *extra: str) -> str:
-    result = run_cli("solve", str(path), "--stream", *extra)
+def _refused(call_cli: CliRunner, path: Path, *extra: str) -> str:
+    result = call_cli("solve", str(path), "--stream", *extra)
     assert result.returncode == 2, result.stdout
     assert result.stdout == ""
     lines = result.stderr.strip().splitlines()
@@ -109,9 +109,9 @@ def _refused(run_cli: CliRunner, path: Path, *extra: str) -> str:
     return lines[0]
 
 
-def test_missing_column_is_refused(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_missing_column_is_refused(call_cli: CliRunner, tmp_path: Path) -> None:
     path = _write(tmp_path / "nogz.csv", np.zeros((3, 6)), "t,ax,ay,az,gx,gy")
-    assert "header lacks column(s) gz" in _refused(run_cli, path)
+    assert "header lacks column(s) gz" in _refused(call_cli, path)
 
 
 def test_time_going_back_is_named(tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]) -> None:
@@ -138,24 +138,24 @@ def test_a_short_row_is_named_with_its_line(tmp_path: Path) -> None:
 
 
 def test_too_few_stills_are_refused(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
     still_n, move_n = round(PLAN.still_s * PLAN.rate_hz), round(PLAN.move_s * PLAN.rate_hz)
     path = _write(tmp_path / "short.csv", rows[: 8 * still_n + 7 * move_n])
-    line = _refused(run_cli, path, "--model", "nine")
+    line = _refused(call_cli, path, "--model", "nine")
     assert "8 still poses found, the nine-parameter model needs 9" in line
 
 
-def _solved(run_cli: CliRunner, path: Path, *options: str) -> dict[str, object]:
-    result = run_cli("solve", str(path), "--stream", "--model", "nine", "--json", *options)
+def _solved(call_cli: CliRunner, path: Path, *options: str) -> dict[str, object]:
+    result = call_cli("solve", str(path), "--stream", "--model", "nine", "--json", *options)
     assert result.returncode == 0, result.stderr
     data: dict[str, object] = json.loads(result.stdout)
     return data
 
 
-def _refused(run_cli: CliRunner, path: Path, *options: str) -> str:
-    result = run_cli("solve", str(path), "--stream", "--model", "nine", *options)
+def _refused(call_cli: CliRunner, path: Path, *options: str) -> str:
+    result = call_cli("solve", str(path), "--stream", "--model", "nine", *options)
     assert result.returncode == 2
     assert result.stdout == ""
     lines = result.stderr.strip().splitlines()
@@ -164,10 +164,10 @@ def _refused(run_cli: CliRunner, path: Path, *options: str) -> str:
 
 
 def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     _, rows = recorded
-    reference = _solved(run_cli, _write(tmp_path / "counts.csv", rows))
+    reference = _solved(call_cli, _write(tmp_path / "counts.csv", rows))
     in_g = rows.copy()
     in_g[:, 1:4] = (rows[:, 1:4] - 2048.0) / 819.2
     in_ms2 = in_g.copy()
@@ -195,8 +195,8 @@ def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
     ]
     for name, table, declared, refusal in cases:
         path = _write(tmp_path / name, table)
-        assert refusal in _refused(run_cli, path), name
-        data = _solved(run_cli, path, *declared)
+        assert refusal in _refused(call_cli, path), name
+        data = _solved(call_cli, path, *declared)
         for key in ("offset", "sensitivity"):
             got, want = data[key], reference[key]
             assert isinstance(got, dict)
@@ -209,33 +209,33 @@ def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
         np.testing.assert_allclose(gyro["scale_matrix"], want_gyro["scale_matrix"], atol=1e-6)
 
 
-def test_units_are_for_streams_and_a_rate_must_be_one(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_units_are_for_streams_and_a_rate_must_be_one(call_cli: CliRunner, tmp_path: Path) -> None:
     poses = tmp_path / "poses.csv"
     poses.write_text("ax,ay,az\n2031,1999,1143\n")
     for option, value in (("--accel-units", "g"), ("--known-turn-deg", "360")):
-        result = run_cli("solve", str(poses), option, value)
+        result = call_cli("solve", str(poses), option, value)
         assert result.returncode == 2
         assert result.stderr.strip().splitlines() == [
             "calstation: error: --accel-units, --gyro-units, --time-units, --rate and "
             "--known-turn-deg describe a raw stream: use them with --stream"
         ]
-    rate = _refused(run_cli, poses, "--rate", "0")
+    rate = _refused(call_cli, poses, "--rate", "0")
     assert "--rate" in rate
     assert "not a positive rate" in rate
 
 
 def test_a_gyro_bias_and_noise_above_the_live_limits_are_the_recordings_own(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     # A MEMS gyro with a 2 deg/s bias on y (common; the live judge refuses 1 deg/s) and
     # an accelerometer five times noisier than the putter's: the stills are found on the
     # recording's own bias and noise, and the same unit comes out.
     imu, rows = recorded
-    reference = _solved(run_cli, _write(tmp_path / "log.csv", rows))
+    reference = _solved(call_cli, _write(tmp_path / "log.csv", rows))
     other = rows.copy()
     other[:, 5] += 2.0
     other[:, 1:4] += np.random.default_rng(3).normal(0.0, 5.0, other[:, 1:4].shape)
-    data = _solved(run_cli, _write(tmp_path / "other.csv", other))
+    data = _solved(call_cli, _write(tmp_path / "other.csv", other))
     assert data["poses"] == reference["poses"] == 12
     gyro = data["gyro"]
     assert isinstance(gyro, dict)
@@ -246,14 +246,14 @@ def test_a_gyro_bias_and_noise_above_the_live_limits_are_the_recordings_own(
 
 
 def test_no_still_pose_found_says_why_in_the_operators_terms(
-    run_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
 ) -> None:
     # A gyro y whose rate swings ±5 deg/s every 4 s (a unit never at rest, or a broken
     # gyro): hardly a window is still; the refusal says what the judge saw most often.
     _, rows = recorded
     swinging = rows.copy()
     swinging[:, 5] += 5.0 * np.sin(2 * np.pi * rows[:, 0] / 4.0)
-    line = _refused(run_cli, _write(tmp_path / "swinging.csv", swinging))
+    line = _refused(call_cli, _write(tmp_path / "swinging.csv", swinging))
     found = re.search(r"(\d+) still poses found, the nine-parameter model needs 9", line)
     assert found is not None, line
     assert int(found.group(1)) < 9

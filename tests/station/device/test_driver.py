@@ -27,6 +27,7 @@ from station.domain.poses import pose
 from station.domain.samples import SampleBlock
 from station.simulator import VirtualPutter
 from station.simulator.putter import FIRMWARE_VERSION, SENSOR_PART
+from tests.conftest import examples
 
 SPEED = 20.0
 
@@ -340,7 +341,7 @@ def test_an_undrained_buffer_keeps_the_newest_samples_and_counts_the_overrun() -
     np.testing.assert_array_equal(rows.seq, np.arange(70, 120))
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(40), deadline=None)
 @given(
     start=st.integers(0, 0xFFFF),
     steps=st.lists(st.integers(1, 40), min_size=1, max_size=60),

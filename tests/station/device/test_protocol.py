@@ -19,6 +19,7 @@ from station.device.protocol import (
     encode_frame,
     encode_sample,
 )
+from tests.conftest import examples
 
 samples = st.tuples(
     st.integers(0, 0xFFFF),
@@ -139,7 +140,7 @@ def accepted_subsequence(accepted: list[bytes], sent: list[bytes]) -> bool:
     return all(any(a == s for s in remaining) for a in accepted)
 
 
-@settings(max_examples=300)
+@settings(max_examples=examples(300))
 @given(
     st.lists(st.tuples(samples, st.binary(max_size=40)), max_size=30),
     st.lists(st.integers(1, 64), min_size=1, max_size=10),
@@ -161,7 +162,7 @@ def test_garbage_between_frames_never_costs_a_good_frame(
     assert accepted == [f[4:-2] for f in sent]
 
 
-@settings(max_examples=300)
+@settings(max_examples=examples(300))
 @given(
     st.lists(samples, min_size=1, max_size=20),
     st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 7)), max_size=3),
@@ -187,7 +188,7 @@ def test_bit_flips_truncation_and_garbage_never_yield_a_wrong_sample(
     assert parser.frames == len(accepted)
 
 
-@settings(max_examples=200)
+@settings(max_examples=examples(200))
 @given(st.binary(max_size=2000))
 def test_random_bytes_never_crash_the_parser(noise: bytes) -> None:
     parser = FrameParser()

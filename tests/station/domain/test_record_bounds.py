@@ -15,6 +15,7 @@ from station.domain.record_bounds import ERROR_MAX_MG, GYRO_RANGE_DPS
 from station.domain.records import Coefficients, GyroSummary, QualityMetrics, RunRecord, Vector3
 from station.simulator.recording import pose_means, six_directions
 from station.simulator.sensor import SensorTruth
+from tests.conftest import examples
 from tests.db.records import make_record
 
 
@@ -22,7 +23,7 @@ def _vec(values: np.ndarray) -> Vector3:
     return Vector3(x=float(values[0]), y=float(values[1]), z=float(values[2]))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(
     offset=st.lists(st.floats(600, 3500), min_size=3, max_size=3),
     sensitivity=st.lists(st.floats(100, 1500), min_size=3, max_size=3),

@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from station.domain.records import RunRecord
 from station.domain.unit_state import UnitCalibration
+from tests.conftest import examples
 from tests.db.records import OUTCOMES, T0, make_record
 
 
@@ -22,7 +23,7 @@ def _history(outcomes: list[str]) -> list[RunRecord]:
     ]
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(st.lists(st.sampled_from(sorted(OUTCOMES)), min_size=1, max_size=8))
 def test_the_answer_updated_run_by_run_is_the_answer_of_the_history(outcomes: list[str]) -> None:
     runs = _history(outcomes)

@@ -7,7 +7,6 @@ The faults are real: a tiny tmpfs mounted for the test and filled to the last by
 
 import errno
 import subprocess
-import time
 from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
@@ -25,6 +24,7 @@ from station.results.storage import DatabaseStore, HttpStore
 from tests.db.records import make_record
 from tests.servers import free_port
 from tests.station.loop.test_station_terminal import Station
+from tests.terminal import hang_guard, wait_until
 
 
 class SmallDisk:
@@ -152,6 +152,7 @@ def test_a_read_only_data_dir_is_said_and_the_end_of_the_unit_is_done_later(
     assert outbox.count() == 1
 
 
+@hang_guard
 def test_a_full_disk_mid_unit_is_told_and_the_station_goes_on(
     small_disk: SmallDisk, tmp_path: Path
 ) -> None:
@@ -170,11 +171,14 @@ def test_a_full_disk_mid_unit_is_told_and_the_station_goes_on(
         assert loaded is not None
         assert sorted(loaded.captures) == [0, 1]
         small_disk.free()
-        deadline = time.monotonic() + 60  # a safety net only
-        while len(loaded.captures) < 4 and time.monotonic() < deadline:
-            child.expect([pexpect.TIMEOUT], timeout=0.2)  # read the screen: it must not block
-            loaded = saved.load() or loaded
-        assert sorted(loaded.captures) == [0, 1, 2, 3]  # written once space returned
+        journaled = [loaded]
+
+        def four_poses_journaled() -> bool:
+            journaled[0] = saved.load() or journaled[0]
+            return len(journaled[0].captures) >= 4
+
+        wait_until(four_poses_journaled, "the journal of poses 1-4", tick=station.tick)
+        assert sorted(journaled[0].captures) == [0, 1, 2, 3]  # written once space returned
         small_disk.fill()  # full again at the verdict: the run is sent from memory
         station.asked = fifth
         station.putter.move_to(fifth, 1.0)
@@ -187,6 +191,7 @@ def test_a_full_disk_mid_unit_is_told_and_the_station_goes_on(
         station.close()
 
 
+@hang_guard
 def test_stopping_with_a_run_only_in_memory_asks_then_saves_it_elsewhere(
     small_disk: SmallDisk, tmp_path: Path
 ) -> None:
@@ -218,6 +223,7 @@ def test_stopping_with_a_run_only_in_memory_asks_then_saves_it_elsewhere(
     assert (record.serial, record.verdict) == ("PT000042", "pass")
 
 
+@hang_guard
 def test_a_journal_left_by_a_read_only_disk_never_calibrates_a_stored_run_again(
     small_disk: SmallDisk, tmp_path: Path
 ) -> None:

@@ -13,6 +13,7 @@ from station.domain.quality.golden import GoldenUnit, disagreements, due
 from station.domain.records import RunRecord
 from station.loop.golden_lock import GoldenLock
 from station.loop.shift_checks import ShiftChecks, unlock_usage
+from tests.conftest import examples
 from tests.db.records import make_record
 
 OFFSET = (2081.9, 2041.2, 1960.5)
@@ -58,7 +59,7 @@ def test_the_golden_unit_is_due_after_its_period_and_at_each_shift_start() -> No
     later=st.integers(0, 24 * 60),
     starts=st.lists(st.integers(0, 24 * 60 - 1), max_size=3),
 )
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 def test_once_due_it_stays_due_until_checked(
     last: int, gap: int, later: int, starts: list[int]
 ) -> None:

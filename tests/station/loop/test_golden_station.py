@@ -11,11 +11,12 @@ import pexpect
 import pytest
 
 from tests.station.loop.test_station_terminal import Station
+from tests.terminal import hang_guard
 
 GOLDEN = "PT900001"
 
 
-@pytest.mark.timeout(120)
+@hang_guard
 def test_a_disagreeing_golden_unit_locks_the_station_until_a_supervisor_unlocks_it(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -43,7 +44,7 @@ def test_a_disagreeing_golden_unit_locks_the_station_until_a_supervisor_unlocks_
         child.expect("LOCKED: golden unit")
         # The lock survives a restart of the station.
         child.sendeof()
-        child.expect(pexpect.EOF, timeout=15)
+        child.expect(pexpect.EOF)
         child = station.start()
         child.expect(f"LOCKED: golden unit {GOLDEN} offset x")
         station.scan("unlock j.smith reference re-measured on the lab bench")

@@ -15,6 +15,9 @@ from station.domain.faults import Faults
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT, CliRunner
 from tests.station.loop.test_station_terminal import SPEED, Station
+from tests.terminal import hang_guard
+
+pytestmark = hang_guard
 
 
 @pytest.fixture

@@ -19,6 +19,7 @@ import pytest
 
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT, CliRunner
+from tests.terminal import hang_guard, spawn, wait_until
 
 SERIAL = "PT000042"
 
@@ -168,6 +169,7 @@ def _fill(path: Path) -> None:
         _write_forever(handle)
 
 
+@hang_guard
 @pytest.mark.usefixtures("mountable")
 def test_a_disk_full_at_the_scan_is_said_and_the_unit_goes_on_in_memory(
     tmp_path: Path, putter: Path
@@ -176,14 +178,10 @@ def test_a_disk_full_at_the_scan_is_said_and_the_unit_goes_on_in_memory(
     data.mkdir()
     command = [sys.executable, "-m", "station", "run", "--port", str(putter)]
     argv = _in_tmpfs(data, "size=256k", *command)
-    child = pexpect.spawn(
-        argv[0],
-        argv[1:],
+    child = spawn(
+        argv,
         env={**_env(tmp_path), "PYTHONPATH": str(REPO_ROOT), "TERM": "xterm-256color"},
-        cwd=str(REPO_ROOT),
-        encoding="utf-8",
-        dimensions=(60, 140),
-        timeout=30,
+        cwd=REPO_ROOT,
     )
     try:
         child.expect("Scan the next unit's serial number")
@@ -199,11 +197,11 @@ def test_a_disk_full_at_the_scan_is_said_and_the_unit_goes_on_in_memory(
         filler.unlink()
         # Once there is room the owed journal is written (DiskWatch retries every second);
         # the screen is read meanwhile so that the station never blocks on its terminal.
-        for _ in range(300):
-            if journal.exists():
-                break
-            child.expect([pexpect.TIMEOUT, r"pose \d of 7"], timeout=0.1)
-        assert journal.exists()
+        wait_until(
+            journal.exists,
+            "the owed journal",
+            tick=lambda: child.expect([pexpect.TIMEOUT], timeout=0.1),
+        )
     finally:
         child.sendeof()
-        child.expect(pexpect.EOF, timeout=15)
+        child.expect(pexpect.EOF)

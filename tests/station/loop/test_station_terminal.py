@@ -29,10 +29,13 @@ from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url
 from tests.servers import server_process
+from tests.terminal import hang_guard, spawn, wait_until
 
 SPEED = 20.0
 POSE_ASKED = re.compile(r"pose (\d) of (\d): ([a-z ]+?)\x1b")
 VERDICT = re.compile(r"(PASS|FAIL)  unit (PT\d{6})")
+
+pytestmark = hang_guard
 
 
 class Station:
@@ -87,15 +90,7 @@ class Station:
         if self.limits is not None:
             args += ["--limits", str(self.limits)]
         args += extra
-        self.child = pexpect.spawn(
-            sys.executable,
-            args,
-            env=env,
-            cwd=str(REPO_ROOT),
-            encoding="utf-8",
-            dimensions=(60, 140),
-            timeout=30,
-        )
+        self.child = spawn([sys.executable, *args], env=env, cwd=REPO_ROOT)
         if prompt:
             self.child.expect("Scan the next unit's serial number")
         return self.child
@@ -130,25 +125,30 @@ class Station:
         """``sql`` on the results database, once the station's outbox is empty (the
         station sends its runs beside its loop, a moment after each verdict)."""
         outbox = self.tmp / "data" / "outbox"
-        deadline = time.monotonic() + 30
-        while list(outbox.glob("*.json")) and time.monotonic() < deadline:
-            time.sleep(0.05)
+        wait_until(lambda: not list(outbox.glob("*.json")), "an empty outbox", tick=self.tick)
         with sqlite3.connect(self.database) as db:
             return db.execute(sql).fetchall()
 
     def wait_stored(self, runs: int) -> None:
-        """Wait (30 s at most) until ``runs`` runs are in the results database: the
-        station sends them beside its loop, a moment after each verdict."""
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            if self.database.exists() and self.rows("select count(*) from runs") >= [(runs,)]:
-                return
+        """Wait until ``runs`` runs are in the results database: the station sends them
+        beside its loop, a moment after each verdict."""
+
+        def stored() -> bool:
+            return self.database.exists() and self.rows("select count(*) from runs") >= [(runs,)]
+
+        wait_until(stored, f"{runs} runs stored", tick=self.tick)
+
+    def tick(self) -> None:
+        """Read the screen a moment (the station must never block on its terminal)."""
+        if self.child is not None and self.child.isalive():
+            self.child.expect([pexpect.TIMEOUT, pexpect.EOF], timeout=0.05)
+        else:
             time.sleep(0.05)
 
     def close(self) -> None:
         if self.child is not None and self.child.isalive():
             self.child.sendeof()
-            self.child.expect(pexpect.EOF, timeout=15)
+            self.child.expect(pexpect.EOF)
         self.putter.close()
 
 
@@ -363,7 +363,7 @@ def test_database_down_then_back_drains_the_outbox_once(tmp_path: Path) -> None:
         with admin.connect() as connection:
             connection.execute(text(f'CREATE DATABASE "{name}"'))
         open_database(url, auto_migrate=True).dispose()
-        child.expect("outbox empty", timeout=30)
+        child.expect("outbox empty")
         database = open_database(url)
         with database.session() as session:
             counts = session.execute(
@@ -399,7 +399,7 @@ def test_a_hung_results_server_never_freezes_the_screen(
             child.expect("waiting for the results store: 1 run waits in the outbox…")
             child.expect("Scan the next unit's serial number")
             os.kill(server, signal.SIGCONT)
-            child.expect("outbox empty", timeout=60)
+            child.expect("outbox empty")
         finally:
             os.kill(server, signal.SIGCONT)
             station.close()

@@ -20,6 +20,7 @@ from station.domain.poses import CALIBRATION_POSES, pose
 from station.domain.samples import SampleBlock
 from station.run.acquisition import StillnessDetector, StillnessThresholds, acquire_pose
 from station.simulator import VirtualPutter
+from tests.conftest import examples
 
 LIMITS = StillnessThresholds()
 PROFILE = load_profile()
@@ -76,7 +77,7 @@ def test_the_budget_follows_the_profiles_limit_widths() -> None:
     extra=st.integers(0, 4096),
     budget=st.floats(0.01, 5.0),
 )
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 def test_the_samples_a_spread_needs_end_the_window_between_floor_and_ceiling(
     std: list[float], floor: int, extra: int, budget: float
 ) -> None:

@@ -20,6 +20,7 @@ from station.domain.calibration import (
 )
 from station.domain.calibration.geometry import GeometryLimits, screen
 from station.simulator.recording import random_directions, six_directions, spread_directions
+from tests.conftest import examples
 from tests.station.domain.calibration.test_paper import TABLE_2
 
 NOMINAL = 2048.0 + 819.2 * six_directions()
@@ -81,7 +82,7 @@ def test_spacing_and_coverage_ignore_the_offset(seed: int, offset: float) -> Non
     np.testing.assert_allclose(pair_angles_deg(poses), np.degrees(np.arccos(cos)), atol=1e-5)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     poses=st.lists(
         st.tuples(*[st.floats(1.0, 4094.0) | st.floats(allow_nan=False)] * 3),

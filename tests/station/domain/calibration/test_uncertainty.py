@@ -20,6 +20,7 @@ from station.domain.calibration.uncertainty import (
 )
 from station.simulator.recording import six_directions, spread_directions
 from station.simulator.sensor import SensorTruth
+from tests.conftest import examples
 from tests.station.domain.calibration.strategies import rotations, seeds, true_units
 
 noise = st.floats(0.6, 8.0)
@@ -40,7 +41,7 @@ def jig_rotations(draw: st.DrawFn) -> Rotation:
 sample_counts = st.integers(64, 4096)
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=examples(15), deadline=None)
 @given(unit=true_units(), rotation=jig_rotations(), seed=seeds, sigma=noise, count=sample_counts)
 def test_the_pose_noise_term_is_the_spread_of_re_solved_noisy_poses(  # type: ignore[no-untyped-def]
     unit, rotation, seed, sigma, count

@@ -1,4 +1,5 @@
-"""``calstation gyro``: the fit and simulate commands, run as real processes."""
+"""``calstation gyro``: the fit and simulate commands. The log is simulated by a real
+process; the commands run through their entry point in the test's process (``call_cli``)."""
 
 import json
 import subprocess
@@ -48,9 +49,9 @@ def test_simulate_writes_the_log_with_segments(centrifuge_log: Path) -> None:
     assert len(lines) == 1 + 4 * 294
 
 
-def test_fit_json_contract(run_cli: CliRunner, centrifuge_log: Path, tmp_path: Path) -> None:
+def test_fit_json_contract(call_cli: CliRunner, centrifuge_log: Path, tmp_path: Path) -> None:
     plot = tmp_path / "fig10.png"
-    result = run_cli("gyro", "fit", str(centrifuge_log), "--json", "--plot", str(plot))
+    result = call_cli("gyro", "fit", str(centrifuge_log), "--json", "--plot", str(plot))
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert len(data["bias_dps"]) == 3
@@ -70,21 +71,21 @@ def test_fit_json_contract(run_cli: CliRunner, centrifuge_log: Path, tmp_path: P
     assert plot.read_bytes().startswith(b"\x89PNG")
 
 
-def test_fit_prints_a_table_without_json(run_cli: CliRunner, centrifuge_log: Path) -> None:
-    result = run_cli("gyro", "fit", str(centrifuge_log))
+def test_fit_prints_a_table_without_json(call_cli: CliRunner, centrifuge_log: Path) -> None:
+    result = call_cli("gyro", "fit", str(centrifuge_log))
     assert result.returncode == 0, result.stderr
     assert "gyro x: form scale-factor" in result.stdout
 
 
 def test_single_mount_log_is_refused_for_the_form_question(
-    run_cli: CliRunner, tmp_path: Path
+    call_cli: CliRunner, tmp_path: Path
 ) -> None:
     log = tmp_path / "single.csv"
-    made = run_cli(
+    made = call_cli(
         "gyro", "simulate-centrifuge", "--single-mount", "--seed", "1", "--out", str(log)
     )
     assert made.returncode == 0, made.stderr
-    result = run_cli("gyro", "fit", str(log), "--json")
+    result = call_cli("gyro", "fit", str(log), "--json")
     assert result.returncode == 0, result.stderr
     data = json.loads(result.stdout)
     assert data["g_sensitivity_ppm_per_g"][0][1] is None
@@ -92,14 +93,14 @@ def test_single_mount_log_is_refused_for_the_form_question(
     reasons = {t["term"]: t["reason"] for t in data["unestimable"]}
     assert "flip the mount" in reasons["N_xy"]
     assert [c["verdict"] for c in data["comparison"]] == [None, None, None]
-    refused = run_cli("gyro", "fit", str(log), "--plot", str(tmp_path / "p.png"))
+    refused = call_cli("gyro", "fit", str(log), "--plot", str(tmp_path / "p.png"))
     assert refused.returncode == 2
     assert "N_xy" in refused.stderr
     assert "Traceback" not in refused.stderr
 
 
-def test_simulate_to_stdout_uses_the_truth_options(run_cli: CliRunner, tmp_path: Path) -> None:
-    result = run_cli(
+def test_simulate_to_stdout_uses_the_truth_options(call_cli: CliRunner, tmp_path: Path) -> None:
+    result = call_cli(
         "gyro",
         "simulate-centrifuge",
         "--seed",
@@ -116,7 +117,7 @@ def test_simulate_to_stdout_uses_the_truth_options(run_cli: CliRunner, tmp_path:
     assert result.returncode == 0, result.stderr
     log = tmp_path / "bias.csv"
     log.write_text(result.stdout, encoding="utf-8")
-    fitted = json.loads(run_cli("gyro", "fit", str(log), "--json").stdout)
+    fitted = json.loads(call_cli("gyro", "fit", str(log), "--json").stdout)
     assert [c["verdict"] for c in fitted["comparison"]] == ["bias"] * 3
     b = fitted["bias_g_sensitivity_dps_per_g"]
     assert [round(b[0][2], 3), round(b[1][0], 3), round(b[2][0], 3)] == [0.02, 0.02, 0.02]
@@ -130,34 +131,34 @@ def _one_line_error(result: subprocess.CompletedProcess[str], *parts: str) -> No
         assert part in result.stderr
 
 
-def test_missing_file(run_cli: CliRunner, tmp_path: Path) -> None:
-    _one_line_error(run_cli("gyro", "fit", str(tmp_path / "none.csv")), "none.csv: no such file")
+def test_missing_file(call_cli: CliRunner, tmp_path: Path) -> None:
+    _one_line_error(call_cli("gyro", "fit", str(tmp_path / "none.csv")), "none.csv: no such file")
 
 
-def test_missing_column(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_missing_column(call_cli: CliRunner, tmp_path: Path) -> None:
     log = tmp_path / "cols.csv"
     log.write_text(HEADER.replace(",gyro_y", "") + "\n", encoding="utf-8")
-    _one_line_error(run_cli("gyro", "fit", str(log)), "cols.csv: missing column gyro_y")
+    _one_line_error(call_cli("gyro", "fit", str(log)), "cols.csv: missing column gyro_y")
 
 
-def test_non_numeric_cell_names_file_line_and_column(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_non_numeric_cell_names_file_line_and_column(call_cli: CliRunner, tmp_path: Path) -> None:
     log = tmp_path / "cell.csv"
     rows = [",".join(["1"] * 10)] * 3
     rows[2] = ",".join(["1"] * 5 + ["x1"] + ["1"] * 4)
     log.write_text(HEADER + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
     _one_line_error(
-        run_cli("gyro", "fit", str(log)), "cell.csv:4: column acc_y: 'x1' is not a number"
+        call_cli("gyro", "fit", str(log)), "cell.csv:4: column acc_y: 'x1' is not a number"
     )
 
 
-def test_too_few_rows(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_too_few_rows(call_cli: CliRunner, tmp_path: Path) -> None:
     log = tmp_path / "short.csv"
     log.write_text(HEADER + "\n" + "\n".join([",".join(["1"] * 10)] * 5) + "\n", encoding="utf-8")
     _one_line_error(
-        run_cli("gyro", "fit", str(log)), "short.csv: 5 dwells in the log", "at least 11"
+        call_cli("gyro", "fit", str(log)), "short.csv: 5 dwells in the log", "at least 11"
     )
     log.write_text(HEADER + "\n", encoding="utf-8")
-    _one_line_error(run_cli("gyro", "check", str(log)), "short.csv: the log holds no dwells")
+    _one_line_error(call_cli("gyro", "check", str(log)), "short.csv: the log holds no dwells")
 
 
 @pytest.mark.parametrize(
@@ -170,38 +171,38 @@ def test_too_few_rows(run_cli: CliRunner, tmp_path: Path) -> None:
     ],
 )
 def test_simulate_refuses_bad_options(
-    run_cli: CliRunner, args: tuple[str, ...], message: str
+    call_cli: CliRunner, args: tuple[str, ...], message: str
 ) -> None:
-    _one_line_error(run_cli("gyro", "simulate-centrifuge", *args), message)
+    _one_line_error(call_cli("gyro", "simulate-centrifuge", *args), message)
 
 
 def test_fit_refuses_a_bad_plot_suffix(
-    run_cli: CliRunner, centrifuge_log: Path, tmp_path: Path
+    call_cli: CliRunner, centrifuge_log: Path, tmp_path: Path
 ) -> None:
     _one_line_error(
-        run_cli("gyro", "fit", str(centrifuge_log), "--plot", str(tmp_path / "f.jpg")),
+        call_cli("gyro", "fit", str(centrifuge_log), "--plot", str(tmp_path / "f.jpg")),
         "must end in .png or .svg",
     )
 
 
-def test_check_accepts_the_full_plan(run_cli: CliRunner, centrifuge_log: Path) -> None:
-    result = run_cli("gyro", "check", str(centrifuge_log), "--json")
+def test_check_accepts_the_full_plan(call_cli: CliRunner, centrifuge_log: Path) -> None:
+    result = call_cli("gyro", "check", str(centrifuge_log), "--json")
     assert result.returncode == 0, result.stderr
     axes = json.loads(result.stdout)["axes"]
     assert [a["form_question"] for a in axes] == [True, True, True]
 
 
-def test_check_refuses_a_single_mount_log(run_cli: CliRunner, tmp_path: Path) -> None:
+def test_check_refuses_a_single_mount_log(call_cli: CliRunner, tmp_path: Path) -> None:
     log = tmp_path / "single.csv"
     assert (
-        run_cli("gyro", "simulate-centrifuge", "--single-mount", "--out", str(log)).returncode == 0
+        call_cli("gyro", "simulate-centrifuge", "--single-mount", "--out", str(log)).returncode == 0
     )
-    result = run_cli("gyro", "check", str(log))
+    result = call_cli("gyro", "check", str(log))
     assert "not estimable: N_xy: confounded with scale-factor non-linearity ω³" in result.stdout
     _one_line_error(result, "cannot tell bias-form from scale-factor-form", "gyro x", "N_xy")
 
 
-def test_fit_refuses_a_bad_alpha(run_cli: CliRunner, centrifuge_log: Path) -> None:
+def test_fit_refuses_a_bad_alpha(call_cli: CliRunner, centrifuge_log: Path) -> None:
     _one_line_error(
-        run_cli("gyro", "fit", str(centrifuge_log), "--alpha", "1.5"), "--alpha: must lie between"
+        call_cli("gyro", "fit", str(centrifuge_log), "--alpha", "1.5"), "--alpha: must lie between"
     )

@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.domain.quality.drift import DRIFT_ALPHA, DRIFT_WINDOW, find_drift
+from tests.conftest import examples
 
 SPREAD = 207.0  # the datasheet's offset spread, counts
 
@@ -65,7 +66,7 @@ def test_fewer_units_than_the_window_give_no_verdict() -> None:
 
 
 @given(st.permutations(list(range(DRIFT_WINDOW))))
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=examples(15), deadline=None)
 def test_only_the_order_matters_not_the_units_spread(order: list[int]) -> None:
     """A monotone transform of the values changes neither the test nor its verdict."""
     rng = np.random.default_rng(1)
