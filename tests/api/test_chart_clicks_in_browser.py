@@ -2,16 +2,14 @@
 point opens its run's unit page, a point of the yield per day or per shift opens the
 report of that period with every unit listed (the units that point counts)."""
 
-from collections.abc import Iterator
 from datetime import timedelta
-from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 
 from db import Database, RunRepository
-from tests.browser import Browser, chromium, chromium_binary
+from tests.browser import Browser
 from tests.db.records import T0, make_record
 from tests.servers import serving
 
@@ -32,13 +30,6 @@ CLICK = """
   return circles.length;
 }})()
 """
-
-
-@pytest.fixture
-def browser(tmp_path: Path) -> Iterator[Browser]:
-    chromium_binary()
-    with chromium(tmp_path / "chromium") as browser:
-        yield browser
 
 
 def _history(database: Database) -> None:
