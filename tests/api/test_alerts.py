@@ -20,7 +20,7 @@ import pytest
 from db import Database, RunRepository
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
-from tests.servers import serving
+from tests.servers import HUNG_SERVER_S, serving
 
 #: The rule: first-pass yield of st1's last 4 units below 75 %.
 RULES = """
@@ -95,7 +95,7 @@ def _store(database: Database, verdicts: str, start: int) -> None:
 
 
 def _alerts(base: str) -> dict[str, Any]:
-    answer = httpx.get(f"{base}/alerts", params={"format": "json"}, timeout=10)
+    answer = httpx.get(f"{base}/alerts", params={"format": "json"}, timeout=HUNG_SERVER_S)
     assert answer.status_code == 200, answer.text
     found: dict[str, Any] = answer.json()
     return found
@@ -143,11 +143,13 @@ def test_an_alert_is_posted_once_per_event_and_again_after_it_clears_and_fires(
     # Restarted, as two server processes: the event is stored and delivered already.
     with serving(database_url, workers=2, **settings) as base:
         _rounds_later(base, 2, processes=2)
-        page = httpx.get(f"{base}/alerts").text
+        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
         link = page.split('<a class="runs" href="', 1)[1].split('"', 1)[0]
-        report = httpx.get(f"{base}{link.replace('&amp;', '&')}").text
+        report = httpx.get(f"{base}{link.replace('&amp;', '&')}", timeout=HUNG_SERVER_S).text
         assert "PT000001" in report
-        assert 'href="/alerts"' in httpx.get(f"{base}/").text  # every page's navigation
+        assert (
+            'href="/alerts"' in httpx.get(f"{base}/", timeout=HUNG_SERVER_S).text
+        )  # every page's navigation
         assert len(receiver.received) == 1
         _store(database, "pppp", 20)  # the last 4 all passed: the alert clears
         for _ in range(int(PATIENCE_S / 0.05)):
@@ -208,7 +210,7 @@ def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
             )
         shown = _rounds_later(base)
         assert shown["alerts"][0]["cleared_at"] is not None
-        page = httpx.get(f"{base}/alerts").text
+        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
         assert 'last run: <a class="serial" href="/units/PT000001">' in page
     assert len(receiver.received) == 1
 

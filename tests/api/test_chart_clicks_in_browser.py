@@ -11,7 +11,7 @@ import pytest
 from db import Database, RunRepository
 from tests.browser import Browser
 from tests.db.records import T0, make_record
-from tests.servers import serving
+from tests.servers import HUNG_SERVER_S, serving
 
 #: Units per day at the station the report is narrowed to, over three days.
 PER_DAY, DAYS = 3, 3
@@ -60,7 +60,7 @@ def test_a_control_chart_point_opens_its_unit(
     _history(database)
     with serving(database_url) as base:
         report: dict[str, Any] = httpx.get(
-            f"{base}/api/v1/reports/eol", params={"station": "st1"}
+            f"{base}/api/v1/reports/eol", params={"station": "st1"}, timeout=HUNG_SERVER_S
         ).json()
         points = report["control_charts"][0]["points"]
         assert len(points) == PER_DAY * DAYS

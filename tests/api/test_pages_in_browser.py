@@ -14,6 +14,7 @@ from db import Database, RunRepository
 from tests.browser import OFFLINE, Browser, chromium
 from tests.db.eol_data import insert_line_history
 from tests.db.records import make_record
+from tests.servers import HUNG_SERVER_S
 
 COUNT_CHARTS = "document.querySelectorAll('svg.chart').length"
 DRAWN_CHARTS = (
@@ -162,7 +163,7 @@ def test_the_dashboard_shows_a_run_submitted_through_the_api_without_a_reload(
         json=record.model_dump(mode="json", exclude={"failures"})
         | {"failures": [{"code": "offset", "message": "offset x out of limits"}]},
         headers={"Authorization": f"Bearer {station_key}"},
-        timeout=30,
+        timeout=HUNG_SERVER_S,
     )
     assert answer.status_code == 201
     row = "Array.from(document.querySelectorAll('table.units a.serial')).map(a => a.textContent)"
@@ -181,7 +182,10 @@ def test_docs_and_redoc_render_with_every_other_host_unreachable(
     tmp_path: Path, live_url: str
 ) -> None:
     operations = sum(
-        len(ops) for ops in httpx.get(f"{live_url}/openapi.json").json()["paths"].values()
+        len(ops)
+        for ops in httpx.get(f"{live_url}/openapi.json", timeout=HUNG_SERVER_S)
+        .json()["paths"]
+        .values()
     )
     with chromium(tmp_path / "chromium", flags=OFFLINE) as browser:
         assert browser.load(f"{live_url}/docs").errors == []
