@@ -290,7 +290,8 @@ class RunFacts(Base):
 
 
 class _Bucket:
-    """The key of a roll-up row: a UTC day (days since 1970-01-01), station, operator, lot.
+    """The key of a roll-up row: a UTC day (days since 1970-01-01), station, operator, lot
+    and product (part number), so that a product's rows read the roll-ups as a station's do.
 
     A run without a lot is counted under the lot ``''``.
     """
@@ -299,6 +300,7 @@ class _Bucket:
     station_id: Mapped[str] = mapped_column(String(NAME), primary_key=True)
     operator_id: Mapped[str] = mapped_column(String(NAME), primary_key=True)
     lot: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    part_number: Mapped[str] = mapped_column(String(NAME), primary_key=True)
 
 
 class ReportCounts(_Bucket, Base):

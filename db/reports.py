@@ -119,16 +119,13 @@ HISTOGRAM_RUNS = 1000
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 DAY = timedelta(days=1)
-#: Bounds of an open range read from the runs themselves (a product's report).
-FIRST = datetime(1, 1, 1, tzinfo=UTC)
-LAST = datetime(9999, 12, 31, tzinfo=UTC)
 #: The last moment before an exclusive end.
 EPSILON = timedelta(microseconds=1)
 
 
 def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
-    """The station, operator and lot conditions of ``filter`` on ``columns`` (``runs``
-    or a roll-up)."""
+    """The station, operator, lot and product conditions of ``filter`` on ``columns``
+    (``runs`` or a roll-up)."""
     where = []
     if filter.station_id is not None:
         where.append(columns.station_id == filter.station_id)
@@ -136,7 +133,7 @@ def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
         where.append(columns.operator_id == filter.operator_id)
     if filter.lot is not None:
         where.append(columns.lot == filter.lot)
-    if filter.part_number is not None:  # runs only: the roll-ups have no product
+    if filter.part_number is not None:
         where.append(columns.part_number == filter.part_number)
     return where
 
@@ -176,10 +173,6 @@ class ReportQueries:
         self.filter = filter
         self.dialect = session.get_bind().dialect.name
         self.days, self.edges = split_days(filter.since, filter.until)
-        if filter.part_number is not None:
-            # The roll-ups are kept per station, operator and lot, not per product: a
-            # product's report adds up its runs themselves, the whole range as one edge.
-            self.days, self.edges = None, [(filter.since or FIRST, filter.until or LAST)]
         if self.dialect == "postgresql":
             # The raw statements are scans with long expressions: compiling them (JIT)
             # cost seconds and saved nothing; their sorts and hashes spill to disk with
@@ -229,7 +222,8 @@ class ReportQueries:
         )
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
-        """The station, operator and lot conditions on ``columns`` (``runs`` or a roll-up)."""
+        """The station, operator, lot and product conditions on ``columns`` (``runs`` or a
+        roll-up)."""
         return dimensions(self.filter, columns)
 
     def conditions(self) -> list[ColumnElement[bool]]:
@@ -298,32 +292,28 @@ class ReportQueries:
         )
         return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
-    def only_product(self) -> str | None:
-        """The part number of the runs in range when they are all one product's, else
-        None (no run, or several products). Two index probes: one run in range, then any
-        run of another part number in range, which ``ix_runs_part_number_started_at``
-        answers without reading the first product's runs."""
-        first = self.session.scalars(
-            select(Run.part_number).where(*self.conditions()).limit(1)
-        ).first()
-        if first is None:
-            return None
-        other = or_(Run.part_number < first, Run.part_number > first)
-        several = self.session.scalar(select(exists().where(other, *self.conditions())))
-        return None if several else first
-
     def product_counts(self) -> list[Row[Any]]:
-        """Per part number: the counts :meth:`station_counts` sums per station, and the
-        runs the operator aborted, added up over the runs in range themselves (the
-        roll-ups have no product): one grouped statement, by ``ix_runs_started_at``."""
-        stmt = count_contributions(
-            ["part_number"],
-            self.conditions(),
-            columns={"part_number": Run.part_number.expression},
-            values=PRODUCT_COUNT_VALUES,
-        )
-        rows = self.session.execute(stmt.order_by(Run.part_number)).all()
-        return list(rows)
+        """Per part number: the counts :meth:`station_counts` sums per station (units,
+        runs, passes, station time), from the roll-ups and the partial days as theirs."""
+        group = ["part_number"]
+        edges = self._edge_conditions()
+        values = PRODUCT_COUNT_VALUES
+        raw = [] if edges is None else [count_contributions(group, edges, values=values)]
+        rows = self._merged(ReportCounts, values, group, self._rolled_conditions(ReportCounts), raw)
+        return sorted(rows, key=lambda row: str(row.part_number))
+
+    def product_aborts(self) -> dict[str, int]:
+        """Per part number: the runs the operator aborted (first failure ``aborted``),
+        from ``report_failures`` and the partial days."""
+        group = ["part_number"]
+        edges = self._edge_conditions()
+        aborted = RunFacts.first_failure == ABORTED
+        raw = [] if edges is None else [failure_contributions(group, [*edges, aborted])]
+        rolled = self._rolled_conditions(ReportFailures)
+        if rolled is not None:
+            rolled.append(ReportFailures.code == ABORTED)
+        rows = self._merged(ReportFailures, FAILURE_VALUES, group, rolled, raw)
+        return {str(row.part_number): int(row.runs) for row in rows}
 
     # -- failures ----------------------------------------------------------------------
 
@@ -682,26 +672,23 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
 
 def _products(
     queries: ReportQueries,
-    line: _Counts,
     unattempted: Sequence[Row[str, str, datetime]],
     hours: float | None,
 ) -> list[ProductSummary]:
     """Each product's summary: a unit is one product's, so the rows add up to the
-    ``line``'s as the stations' do. The runs of one product are the line's runs, its row
-    the line's (no scan: the roll-ups have no product); of several, each one's row of
-    :meth:`ReportQueries.product_counts`, less its ``unattempted`` units (nothing but
-    aborts)."""
-    only = queries.only_product()
-    if only is not None:
-        return [ProductSummary(part_number=only, summary=_summary(line, hours))]
-    rows = queries.product_counts()
+    line's as the stations' do. Each one's row of :meth:`ReportQueries.product_counts`,
+    with its aborted runs, less its ``unattempted`` units (nothing but aborts)."""
+    aborts = queries.product_aborts()
     abort_only = Counter(row.part_number for row in unattempted)
     return [
         ProductSummary(
             part_number=row.part_number,
-            summary=_summary(_counts([row], int(row.aborted), abort_only[row.part_number]), hours),
+            summary=_summary(
+                _counts([row], aborts.get(row.part_number, 0), abort_only[row.part_number]),
+                hours,
+            ),
         )
-        for row in rows
+        for row in queries.product_counts()
     ]
 
 
@@ -1113,7 +1100,7 @@ def eol_report(
             )
             for station, rows_ in sorted(by_station.items())
         ],
-        products=_products(queries, line, unattempted, hours),
+        products=_products(queries, unattempted, hours),
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],

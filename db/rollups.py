@@ -11,9 +11,9 @@ transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
   with coefficients. A unit's latest run is its latest that is not an operator's abort
   (an abort wrote nothing into the unit), or its latest if all are aborts.
 - ``report_counts``, ``report_failures``, ``report_parameters``: per day (UTC) × station ×
-  operator × lot, the sums, minima and maxima of what each run contributes (counts,
-  first and final passes, moving ranges; failing runs by first reason; n, Σ(x − c),
-  Σ(x − c)², min, max and histogram bins of every parameter).
+  operator × lot × product (part number), the sums, minima and maxima of what each run
+  contributes (counts, first and final passes, moving ranges; failing runs by first
+  reason; n, Σ(x − c), Σ(x − c)², min, max and histogram bins of every parameter).
 
 A submission can change facts of runs stored before it: a late run becomes its unit's
 first, a retest makes the previous run no longer the latest, a run slotted in between
@@ -95,9 +95,9 @@ from station.domain.quality.parameters import (
 )
 from station.domain.unit_state import ABORTED
 
-#: The key of every roll-up row (a UTC day, station, operator, lot); ``report_counts``
-#: adds the limits profile.
-BUCKET = ("day", "station_id", "operator_id", "lot")
+#: The key of every roll-up row (a UTC day, station, operator, lot, product);
+#: ``report_counts`` adds the limits profile.
+BUCKET = ("day", "station_id", "operator_id", "lot", "part_number")
 LIMITS = ("limits_name", "limits_version", "limits_sha256")
 
 #: Histogram bin columns of ``report_parameters``.
@@ -148,22 +148,18 @@ TREND_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")
 }
-#: The columns a product's summary reads (the runs themselves: the roll-ups have no
-#: product), with the runs the operator aborted.
+#: The columns a product's summary reads (its aborted runs come from ``report_failures``).
 PRODUCT_COUNT_VALUES: dict[str, str] = {
-    **{
-        name: COUNT_VALUES[name]
-        for name in (
-            "runs",
-            "runs_passed",
-            "duration_ms",
-            "poses",
-            "line_units",
-            "line_first_pass",
-            "line_final_pass",
-        )
-    },
-    "aborted": "sum",
+    name: COUNT_VALUES[name]
+    for name in (
+        "runs",
+        "runs_passed",
+        "duration_ms",
+        "poses",
+        "line_units",
+        "line_first_pass",
+        "line_final_pass",
+    )
 }
 FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
 #: The columns a mean and spread (and Cpk) need, all added up.
@@ -409,6 +405,7 @@ def _keys(names: Sequence[str], extra: dict[str, Any]) -> list[ColumnElement[Any
         "station_id": Run.station_id,
         "operator_id": Run.operator_id,
         "lot": func.coalesce(Run.lot, _inline("")),
+        "part_number": Run.part_number,
         **{name: getattr(Run, name) for name in LIMITS},
         **extra,
     }
@@ -446,7 +443,6 @@ def count_contributions(
         "first_pass": _count_if(and_(facts.station_first, passed)),
         "final_pass": _count_if(facts.station_final_pass),
         "charted": func.count(Run.offset_x),
-        "aborted": _count_if(facts.first_failure == _ABORTED),
         **{
             f"mr_{name}": func.coalesce(
                 func.sum(func.abs(getattr(Run, name) - getattr(previous, name))), _inline(0.0)

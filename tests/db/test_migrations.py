@@ -155,6 +155,37 @@ def test_the_report_migration_builds_the_roll_ups_of_the_runs_already_stored(
         engine.dispose()
 
 
+def test_the_product_migration_rebuilds_the_roll_ups_per_part_number(empty_url: str) -> None:
+    """Revision 0019 keys the roll-ups by part number too: from 0016, whose roll-ups have
+    no product, the upgrade writes them anew from the runs, one row per product."""
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine)
+        with Session(engine) as session:
+            for hour, (serial, product) in enumerate(
+                [("U1", "DIXX-A12"), ("U2", "DIXX-D16"), ("U1", "DIXX-A12"), ("U3", "DIXX-D16")]
+            ):
+                RunRepository(session).submit(
+                    make_record(
+                        serial=serial, part_number=product, started_at=T0 + timedelta(hours=hour)
+                    )
+                )
+            session.commit()
+            submitted = rollup_rows(session)
+        with engine.begin() as connection:
+            command.downgrade(alembic_config(connection), "0016")
+        for table in ("report_counts", "report_failures", "report_parameters"):
+            assert "part_number" not in {c["name"] for c in inspect(engine).get_columns(table)}
+        upgrade(engine)
+        with Session(engine) as session:
+            assert rollup_rows(session) == submitted
+            runs = select(ReportCounts.part_number, func.sum(ReportCounts.runs))
+            by_product = session.execute(runs.group_by(ReportCounts.part_number)).all()
+            assert sorted(by_product) == [("DIXX-A12", 2), ("DIXX-D16", 2)]
+    finally:
+        engine.dispose()
+
+
 def test_the_key_scope_migration_makes_every_existing_key_a_station_key(empty_url: str) -> None:
     engine = make_engine(empty_url)
     upgrade(engine, "0004")

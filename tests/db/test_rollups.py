@@ -90,6 +90,7 @@ filters = st.builds(
     station_id=st.sampled_from([None, "st1"]),
     operator_id=st.sampled_from([None, "op-b"]),
     lot=st.sampled_from([None, "L1"]),
+    part_number=st.sampled_from([None, "DIXX-D16"]),
 )
 
 
@@ -117,6 +118,7 @@ def _selected(run: Planned, f: ReportFilter) -> bool:
         and f.station_id in (None, run.station)
         and f.operator_id in (None, run.operator)
         and f.lot in (None, run.lot)
+        and f.part_number in (None, run.part_number)
     )
 
 
