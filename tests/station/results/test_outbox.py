@@ -17,6 +17,7 @@ from sqlalchemy import func, select
 
 from db import Database
 from db.models import Run
+from station.domain.outbox_report import OutboxReport
 from station.domain.records import RunRecord
 from station.loop.screens import header
 from station.results.backoff import FIRST_S, RecordBackoff
@@ -180,9 +181,9 @@ class Counting:
         self.store = store
         self.sent: list[str] = []
 
-    def submit(self, record: RunRecord) -> SubmitOutcome:
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
         self.sent.append(record.serial)
-        return self.store.submit(record)
+        return self.store.submit(record, outbox)
 
     def close(self) -> None:
         self.store.close()
