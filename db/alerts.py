@@ -23,10 +23,12 @@ from sqlalchemy.orm import Session
 from db.engine import for_dialect
 from db.limits_profiles import stored_profiles
 from db.models import Run, RunFacts, StoredAlert
+from db.outbox_reports import latest_outboxes
 from station.domain.quality.alerts import (
     Alert,
     AlertRules,
     CpkRule,
+    OutboxRule,
     ParameterWindow,
     RuleKind,
     SilentRule,
@@ -206,6 +208,40 @@ def _western_electric_check(session: Session, rule: WesternElectricRule) -> _Che
     return replace(check, evidence=evidence, message=message, tipped_by=str(latest.run_id))
 
 
+def _outbox_checks(session: Session, rule: OutboxRule) -> list[_Check]:
+    """Per station (the rule's, or each that reported), its latest outbox report: at
+    least ``queued`` runs waiting, the oldest waiting ``hours`` or more, or a file set
+    aside."""
+    checks = []
+    for report in latest_outboxes(session, rule.station):
+        station = report.station_id
+        check = _Check("outbox", station, f"outbox:{station}:{rule.queued}:{rule.hours}")
+        waited_h = report.oldest_s / 3600
+        reasons = [
+            *([f"{report.queued} runs queued"] if report.queued >= rule.queued else []),
+            *([f"the oldest waiting {waited_h:.1f} h"] if waited_h >= rule.hours else []),
+            *([f"{report.set_aside} files set aside"] if report.set_aside else []),
+        ]
+        if reasons:
+            evidence = {
+                "station": station,
+                "queued": report.queued,
+                "oldest_s": report.oldest_s,
+                "set_aside": report.set_aside,
+                "reported_at": report.reported_at.isoformat(),
+                "rule_queued": rule.queued,
+                "rule_hours": rule.hours,
+            }
+            message = (
+                f"outbox of {station}: {', '.join(reasons)} (rule: {rule.queued} runs, "
+                f"{rule.hours:g} h, no file set aside)"
+            )
+            tipped_by = report.reported_at.isoformat()
+            check = replace(check, evidence=evidence, message=message, tipped_by=tipped_by)
+        checks.append(check)
+    return checks
+
+
 def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
     """Fire the alerts whose rule holds and has none open; clear those that no longer
     hold."""
@@ -214,6 +250,7 @@ def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
         *(_silent_check(session, rule, now) for rule in rules.silent_rules),
         *(_western_electric_check(session, rule) for rule in rules.western_electric_rules),
         *(_cpk_check(session, rule) for rule in rules.cpk_rules),
+        *(check for rule in rules.outbox_rules for check in _outbox_checks(session, rule)),
     ]
     for check in checks:
         open_alert = session.scalars(

@@ -425,3 +425,16 @@ class StoredAlert(Base):
     delivered_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
     attempts: Mapped[int] = mapped_column(Integer())
     next_attempt_at: Mapped[datetime] = mapped_column(UtcDateTime())
+
+
+class StationOutbox(Base):
+    """A station's outbox as it last reported it with a run it sent
+    (:mod:`station.domain.outbox_report`): one row per station, the latest report."""
+
+    __tablename__ = "station_outboxes"
+
+    station_id: Mapped[str] = mapped_column(String(NAME), primary_key=True)
+    queued: Mapped[int] = mapped_column(Integer())
+    oldest_s: Mapped[int] = mapped_column(Integer())
+    set_aside: Mapped[int] = mapped_column(Integer())
+    reported_at: Mapped[datetime] = mapped_column(UtcDateTime())

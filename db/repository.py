@@ -38,10 +38,12 @@ from db.models import (
 from db.models import (
     HoldReview as ReviewRow,
 )
+from db.outbox_reports import record_outbox
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import CalstationError, InputError
+from station.domain.outbox_report import OutboxReport
 from station.domain.records import (
     GyroFitRecord,
     HoldReview,
@@ -176,7 +178,13 @@ class RunRepository:
 
     # -- runs --------------------------------------------------------------------------
 
-    def submit(self, record: RunRecord, *, received_at: datetime | None = None) -> SubmitOutcome:
+    def submit(
+        self,
+        record: RunRecord,
+        *,
+        received_at: datetime | None = None,
+        outbox: OutboxReport | None = None,
+    ) -> SubmitOutcome:
         """Store ``record`` unless a run with its UUID is stored already.
 
         The unique constraint on ``run_id`` decides (``INSERT … ON CONFLICT DO
@@ -184,13 +192,17 @@ class RunRepository:
         returns the stored run; the same UUID with other content raises
         :class:`RunConflictError`. A new run brings the report's facts and roll-ups up to
         date in the same transaction (:func:`db.rollups.record_run`); submissions are
-        serialised for that (:func:`db.rollups.lock_submissions`).
+        serialised for that (:func:`db.rollups.lock_submissions`). ``outbox``: the
+        station's outbox as it sent the run, kept as its latest report
+        (:func:`db.outbox_reports.record_outbox`), a retry's too.
         """
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
         row = run_row(record, received_at=received_at, record_sha256=digest)
         lock_submissions(self.session.connection())
         pk = self.session.execute(self._insert_new_run(), row).scalar_one_or_none()
+        if outbox is not None:
+            record_outbox(self.session, record.station_id, outbox, received_at)
         if pk is None:
             stored_digest = self.session.scalars(
                 select(Run.record_sha256).where(Run.run_id == record.run_id)

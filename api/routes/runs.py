@@ -4,7 +4,7 @@ import logging
 from typing import Annotated
 from uuid import UUID
 
-from fastapi import APIRouter, HTTPException, Query, Request, Response, status
+from fastapi import APIRouter, Header, HTTPException, Query, Request, Response, status
 
 from api.deps import ReaderDep, RepositoryDep, StationDep
 from api.errors import invalid
@@ -17,6 +17,7 @@ from db.repository import MAX_PAGE
 from station.domain.constants import PART_NUMBER_PATTERN
 from station.domain.errors import InputError
 from station.domain.limits import profile_of
+from station.domain.outbox_report import OUTBOX_HEADER, parse_outbox_header
 from station.domain.record_bounds import RUN_YEARS, implausible_run_time
 from station.domain.records import (
     IDENTIFIER_PATTERN,
@@ -97,12 +98,29 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             _422="invalid (each offending field named: a limits profile that does not hash to "
             "its sha256, or holds a bound outside what its quantity can take, is one; a "
             "`started_at` or `finished_at` outside the years "
-            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another), or the poses give other coefficients",
+            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another; a `{OUTBOX_HEADER}` header that is "
+            "not `queued=N; oldest_s=N; set_aside=N` another), or the poses give other "
+            "coefficients",
         ),
     },
 )
 async def submit_run(
-    record: RunRecord, station: StationDep, repository: RepositoryDep, request: Request
+    record: RunRecord,
+    station: StationDep,
+    repository: RepositoryDep,
+    request: Request,
+    outbox: Annotated[
+        str | None,
+        Header(
+            alias=OUTBOX_HEADER,
+            description="the station's outbox as it sends this run, kept as its latest "
+            "report (the `[[outbox]]` alert rule): `queued=N; oldest_s=N; set_aside=N`, "
+            "runs queued behind this one, whole seconds the oldest of them has waited, "
+            "files set aside (refused, unreadable); a station that sends none is stored "
+            "as before",
+            examples=["queued=12; oldest_s=5400; set_aside=1"],
+        ),
+    ] = None,
 ) -> Response:
     """Store a station's run; a retry of a stored run returns it (200) unchanged."""
     if record.station_id != station:
@@ -117,6 +135,11 @@ async def submit_run(
             refuse(request, "implausible_time")
             raise invalid(("body", field), why)
     try:
+        report = None if outbox is None else parse_outbox_header(outbox)
+    except InputError as exc:
+        refuse(request, "outbox_header")
+        raise invalid(("header", OUTBOX_HEADER), str(exc)) from None
+    try:
         profile_of(record.limits)
     except InputError as exc:
         refuse(request, "limits_profile")
@@ -130,7 +153,7 @@ async def submit_run(
         )
         raise
     async with repository.session.begin():
-        outcome = await repository.run(lambda r: r.submit(record))
+        outcome = await repository.run(lambda r: r.submit(record, outbox=report))
     if outcome.created:  # committed: a retry of a stored run is not counted again
         stored = get_metrics(request).runs_stored
         stored.labels(station, record.verdict, record.part_number).inc()

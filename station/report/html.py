@@ -63,8 +63,11 @@ _env.filters.update(
     percent=formatting.percent,
     number=formatting.number,
     seconds=formatting.seconds,
-    # A moment names its zone on every page: the plant's, which each page is given.
-    moment=lambda value, zone: formatting.moment(value, zone),
+    # A moment names its zone on every page: the plant's, which each page is given; an
+    # alert's evidence (JSON) holds its moments as ISO 8601 text.
+    moment=lambda value, zone: formatting.moment(
+        datetime.fromisoformat(value) if isinstance(value, str) else value, zone
+    ),
     field=formatting.field,
     reason=formatting.reason,
 )

@@ -18,16 +18,22 @@ answer and the removal) is still stored once. Nothing in the outbox stops it:
   reason (:mod:`station.results.outbox_files`);
 - the disk refusing the record's file (full, read-only): the record is kept in memory,
   written again at every sync and sent from memory meanwhile.
+
+Each record goes with the outbox's report (:class:`station.domain.outbox_report.OutboxReport`):
+the runs still waiting behind it, the oldest one's wait, and the files set aside, so that
+the results server sees a backlog building at a station (its ``[[outbox]]`` alert rule).
 """
 
 import logging
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
 from station.domain.i18n import tr
+from station.domain.outbox_report import OutboxReport
 from station.domain.records import RunRecord
 from station.results.backoff import RecordBackoff
 from station.results.files import write_atomic
@@ -151,7 +157,7 @@ class Outbox:
         Stops at the first sign the store is unreachable or refuses this station.
         """
         self.flush()
-        tally = _Tally()
+        tally = _Tally(backlog=self._backlog())
         try:
             with self._lock:
                 in_memory = list(self.unwritten)
@@ -165,6 +171,16 @@ class Outbox:
             return tally.result(self, str(exc))
         return tally.result(self, None)
 
+    def _backlog(self) -> "_Backlog":
+        """What waits now: each record's name and when it was queued (its file's time, or
+        its finish for one kept in memory), oldest first; the files set aside."""
+        ages = ((path.name, _age(path)[0]) for path in self.pending())
+        written = {name: mtime_ns / 1e9 for name, mtime_ns in ages if mtime_ns}
+        with self._lock:
+            kept = {_name(r): r.finished_at.timestamp() for r in self.unwritten}
+        queued = dict(sorted({**written, **kept}.items(), key=lambda item: item[1]))
+        return _Backlog(queued, sum(self.set_aside()))
+
     def _send_file(self, store: RunStore, path: Path, tally: "_Tally") -> None:
         if not self.backoff.due(path.name):
             return
@@ -174,6 +190,7 @@ class Outbox:
             log.warning("outbox file %s is unreadable: %s", path.name, exc)
             if set_aside(path, self.unreadable_dir, str(exc)):
                 tally.unreadable += 1
+                tally.backlog.gone(path.name)
                 self.backoff.forget(path.name)
             else:
                 self.backoff.failed(
@@ -195,7 +212,7 @@ class Outbox:
         if not self.backoff.due(name):
             return
         try:
-            store.submit(record)
+            store.submit(record, tally.report(name, time.time()))
         except RecordFailedError as exc:
             wait = self.backoff.failed(name, str(exc))
             log.warning("%s; next try in %.0f s, the other runs go on", exc, wait)
@@ -212,12 +229,14 @@ class Outbox:
                 done()
             if set_aside(path, self.refused_dir, str(exc)):
                 tally.refused += 1
+                tally.backlog.gone(name)
                 self.backoff.forget(name)
             else:
                 self.backoff.failed(name, str(exc))
             return
         done()
         self.backoff.forget(name)
+        tally.backlog.gone(name)
         tally.stored += 1
 
     def _path(self, record: RunRecord) -> Path:
@@ -225,10 +244,37 @@ class Outbox:
 
 
 @dataclass
+class _Backlog:
+    """The records waiting at a pass's start, by name, when each was queued (``time.time()``),
+    oldest first, less those stored or set aside since; the files set aside before it."""
+
+    queued: dict[str, float]
+    set_aside: int
+
+    def gone(self, name: str) -> None:
+        """The record ``name`` no longer waits (stored, or set aside)."""
+        self.queued.pop(name, None)
+
+    def behind(self, name: str, now: float) -> tuple[int, int]:
+        """The records waiting besides ``name``: how many, and the oldest one's whole
+        seconds of wait at ``now`` (0: none)."""
+        others = len(self.queued) - (name in self.queued)
+        oldest = next((since for other, since in self.queued.items() if other != name), now)
+        return others, max(0, int(now - oldest))
+
+
+@dataclass
 class _Tally:
+    backlog: _Backlog
     stored: int = 0
     refused: int = 0
     unreadable: int = 0
+
+    def report(self, name: str, now: float) -> OutboxReport:
+        """The outbox's report sent with the record ``name`` at ``now``."""
+        queued, oldest_s = self.backlog.behind(name, now)
+        aside = self.backlog.set_aside + self.refused + self.unreadable
+        return OutboxReport(queued=queued, oldest_s=oldest_s, set_aside=aside)
 
     def result(self, outbox: Outbox, error: str | None) -> SyncResult:
         waiting = {p.name for p in outbox.pending()} | {_name(r) for r in outbox.unwritten}

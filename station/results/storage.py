@@ -45,6 +45,7 @@ from db import (
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.domain.closing import Closing
 from station.domain.errors import CalstationError, InputError
+from station.domain.outbox_report import OUTBOX_HEADER, OutboxReport
 from station.domain.records import GyroFitRecord, HoldReview, RunRecord, RunSummary, StoredRun
 
 __all__ = [
@@ -95,8 +96,9 @@ class RunStore(Protocol):
     Opening a store and every method raise only :class:`StoreError` (and its kinds).
     """
 
-    def submit(self, record: RunRecord) -> SubmitOutcome:
-        """Store ``record`` (or find it stored already) and return the stored run."""
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
+        """Store ``record`` (or find it stored already) and return the stored run;
+        ``outbox``: the station's outbox as it sends it, kept as its latest report."""
         ...
 
     def history(self, serial: str) -> list[RunSummary]:
@@ -131,10 +133,10 @@ class DatabaseStore(Closing):
         except SQLAlchemyError as exc:
             raise StoreUnavailableError(f"database: {_first_line(exc)}") from None
 
-    def submit(self, record: RunRecord) -> SubmitOutcome:
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
         try:
             with self.database.session() as session, session.begin():
-                return RunRepository(session).submit(record)
+                return RunRepository(session).submit(record, outbox=outbox)
         except RunConflictError as exc:
             raise SubmissionRefusedError(str(exc)) from None
         except SQLAlchemyError as exc:
@@ -198,7 +200,8 @@ class HttpStore(Closing):
             transport=transport,
         )
 
-    def submit(self, record: RunRecord) -> SubmitOutcome:
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
+        """POST the run, the outbox's report in the ``Calstation-Outbox`` header."""
         if self.station_id is not None and record.station_id != self.station_id:
             raise SubmissionRefusedError(
                 f"run {record.run_id} was recorded by station {record.station_id}, and this "
@@ -206,7 +209,8 @@ class HttpStore(Closing):
                 f"store it (calstation outbox send {record.run_id} --api-key KEY)"
             )
         try:
-            response = self._post(record.model_dump(mode="json"))
+            headers = {} if outbox is None else {OUTBOX_HEADER: outbox.header()}
+            response = self._post(record.model_dump(mode="json"), headers)
         except httpx.HTTPError as exc:
             raise StoreUnavailableError(
                 f"results server {self.client.base_url} unreachable: {exc}"
@@ -221,7 +225,7 @@ class HttpStore(Closing):
             return SubmitOutcome(created=response.status_code == 201, run=run)
         raise _http_error(self.client.base_url, record, response)
 
-    def _post(self, body: dict[str, object]) -> httpx.Response:
+    def _post(self, body: dict[str, object], headers: dict[str, str]) -> httpx.Response:
         """POST the run; once more on a fresh connection if a kept-alive one was dropped.
 
         The server closes its connection after a 500, so the next record's request may
@@ -229,9 +233,9 @@ class HttpStore(Closing):
         the submission is idempotent, so it is simply sent again.
         """
         try:
-            return self.client.post(RUNS_PATH, json=body)
+            return self.client.post(RUNS_PATH, json=body, headers=headers)
         except (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError):
-            return self.client.post(RUNS_PATH, json=body)
+            return self.client.post(RUNS_PATH, json=body, headers=headers)
 
     def history(self, serial: str) -> list[RunSummary]:
         """``GET /api/v1/units/{serial}/runs``; a unit the server does not know has none."""

@@ -16,11 +16,17 @@ from typing import Any
 import httpx
 import numpy as np
 import pytest
+from sqlalchemy import select
 
 from db import Database, RunRepository
+from db.models import StationOutbox
+from station.domain.outbox_report import OUTBOX_HEADER
+from station.results.backoff import RecordBackoff
+from station.results.outbox import Outbox
+from station.results.storage import HttpStore
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
-from tests.servers import HUNG_SERVER_S, serving
+from tests.servers import HUNG_SERVER_S, STATION, serving
 
 #: The rule: first-pass yield of st1's last 4 units below 75 %.
 RULES = """
@@ -299,6 +305,73 @@ def test_a_cpk_below_its_target_fires_once_and_clears_when_capable_again(
     assert (posted["evidence"]["lower"], posted["evidence"]["upper"]) == (1841.0, 2255.0)
     assert shown["alerts"][0]["cleared_at"] is not None
     assert len(receiver.received) == 1
+
+
+def test_a_station_outbox_backlog_fires_once_and_clears_when_it_drains(
+    database_url: str, station_key: str, receiver: Receiver, tmp_path: Path
+) -> None:
+    rules = tmp_path / "alerts.toml"
+    rules.write_text(f'webhook = "{receiver.url}"\n[[outbox]]\nqueued = 3\nhours = 1\n')
+    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+    # Three runs the store failed on wait for their retry (the backoff's clock stands
+    # still until the test moves it), the oldest for two hours; one file was refused.
+    clock = [0.0]
+    outbox = Outbox(tmp_path / "outbox", backoff=RecordBackoff(lambda: clock[0]))
+    for i in range(3):
+        record = make_record(serial=f"PT00001{i}", station_id=STATION)
+        outbox.put(record)
+        outbox.backoff.failed(f"{record.run_id}.json", "the store failed on it")
+    two_hours_ago = datetime.now(UTC).timestamp() - 2 * 3600
+    os.utime(outbox.pending()[0], (two_hours_ago, two_hours_ago))
+    outbox.refused_dir.mkdir()
+    refused = outbox.refused_dir / f"{make_record().run_id}.json"
+    refused.write_text("{}")
+    outbox.put(make_record(serial="PT000020", station_id=STATION))
+    with serving(database_url, **settings) as base, HttpStore(base, station_key) as store:
+        sent = outbox.sync(store)
+        assert (sent.stored, sent.pending) == (1, 3)
+        receiver.wait("alert", lambda: receiver.received)
+        (posted,) = receiver.received
+        assert (posted["rule"], posted["scope"]) == ("outbox", STATION)
+        evidence = posted["evidence"]
+        assert (evidence["queued"], evidence["set_aside"]) == (3, 1)
+        assert evidence["oldest_s"] >= 2 * 3600
+        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
+        assert '<span class="outbox">3 runs queued, the oldest waiting 2' in page
+        assert "1 files set aside (reported " in page
+        # The operator dealt with the refused file; the runs' retry comes: all stored.
+        refused.unlink()
+        clock[0] += 3600
+        sent = outbox.sync(store)
+        assert (sent.stored, sent.pending) == (3, 0)
+        shown = _rounds_later(base)
+        assert shown["alerts"][0]["cleared_at"] is not None
+    assert len(receiver.received) == 1
+
+
+def test_the_outbox_header_is_checked_and_a_station_without_it_stored_as_before(
+    database: Database, database_url: str, station_key: str
+) -> None:
+    bad = make_record(serial="PT000001", station_id=STATION)
+    older = make_record(serial="PT000002", station_id=STATION)
+    with serving(database_url) as base, HttpStore(base, station_key) as store:
+        answer = httpx.post(
+            f"{base}/api/v1/runs",
+            content=bad.model_dump_json(),
+            headers={
+                "Authorization": f"Bearer {station_key}",
+                "Content-Type": "application/json",
+                OUTBOX_HEADER: "queued=-1; oldest_s=0; set_aside=0",
+            },
+            timeout=HUNG_SERVER_S,
+        )
+        assert answer.status_code == 422, answer.text
+        assert f"header.{OUTBOX_HEADER}: {OUTBOX_HEADER}: 'queued=-1'" in answer.json()["detail"]
+        assert httpx.get(f"{base}/api/v1/runs/{bad.run_id}", timeout=30).status_code == 404
+        assert store.submit(older).created  # a station that does not report its outbox
+    with database.session() as session:
+        assert session.scalars(select(StationOutbox)).all() == []
+        assert RunRepository(session).get(older.run_id) is not None
 
 
 @pytest.mark.parametrize(

@@ -15,6 +15,11 @@ no longer holds the alert clears, and the next time it holds is a new event. Rul
 - ``cpk``: the Cpk of ``parameter`` (a coefficient) over the last ``runs`` runs (at
   ``station`` or anywhere), against the limits profile of the latest of them, below
   ``target`` (1.33 by default, :data:`station.domain.quality.capability.CAPABLE_CPK`).
+- ``outbox``: a station's latest outbox report (:mod:`station.domain.outbox_report`,
+  sent with each run) says ``queued`` runs or more wait behind the run it sent (20 by
+  default), or the oldest of them has waited ``hours`` or more (1 by default), or a file
+  is set aside (refused or unreadable); one alert per station (``station`` or every
+  station that reported), cleared by a later report under all three.
 
 The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
 
@@ -37,6 +42,11 @@ The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
     parameter = "sensitivity_z"
     runs = 100
     target = 1.33
+
+    [[outbox]]
+    station = "line2-st1"   # optional: every station without it
+    queued = 20
+    hours = 1
 """
 
 import tomllib
@@ -51,7 +61,7 @@ from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.parameters import COEFFICIENTS
 
 #: The kinds of rule.
-RuleKind = Literal["yield", "silent", "western_electric", "cpk"]
+RuleKind = Literal["yield", "silent", "western_electric", "cpk", "outbox"]
 
 
 class _Rules(BaseModel):
@@ -107,6 +117,15 @@ class CpkRule(ParameterWindow):
     target: Annotated[float, Field(gt=0, le=10)] = CAPABLE_CPK
 
 
+class OutboxRule(_Rules):
+    """A station's latest outbox report: ``queued`` runs or more waiting, the oldest
+    waiting ``hours`` or more, or a file set aside."""
+
+    station: Identifier | None = None
+    queued: Annotated[int, Field(ge=1, le=1_000_000)] = 20
+    hours: Annotated[float, Field(gt=0, le=30 * 24)] = 1.0
+
+
 class AlertRules(_Rules):
     """The plant's alert rules and where their alerts go."""
 
@@ -117,6 +136,7 @@ class AlertRules(_Rules):
         default_factory=list, alias="western_electric"
     )
     cpk_rules: list[CpkRule] = Field(default_factory=list, alias="cpk")
+    outbox_rules: list[OutboxRule] = Field(default_factory=list, alias="outbox")
 
 
 def parse_alert_rules(text: str, shown: str) -> AlertRules:

@@ -16,7 +16,8 @@ from rich.console import Console
 from sqlalchemy import func, select
 
 from db import Database
-from db.models import Run
+from db.models import Run, StationOutbox
+from station.domain.outbox_report import OutboxReport
 from station.domain.records import RunRecord
 from station.loop.screens import header
 from station.results.backoff import FIRST_S, RecordBackoff
@@ -180,9 +181,9 @@ class Counting:
         self.store = store
         self.sent: list[str] = []
 
-    def submit(self, record: RunRecord) -> SubmitOutcome:
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
         self.sent.append(record.serial)
-        return self.store.submit(record)
+        return self.store.submit(record, outbox)
 
     def close(self) -> None:
         self.store.close()
@@ -216,6 +217,50 @@ def test_a_poison_run_on_postgresql_never_holds_up_the_runs_behind_it(
     assert outbox.sync(store).failing == 1
     assert store.sent[3:] == ["PT-POISON"]
     assert stored_runs(database) == 2
+
+
+DAY_S = 86_400
+
+
+class Reporting(Counting):
+    """A real store, keeping the outbox report each run came with."""
+
+    def __init__(self, store: DatabaseStore) -> None:
+        super().__init__(store)
+        self.reports: list[OutboxReport | None] = []
+
+    def submit(self, record: RunRecord, outbox: OutboxReport | None = None) -> SubmitOutcome:
+        self.reports.append(outbox)
+        return super().submit(record, outbox)
+
+
+def test_each_run_goes_with_what_waits_behind_it_and_the_store_keeps_the_latest(
+    tmp_path: Path, database: Database
+) -> None:
+    outbox = Outbox(tmp_path / "outbox")
+    # Days apart: the seconds the sync itself takes never blur which run is the oldest.
+    for serial, days_ago in (("PT-1", 30), ("PT-2", 20), ("PT-3", 10)):
+        outbox.put(make_record(serial=serial))
+        age(outbox.pending()[-1], days_ago * DAY_S)
+    outbox.refused_dir.mkdir()
+    (outbox.refused_dir / "refused.json").write_text("{}")
+    store = Reporting(DatabaseStore(database=database))
+    assert outbox.sync(store).stored == 3
+    assert store.sent == ["PT-1", "PT-2", "PT-3"]
+    first, second, last = store.reports
+    assert first is not None
+    assert second is not None
+    assert (first.queued, first.set_aside, first.oldest_s // DAY_S) == (2, 1, 20)
+    assert (second.queued, second.set_aside, second.oldest_s // DAY_S) == (1, 1, 10)
+    assert last == OutboxReport(queued=0, oldest_s=0, set_aside=1)
+    with database.session() as session:
+        (kept,) = session.scalars(select(StationOutbox)).all()
+    assert (kept.station_id, kept.queued, kept.oldest_s, kept.set_aside) == (
+        make_record().station_id,
+        0,
+        0,
+        1,
+    )
 
 
 def echo_server(
