@@ -24,6 +24,8 @@ from station.domain.sensor import (
     NOMINAL_OFFSET_COUNTS,
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
     OFFSET_SPREAD_COUNTS,
+    OFFSET_TEMPCO_COUNTS_PER_C,
+    SENSITIVITY_TEMPCO_PER_C,
     SENSITIVITY_TOLERANCE,
 )
 
@@ -51,6 +53,13 @@ class SensorSpec(BaseModel):
     sensitivity_tolerance: Annotated[float, Field(ge=0, lt=1)] = 0.05
     #: White noise of a reading, g rms.
     noise_g: Annotated[float, Field(ge=0, le=1)] = 0.0012
+    #: The datasheet's largest temperature coefficients of the zero g (± g/°C) and of the
+    #: sensitivity (± fraction/°C): the uncertainty budget's temperature term
+    #: (:mod:`station.domain.calibration.uncertainty`).
+    offset_tempco_g_per_c: Annotated[float, Field(ge=0, le=0.1)] = (
+        OFFSET_TEMPCO_COUNTS_PER_C / NOMINAL_SENSITIVITY_COUNTS_PER_G
+    )
+    sensitivity_tempco_per_c: Annotated[float, Field(ge=0, le=0.01)] = SENSITIVITY_TEMPCO_PER_C
 
     @property
     def adc_max(self) -> int:
@@ -81,6 +90,11 @@ class SensorSpec(BaseModel):
     def zero_g_spread_counts(self) -> float:
         """The datasheet's spread of a unit's zero g, ± counts."""
         return self.counts(self.zero_g_spread_g)
+
+    @property
+    def offset_tempco_counts_per_c(self) -> float:
+        """The datasheet's largest temperature coefficient of the zero g, ± counts/°C."""
+        return self.counts(self.offset_tempco_g_per_c)
 
 
 #: The putter's sensor (DIXX-A12): the KXM52-1050 behind the 12-bit ADS7829, ±2 g,

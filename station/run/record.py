@@ -41,6 +41,7 @@ from station.domain.records import (
     Verdict,
 )
 from station.domain.run_settings import RunSettings
+from station.domain.sensor_spec import SensorSpec
 from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 
@@ -152,11 +153,13 @@ def uncertainty_record(
     captures: Mapping[int, Capture],
     fit_count: int,
     solution: Solution | None,
-    gyro_fit: GyroMatrixFit | None = None,
+    gyro_fit: GyroMatrixFit | None,
+    sensor: SensorSpec,
 ) -> UncertaintyRecord | None:
     """The expanded uncertainties of the run's coefficients
     (:mod:`station.domain.calibration.uncertainty`): the accelerometer's from the fit
-    poses' means, spreads and sample counts and the verification pose, the gyro bias's
+    poses' means, spreads, sample counts and temperatures (drifting within ``sensor``'s
+    datasheet) and the verification pose, the gyro bias's
     from the fit poses' gyro means, the gyro matrix's from its fit and the accelerometer
     calibration its moves' gravity directions came from (None: no solution)."""
     if solution is None or any(i not in captures for i in range(fit_count)):
@@ -173,6 +176,7 @@ def uncertainty_record(
         verification_samples=None if verify is None else verify.record.sample_count,
         temperatures=_temperatures([c.record for c in fit]),
         verification_temperature=None if verify is None else verify.record.temperature_c,
+        tempco=(sensor.offset_tempco_counts_per_c, sensor.sensitivity_tempco_per_c),
     )
     uncertainty = Uncertainty.of_budget(budget)
     gyro_means = [c.record.gyro_mean for c in fit]

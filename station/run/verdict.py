@@ -165,7 +165,9 @@ def conclude(
     for reason in gyro_checks:
         failures.add(reason)
     error = _verification_error_mg(captures, solution, fit_count)
-    uncertainty = record.uncertainty_record(captures, fit_count, solution, gyro_fit)
+    uncertainty = record.uncertainty_record(
+        captures, fit_count, solution, gyro_fit, settings.sensor
+    )
     if failures.aborted:
         reasons, error = list(failures.found), None
     else:

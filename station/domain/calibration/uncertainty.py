@@ -54,8 +54,10 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     those at the mean temperature T̄ of the fitted poses; a pose taken at T_i reads
     ``δa_ij = (T_i − T̄)·(κ_o,j + κ_s,j·(a_ij − o_j))`` more, with the unit's temperature
     coefficients of offset κ_o (counts/°C) and sensitivity κ_s (/°C), unknown, rectangular
-    within the KXM52-1050 datasheet's bounds (:data:`OFFSET_TEMPCO_BOUND`,
-    :data:`SENSITIVITY_TEMPCO_BOUND`) and the same at every pose; propagated to first
+    within the sensor's datasheet bounds (the product's
+    :class:`~station.domain.sensor_spec.SensorSpec`; the KXM52-1050's
+    :data:`OFFSET_TEMPCO_BOUND`, :data:`SENSITIVITY_TEMPCO_BOUND` by default) and the
+    same at every pose; propagated to first
     order through J⁺ as the pose noise is, linear in κ; the symmetric 95 % interval of
     the coefficients' change over :data:`TEMPCO_DRAWS` seeded draws of κ, over k
     ([JCGM101]_ 7.7: the change is near rectangular when one κ dominates, which k·σ would
@@ -126,8 +128,8 @@ ADC_LSB_COUNTS: Final = 1.0
 #: The unmodelled cross-axis coupling of the six-parameter model: the KXM52-1050
 #: datasheet's typical cross-axis sensitivity, 2 % ([Song2006]_ Table 1).
 CROSS_AXIS_BOUND: Final = CROSS_AXIS_TYPICAL
-#: The temperature coefficients' half-widths: the KXM52-1050 datasheet's largest
-#: (:mod:`station.domain.sensor`), counts/°C and per °C.
+#: The temperature coefficients' half-widths when no sensor is named: the KXM52-1050
+#: datasheet's largest (:mod:`station.domain.sensor`), counts/°C and per °C.
 OFFSET_TEMPCO_BOUND: Final = OFFSET_TEMPCO_COUNTS_PER_C
 SENSITIVITY_TEMPCO_BOUND: Final = SENSITIVITY_TEMPCO_PER_C
 #: A pose's sample noise when the file gives means only: the KXM52 at the stream's
@@ -247,6 +249,7 @@ def accelerometer_budget(
     verification_samples: int | None = None,
     temperatures: ArrayLike | None = None,
     verification_temperature: float | None = None,
+    tempco: tuple[float, float] = (OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND),
     cross_axis_bound: float = CROSS_AXIS_BOUND,
     k: float = COVERAGE_FACTOR,
 ) -> AccelerometerBudget:
@@ -263,6 +266,10 @@ def accelerometer_budget(
         temperatures: shape (N,), each pose's temperature, °C (``None``: not known, no
             temperature term).
         verification_temperature: the verification pose's, °C.
+        tempco: the half-widths of the sensor's temperature coefficients of offset
+            (counts/°C) and sensitivity (/°C), its datasheet's
+            (:attr:`~station.domain.sensor_spec.SensorSpec.offset_tempco_counts_per_c`;
+            the default is the putter's KXM52).
         cross_axis_bound: the unmodelled coupling's half-width (six-parameter model).
         k: the coverage factor.
     """
@@ -296,12 +303,14 @@ def accelerometer_budget(
     }
     drift: FloatArray | None = None  # ∂r/∂κ of the fit poses
     reference = 0.0  # the calibration's temperature T̄, °C
+    kappa_bound = np.repeat(tempco, 3)
+    kappa_variance = kappa_bound**2 / 3  # rectangular within the datasheet's bounds
     if temperatures is not None:
         t = np.asarray(temperatures, dtype=np.float64).reshape(n_all)[keep]
         reference = float(np.mean(t))
         drift = _drift_jacobian(theta, model, a, dr_da, t - reference)
-        terms["temperature"] = _temperature_term(gp @ drift)
-        covariance = covariance + (pinv @ drift * _TEMPCO_VARIANCE) @ (pinv @ drift).T
+        terms["temperature"] = _temperature_term(gp @ drift, kappa_bound)
+        covariance = covariance + (pinv @ drift * kappa_variance) @ (pinv @ drift).T
     model_rv: FloatArray | None = None
     model_draws: tuple[FloatArray, FloatArray] | None = None
     u_dir: FloatArray | None = None
@@ -322,7 +331,7 @@ def accelerometer_budget(
         expected = float(np.mean(w_noise + w_quant))
         if drift is not None:  # what the drift leaves in the residuals, (I − J·J⁺)·D·κ
             left = drift - jac @ (pinv @ drift)
-            expected += float(np.sum(left**2 @ _TEMPCO_VARIANCE)) / (rows - p)
+            expected += float(np.sum(left**2 @ kappa_variance)) / (rows - p)
         from scipy.stats import chi2
 
         if sigma2 > expected * chi2.ppf(_CHI2_QUANTILE, rows - p) / (rows - p):
@@ -345,7 +354,7 @@ def accelerometer_budget(
             delta_v = np.array([verification_temperature - reference])
             row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
             row = row - (jv @ pinv @ drift)[0]
-            var_temperature = float(row**2 @ _TEMPCO_VARIANCE)
+            var_temperature = float(row**2 @ kappa_variance)
         ratio = _verification_ratio(
             theta,
             model,
@@ -505,22 +514,17 @@ def _drift_jacobian(
     return np.hstack([dr_da * delta[:, None], dr_da * (a - offset) * delta[:, None]])
 
 
-def _temperature_term(gain: FloatArray) -> FloatArray:
+def _temperature_term(gain: FloatArray, bound: FloatArray) -> FloatArray:
     """The temperature term (6,) from ∂y/∂κ (6, 6): the symmetric 95 % interval of
     ``gain·κ`` over :data:`TEMPCO_DRAWS` seeded draws of κ, rectangular within the
-    datasheet's bounds, over k ([JCGM101]_ 7.7: where one rectangular κ dominates a
-    coefficient, k·σ would cover all of it, not 95 %)."""
+    datasheet's bounds ``bound`` (6,), over k ([JCGM101]_ 7.7: where one rectangular κ
+    dominates a coefficient, k·σ would cover all of it, not 95 %)."""
     rng = np.random.default_rng(20080903)
-    bound = np.repeat([OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND], 3)
     kappa = rng.uniform(-1.0, 1.0, (TEMPCO_DRAWS, 6)) * bound
     shift = np.abs(kappa @ gain.T)
     return np.asarray(
         np.quantile(shift, _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR, dtype=np.float64
     )
-
-
-#: The variances of κ = (κ_o, κ_s): rectangular within the datasheet's bounds.
-_TEMPCO_VARIANCE: Final = np.repeat([OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND], 3) ** 2 / 3
 
 
 def _pose_variances(

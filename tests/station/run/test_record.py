@@ -9,10 +9,12 @@ import numpy as np
 from station.device import LinkCounters
 from station.domain.calibration import solve
 from station.domain.limits import load_profile
+from station.domain.products import load_products
 from station.domain.record_bounds import ADC_SPAN
 from station.domain.records import FailureReason, PoseRecord, Vector3
 from station.domain.run_settings import RunSettings
 from station.domain.samples import SampleBlock
+from station.domain.sensor_spec import PUTTER_SENSOR
 from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 from station.run.record import (
@@ -96,7 +98,9 @@ def test_a_clock_stepped_back_never_ends_a_run_before_it_began() -> None:
     assert record.decision_rule == "simple"
 
 
-def _captures(poses: np.ndarray, spread: float, count: int) -> dict[int, Capture]:
+def _captures(
+    poses: np.ndarray, spread: float, count: int, temperatures: list[float] | None = None
+) -> dict[int, Capture]:
     return {
         i: Capture(
             record=PoseRecord(
@@ -106,6 +110,7 @@ def _captures(poses: np.ndarray, spread: float, count: int) -> dict[int, Capture
                 std=Vector3.of([spread] * 3),
                 sample_count=count,
                 gyro_mean=Vector3.of([0.1, -0.2, 0.05]),
+                temperature_c=None if temperatures is None else temperatures[i],
             ),
             gyro_std=Vector3.of([0.08] * 3),
             captured_at=datetime.now(UTC),
@@ -120,12 +125,37 @@ def test_the_record_carries_the_budget_or_none_when_it_is_beyond_what_a_record_h
     unit = SensorTruth.draw_accelerometer(np.random.default_rng(33))
     poses = unit.still_counts(six_directions())
     solution = solve(poses)
-    quiet = uncertainty_record(_captures(poses, 1.0, 1024), 6, solution)
+    quiet = uncertainty_record(_captures(poses, 1.0, 1024), 6, solution, None, PUTTER_SENSOR)
     assert quiet is not None
     assert set(quiet.to_json()) == {"k", "offset", "sensitivity", "gyro_bias_dps"}
     assert quiet.offset is not None
     assert max(quiet.offset.as_tuple()) < 0.2
     # A spread of nearly the widest ADC's span in one sample a pose: U beyond that span,
     # which no record holds; the run is recorded without it rather than lost.
-    assert uncertainty_record(_captures(poses, 0.9 * ADC_SPAN, 1), 6, solution) is None
-    assert uncertainty_record(_captures(poses, 1.0, 1024), 6, None) is None
+    assert (
+        uncertainty_record(_captures(poses, 0.9 * ADC_SPAN, 1), 6, solution, None, PUTTER_SENSOR)
+        is None
+    )
+    assert uncertainty_record(_captures(poses, 1.0, 1024), 6, None, None, PUTTER_SENSOR) is None
+
+
+def test_the_temperature_term_follows_the_products_sensors_datasheet() -> None:
+    # The same poses taken while the unit warmed 2 °C: the offsets' U grows with the
+    # temperature coefficient the product's sensor allows, and only the drift differs.
+    unit = SensorTruth.draw_accelerometer(np.random.default_rng(34))
+    poses = unit.still_counts(six_directions())
+    captures = _captures(poses, 1.0, 1024, [25.0 + 0.4 * i for i in range(6)])
+    solution = solve(poses)
+
+    def offset_u(offset_tempco_g_per_c: float) -> float:
+        sensor = PUTTER_SENSOR.model_copy(update={"offset_tempco_g_per_c": offset_tempco_g_per_c})
+        found = uncertainty_record(captures, 6, solution, None, sensor)
+        assert found is not None
+        assert found.offset is not None
+        return max(found.offset.as_tuple())
+
+    still = offset_u(0.0)
+    putter = offset_u(PUTTER_SENSOR.offset_tempco_g_per_c)
+    assert still < putter < offset_u(10 * PUTTER_SENSOR.offset_tempco_g_per_c)
+    d16 = load_products().products["DIXX-D16"].sensor
+    assert d16.offset_tempco_counts_per_c == d16.offset_tempco_g_per_c * d16.counts_per_g
