@@ -37,8 +37,10 @@ from typing import Any
 
 from sqlalchemy import insert, make_url, text
 
+from api.routes.alerts import LISTED_ALERTS
 from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body, split_body
 from db import RunRepository, make_engine, open_database
+from db.alerts import evaluate, recent_alerts
 from db.chart_queries import first_moving_ranges, latest_chart_points
 from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
@@ -46,10 +48,11 @@ from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
 from db.station_health import CYCLE_RUNS, station_health
 from station.domain.limits import load_profile
+from station.domain.quality.alerts import parse_alert_rules
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.station_health import StationHealth
-from station.report.html import certificate_page, station_page, unit_page
+from station.report.html import alerts_page, certificate_page, station_page, unit_page
 from station.report.render import render
 
 DEFAULT_URL = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
@@ -148,6 +151,33 @@ def _health(session: Any) -> StationHealth:
     return health
 
 
+#: The rules an alert round checks in the bench: one of each kind that reads runs.
+ALERT_RULES = """
+webhook = "http://127.0.0.1:9/hook"
+[[yield]]
+station = "line1-st1"
+units = 100
+goal = 0.9
+[[silent]]
+station = "line1-st1"
+[[western_electric]]
+parameter = "offset_x"
+runs = 50
+[[cpk]]
+parameter = "sensitivity_z"
+runs = 100
+"""
+
+
+def _alert_round(session: Any, at: datetime) -> str:
+    """One round of the server's alert loop over the history (what it fires is rolled
+    back, so each repeat judges the same), and the alerts page it then shows."""
+    evaluate(session, parse_alert_rules(ALERT_RULES, "bench"), at)
+    page = alerts_page(recent_alerts(session, LISTED_ALERTS), "UTC", 1)
+    session.rollback()
+    return page
+
+
 def pages(session: Any, repeat: int, runs: int) -> None:
     """The HTML pages over the generated history: seconds to build, and kB."""
     repository = RunRepository(session)
@@ -216,6 +246,12 @@ def pages(session: Any, repeat: int, runs: int) -> None:
         (
             "dashboard (one day, 50 latest of the units on hold)",
             lambda: dashboard_body(repository, at),
+            repeat,
+        ),
+        (
+            "an alert round (a yield, a silent, a Western Electric and a Cpk rule), then "
+            "`/alerts` (the latest 100)",
+            lambda: _alert_round(session, at),
             repeat,
         ),
     ]
