@@ -8,7 +8,7 @@ page links to the unit's page through one macro, ``serial_link`` in ``base.html`
 
 from collections.abc import Callable, Sequence
 from datetime import datetime, timedelta
-from typing import Any, get_args
+from typing import Any, Final, get_args
 from urllib.parse import urlencode
 
 from jinja2 import Environment, PackageLoader, select_autoescape
@@ -22,7 +22,7 @@ from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.days import midnight
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
-from station.domain.quality.split import SplitBy, SplitReport
+from station.domain.quality.split import NO_VALUE, SplitBy, SplitReport
 from station.domain.quality.station_health import (
     BASELINE_CHECKS,
     OFFSET_TOLERANCE,
@@ -348,6 +348,15 @@ def alerts_page(alerts: Sequence[Alert], zone: str, rounds: int | None) -> str:
     )
 
 
+#: The splits the end-of-line report can be narrowed by, and its query parameter for each.
+REPORT_NARROWED_BY: Final[dict[str, str]] = {
+    "station": "station",
+    "operator": "operator",
+    "lot": "lot",
+    "part_number": "part_number",
+}
+
+
 def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str:
     """A parameter split by a run's column (:mod:`station.domain.quality.split`): box
     plots and each group's figures, a form to choose another ``parameters`` or split."""
@@ -355,12 +364,24 @@ def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str
     form = filter_query(report.filter, zone)
     if report.filter.part_number:
         form["part_number"] = report.filter.part_number
+    narrowing = REPORT_NARROWED_BY.get(report.by)
+
+    def group_link(group: str) -> str | None:
+        """The report of a group's runs (with every unit listed), where the report can be
+        narrowed to it: a station, operator, lot or product, not a slot or a version."""
+        if narrowing is None or group == NO_VALUE:
+            return None
+        query = {"format": "html", "list": "all", **form, narrowing: group}
+        return f"/api/v1/reports/eol?{urlencode(query)}"
+
     return _env.get_template("split.html").render(
         report=report,
         zone=zone,
         parameters=parameters,
         splits=get_args(SplitBy),
         form=form,
+        group_link=group_link,
+        no_value=NO_VALUE,
         report_query=urlencode({"format": "html", **form}),
         json_query=urlencode({**query, **form, "format": "json"}),
     )

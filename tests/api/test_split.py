@@ -74,7 +74,7 @@ def test_a_split_by_station_has_each_groups_figures_from_its_values(
     assert page.headers["content-type"].startswith("text/html")
     assert page.text.count('<rect class="box"') == 2
     assert "From the latest 10 runs" in html.unescape(re.sub(r"\s+", " ", page.text))
-    rows = re.findall(r'<tr class="group"><td>([^<]+)</td><td>(\d+)</td>', page.text)
+    rows = re.findall(r'<tr class="group"><td><a [^>]+>([^<]+)</a></td><td>(\d+)</td>', page.text)
     assert sorted(rows) == [(s, str(len(v))) for s, v in sorted(VALUES.items())]
     by_lot = client.get(
         "/api/v1/reports/split", params={"parameter": "offset_x", "by": "lot", "format": "json"}
@@ -85,6 +85,25 @@ def test_a_split_by_station_has_each_groups_figures_from_its_values(
         params={"parameter": "offset_x", "by": "lot", "station": "line1-st1", "format": "json"},
     ).json()
     assert sum(g["n"] for g in narrowed["groups"]) == len(VALUES["line1-st1"])
+
+
+def test_a_group_of_a_split_opens_the_report_of_its_runs(
+    client: httpx.Client, database: Database
+) -> None:
+    _store(database)
+    for by, counts in (
+        ("station", {station: len(values) for station, values in VALUES.items()}),
+        ("lot", {"lot-0": 6, "lot-1": 4}),
+    ):
+        page = client.get("/api/v1/reports/split", params={"parameter": "offset_x", "by": by})
+        links = re.findall(r'<tr class="group"><td><a href="([^"]+)">([^<]+)</a>', page.text)
+        assert sorted(group for _, group in links) == sorted(counts)
+        for link, group in links:
+            opened = client.get(html.unescape(link))
+            assert opened.status_code == 200, opened.text
+            assert opened.headers["content-type"].startswith("text/html")
+            report = client.get(html.unescape(link).replace("format=html", "format=json"))
+            assert report.json()["summary"]["runs"] == counts[group], (by, group)
 
 
 def test_a_refused_split_answers_a_page_and_no_runs_say_so(
