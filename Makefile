@@ -16,7 +16,7 @@ demo: $(STAMP)  ## the main job on the embedded defaults
 	$(VENV)/bin/calstation demo
 
 test: $(STAMP)  ## the whole test suite, one worker per core (pytest -n 0 for one process)
-	@start=$$(date +%s); $(PY) -m pytest -n auto; status=$$?; \
+	@start=$$(date +%s); $(PY) -m pytest -n auto --durations=15; status=$$?; \
 	echo "make test: $$(( $$(date +%s) - start )) s wall, exit $$status"; exit $$status
 
 test-nightly: $(STAMP)  ## the whole suite at the nightly sizes of its properties and API fuzzing
