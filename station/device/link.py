@@ -36,12 +36,12 @@ log = logging.getLogger(__name__)
 #: waiting for its reply wakes the reader at once (:meth:`PutterLink.expect_reply`).
 PACE_BELOW_BYTES = 2048
 PACE_S = 0.1
-#: A stream faster than this (bytes a second; the putter's own is 10 kB/s) is a sped-up
-#: simulator's, and is read as it comes, never paced: a read drains at most what the
-#: port's buffer holds (4 kB on a pty), so one read a rest would fall behind it and the
-#: putter would drop what it cannot send. Judged over :data:`RATE_WINDOW_S`; a new link
-#: starts paced.
-UNPACED_ABOVE_BYTES_PER_S = PACE_BELOW_BYTES / PACE_S
+#: A stream faster than this (bytes a second: three times the putter's own 10 kB/s, so
+#: above its raw and calibrated streams at once) is a sped-up simulator's, and is read as
+#: it comes, never paced: a read drains at most what the port's buffer holds (4 kB on a
+#: pty), so one read a rest would fall behind it and the putter would drop what it cannot
+#: send. Judged over :data:`RATE_WINDOW_S`; a new link starts paced.
+UNPACED_ABOVE_BYTES_PER_S = 30_000
 RATE_WINDOW_S = 0.5
 
 

@@ -65,7 +65,7 @@ def test_a_stream_faster_than_the_putters_own_is_read_unpaced() -> None:
     assert len(chunk) < link_module.PACE_BELOW_BYTES  # small: a paced reader rests after it
     link.expect_reply(True)  # keeps the reader from resting while the rate is measured
     start = time.monotonic()
-    # 1 kB a call: far above 20 kB/s however busy the machine, unless a call took 50 ms.
+    # 1 kB a call: far above 30 kB/s however busy the machine, unless calls took 33 ms.
     while time.monotonic() - start <= link_module.RATE_WINDOW_S:
         link.data_received(chunk)
     link.expect_reply(False)
