@@ -14,13 +14,17 @@ from datetime import UTC, datetime, timedelta
 import httpx
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from db.alerts import claim_due, evaluate, mark_delivered
+from db.alerts import claim_next, evaluate, mark_delivered, retry_later
 from station.domain.quality.alerts import AlertRules
 
 log = logging.getLogger(__name__)
 
-#: The longest a webhook may take to answer a post.
+#: The longest a webhook may take to answer a post (each of connecting, sending and
+#: reading the answer).
 POST_TIMEOUT_S = 10.0
+#: How long a claimed alert is this process's: longer than the longest post (the three
+#: phases and the pool), so no other process posts it meanwhile.
+CLAIM_HOLD = timedelta(seconds=6 * POST_TIMEOUT_S)
 
 
 class AlertLoop:
@@ -52,13 +56,17 @@ class AlertLoop:
                 await asyncio.sleep(self.interval_s)
 
     async def round(self, client: httpx.AsyncClient) -> None:
-        """Evaluate the rules, then post each due alert this process won."""
-        now = datetime.now(UTC)
+        """Evaluate the rules, then post each alert due at the round's start, one at a
+        time: claimed (held for :data:`CLAIM_HOLD`) just before its post, so a slow
+        webhook never lets another process claim and post it too."""
+        start = datetime.now(UTC)
         async with self.sessions() as session, session.begin():
-            await session.run_sync(evaluate, self.rules, now)
-        async with self.sessions() as session, session.begin():
-            due = await session.run_sync(claim_due, now, self.retry)
-        for alert in due:
+            await session.run_sync(evaluate, self.rules, start)
+        while True:
+            async with self.sessions() as session, session.begin():
+                alert = await session.run_sync(claim_next, start, datetime.now(UTC), CLAIM_HOLD)
+            if alert is None:
+                break
             try:
                 answer = await client.post(
                     str(self.rules.webhook), json=alert.model_dump(mode="json")
@@ -67,7 +75,10 @@ class AlertLoop:
             except httpx.HTTPError as exc:
                 log.warning("webhook did not take alert %s: %s", alert.event_key, exc)
                 taken = False
-            if taken:
-                async with self.sessions() as session, session.begin():
-                    await session.run_sync(mark_delivered, alert.event_key, datetime.now(UTC))
+            now = datetime.now(UTC)
+            async with self.sessions() as session, session.begin():
+                if taken:
+                    await session.run_sync(mark_delivered, alert.event_key, now)
+                else:
+                    await session.run_sync(retry_later, alert.event_key, now + self.retry)
         self.rounds += 1

@@ -4,10 +4,10 @@
 the stored runs: a rule whose condition holds and has no open alert fires one (``INSERT
 … ON CONFLICT DO NOTHING``: the event key is unique, and a rule has at most one open
 alert, so server processes evaluating at once store it once); one whose condition no
-longer holds clears its open alert. :func:`claim_due` hands a process the alerts it is to
-post, each held for the retry interval (an ``UPDATE`` that only one process wins), and
-:func:`mark_delivered` records the webhook's acceptance; a refused post is tried again
-once the hold ends, the alert's row unchanged but for its attempts.
+longer holds clears its open alert. :func:`claim_next` hands a process the next alert it
+is to post, held for longer than a post takes (an ``UPDATE`` that only one process wins);
+:func:`mark_delivered` records the webhook's acceptance, :func:`retry_later` a refusal
+(tried again after the retry interval), the alert's row unchanged but for its attempts.
 """
 
 from dataclasses import dataclass, replace
@@ -16,7 +16,7 @@ from itertools import pairwise
 from statistics import fmean, stdev
 from typing import Any
 
-from sqlalchemy import Row, select, update
+from sqlalchemy import Row, func, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
@@ -116,17 +116,23 @@ def _silent_check(session: Session, rule: SilentRule, now: datetime) -> _Check:
 
 
 def _latest_values(session: Session, rule: ParameterWindow) -> list[Row[Any]]:
-    """The last ``runs`` production runs with the rule's coefficient (at its station),
-    oldest first: run id, serial, start, limits profile and ``value``."""
+    """The last ``runs`` production runs with the rule's coefficient (at its station) of
+    the product of the latest of them, oldest first: run id, serial, start, limits
+    profile and ``value``."""
     column = getattr(Run, rule.parameter)
+    scope = [column.is_not(None), Run.purpose.is_(None)]
+    if rule.station is not None:
+        scope.append(Run.station_id == rule.station)
+    latest = (Run.started_at.desc(), Run.id.desc())
+    # One product's runs: a line building two sensors (zero g 2048 and 32768 counts) would
+    # otherwise judge both against one profile.
+    product = select(Run.part_number).where(*scope).order_by(*latest).limit(1).scalar_subquery()
     stmt = (
         select(Run.run_id, Run.serial, Run.started_at, Run.limits_sha256, column.label("value"))
-        .where(column.is_not(None), Run.purpose.is_(None))
-        .order_by(Run.started_at.desc(), Run.id.desc())
+        .where(*scope, Run.part_number.is_not_distinct_from(product))
+        .order_by(*latest)
         .limit(rule.runs)
     )
-    if rule.station is not None:
-        stmt = stmt.where(Run.station_id == rule.station)
     return list(reversed(session.execute(stmt).all()))
 
 
@@ -263,11 +269,18 @@ def evaluate(session: Session, rules: AlertRules, now: datetime) -> None:
                 update(StoredAlert).where(StoredAlert.id == open_alert).values(cleared_at=now)
             )
         elif check.evidence is not None and open_alert is None:
+            # The rule's events so far (all cleared) and the run that tipped it: every
+            # process that sees this event names it so, and a recurrence tipped by the
+            # same run (late runs cleared it, then made it hold again) is a new event.
+            earlier = session.scalar(
+                select(func.count())
+                .select_from(StoredAlert)
+                .where(StoredAlert.watch == check.watch)
+            )
             session.execute(
                 for_dialect(session, _INSERT),
                 {
-                    # The run that tipped it: every process that sees the event names it so.
-                    "event_key": f"{check.watch}:{check.tipped_by}",
+                    "event_key": f"{check.watch}:{earlier}:{check.tipped_by}",
                     "watch": check.watch,
                     "rule": check.rule,
                     "scope": check.scope,
@@ -284,29 +297,37 @@ def _alert(row: StoredAlert) -> Alert:
     return Alert.model_validate({name: getattr(row, name) for name in Alert.model_fields})
 
 
-def claim_due(session: Session, now: datetime, hold: timedelta) -> list[Alert]:
-    """The undelivered alerts due now that this process won, each held for ``hold``
-    (no other process posts it meanwhile) and its attempt counted."""
+def claim_next(session: Session, due_by: datetime, now: datetime, hold: timedelta) -> Alert | None:
+    """The next undelivered alert due by ``due_by`` that this process won, held until
+    ``now + hold`` (no other process posts it meanwhile: ``hold`` outlasts a post) with
+    its attempt counted; None when none is left."""
     due = session.scalars(
         select(StoredAlert.id)
-        .where(StoredAlert.delivered_at.is_(None), StoredAlert.next_attempt_at <= now)
+        .where(StoredAlert.delivered_at.is_(None), StoredAlert.next_attempt_at <= due_by)
         .order_by(StoredAlert.id)
     ).all()
-    won = []
     for alert_id in due:
         claimed = session.connection().execute(
             update(StoredAlert)
             .where(
                 StoredAlert.id == alert_id,
                 StoredAlert.delivered_at.is_(None),
-                StoredAlert.next_attempt_at <= now,
+                StoredAlert.next_attempt_at <= due_by,
             )
             .values(next_attempt_at=now + hold, attempts=StoredAlert.attempts + 1)
         )
         if claimed.rowcount == 1:
-            won.append(alert_id)
-    rows = session.scalars(select(StoredAlert).where(StoredAlert.id.in_(won))).all()
-    return [_alert(row) for row in rows]
+            return _alert(session.get_one(StoredAlert, alert_id))
+    return None
+
+
+def retry_later(session: Session, event_key: str, at: datetime) -> None:
+    """The webhook did not take the alert ``event_key``: try again ``at``."""
+    session.execute(
+        update(StoredAlert)
+        .where(StoredAlert.event_key == event_key, StoredAlert.delivered_at.is_(None))
+        .values(next_attempt_at=at)
+    )
 
 
 def mark_delivered(session: Session, event_key: str, now: datetime) -> None:

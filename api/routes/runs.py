@@ -98,8 +98,7 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             _422="invalid (each offending field named: a limits profile that does not hash to "
             "its sha256, or holds a bound outside what its quantity can take, is one; a "
             "`started_at` or `finished_at` outside the years "
-            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another; a `{OUTBOX_HEADER}` header that is "
-            "not `queued=N; oldest_s=N; set_aside=N` another), or the poses give other "
+            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another), or the poses give other "
             "coefficients",
         ),
     },
@@ -116,8 +115,8 @@ async def submit_run(
             description="the station's outbox as it sends this run, kept as its latest "
             "report (the `[[outbox]]` alert rule): `queued=N; oldest_s=N; set_aside=N`, "
             "runs queued behind this one, whole seconds the oldest of them has waited, "
-            "files set aside (refused, unreadable); a station that sends none is stored "
-            "as before",
+            "files set aside (refused, unreadable); a station that sends none, or one "
+            "that does not parse (logged), is stored as before without a report",
             examples=["queued=12; oldest_s=5400; set_aside=1"],
         ),
     ] = None,
@@ -134,11 +133,16 @@ async def submit_run(
         if why is not None:
             refuse(request, "implausible_time")
             raise invalid(("body", field), why)
-    try:
-        report = None if outbox is None else parse_outbox_header(outbox)
-    except InputError as exc:
-        refuse(request, "outbox_header")
-        raise invalid(("header", OUTBOX_HEADER), str(exc)) from None
+    report = None
+    if outbox is not None:
+        try:
+            report = parse_outbox_header(outbox)
+        except InputError as exc:
+            # Monitoring, not the record: a good run is never refused for it (the station
+            # would set the run aside); its report is left out and the log says why.
+            log.warning(
+                "run %s from %s stored without its outbox report: %s", record.run_id, station, exc
+            )
     try:
         profile_of(record.limits)
     except InputError as exc:

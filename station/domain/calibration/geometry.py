@@ -57,9 +57,10 @@ from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 MIN_POSE_ANGLE_DEG = 10.0
 #: Default minimum coverage √(λ_min/λ_max) of the pose set.
 MIN_COVERAGE = 0.2
-#: A pose mean this close to a rail is clipped: with the 9.8 mg sample spread the
-#: stillness limit allows (8 counts of the putter), samples 2σ above such a mean sat at
-#: the rail. 19.5 mg: 16 counts of the putter's 819.2 counts/g.
+#: A pose mean this close to a rail is clipped: with a sample spread of twice what the
+#: stillness limit allows (9.8 mg, 8 counts of the putter: the worst case a judged window
+#: passes, as :mod:`.consistency` takes it), samples 2σ above such a mean sat at the rail.
+#: 19.5 mg: 16 counts of the putter's 819.2 counts/g.
 RAIL_MARGIN_G = 0.01953125
 #: Largest cross-axis coupling of a unit the datasheet allows for: 5 %.
 CROSS_AXIS_MAX = 0.05

@@ -1,0 +1,85 @@
+"""The alert rules against stored runs, one round at a time (`db.alerts.evaluate`): a
+condition that clears and holds again is a new event even when the same run tips it,
+and a rule over a coefficient judges the runs of one product."""
+
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+from sqlalchemy import select
+
+from db import Database, RunRepository
+from db.alerts import evaluate
+from db.models import StoredAlert
+from station.domain.quality.alerts import parse_alert_rules
+from tests.db.records import T0, make_record
+
+#: Where the rules' alerts would go (no round here posts).
+WEBHOOK = 'webhook = "http://127.0.0.1:9/hook"\n'
+#: A round's clock: the runs below start a day before it.
+NOW = datetime(2026, 11, 26, 12, tzinfo=UTC)
+
+
+def _store(database: Database, *runs: tuple[str, float, str]) -> None:
+    """Units at st1, each one run: (serial, its start in minutes from T0, verdict)."""
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for serial, minute, verdict in runs:
+            repository.submit(
+                make_record(
+                    serial=serial,
+                    station_id="st1",
+                    started_at=T0 + timedelta(minutes=minute),
+                    verdict=verdict,
+                )
+            )
+
+
+def _round(database: Database, rules: str) -> list[StoredAlert]:
+    with database.session() as session, session.begin():
+        evaluate(session, parse_alert_rules(rules, "rules"), NOW)
+    with database.session() as session:
+        return list(session.scalars(select(StoredAlert).order_by(StoredAlert.id)))
+
+
+def test_a_yield_that_recovers_and_drops_again_by_late_runs_is_a_new_event(
+    database: Database,
+) -> None:
+    rules = (
+        'webhook = "http://127.0.0.1:9/hook"\n[[yield]]\nstation = "st1"\nunits = 4\ngoal = 0.75\n'
+    )
+    _store(database, ("PT0", 0, "pass"), ("PT1", 1, "fail"), ("PT2", 2, "pass"), ("PT3", 3, "fail"))
+    (first,) = _round(database, rules)  # 2 of the last 4 passed: 50 % < 75 %
+    # Two late passing units (their runs started before PT3's, which stays the newest):
+    # PT3, LATE2, LATE1, PT2: 3 of 4, the alert clears.
+    _store(database, ("LATE1", 2.5, "pass"), ("LATE2", 2.6, "pass"))
+    (cleared,) = _round(database, rules)
+    assert cleared.cleared_at is not None
+    # Two late failing units: PT3, LATE4, LATE3, LATE2: 1 of 4, below again, and PT3 still
+    # the newest: a new event all the same.
+    _store(database, ("LATE3", 2.7, "fail"), ("LATE4", 2.8, "fail"))
+    alerts = _round(database, rules)
+    assert len(alerts) == 2
+    assert alerts[0].event_key == first.event_key
+    assert alerts[1].event_key != first.event_key
+    assert alerts[1].cleared_at is None
+
+
+def test_a_cpk_rule_judges_the_runs_of_the_latest_runs_product(database: Database) -> None:
+    # Two products alternate at st1, their offsets 200 counts apart, each steady: over both
+    # the spread would put Cpk far below 1.33; over the latest run's product it is high.
+    rules = f'{WEBHOOK}[[cpk]]\nparameter = "offset_x"\nruns = 20\n'
+    noise = np.random.default_rng(3).normal(0.0, 0.5, 40)
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for i in range(40):
+            left = i % 2 == 0
+            repository.submit(
+                make_record(
+                    serial=f"PT{i:04d}",
+                    station_id="st1",
+                    started_at=T0 + timedelta(minutes=i),
+                    offset=(2150.0 + noise[i] if left else 1950.0 + noise[i], 2041.2, 1960.5),
+                    part_number="DIXX-A12-LH" if left else "DIXX-A12",
+                )
+            )
+    assert _round(database, rules) == []
