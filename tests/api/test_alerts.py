@@ -104,6 +104,24 @@ def _store(database: Database, verdicts: str, start: int) -> None:
             )
 
 
+def _store_offsets(
+    database: Database, values: list[float], start: int, station_id: str = "line1-st1"
+) -> None:
+    """Units at ``station_id``, one run each with these offset_x ``values``, a minute
+    apart from minute ``start``."""
+    with database.session() as session, session.begin():
+        repository = RunRepository(session)
+        for i, value in enumerate(values):
+            repository.submit(
+                make_record(
+                    serial=f"PT{start + i:06d}",
+                    station_id=station_id,
+                    started_at=T0 + timedelta(minutes=start + i),
+                    offset=(value, 2041.2, 1960.5),
+                )
+            )
+
+
 def _alerts(base: str) -> dict[str, Any]:
     answer = httpx.get(f"{base}/alerts", params={"format": "json"}, timeout=HUNG_SERVER_S)
     assert answer.status_code == 200, answer.text
@@ -127,9 +145,11 @@ def _rounds_later(base: str, rounds: int = 2, processes: int = 1) -> dict[str, A
     raise AssertionError("the alert loop did no rounds")
 
 
-def _settings(tmp_path: Path, receiver: Receiver) -> dict[str, str]:
+def _settings(tmp_path: Path, receiver: Receiver, rules_text: str = RULES) -> dict[str, str]:
+    """The server's settings for ``rules_text`` (``{webhook}``: the receiver's address),
+    checked every 0.2 s, a refused post tried again after 0.5 s."""
     rules = tmp_path / "alerts.toml"
-    rules.write_text(RULES.format(webhook=receiver.url))
+    rules.write_text(rules_text.format(webhook=receiver.url))
     return {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
 
 
@@ -198,9 +218,8 @@ def test_an_alert_the_webhook_refused_is_posted_again_once_it_is_back(
 def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
     database: Database, database_url: str, receiver: Receiver, tmp_path: Path
 ) -> None:
-    rules = tmp_path / "alerts.toml"
-    rules.write_text(f'webhook = "{receiver.url}"\n[[silent]]\nstation = "st2"\nminutes = 60\n')
-    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+    rules = 'webhook = "{webhook}"\n[[silent]]\nstation = "st2"\nminutes = 60\n'
+    settings = _settings(tmp_path, receiver, rules)
     with serving(database_url, **settings) as base:
         with database.session() as session, session.begin():
             # Its last run weeks ago (the history's T0); st1 ran since, st2 did not.
@@ -228,33 +247,19 @@ def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
 def test_a_western_electric_signal_on_the_latest_run_fires_once(
     database: Database, database_url: str, receiver: Receiver, tmp_path: Path
 ) -> None:
-    rules = tmp_path / "alerts.toml"
-    rules.write_text(
-        f'webhook = "{receiver.url}"\n[[western_electric]]\nparameter = "offset_x"\n'
+    rules = (
+        'webhook = "{webhook}"\n[[western_electric]]\nparameter = "offset_x"\n'
         'station = "st1"\nruns = 20\n'
     )
-    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
-
-    def store(values: list[float], start: int) -> None:
-        with database.session() as session, session.begin():
-            repository = RunRepository(session)
-            for i, value in enumerate(values):
-                repository.submit(
-                    make_record(
-                        serial=f"PT{start + i:06d}",
-                        station_id="st1",
-                        started_at=T0 + timedelta(minutes=start + i),
-                        offset=(value, 2041.2, 1960.5),
-                    )
-                )
+    settings = _settings(tmp_path, receiver, rules)
 
     in_control = [2079.0, 2083.0] * 6  # alternating about the centre, within 1σ
     with serving(database_url, **settings) as base:
-        store(in_control, 0)
+        _store_offsets(database, in_control, 0, "st1")
         assert _rounds_later(base)["alerts"] == []
-        store([2100.0], 20)
+        _store_offsets(database, [2100.0], 20, "st1")
         receiver.wait("alert", lambda: receiver.received)
-        store([2081.0], 30)  # back in control: the alert clears
+        _store_offsets(database, [2081.0], 30, "st1")  # back in control: the alert clears
         shown = _rounds_later(base)
     # By hand: the chart of the 13 runs up to the spike, x̄ and σ = MR̄/d₂ (d₂ = 1.128).
     values = np.array([*in_control, 2100.0])
@@ -271,32 +276,17 @@ def test_a_western_electric_signal_on_the_latest_run_fires_once(
 def test_a_cpk_below_its_target_fires_once_and_clears_when_capable_again(
     database: Database, database_url: str, receiver: Receiver, tmp_path: Path
 ) -> None:
-    rules = tmp_path / "alerts.toml"
-    rules.write_text(
-        f'webhook = "{receiver.url}"\n[[cpk]]\nparameter = "offset_x"\nruns = 10\ntarget = 1.33\n'
-    )
-    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
-
-    def store(values: list[float], start: int) -> None:
-        with database.session() as session, session.begin():
-            repository = RunRepository(session)
-            for i, value in enumerate(values):
-                repository.submit(
-                    make_record(
-                        serial=f"PT{start + i:06d}",
-                        started_at=T0 + timedelta(minutes=start + i),
-                        offset=(value, 2041.2, 1960.5),
-                    )
-                )
+    rules = 'webhook = "{webhook}"\n[[cpk]]\nparameter = "offset_x"\nruns = 10\ntarget = 1.33\n'
+    settings = _settings(tmp_path, receiver, rules)
 
     capable = [2046.0, 2050.0] * 5
     spread = [1900.0, 2200.0] * 5
     with serving(database_url, **settings) as base:
-        store(capable, 0)
+        _store_offsets(database, capable, 0)
         assert _rounds_later(base)["alerts"] == []
-        store(spread, 10)
+        _store_offsets(database, spread, 10)
         receiver.wait("alert", lambda: receiver.received)
-        store(capable, 20)  # the last 10 capable again: the alert clears
+        _store_offsets(database, capable, 20)  # the last 10 capable again: the alert clears
         shown = _rounds_later(base)
     # By hand, against the shipped production limits of offsets, 1841 … 2255 counts.
     values = np.array(spread)
@@ -314,9 +304,9 @@ def test_a_cpk_below_its_target_fires_once_and_clears_when_capable_again(
 def test_a_station_outbox_backlog_fires_once_and_clears_when_it_drains(
     database_url: str, station_key: str, receiver: Receiver, tmp_path: Path
 ) -> None:
-    rules = tmp_path / "alerts.toml"
-    rules.write_text(f'webhook = "{receiver.url}"\n[[outbox]]\nqueued = 3\nhours = 1\n')
-    settings = {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+    settings = _settings(
+        tmp_path, receiver, 'webhook = "{webhook}"\n[[outbox]]\nqueued = 3\nhours = 1\n'
+    )
     # Three runs the store failed on wait for their retry (the backoff's clock stands
     # still until the test moves it), the oldest for two hours; one file was refused.
     clock = [0.0]
