@@ -18,6 +18,7 @@ from station.domain.limits import Bounds, check, load_profile
 from station.domain.records import GyroFitRecord, HoldReview
 from station.report.certificate import document_number
 from tests.db.records import T0, make_record
+from tests.station.report.test_certificate import GYRO_MATRIX as WHOLE_UNIT_GYRO_MATRIX
 
 SERIAL = "PT-000777"
 #: The failure as each language explains it, the page's title and its "what failed".
@@ -145,15 +146,8 @@ ALLOWED = {
     *("ISO", "IEC", "JCGM", "GUM", "ILAC", "Song", "Tedaldi", "Monte", "Carlo"),
     *("u_c", "K_ii", "K_ij"),
 }
-#: A whole unit's gyro matrix and the uncertainty of its coefficients, as a run records them.
-GYRO_MATRIX = {
-    "matrix": [[1.004, 0.002, -0.001], [0.001, 0.997, 0.003], [-0.002, 0.001, 1.002]],
-    "standard_errors": [[6e-5, 5e-5, 5e-5], [5e-5, 6e-5, 5e-5], [5e-5, 5e-5, 6e-5]],
-    "bias_dps": {"x": 0.01, "y": -0.02, "z": 0.005},
-    "residual_rms_deg": 0.01,
-    "condition_number": 3.0,
-    "verification_deg": 0.2,
-}
+#: A whole unit's gyro matrix, with its verification move, as a run records it.
+GYRO_MATRIX = {**WHOLE_UNIT_GYRO_MATRIX, "verification_deg": 0.2}
 UNCERTAINTY = {
     "k": 2.0,
     "offset": {"x": 0.5, "y": 0.5, "z": 0.6},
