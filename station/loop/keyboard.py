@@ -3,12 +3,15 @@
 On a terminal the station puts it in cbreak mode (each key arrives at once, nothing
 echoed) and restores it on exit; a barcode scanner is a keyboard that types the
 serial number and Enter. Without a terminal (a pipe), whatever arrived is read as is.
+Between its passes the loop waits on the keys (:meth:`KeySource.wait`): a key ends the
+wait, so what is typed is echoed at once however seldom the loop passes otherwise.
 """
 
 import os
 import select
 import sys
 import termios
+import time
 import tty
 from types import TracebackType
 from typing import Any, Protocol, Self
@@ -25,6 +28,19 @@ class KeySource(Protocol):
         Raises :class:`EOFError` once the source is closed.
         """
         ...
+
+    def wait(self, timeout: float) -> None:
+        """Return once a key may have come, or after ``timeout`` seconds."""
+        ...
+
+
+class PolledKeys:
+    """A key source with nothing to wait on (a script, the demo's operator): the loop
+    just rests between its passes."""
+
+    def wait(self, timeout: float) -> None:
+        """Rest ``timeout`` seconds."""
+        time.sleep(timeout)
 
 
 class TerminalKeys:
@@ -48,6 +64,10 @@ class TerminalKeys:
     ) -> None:
         if self._saved is not None:
             termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
+
+    def wait(self, timeout: float) -> None:
+        """Return once standard input holds a key (or its end), or after ``timeout``."""
+        select.select([self.fd], [], [], timeout)
 
     def read(self) -> str:
         chunks: list[bytes] = []

@@ -5,11 +5,10 @@ the multi-slot fixture (:class:`station.loop.fixture.app.FixtureApp`) have in co
 slots and the unit lifecycle behind them (:class:`station.loop.lifecycle.UnitLifecycle`),
 the keys they read, the console they draw on, and the loop: tick, redraw every so often,
 until done. On a terminal the screen is a rich :class:`~rich.live.Live` display redrawn
-every :data:`DRAW_EVERY_S`; on anything else (logs, the demo's stderr) nothing is drawn
-and the station says its lines instead.
+after every pass; on anything else (logs, the demo's stderr) nothing is drawn and the
+station says its lines instead.
 """
 
-import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
 
@@ -29,13 +28,15 @@ from station.loop.slot import Slot
 from station.results.rescue import Rescued
 from station.results.storage import RunStore
 
-#: Seconds between screen refreshes.
-DRAW_EVERY_S = 0.1
-#: Seconds between the loop's passes: keys, units, outbox. One pass a redraw: what a
-#: pass changes is seen only at the next redraw, and every pass more burns the
-#: station's CPU for nothing (issue 28); a capture's window is judged on its samples'
-#: sequence numbers, so its device time does not depend on when a pass comes.
-TICK_S = DRAW_EVERY_S
+#: Seconds between the loop's passes (keys, units, outbox, then the screen redrawn): the
+#: four redraws a second of rich's own ``Live`` default, about the live view's window
+#: (:data:`station.run.capture.LIVE_SAMPLES` at 500 samples/s). A key ends the wait at
+#: once (:meth:`KeySource.wait`), so typing is echoed without delay. Every pass more
+#: burns the station's CPU for nothing (issue 28): each wake costs about half a
+#: millisecond whatever it carries, and the pass reads the putter's port itself
+#: (:meth:`station.device.link.PutterLink.read_now`). A capture's window is judged on its
+#: samples' sequence numbers, so its device time does not depend on when a pass comes.
+TICK_S = 0.25
 
 
 class FrontEnd(ABC):
@@ -173,14 +174,10 @@ class FrontEnd(ABC):
         )
 
     def _loop(self, draw: Callable[[], None]) -> None:
-        next_draw = 0.0
         while not self.done:
             self.tick()
-            now = time.monotonic()
-            if now >= next_draw:
-                draw()
-                next_draw = now + DRAW_EVERY_S
-            time.sleep(self.tick_s)
+            draw()
+            self.keys.wait(self.tick_s)
         draw()
 
     def top(self) -> list[RenderableType]:
