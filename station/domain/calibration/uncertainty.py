@@ -144,7 +144,7 @@ TEMPCO_DRAWS: Final = 4096
 _REFITS: Final = 6
 #: The largest condition number of a refit's normal matrix solved by LU (:func:`_refit`):
 #: its step is then the pseudo-inverse's to within ~cond·ε (1e-8) of the step, far from
-#: where the pseudo-inverse cuts (1e15) and ever a step later corrected.
+#: where the pseudo-inverse cuts (1e15), and the next step corrects what differs.
 _SOLVE_CONDITION: Final = 1e8
 #: The budget's terms, in the order they are listed.
 TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "temperature", "tilt")
