@@ -44,11 +44,15 @@ class PolledKeys:
 
 
 class TerminalKeys:
-    """Keys from standard input, in cbreak mode while used as a context manager."""
+    """Keys from standard input (or the file descriptor ``fd``), in cbreak mode while used
+    as a context manager."""
 
-    def __init__(self) -> None:
-        self.fd = sys.stdin.fileno()
+    def __init__(self, fd: int | None = None) -> None:
+        self.fd = sys.stdin.fileno() if fd is None else fd
         self._saved: list[Any] | None = None
+        #: Standard input has ended: it reads as ready for ever, so waiting on it would
+        #: spin (the station may go on a while after Ctrl-D, storing what it holds).
+        self._ended = False
 
     def __enter__(self) -> Self:
         if os.isatty(self.fd):
@@ -66,8 +70,11 @@ class TerminalKeys:
             termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
 
     def wait(self, timeout: float) -> None:
-        """Return once standard input holds a key (or its end), or after ``timeout``."""
-        select.select([self.fd], [], [], timeout)
+        """Return once standard input holds a key, or after ``timeout``."""
+        if self._ended:
+            time.sleep(timeout)
+        else:
+            select.select([self.fd], [], [], timeout)
 
     def read(self) -> str:
         chunks: list[bytes] = []
@@ -76,6 +83,7 @@ class TerminalKeys:
             if not data:
                 if chunks:
                     break
+                self._ended = True
                 raise EOFError
             if CTRL_D in data:  # in cbreak mode the terminal no longer turns it into EOF
                 raise EOFError
