@@ -179,7 +179,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
     # Whole-array operations, then plain floats per axis: the live view judges a window
-    # ten times a second per slot, and numpy's per-call overhead is most of the cost.
+    # at every pass per slot, and numpy's per-call overhead is most of the cost.
     at_rail = np.any((acc <= ADC_MIN) | (acc >= limits.sensor.adc_max), axis=0).tolist()
     saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
