@@ -9,6 +9,7 @@ after every pass; on anything else (logs, the demo's stderr) nothing is drawn an
 station says its lines instead.
 """
 
+import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
 
@@ -29,13 +30,14 @@ from station.results.rescue import Rescued
 from station.results.storage import RunStore
 
 #: Seconds between the loop's passes (keys, units, outbox, then the screen redrawn): the
-#: four redraws a second of rich's own ``Live`` default, about the live view's window
-#: (:data:`station.run.capture.LIVE_SAMPLES` at 500 samples/s). A key ends the wait at
-#: once (:meth:`KeySource.wait`), so typing is echoed without delay. Every pass more
-#: burns the station's CPU for nothing (issue 28): each wake costs about half a
-#: millisecond whatever it carries, and the pass reads the putter's port itself
-#: (:meth:`station.device.link.PutterLink.read_now`). A capture's window is judged on its
-#: samples' sequence numbers, so its device time does not depend on when a pass comes.
+#: four redraws a second of rich's own ``Live`` default, within the live view's window
+#: (:data:`station.run.capture.LIVE_SAMPLES`, 0.256 s at 500 samples/s), so that a pass
+#: on time judges one window. A key ends the wait at once (:meth:`KeySource.wait`), so
+#: typing is echoed without delay. Every pass more burns the station's CPU for nothing
+#: (issue 28): each wake costs about half a millisecond whatever it carries, and the pass
+#: reads the putter's port itself (:meth:`station.device.link.PutterLink.read_now`). A
+#: capture's window is judged on its samples' sequence numbers, so its device time does
+#: not depend on when a pass comes.
 TICK_S = 0.25
 
 
@@ -174,10 +176,20 @@ class FrontEnd(ABC):
         )
 
     def _loop(self, draw: Callable[[], None]) -> None:
+        """Pass, redraw, wait for a key or the next pass. Passes keep their cadence (a
+        pass a key brings in between does not move the next one), so a pass drains a
+        tick's samples, within one live window (:data:`TICK_S`); one that falls behind
+        is followed a whole tick later, never by a burst."""
+        due = time.monotonic()
         while not self.done:
             self.tick()
             draw()
-            self.keys.wait(self.tick_s)
+            now = time.monotonic()
+            if now >= due:
+                due += self.tick_s
+                if due <= now:
+                    due = now + self.tick_s
+            self.keys.wait(due - now)
         draw()
 
     def top(self) -> list[RenderableType]:
