@@ -161,7 +161,10 @@ def test_the_model_term_grows_with_the_unmodelled_coupling(unit, rotation, bound
 
 
 @settings(max_examples=20, deadline=None)
-@given(unit=true_units(cross_axis=0.02), bound=st.floats(0.02, 0.05))
+# The bound a quarter above the unit's own coupling (±0.02), so that every pose lies within
+# its reach of an axis, the case this is about: at a bound equal to the coupling a pose may
+# lie just beyond it, and its term is rightly taken along the pose (a flaky draw before).
+@given(unit=true_units(cross_axis=0.02), bound=st.floats(0.025, 0.05))
 def test_on_poses_along_the_axes_the_unit_s_own_coupling_is_not_counted_again(unit, bound) -> None:  # type: ignore[no-untyped-def]
     # Along the axes a coupling moves the sensitivities in second order only: the term
     # is what a coupling within the bound does to poses along the axes, the same for a
