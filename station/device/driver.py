@@ -6,8 +6,9 @@
 (:class:`~station.device.link.PutterLink`) parses frames, accounts for the link's
 health and fills bounded buffers with samples. Commands go one at a time, each
 waiting for its reply. Nothing in it blocks longer than a command's reply timeout,
-and :meth:`PutterDriver.drain` never blocks at all, so an operator interface can
-poll it from its own loop.
+and :meth:`PutterDriver.drain` never waits (it parses what the port holds when the
+reader rests, so the station's pass and the port share one wake), so an operator
+interface can poll it from its own loop.
 """
 
 import logging
@@ -124,7 +125,7 @@ class PutterDriver(Closing):
 
     def close(self) -> None:
         """Stop the reader thread and close the port. Buffered samples stay drainable."""
-        self._link.closing = True
+        self._link.close()
         self._reader.close()
 
     @property
@@ -155,7 +156,8 @@ class PutterDriver(Closing):
     # -- samples ----------------------------------------------------------------------
 
     def drain(self, max_rows: int | None = None) -> SampleBlock:
-        """Take the raw samples received so far; never blocks.
+        """Take the raw samples received so far; never waits (what the port holds is read
+        now, if the reader rests: :meth:`PutterLink.read_now`).
 
         Raises the link's failure (e.g. :class:`DeviceDisconnectedError`) only once every
         sample received before it has been handed out.
@@ -178,7 +180,9 @@ class PutterDriver(Closing):
         """
         link = self._link
         buffer = link.calibrated if calibrated else link.raw
-        if not buffer.wait(count, timeout, lambda: link.failure is not None):
+        with link.attended():
+            arrived = buffer.wait(count, timeout, lambda: link.failure is not None)
+        if not arrived:
             if link.failure is not None:
                 raise link.failure
             raise DeviceTimeoutError(
@@ -187,6 +191,7 @@ class PutterDriver(Closing):
         return buffer.drain(count)
 
     def _take(self, buffer: SampleBuffer, max_rows: int | None) -> SampleBlock:
+        self._link.read_now(self._reader.serial)
         # Read the failure first: the reader stores its last samples before it fails, so
         # a failure seen here means the drain below holds everything received.
         failure = self._link.failure
@@ -262,11 +267,8 @@ class PutterDriver(Closing):
         with self._command_lock:
             while not replies.empty():
                 replies.get_nowait()
-            self._link.expect_reply(True)
-            try:
+            with self._link.attended():
                 return self._send_awaiting(command, frame, expect)
-            finally:
-                self._link.expect_reply(False)
 
     def _send_awaiting(self, command: FrameType, frame: bytes, expect: FrameType) -> Frame:
         """Send ``frame`` until its reply comes, up to :attr:`retries` more times."""

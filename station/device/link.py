@@ -7,12 +7,26 @@ and a CRC, not the terminator pyserial's ``Packetizer`` splits on), unwraps the
 samples' sequence numbers into the two sample buffers and queues every other frame
 as a reply for the command waiting on it. When the thread ends,
 :meth:`connection_lost` records why, so that nobody waits for a dead link.
+
+**One wake for the station's pass and the port** (issue 28). At the putter's own rate
+the reader rests after each chunk, and the station's loop reads what waits at the port
+itself when it drains the samples (:meth:`PutterLink.read_now`, from
+:meth:`station.device.driver.PutterDriver.drain`): the pass that looks at the samples
+is the one that parses them, with its caches warm, instead of a second thread woken for
+it (each wake cost about half a millisecond whatever it carried, some 30 times a
+frame's parsing). The reader stays the port's safety net: it reads at once while a
+command waits for its reply or a script waits for samples (:meth:`PutterLink.attended`),
+on a stream faster than the putter's own, and whenever the station has not read for
+:data:`REST_S`, so the port's buffer never fills (nor a failure goes unseen) while the
+loop is busy elsewhere.
 """
 
+import contextlib
 import logging
 import queue
 import threading
 import time
+from collections.abc import Iterator
 
 import serial
 from serial.threaded import Protocol
@@ -27,15 +41,14 @@ from station.domain.sensor import ADC_MAX
 
 log = logging.getLogger(__name__)
 
-#: A chunk smaller than this (bytes: ~100 sample frames) has the reader rest for
-#: :data:`PACE_S` before it reads again, so that the next read takes a batch. At the
-#: putter's 512 frames a second the port would otherwise wake the reader once per
-#: 20-byte frame, each wake costing some 30 times the frame's parsing (issue 28). A
-#: tenth of a second is the screen's redraw period: the station looks at the samples
-#: no more often than that, so one batch a redraw delays nothing it shows. A command
-#: waiting for its reply wakes the reader at once (:meth:`PutterLink.expect_reply`).
-PACE_BELOW_BYTES = 2048
-PACE_S = 0.1
+#: A read smaller than this (bytes) drained the port: the reader rests after it. A tty
+#: hands out at most its line discipline's 4 KiB buffer a read, so a read this big may
+#: have left more behind, and the port is read again at once.
+PACE_BELOW_BYTES = 3072
+#: The longest the reader rests while nobody reads the port (s). At the putter's 10 kB/s
+#: a second is 10 kB: within a pty's 20 kB and a USB serial port's 64 kB of buffer, and
+#: the longest a pulled cable goes unnoticed by a station that does not read.
+REST_S = 1.0
 #: A stream faster than this (bytes a second: three times the putter's own 10 kB/s, so
 #: above its raw and calibrated streams at once) is a sped-up simulator's, and is read as
 #: it comes, never paced: a read drains at most what the port's buffer holds (4 kB on a
@@ -65,8 +78,16 @@ class PutterLink(Protocol):
         self._samples = 0
         self._lock = threading.Lock()
         self._failure: DeviceError | None = None
-        #: Set while a command waits for its reply: the reader does not rest then.
-        self._reply_due = threading.Event()
+        #: How many wait on the port (a command for its reply, a script for samples): the
+        #: reader does not rest while any does.
+        self._attending = 0
+        #: Ends the reader's rest: someone waits on the port, the link closes, the station's
+        #: read met a failure or a stream too fast for its passes.
+        self._wake = threading.Event()
+        #: Held by whoever reads the port: the reader, or the station while the reader rests.
+        self._port_lock = threading.Lock()
+        self._resting = False
+        self._read_at = time.monotonic()
         self._paced = True
         self._rate_since: float | None = None
         self._rate_bytes = 0
@@ -91,12 +112,45 @@ class PutterLink(Protocol):
                 buffer_overruns=self.raw.overruns + self.calibrated.overruns,
             )
 
-    def expect_reply(self, due: bool) -> None:
-        """A command was sent and waits for its reply (``due``), or has it."""
-        if due:
-            self._reply_due.set()
-        else:
-            self._reply_due.clear()
+    @contextlib.contextmanager
+    def attended(self) -> Iterator[None]:
+        """While inside, someone waits on the port (a command for its reply, a script for
+        samples): the reader reads as data comes, never resting."""
+        with self._lock:
+            self._attending += 1
+        self._wake.set()
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._attending -= 1
+
+    def close(self) -> None:
+        """The driver closes the link: a resting reader ends its rest."""
+        self.closing = True
+        self._wake.set()
+
+    def read_now(self, port: serial.Serial) -> None:
+        """Read and parse what waits at ``port``, in the caller's thread, if the reader
+        rests (else it reads the port itself, and nothing is done). A port that fails
+        here ends the reader's rest: its own read meets the failure and ends the link."""
+        if not self._port_lock.acquire(blocking=False):
+            return
+        try:
+            if not self._resting:
+                return
+            while size := port.in_waiting:
+                data = port.read(size)
+                self._received(data)
+                if len(data) < PACE_BELOW_BYTES:
+                    break
+            self._read_at = time.monotonic()
+            if not self._paced:
+                self._wake.set()
+        except (serial.SerialException, OSError):
+            self._wake.set()
+        finally:
+            self._port_lock.release()
 
     def restart_sequence(self) -> None:
         """The unit is about to count its samples from 0 again."""
@@ -117,6 +171,12 @@ class PutterLink(Protocol):
     # -- serial.threaded.Protocol ---------------------------------------------------
 
     def data_received(self, data: bytes) -> None:
+        """Parse a chunk the reader read; then rest, unless it must not (see the module)."""
+        self._received(data)
+        if self._pace(len(data)) and not self.closing:
+            self._rest()
+
+    def _received(self, data: bytes) -> None:
         """Parse a chunk; store its samples, queue its replies."""
         with self._lock:
             frames = self._parser.feed(data)
@@ -130,12 +190,10 @@ class PutterLink(Protocol):
         for frame in frames:
             if frame.type not in (FrameType.SAMPLE, FrameType.CAL_SAMPLE):
                 self.replies.put(frame)
-        if self._pace(len(data)) and not self.closing:
-            self._reply_due.wait(PACE_S)
+        self._measure_rate(len(data))
 
-    def _pace(self, size: int) -> bool:
-        """Whether to rest after a chunk of ``size`` bytes: a small one, from a stream
-        no faster than :data:`UNPACED_ABOVE_BYTES_PER_S` over the last window."""
+    def _measure_rate(self, size: int) -> None:
+        """Count ``size`` bytes read towards the stream's rate over :data:`RATE_WINDOW_S`."""
         now = time.monotonic()
         if self._rate_since is None:
             self._rate_since = now
@@ -143,7 +201,26 @@ class PutterLink(Protocol):
         if (elapsed := now - self._rate_since) >= RATE_WINDOW_S:
             self._paced = self._rate_bytes / elapsed <= UNPACED_ABOVE_BYTES_PER_S
             self._rate_since, self._rate_bytes = now, 0
-        return self._paced and size < PACE_BELOW_BYTES
+
+    def _pace(self, size: int) -> bool:
+        """Whether to rest after a read of ``size`` bytes: a small one, from a stream no
+        faster than :data:`UNPACED_ABOVE_BYTES_PER_S`, nobody waiting on the port."""
+        return self._paced and size < PACE_BELOW_BYTES and not self._attending
+
+    def _rest(self) -> None:
+        """Leave the port to the station's reads until someone waits on it or nobody has
+        read it for :data:`REST_S`; a read of the station's in progress ends first."""
+        with self._port_lock:
+            self._wake.clear()
+            if self._attending or self.closing:
+                return
+            self._resting = True
+            self._read_at = time.monotonic()
+        while (left := self._read_at + REST_S - time.monotonic()) > 0:
+            if self._wake.wait(left):
+                break
+        with self._port_lock:
+            self._resting = False
 
     def connection_lost(self, exc: BaseException | None) -> None:
         """The reader thread ended: by :meth:`PutterDriver.close`, or the link failed."""

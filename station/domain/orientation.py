@@ -140,7 +140,7 @@ def sense(
         direction, slack = g / norm, known.doubt / known.counts_per_g / norm
     pool = candidates if candidates is not None else _NAMED
     gravity = _NAMED_GRAVITY if candidates is None else np.stack([p.gravity_body for p in pool])
-    # One product for every pose (the live view asks ten times a second per slot).
+    # One product for every pose (the live view asks at every pass, per slot).
     cosines = gravity @ direction
     best = int(np.argmax(cosines))
     return Sensed(direction, pool[best], angle_deg(direction, pool[best].gravity_body), slack)

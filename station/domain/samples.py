@@ -119,7 +119,7 @@ class SampleBlock:
         if not len(self.rows):
             raise ValueError("an empty block of samples has no summary")
         # What ndarray.mean and .std(ddof=1) compute, to the bit, without their wrappers'
-        # overhead (the live view summarises a window ten times a second per slot).
+        # overhead (the live view summarises a window at every pass of the loop, per slot).
         rows = self.rows
         count = len(rows)
         mean = rows.sum(axis=0) / count

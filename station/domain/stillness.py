@@ -29,6 +29,7 @@ from typing import Any, Final
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from station.domain.arrays import FloatArray
 from station.domain.samples import SampleBlock, WindowSummary
 from station.domain.sensor import ADC_MIN, AXES, SAMPLES_PER_POSE
 from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
@@ -178,7 +179,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
     # Whole-array operations, then plain floats per axis: the live view judges a window
-    # ten times a second per slot, and numpy's per-call overhead is most of the cost.
+    # at every pass per slot, and numpy's per-call overhead is most of the cost.
     at_rail = np.any((acc <= ADC_MIN) | (acc >= limits.sensor.adc_max), axis=0).tolist()
     saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
@@ -211,6 +212,44 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
             motion = True
     return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary)
+
+
+class SpreadScreen:
+    """Which windows of a block of counts the judge would certainly refuse for an
+    accelerometer spread above ``limit`` (a cheap screen, for windows whose verdict nobody
+    reads: the live detector keeps only its latest one).
+
+    From running sums of the counts and their squares, exact in integers, a window's
+    sample variance is (n·Σx² − (Σx)²) / (n(n − 1)) with no rounding at all; a window is
+    screened out only when that exceeds the limit's square by a relative margin far above
+    the judge's own rounding (~1e-13), so the judge, which sees the same spread, refuses
+    it too. Axes with a sample at an ADC rail are left out, as the judge leaves them out.
+    A block that is not whole counts (a calibrated stream) screens nothing.
+    """
+
+    #: Relative margin over the limit's square: the judge's float spread is within ~1e-13.
+    MARGIN: Final = 1e-9
+
+    def __init__(self, accel: FloatArray, limit: float, adc_max: int) -> None:
+        counts = accel.astype(np.int64)
+        self._whole = bool(np.array_equal(counts, accel))
+        zero = np.zeros((1, 3), dtype=np.int64)
+        self._sums = np.concatenate((zero, counts.cumsum(axis=0)))
+        self._squares = np.concatenate((zero, (counts * counts).cumsum(axis=0)))
+        rail = (counts <= ADC_MIN) | (counts >= adc_max)
+        self._rails = np.concatenate((zero, rail.cumsum(axis=0)))
+        self._bound = limit * limit * (1.0 + self.MARGIN)
+
+    def refuses(self, start: int, stop: int) -> bool:
+        """Whether rows ``start`` to ``stop`` (excluded) certainly spread too much."""
+        n = stop - start
+        if not self._whole or n < 2:
+            return False
+        total = self._sums[stop] - self._sums[start]
+        squares = self._squares[stop] - self._squares[start]
+        free = (self._rails[stop] - self._rails[start]) == 0
+        excess = (n * squares - total * total)[free]
+        return bool(np.any(excess > self._bound * (n * (n - 1))))
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from station.domain.sensor_spec import SensorSpec
+from station.loop.keyboard import PolledKeys
 from station.simulator.putter import VirtualPutter
 
 #: Simulated seconds an operator takes to turn the putter into the next pose.
@@ -79,7 +80,7 @@ ANSWERS = {"confirm": "y", "resume": "n"}
 
 
 @dataclass
-class ScriptedOperator:
+class ScriptedOperator(PolledKeys):
     """Plays the operator: plugs units in, scans them, moves them as asked.
 
     ``station`` is the :class:`station.loop.app.StationApp` it serves (set before its

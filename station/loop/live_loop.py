@@ -5,8 +5,8 @@ the multi-slot fixture (:class:`station.loop.fixture.app.FixtureApp`) have in co
 slots and the unit lifecycle behind them (:class:`station.loop.lifecycle.UnitLifecycle`),
 the keys they read, the console they draw on, and the loop: tick, redraw every so often,
 until done. On a terminal the screen is a rich :class:`~rich.live.Live` display redrawn
-every :data:`DRAW_EVERY_S`; on anything else (logs, the demo's stderr) nothing is drawn
-and the station says its lines instead.
+after every pass; on anything else (logs, the demo's stderr) nothing is drawn and the
+station says its lines instead.
 """
 
 import time
@@ -29,13 +29,16 @@ from station.loop.slot import Slot
 from station.results.rescue import Rescued
 from station.results.storage import RunStore
 
-#: Seconds between screen refreshes.
-DRAW_EVERY_S = 0.1
-#: Seconds between the loop's passes: keys, units, outbox. One pass a redraw: what a
-#: pass changes is seen only at the next redraw, and every pass more burns the
-#: station's CPU for nothing (issue 28); a capture's window is judged on its samples'
-#: sequence numbers, so its device time does not depend on when a pass comes.
-TICK_S = DRAW_EVERY_S
+#: Seconds between the loop's passes (keys, units, outbox, then the screen redrawn): the
+#: four redraws a second of rich's own ``Live`` default, within the live view's window
+#: (:data:`station.run.capture.LIVE_SAMPLES`, 0.256 s at 500 samples/s), so that a pass
+#: on time judges one window. A key ends the wait at once (:meth:`KeySource.wait`), so
+#: typing is echoed without delay. Every pass more burns the station's CPU for nothing
+#: (issue 28): each wake costs about half a millisecond whatever it carries, and the pass
+#: reads the putter's port itself (:meth:`station.device.link.PutterLink.read_now`). A
+#: capture's window is judged on its samples' sequence numbers, so its device time does
+#: not depend on when a pass comes.
+TICK_S = 0.25
 
 
 class FrontEnd(ABC):
@@ -173,14 +176,20 @@ class FrontEnd(ABC):
         )
 
     def _loop(self, draw: Callable[[], None]) -> None:
-        next_draw = 0.0
+        """Pass, redraw, wait for a key or the next pass. Passes keep their cadence (a
+        pass a key brings in between does not move the next one), so a pass drains a
+        tick's samples, within one live window (:data:`TICK_S`); one that falls behind
+        is followed a whole tick later, never by a burst."""
+        due = time.monotonic()
         while not self.done:
             self.tick()
+            draw()
             now = time.monotonic()
-            if now >= next_draw:
-                draw()
-                next_draw = now + DRAW_EVERY_S
-            time.sleep(self.tick_s)
+            if now >= due:
+                due += self.tick_s
+                if due <= now:
+                    due = now + self.tick_s
+            self.keys.wait(due - now)
         draw()
 
     def top(self) -> list[RenderableType]:

@@ -26,7 +26,12 @@ from station.device import DeviceTimeoutError, LinkCounters, PutterDriver
 from station.domain.capture_budget import WindowPolicy
 from station.domain.errors import CalstationError
 from station.domain.samples import SampleBlock, WindowSummary
-from station.domain.stillness import StillnessThresholds, WindowVerdict, judge_window
+from station.domain.stillness import (
+    SpreadScreen,
+    StillnessThresholds,
+    WindowVerdict,
+    judge_window,
+)
 
 __all__ = [
     "AcquisitionError",
@@ -101,9 +106,21 @@ class StillnessDetector:
         hop = self.limits.hop_samples
         self._held = SampleBlock.concat((self._held, block)) if len(self._held) else block
         self.samples_seen += len(block)
+        screen: SpreadScreen | None = None
         while self._next_eval <= self.samples_seen:
             end = self._next_eval
             start = max(self._start, end - ceiling)
+            if end + hop <= self.samples_seen:  # a later window is judged in this feed too
+                # Only the latest verdict is kept (:attr:`last`): a window the judge would
+                # certainly refuse for its spread need not be judged (issue 28: a quarter
+                # second's feed holds four windows, each a thousand samples judged whole).
+                screen = screen or SpreadScreen(
+                    self._held.accel, self.limits.accel_std_max_counts, self.limits.sensor.adc_max
+                )
+                if screen.refuses(start - self._held_from, end - self._held_from):
+                    self._start = end + hop - floor
+                    self._next_eval = end + hop
+                    continue
             window = self._held[start - self._held_from : end - self._held_from]
             verdict = judge_window(window, self.limits)
             self.last = verdict

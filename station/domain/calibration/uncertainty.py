@@ -101,10 +101,11 @@ calibration it gives and the coupling itself.
 """
 
 from dataclasses import dataclass, field
+from functools import cache, lru_cache
 from typing import TYPE_CHECKING, Final
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
@@ -141,6 +142,10 @@ MODEL_DRAWS: Final = 256
 TEMPCO_DRAWS: Final = 4096
 #: Gauss–Newton iterations of each draw's refit (its steps shrink ~100× each).
 _REFITS: Final = 6
+#: The largest condition number of a refit's normal matrix solved by LU (:func:`_refit`):
+#: its step is then the pseudo-inverse's to within ~cond·ε (1e-8) of the step, far from
+#: where the pseudo-inverse cuts (1e15), and the next step corrects what differs.
+_SOLVE_CONDITION: Final = 1e8
 #: The budget's terms, in the order they are listed.
 TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "temperature", "tilt")
 _CHI2_QUANTILE: Final = 0.95
@@ -519,12 +524,20 @@ def _temperature_term(gain: FloatArray, bound: FloatArray) -> FloatArray:
     ``gain·κ`` over :data:`TEMPCO_DRAWS` seeded draws of κ, rectangular within the
     datasheet's bounds ``bound`` (6,), over k ([JCGM101]_ 7.7: where one rectangular κ
     dominates a coefficient, k·σ would cover all of it, not 95 %)."""
-    rng = np.random.default_rng(20080903)
-    kappa = rng.uniform(-1.0, 1.0, (TEMPCO_DRAWS, 6)) * bound
+    kappa = _tempco_draws() * bound
     shift = np.abs(kappa @ gain.T)
     return np.asarray(
         np.quantile(shift, _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR, dtype=np.float64
     )
+
+
+@cache
+def _tempco_draws() -> FloatArray:
+    """The temperature term's :data:`TEMPCO_DRAWS` seeded draws (K, 6), rectangular in ±1;
+    drawn once and kept read-only: a budget is due at the end of every unit (issue 28)."""
+    draws = np.random.default_rng(20080903).uniform(-1.0, 1.0, (TEMPCO_DRAWS, 6))
+    draws.flags.writeable = False
+    return draws
 
 
 def _pose_variances(
@@ -595,28 +608,60 @@ def _residuals(theta: FloatArray, a: FloatArray) -> FloatArray:
 
 
 def _refit(theta: FloatArray, poses: FloatArray) -> FloatArray:
-    """Six-parameter Gauss–Newton fits (K, 6) of K pose sets (K, N, 3), from θ."""
+    """Six-parameter Gauss–Newton fits (K, 6) of K pose sets (K, N, 3), from θ.
+
+    Each step solves the normal equations JᵀJ·δ = Jᵀr. A budget is due at the end of
+    every unit (issue 28), so a set whose JᵀJ is provably well conditioned
+    (:func:`_well_conditioned`) is solved by LU (``np.linalg.solve``): the same step as
+    the pseudo-inverse's to rounding, for a tenth of its CPU; any other set keeps the
+    pseudo-inverse's least-norm step, which a singular set needs.
+    """
     thetas = np.repeat(theta[None, :], len(poses), axis=0)
+    weyl: tuple[FloatArray, FloatArray] | None = None  # a reference JᵀJ, its eigenvalues
     for _ in range(_REFITS):
-        d = poses - thetas[:, None, :3]
         s = thetas[:, None, 3:6]
-        g = d / s
+        g = (poses - thetas[:, None, :3]) / s
         norm = np.linalg.norm(g, axis=2, keepdims=True)
-        n = g / norm
-        jac = np.concatenate([-n / s, -n * g / s], axis=2)  # (K, N, 6)
-        normal = np.einsum("kni,knj->kij", jac, jac)
-        rhs = np.einsum("kni,kn->ki", jac, norm[..., 0] - 1.0)
-        thetas = thetas - (np.linalg.pinv(normal) @ rhs[..., None])[..., 0]
+        slope = g / norm / s  # n/s
+        jac = np.concatenate([slope, slope * g], axis=2)  # −J (K, N, 6)
+        jac_t = jac.transpose(0, 2, 1)
+        normal = jac_t @ jac
+        rhs = jac_t @ (norm - 1.0)  # −Jᵀr (K, 6, 1)
+        if weyl is None:  # the draws' mean at the start: each draw's lies close to it
+            centre = normal.mean(axis=0)
+            weyl = (centre, np.linalg.eigvalsh(centre))
+        well = _well_conditioned(normal, *weyl)
+        step = np.empty_like(rhs)
+        step[well] = np.linalg.solve(normal[well], rhs[well])
+        if not well.all():
+            step[~well] = np.linalg.pinv(normal[~well]) @ rhs[~well]
+        thetas = thetas + step[..., 0]
     return thetas
 
 
+def _well_conditioned(
+    normal: FloatArray, reference: FloatArray, eigenvalues: FloatArray
+) -> NDArray[np.bool_]:
+    """Which normal matrices (K, 6, 6) have a condition number within
+    :data:`_SOLVE_CONDITION`, by Weyl's inequality about a ``reference`` (6, 6) of known
+    ``eigenvalues``: every eigenvalue of A moves by at most ‖A − R‖₂ ≤ ‖A − R‖_F. Rows
+    that are not finite are not."""
+    distance = np.sqrt(np.sum((normal - reference) ** 2, axis=(1, 2)))
+    smallest, largest = eigenvalues[0] - distance, eigenvalues[-1] + distance
+    return np.asarray(smallest * _SOLVE_CONDITION > largest, dtype=np.bool_)
+
+
+@lru_cache(maxsize=8)
 def _couplings(bound: float) -> FloatArray:
-    """:data:`MODEL_DRAWS` coupling matrices (K, 3, 3), off-diagonal rectangular ±bound;
-    the same draws every time (a budget is a function of its inputs)."""
+    """:data:`MODEL_DRAWS` couplings I + M (K, 3, 3), M's off-diagonal rectangular ±bound;
+    the same draws every time (a budget is a function of its inputs). Drawn once per
+    bound and kept read-only: a budget is due at the end of every unit (issue 28)."""
     rng = np.random.default_rng(20080901)
     m = rng.uniform(-bound, bound, (MODEL_DRAWS, 3, 3))
     m[:, np.arange(3), np.arange(3)] = 0.0
-    return m
+    coupled = np.eye(3) + m
+    coupled.flags.writeable = False
+    return coupled
 
 
 def _along_axes(n: FloatArray, bound: float) -> FloatArray | None:
@@ -677,7 +722,7 @@ def _model_term(
     axis (:func:`_along_axes`) the sensitivities' term is taken along the axes.
     """
     offset, s = theta[:3], theta[3:6]
-    shift, thetas, coupled = _coupling_shifts(theta, n, g, np.eye(3) + _couplings(bound))
+    shift, thetas, coupled = _coupling_shifts(theta, n, g, _couplings(bound))
     if len(shift) == 0:  # no draw refits: the coupling's own bound on every coefficient
         return np.asarray(np.concatenate([s, s]) * bound, dtype=np.float64), None, None
     # JCGM 101 7.7: the symmetric 95 % interval of the (biased: one-sided on the axis
@@ -685,7 +730,7 @@ def _model_term(
     term = np.quantile(np.abs(shift), _COVERAGE_PROBABILITY, axis=0) / COVERAGE_FACTOR
     axes = _along_axes(n, bound)
     if axes is not None:
-        along, _, _ = _coupling_shifts(theta, axes, g, np.eye(3) + _couplings(bound))
+        along, _, _ = _coupling_shifts(theta, axes, g, _couplings(bound))
         if len(along):
             term[3:] = np.quantile(np.abs(along[:, 3:]), _COVERAGE_PROBABILITY, axis=0)
             term[3:] /= COVERAGE_FACTOR

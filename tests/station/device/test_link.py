@@ -1,19 +1,34 @@
-"""The reader's pacing: it rests between small chunks, never while a reply is due nor on
-a stream faster than the putter's own (a sped-up simulator)."""
+"""The reader's pacing and the station's own reads: at the putter's rate the reader rests
+and the station's pass reads the port itself; the reader reads at once while someone waits
+on the port, on a stream faster than the putter's own, and when nobody read for a while."""
 
+import contextlib
+import os
 import threading
 import time
+from collections.abc import Callable, Iterator
 
+import numpy as np
 import pytest
+import serial
 
+from station.device import PutterDriver
 from station.device import link as link_module
 from station.device.link import PutterLink
+from station.device.ports import open_port
 from station.device.protocol import FrameType, encode_frame, encode_sample
+from station.simulator import VirtualPutter
 
 #: Longer than any test may take: a reader resting this long has not been woken.
 FOREVER_S = 3600.0
-#: Safety net for a join, not a speed requirement.
+#: Safety net for a join or a wait, not a speed requirement.
 JOIN_S = 60.0
+
+
+def samples(first: int, count: int) -> bytes:
+    return b"".join(
+        encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(first, first + count)
+    )
 
 
 def feed_in_thread(link: PutterLink, data: bytes) -> threading.Thread:
@@ -22,37 +37,69 @@ def feed_in_thread(link: PutterLink, data: bytes) -> threading.Thread:
     return thread
 
 
+def until(condition: Callable[[], bool]) -> None:
+    deadline = time.monotonic() + JOIN_S
+    while not condition():
+        assert time.monotonic() < deadline, "hung"
+        time.sleep(0.005)
+
+
 @pytest.fixture
 def resting_forever(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(link_module, "PACE_S", FOREVER_S)
+    monkeypatch.setattr(link_module, "REST_S", FOREVER_S)
+
+
+@pytest.fixture
+def pty_port() -> Iterator[tuple[int, serial.Serial]]:
+    """A real pty: its master's fd (the putter's end) and the station's port on it."""
+    master, slave = os.openpty()
+    port = open_port(os.ttyname(slave), baudrate=115200, timeout=0.01)
+    assert isinstance(port, serial.Serial)
+    try:
+        yield master, port
+    finally:
+        port.close()
+        with contextlib.suppress(OSError):  # a test may have pulled the cable
+            os.close(master)
+        os.close(slave)
+
+
+def resting(link: PutterLink, first_chunk: bytes) -> threading.Thread:
+    """A reader thread that read ``first_chunk`` and now rests."""
+    reader = feed_in_thread(link, first_chunk)
+    until(lambda: link._resting)
+    return reader
 
 
 @pytest.mark.usefixtures("resting_forever")
-def test_a_small_chunk_rests_the_reader_until_a_reply_is_due() -> None:
+def test_a_small_chunk_rests_the_reader_until_someone_waits_on_the_port() -> None:
     link = PutterLink("pty", 1024)
-    reader = feed_in_thread(link, encode_sample(0, (2048, 2048, 2867), (0, 0, 0), 2500))
-    deadline = time.monotonic() + JOIN_S
-    while len(link.raw) < 1:  # what it read goes in before it rests
-        assert time.monotonic() < deadline
-        time.sleep(0.01)
+    reader = resting(link, samples(0, 1))
+    assert len(link.raw) == 1  # what it read goes in before it rests
     reader.join(0.1)
-    assert reader.is_alive()  # resting
-    link.expect_reply(True)  # a command was sent
+    assert reader.is_alive()
+    with link.attended():  # a command was sent
+        reader.join(JOIN_S)
+        assert not reader.is_alive()
+
+
+@pytest.mark.usefixtures("resting_forever")
+def test_closing_the_link_ends_the_readers_rest() -> None:
+    link = PutterLink("pty", 1024)
+    reader = resting(link, samples(0, 1))
+    link.close()
     reader.join(JOIN_S)
     assert not reader.is_alive()
 
 
 @pytest.mark.usefixtures("resting_forever")
-def test_a_reply_due_or_a_big_chunk_never_rests_the_reader() -> None:
+def test_a_reply_awaited_or_a_big_chunk_never_rests_the_reader() -> None:
     link = PutterLink("pty", 4096)
-    link.expect_reply(True)
-    feed_in_thread(link, encode_frame(FrameType.ACK, bytes([FrameType.START_STREAM]))).join(JOIN_S)
+    with link.attended():
+        reply = encode_frame(FrameType.ACK, bytes([FrameType.START_STREAM]))
+        feed_in_thread(link, reply).join(JOIN_S)
     assert link.replies.qsize() == 1
-    link.expect_reply(False)
-    big = b"".join(
-        encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500)
-        for i in range(link_module.PACE_BELOW_BYTES // 20 + 1)
-    )
+    big = samples(0, link_module.PACE_BELOW_BYTES // 20 + 1)
     reader = feed_in_thread(link, big)
     reader.join(JOIN_S)
     assert not reader.is_alive()
@@ -61,14 +108,98 @@ def test_a_reply_due_or_a_big_chunk_never_rests_the_reader() -> None:
 @pytest.mark.usefixtures("resting_forever")
 def test_a_stream_faster_than_the_putters_own_is_read_unpaced() -> None:
     link = PutterLink("pty", 1 << 16)
-    chunk = b"".join(encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(50))
+    chunk = samples(0, 50)
     assert len(chunk) < link_module.PACE_BELOW_BYTES  # small: a paced reader rests after it
-    link.expect_reply(True)  # keeps the reader from resting while the rate is measured
-    start = time.monotonic()
-    # 1 kB a call: far above 30 kB/s however busy the machine, unless calls took 33 ms.
-    while time.monotonic() - start <= link_module.RATE_WINDOW_S:
-        link.data_received(chunk)
-    link.expect_reply(False)
+    with link.attended():  # keeps the reader from resting while the rate is measured
+        start = time.monotonic()
+        # 1 kB a call: far above 30 kB/s however busy the machine, unless calls took 33 ms.
+        while time.monotonic() - start <= link_module.RATE_WINDOW_S:
+            link.data_received(chunk)
     reader = feed_in_thread(link, chunk)
     reader.join(JOIN_S)
     assert not reader.is_alive()
+
+
+@pytest.mark.usefixtures("resting_forever")
+def test_the_station_reads_what_the_port_holds_while_the_reader_rests(
+    pty_port: tuple[int, serial.Serial],
+) -> None:
+    master, port = pty_port
+    link = PutterLink("pty", 4096)
+    reader = resting(link, samples(0, 1))
+    sent = samples(1, 100)
+    os.write(master, sent)
+    until(lambda: port.in_waiting == len(sent))
+    link.read_now(port)
+    block = link.raw.drain()
+    assert block.seq.tolist() == list(range(101))
+    assert port.in_waiting == 0
+    reader.join(0.1)
+    assert reader.is_alive()  # its rest goes on: the station reads the port
+    link.close()
+    reader.join(JOIN_S)
+
+
+def test_the_station_leaves_the_port_to_a_reader_that_is_not_resting(
+    pty_port: tuple[int, serial.Serial],
+) -> None:
+    master, port = pty_port
+    link = PutterLink("pty", 4096)
+    sent = samples(0, 10)
+    os.write(master, sent)
+    until(lambda: port.in_waiting == len(sent))
+    link.read_now(port)
+    assert len(link.raw) == 0
+    assert port.in_waiting == len(sent)
+
+
+def test_a_reader_nobody_relieves_reads_again_after_its_rest(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(link_module, "REST_S", 0.05)
+    link = PutterLink("pty", 1024)
+    reader = feed_in_thread(link, samples(0, 1))
+    reader.join(JOIN_S)
+    assert not reader.is_alive()
+
+
+def test_a_failing_port_ends_the_readers_rest(
+    pty_port: tuple[int, serial.Serial], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(link_module, "REST_S", FOREVER_S)
+    master, port = pty_port
+    link = PutterLink("pty", 1024)
+    reader = resting(link, samples(0, 1))
+    os.close(master)  # the cable pulled: the port's in_waiting now fails
+    link.read_now(port)
+    reader.join(JOIN_S)
+    assert not reader.is_alive()  # its own read meets the failure (a ReaderThread ends the link)
+
+
+@pytest.mark.usefixtures("resting_forever")
+def test_at_the_putters_own_rate_the_stations_drains_parse_the_stream() -> None:
+    """The reader parses its first chunk and rests; every later sample is parsed by the
+    station's drains, in order and none lost."""
+    parsed_by_reader: list[int] = []
+    received = PutterLink.data_received
+
+    def counting(self: PutterLink, data: bytes) -> None:
+        parsed_by_reader.append(len(data))
+        received(self, data)
+
+    monkeypatch = pytest.MonkeyPatch()
+    monkeypatch.setattr(PutterLink, "data_received", counting)
+    try:
+        with VirtualPutter(seed=3, serial="PT000001", speed=1.0) as putter:
+            url = putter.serve_pty()
+            with PutterDriver.open(url) as driver:
+                driver.start_stream()
+                until(lambda: driver._link._resting)
+                reads = len(parsed_by_reader)
+                got: list[np.ndarray] = []
+                until(lambda: got.append(driver.drain().seq) or sum(map(len, got)) >= 600)
+                assert len(parsed_by_reader) == reads  # the reader still rests
+                seq = np.concatenate(got)
+                assert np.array_equal(seq, np.arange(seq[0], seq[0] + len(seq)))
+    finally:
+        monkeypatch.undo()

@@ -26,6 +26,7 @@ from station.loop.config import StationConfig
 from station.loop.fixture.app import FixtureApp, Stage
 from station.loop.fixture.demo import mounts
 from station.loop.fixture.plan import next_fixture_pose
+from station.loop.keyboard import PolledKeys
 from station.loop.slot import SlotState
 from station.results.storage import DatabaseStore
 from station.run.phases import Phase
@@ -34,7 +35,7 @@ from station.simulator.putter import VirtualPutter
 SPEED = 10.0
 
 
-class Fixture:
+class Fixture(PolledKeys):
     """Virtual putters in the slots' ptys and an operator who types and turns."""
 
     def __init__(self, tmp: Path, slots: int, seed: int = 3) -> None:

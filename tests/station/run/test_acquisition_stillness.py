@@ -173,3 +173,39 @@ def test_a_unit_at_the_offset_extremes_is_still_in_the_tilted_pose() -> None:
     rows = unit.trace(0.0, 3 * WINDOW)
     detector = StillnessDetector()
     assert detector.feed(rows) is not None
+
+
+@given(
+    seed=st.integers(0, 10_000),
+    start=st.sampled_from(sorted(POSES)),
+    target=st.sampled_from(sorted(POSES)),
+    duration=st.floats(0.2, 3.0),
+    chunk=st.integers(2 * LIMITS.hop_samples, 600),
+)
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_big_feeds_accept_the_very_window_hop_sized_feeds_accept(
+    seed: int, start: str, target: str, duration: float, chunk: int
+) -> None:
+    """A feed holding several windows judges only its latest whole and screens the earlier
+    ones (issue 28): the pose accepted, where and on which samples, is the one a feed per
+    hop, which judges every window, accepts; and so is the latest verdict at every feed."""
+    unit = VirtualPutter(seed=seed, start_pose=start)
+    unit.move_to(target, duration, at_s=0.5)
+    rows = unit.trace(0.0, int((0.5 + duration + 3.5) * RATE))
+    every = StillnessDetector()
+    screened = StillnessDetector()
+    hop = LIMITS.hop_samples
+    for at in range(0, len(rows), chunk):
+        for small in range(at, min(at + chunk, len(rows)), hop):
+            taken = every.feed(rows[small : min(small + hop, at + chunk, len(rows))])
+            if taken is not None:
+                break
+        found = screened.feed(rows[at : at + chunk])
+        assert (found is None) == (taken is None)
+        if found is not None and taken is not None:
+            assert np.array_equal(found.window.rows, taken.window.rows)
+            return
+        assert (every.last is None) == (screened.last is None)
+        if every.last is not None and screened.last is not None:
+            assert every.last.reasons == screened.last.reasons
+    pytest.fail("the unit lay still for 3.5 s and no pose was accepted")
