@@ -8,8 +8,9 @@ The firmware loop sends the samples that fell due in bursts, every :data:`BURST_
 a real unit's USB-serial adapter delivers them (an FTDI chip holds its receive buffer
 until its latency timer, 16 ms by default, runs out); the samples carry their instants
 in their sequence numbers, so a burst changes no sample. A command is answered at once:
-the loop wakes as soon as the station writes. Waking every 2 ms instead cost about 8 %
-of a core per putter at real time, in every test and demo that streams.
+the loop wakes as soon as the station writes. Waking every 2 ms instead cost 9–13 % of
+a core per putter at real time, against 4–5 % now (``benchmarks/bench_putter_cpu.py``),
+in every test and demo that streams.
 """
 
 import contextlib
