@@ -3,6 +3,14 @@
 It runs in a thread of its own. Tests and demos script the operator through
 :meth:`VirtualPutter.move_to` and check results against :attr:`VirtualPutter.truth`;
 ``calstation simulate`` runs one in its own process.
+
+The firmware loop sends the samples that fell due in bursts, every :data:`BURST_S`, as
+a real unit's USB-serial adapter delivers them (an FTDI chip holds its receive buffer
+until its latency timer, 16 ms by default, runs out); the samples carry their instants
+in their sequence numbers, so a burst changes no sample. A command is answered at once:
+the loop wakes as soon as the station writes. Waking every 2 ms instead cost 9–13 % of
+a core per putter at real time, against 4–5 % now (``benchmarks/bench_putter_cpu.py``),
+in every test and demo that streams.
 """
 
 import contextlib
@@ -36,6 +44,8 @@ log = logging.getLogger(__name__)
 
 FIRMWARE_VERSION: Final = "1.4.2"
 SENSOR_PART: Final = "KXM52-1050"
+#: Real seconds between two bursts of samples (an FTDI adapter's default latency timer).
+BURST_S: Final = 0.016
 
 
 class VirtualPutter(Closing):
@@ -236,7 +246,7 @@ class VirtualPutter(Closing):
                 self._stop.wait(0.005)
                 continue
             try:
-                readable, _, _ = select.select([link], [], [], 0.002)
+                readable, _, _ = select.select([link], [], [], BURST_S)
             except (OSError, ValueError):  # unplugged while waiting
                 continue
             with self._lock:
