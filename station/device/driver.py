@@ -169,7 +169,9 @@ class PutterDriver(Closing):
         return self._take(self._link.calibrated, max_rows)
 
     def pending(self) -> int:
-        """How many raw samples wait in the buffer."""
+        """How many raw samples have arrived and wait to be drained (what the port holds is
+        read now, if the reader rests, as :meth:`drain` reads it)."""
+        self._link.read_now(self._reader.serial)
         return len(self._link.raw)
 
     def wait_samples(self, count: int, timeout: float, *, calibrated: bool = False) -> SampleBlock:

@@ -93,9 +93,10 @@ class PoseCapture:
         #: What the poses taken tell of the offsets, and which captures told it.
         self._zero_g_of: tuple[tuple[int, object], ...] | None = None
         self._known_zero_g = ZeroG.datasheet(settings.sensor)
-        #: Whether the unit moved since the last capture (before it has, it still lies
-        #: in the pose just taken, which is no mistake).
-        self._moved = False
+        #: The sequence number at which the live view first saw the unit move since the
+        #: last capture (None: it has not; before it has, it still lies in the pose just
+        #: taken, which is no mistake).
+        self._moved_at: float | None = None
 
     def restart(self, driver: PutterDriver, target: Pose | None) -> None:
         """Start taking ``target`` afresh (after a capture, a refusal, a redo, a return)."""
@@ -149,7 +150,7 @@ class PoseCapture:
             self.restart(driver, target)
             return None
         self._wrong_pose_said = None
-        self._moved = False
+        self._moved_at = None
         self._still_samples = 0
         self.live = LiveView()
         return result
@@ -187,8 +188,8 @@ class PoseCapture:
             return Saturated(verdict)
         matches = sensed.matches(target, self.settings.pose_tolerance_deg)
         was_capturing = self.live.progress >= 0.25
-        if verdict.motion:
-            self._moved = True
+        if verdict.motion and self._moved_at is None:
+            self._moved_at = float(window.seq[-1])
         refused = self.live.refused if self._still_samples else None
         if matches and not verdict.motion:
             self._still_samples += new
@@ -200,7 +201,7 @@ class PoseCapture:
             elif self.live.progress >= 0.05 and self.live.matches:  # not the settling
                 refused = moved_early()
             self._still_samples = 0
-        if self._moved and not matches and not verdict.motion:
+        if self._moved_at is not None and not matches and not verdict.motion:
             self._say_wrong_pose(sensed, index, target)
         self.live = LiveView(
             sensed=sensed,
@@ -214,14 +215,20 @@ class PoseCapture:
         return None
 
     def _acceptable(self, result: PoseResult, index: int, target: Pose) -> bool:
-        """Whether the still window lies in ``target``, away from every pose taken."""
+        """Whether the still window lies in ``target``, away from every pose taken.
+
+        A window refused is said to the operator only when the unit had moved before it:
+        a poll takes in a pass's samples (a quarter second, or seconds of a sped-up
+        simulator's), and a window from before a move the same poll saw is the unit still
+        lying in the pose just taken, which is no mistake.
+        """
         sensed = sense(result.summary.accel_mean, zero_g=self._zero_g())
         close_to_earlier = any(
             angle_deg(direction, sensed.direction) < self.settings.min_pose_separation_deg
             for _, direction in self._captured_directions()
         )
         if close_to_earlier or not sensed.matches(target, self.settings.pose_tolerance_deg):
-            if self._moved:
+            if self._moved_at is not None and self._moved_at < result.first_seq:
                 self._say_wrong_pose(sensed, index, target)
             return False
         return True

@@ -29,6 +29,10 @@ from station.simulator.sensor import SensorTruth
 SERIAL = "PT000077"
 
 
+#: A hang guard, not a speed requirement: waits end on the samples, not on the clock.
+HANG_S = 60.0
+
+
 class Bench:
     """A virtual putter on a pty, a driver on it, and a run of that unit."""
 
@@ -225,6 +229,27 @@ def test_a_unit_inside_a_limit_but_within_u_of_it_passes_simple_and_fails_guarde
     # The operator's words: inside the limit, but less than its U inside, by which rule.
     assert "within" in guarded.failures[0].message
     assert "guarded acceptance" in guarded.failures[0].message
+
+
+def test_a_unit_left_lying_then_moved_within_one_poll_is_not_told_it_lies_in_a_pose_taken(
+    bench: Bench,
+) -> None:
+    # A poll takes in a pass's samples: a quarter second, or seconds of a sped-up
+    # simulator's. Left lying in the pose just taken for longer than a window, then moved
+    # to the next, all within one poll: the still window from before the move is the unit
+    # still lying where it was put, no mistake, and the operator is not told otherwise.
+    bench.drive(lambda run: len(run.journal.captures) == 1)  # face up taken
+    bench.putter.sleep(3.0)  # 1,500 samples still in face up: more than a window
+    bench.putter.move_to("face_down", 1.0, wait=True)
+    bench.moved_to = "face_down"
+    bench.putter.sleep(0.5)
+    deadline = time.monotonic() + HANG_S
+    while bench.run.driver.pending() < 2_000:  # all of it in, for one poll to take
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    bench.run.step()
+    bench.drive(lambda run: len(run.journal.captures) == 2)
+    assert not [m.text for m in bench.run.messages if m.text.startswith("too close")]
 
 
 def test_the_pose_asked_for_but_tilted_past_the_tolerance_is_refused_with_its_angle(
