@@ -133,7 +133,9 @@ class PutterLink(Protocol):
     def read_now(self, port: serial.Serial) -> None:
         """Read and parse what waits at ``port``, in the caller's thread, if the reader
         rests (else it reads the port itself, and nothing is done). A port that fails
-        here ends the reader's rest: its own read meets the failure and ends the link."""
+        here ends the reader's rest: its own read meets the failure and ends the link; a
+        port that holds nothing lets the rest run out (:data:`REST_S`), so the reader
+        reads it then, and meets a peer that went away."""
         if not self._port_lock.acquire(blocking=False):
             return
         try:
@@ -142,12 +144,19 @@ class PutterLink(Protocol):
             while size := port.in_waiting:
                 data = port.read(size)
                 self._received(data)
+                # Only a read that took bytes relieves the reader: a socket whose peer is
+                # gone holds none and raises nothing here, and only the reader's own read
+                # meets its end.
+                self._read_at = time.monotonic()
                 if len(data) < PACE_BELOW_BYTES:
                     break
-            self._read_at = time.monotonic()
             if not self._paced:
                 self._wake.set()
         except (serial.SerialException, OSError):
+            self._wake.set()
+        except Exception as exc:  # a bug must not pass unseen, nor leave the reader resting
+            log.error("putter read failed", exc_info=exc)
+            self.fail(ProtocolError(f"putter at {self.name}: read failed: {exc!r}"))
             self._wake.set()
         finally:
             self._port_lock.release()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import serial
 
-from station.device import PutterDriver
+from station.device import DeviceDisconnectedError, ProtocolError, PutterDriver
 from station.device import link as link_module
 from station.device.link import PutterLink
 from station.device.ports import open_port
@@ -197,9 +197,56 @@ def test_at_the_putters_own_rate_the_stations_drains_parse_the_stream() -> None:
                 until(lambda: driver._link._resting)
                 reads = len(parsed_by_reader)
                 got: list[np.ndarray] = []
-                until(lambda: got.append(driver.drain().seq) or sum(map(len, got)) >= 600)
+
+                def drained_600() -> bool:
+                    got.append(driver.drain().seq)
+                    return sum(map(len, got)) >= 600
+
+                until(drained_600)
                 assert len(parsed_by_reader) == reads  # the reader still rests
                 seq = np.concatenate(got)
                 assert np.array_equal(seq, np.arange(seq[0], seq[0] + len(seq)))
     finally:
         monkeypatch.undo()
+
+
+def test_a_socket_whose_peer_went_away_is_noticed_while_the_station_drains() -> None:
+    """A socket's ``in_waiting`` holds 0 and raises nothing once the peer is gone: the
+    station's reads, finding nothing, leave the reader's rest to run out, and its own read
+    meets the end of the stream."""
+    with VirtualPutter(seed=3, serial="PT000001", speed=1.0) as putter:
+        url = putter.serve_socket()
+        with PutterDriver.open(url) as driver:
+            driver.start_stream()
+            until(lambda: driver._link._resting)
+            putter.unplug()
+            with pytest.raises(DeviceDisconnectedError):
+                drain_until_it_fails(driver)
+
+
+def drain_until_it_fails(driver: PutterDriver) -> None:
+    """Drain as the station's passes do, until the driver raises (or the hang guard)."""
+    deadline = time.monotonic() + JOIN_S
+    while time.monotonic() < deadline:
+        driver.drain()
+        time.sleep(0.05)
+
+
+@pytest.mark.usefixtures("resting_forever")
+def test_a_bug_in_the_stations_read_fails_the_link_and_wakes_the_reader(
+    pty_port: tuple[int, serial.Serial], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    master, port = pty_port
+    link = PutterLink("pty", 1024)
+    reader = resting(link, samples(0, 1))
+
+    def broken(data: bytes) -> None:
+        raise RuntimeError("a parser bug")
+
+    monkeypatch.setattr(link, "_received", broken)
+    os.write(master, samples(1, 5))
+    until(lambda: port.in_waiting > 0)
+    link.read_now(port)
+    assert isinstance(link.failure, ProtocolError)
+    reader.join(JOIN_S)
+    assert not reader.is_alive()
