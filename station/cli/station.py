@@ -72,10 +72,14 @@ def _station(
     console: Any,
     units: int | None,
     probe_port: bool = True,
+    speed: float = 1.0,
 ) -> StationApp | FixtureApp:
-    """The one-port station, or the fixture's when several slots are configured."""
+    """The one-port station, or the fixture's when several slots are configured;
+    ``speed``: the virtual putters' clock (the demo's), which the loop's passes follow, so
+    that a pass comes every quarter second of the units' own time, as on the line."""
     from station.loop.app import StationApp
     from station.loop.fixture.app import FixtureApp
+    from station.loop.live_loop import TICK_S
 
     front_end = FixtureApp if config.slots else StationApp
     return front_end(
@@ -86,6 +90,7 @@ def _station(
         console=console,
         units=units,
         probe_ports=probe_port,
+        tick_s=TICK_S / speed,
     )
 
 
@@ -244,7 +249,7 @@ def demo_command(
         )
     console = err if as_json or not out.is_terminal else out
     limits = load_profile(config.limits_file, config.limits_profile)
-    app = _station(config, limits, operator_script, console, units, probe_port=False)
+    app = _station(config, limits, operator_script, console, units, probe_port=False, speed=speed)
     operator_script.station = app
     console.print(
         tr(
