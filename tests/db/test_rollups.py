@@ -149,6 +149,15 @@ def _latest(run: Planned) -> tuple[bool, datetime]:
     return (run.code != "aborted", run.started_at)
 
 
+def _check_group(summary: Any, history: list[Planned], runs: list[Planned], same: Any) -> None:
+    """A row of the report (a station's, a product's) against its ``runs``: the counts,
+    the operator's aborts and the retests."""
+    assert _counts_of(summary) == _expected_counts(history, runs, same)
+    aborts = sum(r.code == "aborted" for r in runs)
+    assert summary.aborted_runs == aborts
+    assert summary.retests == max(0, len(runs) - aborts - summary.units_tested)
+
+
 def _counts_of(summary: Any) -> tuple[int, int, int, int, int]:
     return (
         summary.runs,
@@ -172,11 +181,7 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     for station, summary in stations.items():
         # A station's row: the units whose first run on the line was there (and is
         # selected), their first and final passes, and every run at the station.
-        at = [r for r in chosen if r.station == station]
-        assert _counts_of(summary) == _expected_counts(history, at, unit)
-        aborts = sum(r.code == "aborted" for r in at)
-        assert summary.aborted_runs == aborts
-        assert summary.retests == max(0, len(at) - aborts - summary.units_tested)
+        _check_group(summary, history, [r for r in chosen if r.station == station], unit)
     # So the rows add up to the "all" row, on a filtered page too.
     for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
         assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
@@ -185,10 +190,7 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     for part_number, summary in products.items():
         # A product's row: its units (a unit is one product's) and its runs.
         of = [r for r in chosen if r.part_number == part_number]
-        assert _counts_of(summary) == _expected_counts(history, of, unit)
-        aborts = sum(r.code == "aborted" for r in of)
-        assert summary.aborted_runs == aborts
-        assert summary.retests == max(0, len(of) - aborts - summary.units_tested)
+        _check_group(summary, history, of, unit)
         assert summary.poses == 7 * len(of)
     _check_trend(report, history, chosen)
     # an operator's abort is no failure category
