@@ -708,10 +708,18 @@ def _latest_stored_bounds(connection: Connection) -> FamilyBounds | None:
 def lock_submissions(connection: Connection) -> None:
     """Serialise submissions: each one derives facts from every run stored before it.
 
-    PostgreSQL: a transaction-scoped advisory lock; SQLite serialises writers already.
+    PostgreSQL: a transaction-scoped advisory lock keyed by the runs' schema as well, since
+    advisory locks span the whole database: installations that share one database in
+    schemas of their own do not wait for each other's submissions. SQLite serialises
+    writers already.
     """
     if connection.dialect.name == "postgresql":
-        connection.execute(text("SELECT pg_advisory_xact_lock(hashtext('calstation.runs'))"))
+        connection.execute(
+            text(
+                "SELECT pg_advisory_xact_lock("
+                "hashtext('calstation.runs'), hashtext(current_schema()))"
+            )
+        )
 
 
 @dataclass(frozen=True)
