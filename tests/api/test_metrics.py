@@ -1,6 +1,6 @@
 """``GET /metrics``: the server's Prometheus metrics, scraped from a real server and parsed.
 
-Each test starts a server of its own, so its counts start at zero and every count
+Each test of a server starts one of its own, so its counts start at zero and every count
 asserted here is what the test itself caused.
 """
 
@@ -9,6 +9,9 @@ import uuid
 import httpx
 from prometheus_client.parser import text_string_to_metric_families
 
+from api.main import create_app
+from api.metrics import documented_paths
+from api.settings import ApiSettings
 from db import Database, RunRepository
 from tests.db.records import make_record
 from tests.servers import serving
@@ -147,3 +150,11 @@ def test_a_report_counts_in_the_report_pool_and_every_worker_is_added_up(
 def test_the_openapi_document_names_the_metrics_answer(client: httpx.Client) -> None:
     operation = client.get("/openapi.json").json()["paths"]["/metrics"]["get"]
     assert list(operation["responses"]["200"]["content"]) == ["text/plain"]
+
+
+def test_the_route_templates_are_the_documents_paths_in_its_order() -> None:
+    """Requests are labelled by the paths of the OpenAPI document, read off the routes
+    without building it: the two agree, so an upgrade of FastAPI that walks its routes
+    otherwise is caught here."""
+    app = create_app(ApiSettings())
+    assert documented_paths(app) == list(app.openapi()["paths"])
