@@ -2,9 +2,11 @@
 
 import importlib
 import inspect
+import json
 import os
 import subprocess
 import sys
+from typing import Any
 
 import pytest
 import typer
@@ -12,10 +14,7 @@ import typer
 from station import __version__
 from station.cli.main import COMMANDS
 from tests.conftest import REPO_ROOT, CliRunner
-
-#: What a one-line answer must not wait for (issue 28): the numerics, the database and
-#: web layers, the station's loop and the report renderer.
-HEAVY = ("numpy", "scipy", "matplotlib", "sqlalchemy", "fastapi", "station.loop", "station.report")
+from tests.forked_cli import HEAVY
 
 
 def heavy_imports(*args: str) -> set[str]:
@@ -89,18 +88,50 @@ def test_every_command_has_an_argument_it_refuses() -> None:
     assert sorted(REFUSED) == sorted(LEAVES)
 
 
+def _help(command: str) -> list[str]:
+    return [*command.split(), "--help"]
+
+
+def _refused(command: str) -> list[str]:
+    return [*command.split(), *REFUSED[command]]
+
+
+@pytest.fixture(scope="module")
+def forked() -> dict[str, Any]:
+    """Every command's help and refused argument, each in a process forked from one that
+    loaded only the entry point (:mod:`tests.forked_cli`): its exit status and the heavy
+    modules it loaded. The entry point's own imports are the one-line answers' test, in
+    processes of their own."""
+    lines = [_help(c) for c in EVERY_COMMAND] + [_refused(c) for c in REFUSED]
+    result = subprocess.run(
+        [sys.executable, "-m", "tests.forked_cli"],
+        input=json.dumps(lines),
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(REPO_ROOT)},
+        cwd=REPO_ROOT,
+        check=False,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    answer = json.loads(result.stdout)
+    assert answer["base"] == []  # so what each run loaded on top is all it loaded
+    return {" ".join(args): run for args, run in zip(lines, answer["runs"], strict=True)}
+
+
 @pytest.mark.parametrize("command", EVERY_COMMAND)
-def test_a_commands_help_loads_none_of_the_heavy_libraries(command: str) -> None:
-    assert heavy_imports(*command.split(), "--help") == set()
+def test_a_commands_help_loads_none_of_the_heavy_libraries(
+    command: str, forked: dict[str, Any]
+) -> None:
+    assert forked[" ".join(_help(command))] == {"status": 0, "heavy": []}
 
 
 @pytest.mark.parametrize("command", REFUSED)
 def test_a_refused_argument_loads_none_of_the_heavy_libraries(
-    command: str, run_cli: CliRunner
+    command: str, forked: dict[str, Any]
 ) -> None:
-    args = (*command.split(), *REFUSED[command])
-    assert run_cli(*args).returncode == 2  # refused, as a usage error
-    assert heavy_imports(*args) == set()
+    # Refused as a usage error, before anything heavy is loaded.
+    assert forked[" ".join(_refused(command))] == {"status": 2, "heavy": []}
 
 
 def test_version_prints_the_package_version(run_cli: CliRunner) -> None:
