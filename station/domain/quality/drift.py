@@ -25,7 +25,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from station.domain.arrays import FloatArray
 from station.domain.sensor import AXES
@@ -74,6 +73,10 @@ def find_drift(
     values = (np.asarray(offsets, dtype=np.float64), np.asarray(sensitivities, dtype=np.float64))
     if len(values[0]) < window:
         return None
+    # Imported here: scipy.stats takes about as long to import as the rest of the
+    # station's loop, and a station that starts with fewer units than a window needs none.
+    from scipy import stats
+
     order = np.arange(window, dtype=np.float64)
     tests = 2 * len(AXES)
     best: Drift | None = None
