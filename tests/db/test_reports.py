@@ -9,13 +9,14 @@ from zoneinfo import ZoneInfo
 import pytest
 from sqlalchemy.orm import Session
 
-from db import RunQuery, RunRepository
+from db import Database, RunQuery, RunRepository
 from db.reports import eol_report
 from db.rollups import rebuild
 from station.domain.limits import load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import profile_bounds
 from station.report.render import render, rows
+from tests.databases import rolled_back
 from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history
 from tests.db.records import T0, make_record
 
@@ -23,13 +24,23 @@ RUN_SECONDS = 95.0  # every test run lasts 95 s
 POSES_PER_RUN = 7
 
 
-def _report(session: Session, **filters: str) -> EolReport:
+def _report(session: Session) -> EolReport:
+    """The report over the range of the line history, stored in ``session``."""
     insert_line_history(session)
-    return eol_report(session, ReportFilter(since=SINCE, until=UNTIL, **filters))
+    return eol_report(session, ReportFilter(since=SINCE, until=UNTIL))
 
 
-def test_counts_and_yields_over_the_range(session: Session) -> None:
-    s = _report(session).summary
+@pytest.fixture(scope="module")
+def line_report(migrated_database: Database) -> EolReport:
+    """:func:`_report` once per backend, in a transaction rolled back after it: the tests
+    that only read the report share it (it is frozen) instead of storing the history and
+    computing it again each."""
+    with rolled_back(migrated_database) as session:
+        return _report(session)
+
+
+def test_counts_and_yields_over_the_range(line_report: EolReport) -> None:
+    s = line_report.summary
     # 7 runs in range (U9's is after it); passes: U1, U4, U2's retest.
     assert (s.runs, s.runs_passed) == (7, 3)
     assert s.report_yield == pytest.approx(3 / 7)
@@ -47,8 +58,8 @@ def test_counts_and_yields_over_the_range(session: Session) -> None:
     assert s.cycle_time_per_pose_s == pytest.approx(RUN_SECONDS / POSES_PER_RUN)
 
 
-def test_per_station_summaries_rank_units_within_the_station(session: Session) -> None:
-    stations = {s.station_id: s.summary for s in _report(session).stations}
+def test_per_station_summaries_rank_units_within_the_station(line_report: EolReport) -> None:
+    stations = {s.station_id: s.summary for s in line_report.stations}
     assert sorted(stations) == ["st1", "st2"]
     st1, st2 = stations["st1"], stations["st2"]
     # st1: U1 pass; U2 fail then pass; U5 fail.
@@ -58,8 +69,8 @@ def test_per_station_summaries_rank_units_within_the_station(session: Session) -
     assert st2.first_pass_yield == pytest.approx(1 / 2)
 
 
-def test_pareto_counts_each_failing_runs_first_reason(session: Session) -> None:
-    pareto = _report(session).pareto
+def test_pareto_counts_each_failing_runs_first_reason(line_report: EolReport) -> None:
+    pareto = line_report.pareto
     assert [(e.code, e.count) for e in pareto] == [
         ("offset", 2),
         ("sensitivity", 1),
@@ -73,11 +84,10 @@ def test_pareto_counts_each_failing_runs_first_reason(session: Session) -> None:
     assert "link_loss" not in {e.code for e in pareto}
 
 
-def test_capability_of_the_offsets_against_the_datasheet_bounds(session: Session) -> None:
-    report = _report(session)
+def test_capability_of_the_offsets_against_the_datasheet_bounds(line_report: EolReport) -> None:
     lower, upper = profile_bounds(load_profile())["offset"]
     assert (lower, upper) == (1841.0, 2255.0)
-    params = {p.name: p for p in report.parameters}
+    params = {p.name: p for p in line_report.parameters}
     xs = [run[5] for run in IN_RANGE]
     mean, std = statistics.mean(xs), statistics.stdev(xs)
     x = params["offset_x"]
@@ -96,8 +106,8 @@ def test_capability_of_the_offsets_against_the_datasheet_bounds(session: Session
     )
 
 
-def test_histograms_count_every_value_once_in_its_bin(session: Session) -> None:
-    params = {p.name: p for p in _report(session).parameters}
+def test_histograms_count_every_value_once_in_its_bin(line_report: EolReport) -> None:
+    params = {p.name: p for p in line_report.parameters}
     y = params["offset_y"].histogram
     assert sum(y.counts) == 7
     assert y.start == pytest.approx(1841 - 414 / 4)
@@ -110,8 +120,8 @@ def test_histograms_count_every_value_once_in_its_bin(session: Session) -> None:
     assert (bias.count, bias.mean) == (7, pytest.approx(0.01))
 
 
-def test_control_chart_limits_from_moving_ranges_in_time_order(session: Session) -> None:
-    chart = next(c for c in _report(session).control_charts if c.name == "offset_x")
+def test_control_chart_limits_from_moving_ranges_in_time_order(line_report: EolReport) -> None:
+    chart = next(c for c in line_report.control_charts if c.name == "offset_x")
     xs = [run[5] for run in IN_RANGE]
     mr_bar = statistics.mean(abs(b - a) for a, b in itertools.pairwise(xs))
     assert chart.count == 7
@@ -134,10 +144,9 @@ def test_control_chart_points_are_the_latest_runs(session: Session) -> None:
     assert chart.count == 7
 
 
-def test_units_list_gives_each_units_final_disposition(session: Session) -> None:
-    report = _report(session)
-    units = {u.serial: u for u in report.units}
-    assert report.units_total == 5
+def test_units_list_gives_each_units_final_disposition(line_report: EolReport) -> None:
+    units = {u.serial: u for u in line_report.units}
+    assert line_report.units_total == 5
     assert {s: u.disposition for s, u in units.items()} == {
         "U1": "ship",
         "U2": "ship",
@@ -147,7 +156,7 @@ def test_units_list_gives_each_units_final_disposition(session: Session) -> None
     }
     assert (units["U3"].runs, units["U3"].failure) == (2, "verification_error")
     # newest first run first (the order the yield table counts them in)
-    assert [u.serial for u in report.units][:2] == ["U5", "U4"]
+    assert [u.serial for u in line_report.units][:2] == ["U5", "U4"]
 
 
 def test_filters_by_station_and_operator(session: Session) -> None:
