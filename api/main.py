@@ -114,6 +114,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)
+    app.state.export_page_size = settings.export_page_size
     app.state.alert_loop = None
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     install_error_handlers(app)

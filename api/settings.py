@@ -5,6 +5,7 @@ from typing import Annotated
 
 from pydantic import AfterValidator, Field
 
+from db.run_export import PAGE
 from db.settings import DatabaseSettings
 from station.domain.errors import InputError
 from station.domain.quality.alerts import AlertRules, parse_alert_rules
@@ -60,6 +61,11 @@ class ApiSettings(DatabaseSettings):
     (``CALSTATION_ALERTS_FILE``): the plant's alert rules and webhook (TOML,
     :mod:`station.domain.quality.alerts`), checked every ``alert_interval_s``; a post the
     webhook refused is tried again after ``alert_retry_s`` (:mod:`api.alerts`).
+    ``export_page_size`` (``CALSTATION_EXPORT_PAGE_SIZE``): runs per page of the CSV
+    export (``GET /api/v1/reports/eol/runs.csv``), each page one statement under
+    ``read_timeout_s`` and held in memory while it is written: a slow or distant
+    database wants smaller pages (each read well inside the time-out, the answer's
+    first page sooner), a fast one larger (fewer round trips).
     """
 
     read_requires_key: bool = False
@@ -75,6 +81,7 @@ class ApiSettings(DatabaseSettings):
     alerts_file: Annotated[Path | None, AfterValidator(_alert_rules)] = None
     alert_interval_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
+    export_page_size: Annotated[int, Field(ge=1)] = PAGE
 
     def alert_rules(self) -> AlertRules | None:
         """The plant's alert rules (``alerts_file``), if it has any."""

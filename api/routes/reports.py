@@ -111,6 +111,15 @@ async def get_plant_shifts(request: Request) -> tuple[time, ...]:
 PlantShiftsDep = Annotated[tuple[time, ...], Depends(get_plant_shifts)]
 
 
+async def get_export_page_size(request: Request) -> int:
+    """Runs per page of the CSV export (``CALSTATION_EXPORT_PAGE_SIZE``)."""
+    size: int = request.app.state.export_page_size
+    return size
+
+
+ExportPageSizeDep = Annotated[int, Depends(get_export_page_size)]
+
+
 @dataclass(frozen=True)
 class Period:
     """The report's filter as the query gives it: ``from``/``to`` without a zone are the
@@ -450,7 +459,7 @@ def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str
     },
 )
 async def get_run_export(
-    period: PeriodDep, zone: PlantZoneDep, readers: ReadersDep
+    period: PeriodDep, zone: PlantZoneDep, readers: ReadersDep, page_size: ExportPageSizeDep
 ) -> StreamingResponse:
     """Every run of a period (and station, operator, lot) as CSV, streamed a page of runs
     at a time: any length of period, in constant memory.
@@ -459,9 +468,9 @@ async def get_run_export(
     is a 503 with its problem body, not a 200 that stops."""
     report_filter = period.filter(zone)
     async with readers() as session:
-        first = await session.run_sync(run_page, report_filter, None)
+        first = await session.run_sync(run_page, report_filter, None, page_size)
     return StreamingResponse(
-        _csv_pages(readers, report_filter, first),
+        _csv_pages(readers, report_filter, page_size, first),
         media_type=MEDIA_TYPES["csv"],
         headers={"Content-Disposition": 'attachment; filename="runs.csv"'},
     )
@@ -470,10 +479,12 @@ async def get_run_export(
 async def _csv_pages(
     readers: async_sessionmaker[AsyncSession],
     filter: ReportFilter,
+    page_size: int,
     first: tuple[list[Sequence[Any]], tuple[datetime, int] | None],
 ) -> AsyncIterator[str]:
-    """The export's CSV text, a page of runs at a time: the ``first`` page read, then the
-    pages after it (on a session of its own: it outlives the request's handler).
+    """The export's CSV text, a page of ``page_size`` runs at a time: the ``first`` page
+    read, then the pages after it (on a session of its own: it outlives the request's
+    handler).
 
     A read that fails raises on: the server ends the answer without its last chunk, so
     the client sees an incomplete transfer rather than a short CSV."""
@@ -489,7 +500,7 @@ async def _csv_pages(
         while after is not None:
             buffer.seek(0)
             buffer.truncate()
-            rows, after = await session.run_sync(run_page, filter, after)
+            rows, after = await session.run_sync(run_page, filter, after, page_size)
             writer.writerows(_csv_row(row) for row in rows)
             yield buffer.getvalue()
 

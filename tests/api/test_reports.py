@@ -3,6 +3,7 @@
 import csv
 import io
 import re
+from collections.abc import Iterator
 from datetime import timedelta
 from importlib import resources
 
@@ -12,11 +13,10 @@ from sqlalchemy import make_url, select, text, update
 
 from db import Database, RunRepository, make_engine, open_database
 from db.models import Run, RunFailure
-from db.run_export import PAGE
 from tests.databases import postgres_server_url
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
-from tests.servers import serving
+from tests.servers import HUNG_SERVER_S, serving
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
 
@@ -220,40 +220,63 @@ def test_the_units_list_shows_held_units_a_page_at_a_time(client: httpx.Client) 
     assert 'rel="prev"' in html
 
 
-def _store_runs(database: Database, count: int) -> None:
-    """``count`` runs of units ``U0``, ``U1``, … started 10 s apart from :data:`T0`."""
+def _store_runs(database: Database, count: int, apart: timedelta = timedelta(seconds=10)) -> None:
+    """``count`` runs of units ``U0``, ``U1``, … started ``apart`` from :data:`T0` on."""
     with database.session() as session:
         repository = RunRepository(session)
         for i in range(count):
-            repository.submit(
-                make_record(serial=f"U{i}", started_at=T0 + timedelta(seconds=10 * i))
-            )
+            repository.submit(make_record(serial=f"U{i}", started_at=T0 + i * apart))
         session.commit()
 
 
-def test_the_runs_of_a_period_stream_as_csv(client: httpx.Client, database: Database) -> None:
-    _store_runs(database, 1005)  # more than a page of the export
+#: Runs per page of the export on :func:`export_client`'s server: a few, so that a few
+#: runs stored through the submit path (each derives its roll-ups) make several pages.
+EXPORT_PAGE = 5
+
+
+@pytest.fixture(scope="module")
+def export_url(migrated_database: Database, database_url: str) -> Iterator[str]:
+    """A server on the session's database whose CSV export reads :data:`EXPORT_PAGE`
+    runs a page (``CALSTATION_EXPORT_PAGE_SIZE``)."""
+    with serving(database_url, export_page_size=str(EXPORT_PAGE)) as base:
+        yield base
+
+
+@pytest.fixture
+def export_client(database: Database, export_url: str) -> Iterator[httpx.Client]:
+    """An HTTP client of :func:`export_url`'s server; the database is emptied after the
+    test. Its time-out only ends a hung server, as :func:`tests.servers.client`'s."""
+    with httpx.Client(base_url=export_url, timeout=HUNG_SERVER_S) as client:
+        yield client
+
+
+def test_the_runs_of_a_period_stream_as_csv(
+    export_client: httpx.Client, database: Database
+) -> None:
+    stored = 15
+    _store_runs(database, stored, apart=timedelta(minutes=10))
     params = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z", "station": ""}
-    with client.stream("GET", "/api/v1/reports/eol/runs.csv", params=params) as answer:
+    with export_client.stream("GET", "/api/v1/reports/eol/runs.csv", params=params) as answer:
         assert answer.status_code == 200
         assert answer.headers["content-type"].startswith("text/csv")
         assert "content-length" not in answer.headers  # streamed
         text = "".join(answer.iter_text())
     rows = list(csv.DictReader(io.StringIO(text)))
-    in_range = [i for i in range(1005) if 10 * i < 2 * 3600]
+    in_range = [i for i in range(stored) if 10 * i < 2 * 60]
+    assert 2 * EXPORT_PAGE < len(in_range) < stored  # several pages, and runs after the period
     assert [r["serial"] for r in rows] == [f"U{i}" for i in in_range]
     assert rows[0]["started_at"].startswith("2026-11-02T08:00:00")
     assert rows[0]["offset_x"] != ""
-    schema = client.get("/openapi.json").json()["paths"]["/api/v1/reports/eol/runs.csv"]
+    schema = export_client.get("/openapi.json").json()["paths"]["/api/v1/reports/eol/runs.csv"]
     assert "text/csv; charset=utf-8" in schema["get"]["responses"]["200"]["content"]
 
 
 def test_an_export_whose_second_page_cannot_be_read_ends_as_an_incomplete_transfer(
-    client: httpx.Client, database: Database
+    export_client: httpx.Client, database: Database
 ) -> None:
     """The first page is read before the answer starts; a later one that fails cuts the
     answer short of its last chunk, so no client takes the rows it got for the period."""
-    _store_runs(database, PAGE + 1)
+    _store_runs(database, EXPORT_PAGE + 1)
     unreadable = (
         "12000-01-01 00:00:00+00"  # past what the driver reads back
         if database.engine.dialect.name == "postgresql"
@@ -261,15 +284,17 @@ def test_an_export_whose_second_page_cannot_be_read_ends_as_an_incomplete_transf
     )
     with database.engine.begin() as connection:
         connection.execute(
-            update(Run).where(Run.serial == f"U{PAGE}").values(finished_at=text(f"'{unreadable}'"))
+            update(Run)
+            .where(Run.serial == f"U{EXPORT_PAGE}")
+            .values(finished_at=text(f"'{unreadable}'"))
         )
     received: list[str] = []
-    with client.stream("GET", "/api/v1/reports/eol/runs.csv") as answer:
+    with export_client.stream("GET", "/api/v1/reports/eol/runs.csv") as answer:
         assert answer.status_code == 200
         with pytest.raises(httpx.RemoteProtocolError, match="incomplete chunked read"):
             received.extend(answer.iter_text())
     rows = list(csv.DictReader(io.StringIO("".join(received))))
-    assert [r["serial"] for r in rows] == [f"U{i}" for i in range(PAGE)]
+    assert [r["serial"] for r in rows] == [f"U{i}" for i in range(EXPORT_PAGE)]
 
 
 @pytest.mark.postgres

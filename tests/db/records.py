@@ -27,6 +27,9 @@ POSE_NAMES = ("z_up", "z_down", "x_up", "x_down", "y_up", "y_down", "verify")
 #: The shipped limits profile, as a station sends it: the reference and the profile.
 LIMITS = load_profile().ref.model_dump(mode="json")
 T0 = datetime(2026, 11, 2, 8, 0, tzinfo=UTC)
+#: How long each run of :func:`make_record` lasts, and its poses.
+RUN_SECONDS = 95.0
+POSES_PER_RUN = len(POSE_NAMES)
 
 
 def make_record(
@@ -88,7 +91,7 @@ def make_record(
         "station_id": station_id,
         "operator_id": "op-17",
         "started_at": started_at.isoformat(),
-        "finished_at": (started_at + timedelta(seconds=95)).isoformat(),
+        "finished_at": (started_at + timedelta(seconds=RUN_SECONDS)).isoformat(),
         "software_version": "1.4.0",
         "algorithm": "autocal-ls",
         "model": "six",
