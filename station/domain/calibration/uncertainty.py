@@ -153,6 +153,16 @@ _CHI2_QUANTILE: Final = 0.95
 _COVERAGE_PROBABILITY: Final = 0.95
 
 
+def chi2_quantile(df: int) -> float:
+    """The χ² quantile :data:`_CHI2_QUANTILE` with ``df`` degrees of freedom, as
+    ``scipy.stats.chi2.ppf`` computes it: twice the inverse of the regularised lower
+    incomplete gamma function at ``df/2``. From ``scipy.special``, which the solve has
+    loaded already: ``scipy.stats`` took ~1 s of the station's first unit to import."""
+    from scipy.special import gammaincinv
+
+    return 2.0 * float(gammaincinv(df / 2, _CHI2_QUANTILE))
+
+
 @dataclass(frozen=True, eq=False)
 class AccelerometerBudget:
     """Standard uncertainties of the accelerometer's coefficients, term by term.
@@ -337,9 +347,7 @@ def accelerometer_budget(
         if drift is not None:  # what the drift leaves in the residuals, (I − J·J⁺)·D·κ
             left = drift - jac @ (pinv @ drift)
             expected += float(np.sum(left**2 @ kappa_variance)) / (rows - p)
-        from scipy.stats import chi2
-
-        if sigma2 > expected * chi2.ppf(_CHI2_QUANTILE, rows - p) / (rows - p):
+        if sigma2 > expected * chi2_quantile(rows - p) / (rows - p):
             cov = np.linalg.pinv((jac / scale).T @ (jac / scale)) / np.outer(scale, scale)
             covariance = covariance + cov * (sigma2 - expected)
             terms["fit"] = np.sqrt(
@@ -424,9 +432,7 @@ def gyro_bias_uncertainty(
         quant = np.sqrt(np.sum(per_pose_q, axis=0)) / p
     type_a = within
     if p > 1:
-        from scipy.stats import chi2
-
-        beyond = scatter**2 > within**2 * chi2.ppf(_CHI2_QUANTILE, p - 1) / (p - 1)
+        beyond = scatter**2 > within**2 * chi2_quantile(p - 1) / (p - 1)
         type_a = np.where(beyond, scatter, within)
     u = np.sqrt(type_a**2 + quant**2)
     return np.asarray(k * u, dtype=np.float64)

@@ -6,6 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
+from scipy.stats import chi2
 
 from station.domain.calibration import solve, solve_paper_batch
 from station.domain.calibration.uncertainty import (
@@ -18,6 +19,7 @@ from station.domain.calibration.uncertainty import (
     _refit,
     _unpack,
     accelerometer_budget,
+    chi2_quantile,
     gyro_bias_uncertainty,
 )
 from station.simulator.recording import six_directions, spread_directions
@@ -443,3 +445,11 @@ def test_a_singular_refit_keeps_the_least_norm_steps(unit, turn, bound, seed) ->
     fast = _refit(theta, poses)
     assert_same_refit(theta, fast, plain_refit(theta, poses))
     np.testing.assert_array_equal(fast[:, [2, 5]], np.broadcast_to(theta[[2, 5]], (16, 2)))
+
+
+@given(df=st.integers(1, 100_000))
+def test_the_chi2_quantile_is_scipy_stats_to_the_bit(df: int) -> None:
+    """The residuals' and the gyro scatter's χ² test read their quantile from
+    ``scipy.special`` (``scipy.stats`` is slow to import): the very float of
+    ``scipy.stats.chi2.ppf``."""
+    assert chi2_quantile(df) == float(chi2.ppf(0.95, df))
