@@ -39,6 +39,9 @@ goal = 0.75
 """
 #: A safety net for a wait, not a speed requirement.
 PATIENCE_S = 60.0
+#: The servers' alert interval, and how often a test asks how far their loops got:
+#: asking more often than a loop goes round only costs both processes CPU.
+ALERT_INTERVAL_S = 0.2
 
 
 class Receiver:
@@ -134,23 +137,27 @@ def _rounds_later(base: str, rounds: int = 2, processes: int = 1) -> dict[str, A
     more than when first asked (each process counts its own)."""
     first: dict[int, int] = {}
     done: set[int] = set()
-    for _ in range(int(PATIENCE_S / 0.05)):
+    for _ in range(int(PATIENCE_S / ALERT_INTERVAL_S)):
         now = _alerts(base)
         process, done_rounds = now["process"], now["rounds"]
         if done_rounds >= first.setdefault(process, done_rounds) + rounds:
             done.add(process)
         if len(done) >= processes:
             return now
-        threading.Event().wait(0.05)
+        threading.Event().wait(ALERT_INTERVAL_S)
     raise AssertionError("the alert loop did no rounds")
 
 
 def _settings(tmp_path: Path, receiver: Receiver, rules_text: str = RULES) -> dict[str, str]:
     """The server's settings for ``rules_text`` (``{webhook}``: the receiver's address),
-    checked every 0.2 s, a refused post tried again after 0.5 s."""
+    checked every :data:`ALERT_INTERVAL_S`, a refused post tried again after 0.5 s."""
     rules = tmp_path / "alerts.toml"
     rules.write_text(rules_text.format(webhook=receiver.url))
-    return {"alerts_file": str(rules), "alert_interval_s": "0.2", "alert_retry_s": "0.5"}
+    return {
+        "alerts_file": str(rules),
+        "alert_interval_s": str(ALERT_INTERVAL_S),
+        "alert_retry_s": "0.5",
+    }
 
 
 # Three server starts (two of two processes), each waited for up to HUNG_SERVER_S: the
@@ -186,10 +193,10 @@ def test_an_alert_is_posted_once_per_event_and_again_after_it_clears_and_fires(
         )  # every page's navigation
         assert len(receiver.received) == 1
         _store(database, "pppp", 20)  # the last 4 all passed: the alert clears
-        for _ in range(int(PATIENCE_S / 0.05)):
+        for _ in range(int(PATIENCE_S / ALERT_INTERVAL_S)):
             if _alerts(base)["alerts"][0]["cleared_at"] is not None:
                 break
-            threading.Event().wait(0.05)
+            threading.Event().wait(ALERT_INTERVAL_S)
         assert _alerts(base)["alerts"][0]["cleared_at"] is not None
         _store(database, "ff", 30)  # below again: a new event
         receiver.wait("second alert", lambda: len(receiver.received) >= 2)
