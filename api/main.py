@@ -81,6 +81,8 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # 574-578 lookups/s against 683-690/s (back to back twice, on a loaded machine).
         gc.collect()
         gc.freeze()
+        # On from here (calstation serve holds the collector off while the server loads).
+        gc.enable()
         alerting = None
         if rules is not None:
             loop = AlertLoop(
