@@ -25,9 +25,12 @@ from db import (
 )
 from db.timeouts import is_statement_timeout
 from station.domain.errors import InputError
-from station.report.html import problem_page
 
 log = logging.getLogger(__name__)
+
+# A refused page request is answered by station.report.html, imported when the first one
+# is: Jinja and the templates' helpers take ~0.1 s to load, which a server's start (the
+# API, /healthz) does not need (docs/benchmarks.md, "Server start").
 
 #: How many field errors the one-line ``detail`` names.
 DETAIL_FIELDS = 3
@@ -103,10 +106,12 @@ async def _validation_error(request: Request, exc: Exception) -> Response:
     assert isinstance(exc, RequestValidationError)
     page = _page(request)
     if page is not None:
+        from station.report import html
+
         title, with_form = page
         form = {name: request.query_params.get(name, "") for name in FORM_FIELDS}
         return HTMLResponse(
-            problem_page(title, one_line(exc.errors()), form if with_form else None),
+            html.problem_page(title, one_line(exc.errors()), form if with_form else None),
             status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
         )
     return _validation_answer(exc.errors())

@@ -12,15 +12,18 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from db.derived import rewrite_if_stale
 from db.engine import DatabaseUnavailableError, make_engine
-from db.migrate import current_revision, migrate_schema, require_current
+from db.migrate import current_revision, is_at_head, migrate_schema, require_current
 from db.settings import DatabaseSettings
 
 
 def upgrade(engine: Engine, revision: str = "head") -> None:
     """Migrate the database up to ``revision`` in one transaction; at the head, derived
-    data of an older definition is rewritten too."""
+    data of an older definition is rewritten too. A database already at the head, as
+    every opening but the first finds it, is left to the derived data's check: Alembic
+    would find nothing to do, and is not imported for it."""
     with engine.begin() as connection:
-        migrate_schema(connection, revision)
+        if not (revision == "head" and is_at_head(connection)):
+            migrate_schema(connection, revision)
         if revision == "head":
             rewrite_if_stale(connection)
 

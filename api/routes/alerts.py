@@ -13,7 +13,10 @@ from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from db.alerts import recent_alerts
 from station.domain.quality.alerts import Alert
-from station.report.html import alerts_page
+
+# The page is rendered by station.report.html, imported when it is first asked for: Jinja
+# and the templates' helpers take ~0.1 s to load, which a server's start (the API,
+# /healthz) does not need (docs/benchmarks.md, "Server start").
 
 router = APIRouter(tags=["pages"])
 
@@ -57,4 +60,6 @@ async def get_alerts(
     if format == "json":
         answer = AlertsAnswer(alerts=alerts, rounds=rounds, process=os.getpid())
         return Response(answer.model_dump_json(), media_type="application/json")
-    return HTMLResponse(alerts_page(alerts, zone, rounds))
+    from station.report import html
+
+    return HTMLResponse(html.alerts_page(alerts, zone, rounds))

@@ -46,12 +46,6 @@ from station.domain.quality.shifts import shift_start
 from station.domain.quality.split import SplitBy, SplitReport
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.html import (
-    certificate_page,
-    dashboard_page,
-    failing_runs_page,
-    split_page,
-)
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
 from station.report.render import MEDIA_TYPES, render
 
@@ -72,6 +66,10 @@ UNAVAILABLE: dict[int | str, dict[str, Any]] = {
         "for a report, a shorter range is quicker",
     }
 }
+# The pages are rendered by station.report.html, imported where a page is first rendered
+# (the report processes render all but the certificate): Jinja and the templates' helpers
+# take ~0.1 s to load, which a server's start (the API, /healthz) does not need
+# (docs/benchmarks.md, "Server start").
 router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 
@@ -407,7 +405,9 @@ def split_body(
     report = split_report(repository.session, filter, parameter, by)
     if format == "json":
         return report.model_dump_json(indent=2) + "\n"
-    return split_page(report, zone, SPLIT_PARAMETERS)
+    from station.report import html
+
+    return html.split_page(report, zone, SPLIT_PARAMETERS)
 
 
 #: The most runs the page of a Pareto bar lists (the latest).
@@ -441,8 +441,10 @@ async def get_failing_runs(
 
 def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str, zone: str) -> str:
     """The page of a Pareto bar's runs (in a report process: :mod:`api.report_pool`)."""
+    from station.report import html
+
     runs = ReportQueries(repository.session, filter).failing_runs(code, FAILING_RUNS)
-    return failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
+    return html.failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
 
 
 @router.get(
@@ -560,7 +562,9 @@ async def get_certificate(
     since = shift_start(run.started_at, zone, shifts)
     golden = await repository.run(lambda r: r.latest_golden(run.station_id, since, run.started_at))
     reviews = await repository.run(lambda r: r.reviews(serial)) if run.verdict == "fail" else []
-    page = certificate_page(
+    from station.report import html
+
+    page = html.certificate_page(
         run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden, reviews, language
     )
     return HTMLResponse(page)
@@ -585,5 +589,7 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
         zone=zone,
         open_holds=False,  # the dashboard lists the units on hold itself
     )
+    from station.report import html
+
     held = held_units(repository.session, DASHBOARD_HELD)
-    return dashboard_page(report, held.units, held.total, events=EVENTS_PATH)
+    return html.dashboard_page(report, held.units, held.total, events=EVENTS_PATH)

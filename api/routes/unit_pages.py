@@ -26,13 +26,10 @@ from db import ReviewRefusedError, RunRepository
 from db.station_health import CYCLE_RUNS, station_health
 from station.domain.quality.station_health import StationHealth
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
-from station.report.html import (
-    found_page,
-    not_found_page,
-    problem_page,
-    station_page,
-    unit_page,
-)
+
+# The pages are rendered by station.report.html, imported by each page's handler when it
+# first runs: Jinja and the templates' helpers take ~0.1 s to load, which a server's start
+# (the API, /healthz) does not need (docs/benchmarks.md, "Server start").
 
 router = APIRouter(tags=["pages"])
 
@@ -52,14 +49,16 @@ async def get_unit_page(
     serial: SerialPath, repository: ReaderDep, zone: PlantZoneDep
 ) -> HTMLResponse:
     """The unit's page: its state, every run, links to each record and to its certificate."""
+    from station.report import html
+
     runs = await repository.run(lambda r: r.history(serial))
     if not runs:
         return HTMLResponse(
-            not_found_page(f"No calibration run of serial {serial} is stored."),
+            html.not_found_page(f"No calibration run of serial {serial} is stored."),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     reviews = await repository.run(lambda r: r.reviews(serial))
-    return HTMLResponse(unit_page(runs, datetime.now(UTC), zone, reviews))
+    return HTMLResponse(html.unit_page(runs, datetime.now(UTC), zone, reviews))
 
 
 StationPath = Annotated[
@@ -90,15 +89,17 @@ async def get_station_page(
     """A station's health page: its latest golden-unit checks over time against their
     baseline, drift warnings, the cycle time distribution of its latest runs and the
     software and limits versions in use."""
+    from station.report import html
+
     health = await repository.run(station_health_of, station_id)
     if health is None:
         return HTMLResponse(
-            not_found_page(f"No calibration run of station {station_id} is stored."),
+            html.not_found_page(f"No calibration run of station {station_id} is stored."),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     if format == "json":
         return Response(health.model_dump_json(indent=2), media_type="application/json")
-    return HTMLResponse(station_page(health, zone, CYCLE_RUNS))
+    return HTMLResponse(html.station_page(health, zone, CYCLE_RUNS))
 
 
 def station_health_of(repository: RunRepository, station_id: str) -> StationHealth | None:
@@ -152,7 +153,9 @@ async def post_unit_review(
 
 
 def _refused(status_code: int, message: str) -> HTMLResponse:
-    return HTMLResponse(problem_page(REVIEW_TITLE, message), status_code=status_code)
+    from station.report import html
+
+    return HTMLResponse(html.problem_page(REVIEW_TITLE, message), status_code=status_code)
 
 
 #: The most serials a search lists (type more of the serial for fewer).
@@ -192,13 +195,15 @@ SearchQuery = Annotated[
 async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
     """The search box of every page: the unit of this serial number (its page), or the
     units whose serial begins so."""
+    from station.report import html
+
     found = await repository.run(lambda r: r.serials(serial, FOUND_SERIALS + 1))
     if serial in found or len(found) == 1:
         exact = serial if serial in found else found[0]
         return RedirectResponse(f"/units/{exact}", status_code=status.HTTP_303_SEE_OTHER)
     if not found:
         return HTMLResponse(
-            problem_page(SEARCH_TITLE, f"No unit's serial number begins with {serial}."),
+            html.problem_page(SEARCH_TITLE, f"No unit's serial number begins with {serial}."),
             status_code=status.HTTP_404_NOT_FOUND,
         )
-    return HTMLResponse(found_page(serial, found[:FOUND_SERIALS], len(found) > FOUND_SERIALS))
+    return HTMLResponse(html.found_page(serial, found[:FOUND_SERIALS], len(found) > FOUND_SERIALS))

@@ -12,7 +12,6 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from station.domain.quality.figures import EolReport, TrendFigures
-from station.report import html
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
     CAPABILITY_HEADER,
@@ -327,13 +326,22 @@ def _what_if_text(report: EolReport) -> list[str]:
     ]
 
 
+def as_html(report: EolReport) -> str:
+    """The report as a page. station.report.html is imported for it only: Jinja and the
+    page helpers take ~0.1 s to load, which the other formats, and the results server's
+    start, do not need (docs/benchmarks.md, "Server start")."""
+    from station.report import html
+
+    return html.report_page(report)
+
+
 def render(report: EolReport, format: str) -> str:
     """The report in ``format`` (one of :data:`station.domain.constants.FORMATS`)."""
     renderers: dict[str, Any] = {
         "text": as_text,
         "csv": as_csv,
         "json": as_json,
-        "html": html.report_page,
+        "html": as_html,
     }
     text: str = renderers[format](report)
     return text

@@ -24,11 +24,12 @@ from db import (
     SchemaOutOfDateError,
     make_engine,
     open_database,
+    upgrade_database,
 )
 from db.base import Base
 from db.database import upgrade
 from db.mapping import failure_rows, run_row
-from db.migrate import alembic_config, current_revision, head_revision
+from db.migrate import HEAD_REVISION, alembic_config, current_revision, head_revision
 from db.models import ReportCounts, Run, RunFacts, RunFailure, StoredLimitsProfile, Unit
 from db.reports import eol_report
 from db.repository import KeyHolder, key_sha256
@@ -82,6 +83,10 @@ def test_downgrade_to_base_and_back_up(empty_url: str) -> None:
     upgrade(engine)
     assert current_revision(engine) == head_revision()
     engine.dispose()
+
+
+def test_the_head_opening_checks_against_is_the_one_the_packaged_scripts_reach() -> None:
+    assert head_revision() == HEAD_REVISION
 
 
 def test_the_embedded_database_is_created_and_migrated_on_first_use(tmp_path: Path) -> None:
@@ -267,6 +272,21 @@ def test_a_database_written_by_a_newer_calstation_is_refused_in_one_line(
     engine.dispose()
     with pytest.raises(SchemaOutOfDateError, match=r"ffffffffffff.*newer calstation"):
         open_database(url)
+
+
+@pytest.mark.parametrize(
+    "empty_url", [pytest.param("postgresql", marks=pytest.mark.postgres)], indirect=True
+)
+def test_a_server_database_with_the_head_and_another_revision_is_refused(
+    empty_url: str,
+) -> None:
+    upgrade_database(empty_url)
+    engine = make_engine(empty_url)
+    with engine.begin() as connection:
+        connection.execute(text("INSERT INTO alembic_version (version_num) VALUES ('0019')"))
+    engine.dispose()
+    with pytest.raises(SchemaOutOfDateError, match=rf"revision 0019, {HEAD_REVISION}, this"):
+        open_database(empty_url)
 
 
 def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str) -> None:
