@@ -81,7 +81,9 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # 574-578 lookups/s against 683-690/s (back to back twice, on a loaded machine).
         # Frozen without a collection first: one full pass costs ~0.2 s of the start, and
         # the garbage it would free (some 1,300 objects of the imports: functions, tuples,
-        # classes made on the way) holds no resource; kept, it weighs a few hundred KB.
+        # classes made on the way) holds no resource; kept, it weighs a few hundred KB. A
+        # first start that migrates the embedded database keeps the migrations' leftovers
+        # too, for that process's life (their engine is disposed: memory, not files).
         gc.freeze()
         # On from here (calstation serve holds the collector off while the server loads).
         gc.enable()

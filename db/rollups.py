@@ -708,18 +708,26 @@ def _latest_stored_bounds(connection: Connection) -> FamilyBounds | None:
 def lock_submissions(connection: Connection) -> None:
     """Serialise submissions: each one derives facts from every run stored before it.
 
-    PostgreSQL: a transaction-scoped advisory lock keyed by the runs' schema as well, since
-    advisory locks span the whole database: installations that share one database in
-    schemas of their own do not wait for each other's submissions. SQLite serialises
-    writers already.
+    PostgreSQL: a transaction-scoped advisory lock. Advisory locks span the whole
+    database, so the key names the schema of the ``runs`` table the statements reach
+    (resolved as they resolve it): installations that share one database in schemas of
+    their own do not wait for each other's submissions. In the ``public`` schema the key
+    is the one earlier versions took, so servers of both versions on one database, as
+    while a plant upgrades them one by one, still take turns. SQLite serialises writers
+    already.
     """
     if connection.dialect.name == "postgresql":
-        connection.execute(
-            text(
-                "SELECT pg_advisory_xact_lock("
-                "hashtext('calstation.runs'), hashtext(current_schema()))"
-            )
-        )
+        connection.execute(text(_LOCK_SUBMISSIONS))
+
+
+#: The lock of :func:`lock_submissions`: one row, the schema of ``runs`` keying it.
+_LOCK_SUBMISSIONS = """
+SELECT pg_advisory_xact_lock(hashtext(
+    CASE n.nspname WHEN 'public' THEN 'calstation.runs' ELSE n.nspname || '.calstation.runs' END
+))
+FROM pg_class AS c JOIN pg_namespace AS n ON n.oid = c.relnamespace
+WHERE c.oid = 'runs'::regclass
+"""
 
 
 @dataclass(frozen=True)

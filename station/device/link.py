@@ -191,18 +191,23 @@ class PutterLink(Protocol):
             frames = self._parser.feed(data)
         raw: list[bytes] = []
         calibrated: list[bytes] = []
+        replies: list[Frame] = []
         for frame in frames:  # one pass: a station's pass parses some 125 frames a slot
             if frame.type == FrameType.SAMPLE:
                 raw.append(frame.payload)
             elif frame.type == FrameType.CAL_SAMPLE:
                 calibrated.append(frame.payload)
             else:
-                self.replies.put(frame)
+                replies.append(frame)
         if raw:
             block = decode_samples(raw)
             self._store(block[(block.accel <= self.adc_max).all(axis=1)], self.raw)
         if calibrated:
             self._store(decode_samples(calibrated, calibrated=True), self.calibrated)
+        # Replies last: whoever a reply wakes (stop_stream, say) finds every sample read
+        # with it stored already.
+        for frame in replies:
+            self.replies.put(frame)
         self._measure_rate(len(data))
 
     def _measure_rate(self, size: int) -> None:

@@ -4,6 +4,7 @@ on the port, on a stream faster than the putter's own, and when nobody read for 
 
 import contextlib
 import os
+import queue
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -16,7 +17,7 @@ from station.device import DeviceDisconnectedError, ProtocolError, PutterDriver
 from station.device import link as link_module
 from station.device.link import PutterLink
 from station.device.ports import open_port
-from station.device.protocol import FrameType, encode_frame, encode_sample
+from station.device.protocol import Frame, FrameType, encode_frame, encode_sample
 from station.simulator import VirtualPutter
 
 #: Longer than any test may take: a reader resting this long has not been woken.
@@ -250,3 +251,21 @@ def test_a_bug_in_the_stations_read_fails_the_link_and_wakes_the_reader(
     assert isinstance(link.failure, ProtocolError)
     reader.join(JOIN_S)
     assert not reader.is_alive()
+
+
+def test_a_reply_is_handed_over_once_the_samples_read_before_it_are_stored() -> None:
+    """Whoever a reply wakes (``stop_stream`` waiting for its ACK, then a drain or a
+    restart of the sequence) finds every sample that came before it stored already."""
+    link = PutterLink("test", 1024)
+    stored_at_reply: list[int] = []
+
+    class Witness(queue.Queue[Frame]):
+        def put(self, item: Frame, block: bool = True, timeout: float | None = None) -> None:
+            stored_at_reply.append(link.stats().samples)
+            super().put(item, block, timeout)
+
+    link.replies = Witness()
+    with link.attended():  # a command waits for its reply: the reader does not rest
+        link.data_received(samples(0, 5) + encode_frame(FrameType.ACK, b"\x00"))
+    assert stored_at_reply == [5]
+    assert link.replies.get_nowait().type == FrameType.ACK
