@@ -28,9 +28,6 @@ from station.domain.errors import InputError
 
 log = logging.getLogger(__name__)
 
-# A refused page request is answered by station.report.html, imported when the first one
-# is: Jinja and the templates' helpers take ~0.1 s to load, which a server's start (the
-# API, /healthz) does not need (docs/benchmarks.md, "Server start").
 
 #: How many field errors the one-line ``detail`` names.
 DETAIL_FIELDS = 3

@@ -38,15 +38,6 @@ def alembic_config(connection: Connection | None = None) -> "Config":
     return config
 
 
-def head_revision() -> str:
-    """The newest revision the packaged migrations reach, as Alembic reads the scripts."""
-    from alembic.script import ScriptDirectory
-
-    head = ScriptDirectory.from_config(alembic_config()).get_current_head()
-    assert head is not None, "the packaged migrations have no head"
-    return head
-
-
 def current_revision(engine: Engine) -> str | None:
     """The revision the database is at (``None`` for an empty database), read by Alembic."""
     from alembic.runtime.migration import MigrationContext

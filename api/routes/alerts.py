@@ -14,10 +14,6 @@ from api.routes.reports import PlantZoneDep
 from db.alerts import recent_alerts
 from station.domain.quality.alerts import Alert
 
-# The page is rendered by station.report.html, imported when it is first asked for: Jinja
-# and the templates' helpers take ~0.1 s to load, which a server's start (the API,
-# /healthz) does not need (docs/benchmarks.md, "Server start").
-
 router = APIRouter(tags=["pages"])
 
 #: Alerts the page lists (the latest).

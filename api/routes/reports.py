@@ -66,10 +66,6 @@ UNAVAILABLE: dict[int | str, dict[str, Any]] = {
         "for a report, a shorter range is quicker",
     }
 }
-# The pages are rendered by station.report.html, imported where a page is first rendered
-# (the report processes render all but the certificate): Jinja and the templates' helpers
-# take ~0.1 s to load, which a server's start (the API, /healthz) does not need
-# (docs/benchmarks.md, "Server start").
 router = APIRouter(tags=["reports"], responses=UNAVAILABLE)
 dashboard = APIRouter(tags=["reports"])
 

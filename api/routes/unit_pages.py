@@ -27,10 +27,6 @@ from db.station_health import CYCLE_RUNS, station_health
 from station.domain.quality.station_health import StationHealth
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
 
-# The pages are rendered by station.report.html, imported by each page's handler when it
-# first runs: Jinja and the templates' helpers take ~0.1 s to load, which a server's start
-# (the API, /healthz) does not need (docs/benchmarks.md, "Server start").
-
 router = APIRouter(tags=["pages"])
 
 _HTML = {"text/html": {"schema": {"type": "string"}}}

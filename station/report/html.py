@@ -4,6 +4,11 @@ Jinja2 templates (``templates/``) with autoescaping; charts are inline SVG from
 :mod:`station.report.svg`, styles inline: a page needs no other file, no network (the
 dashboard's one inline script asks its own server for updates). Every serial on every
 page links to the unit's page through one macro, ``serial_link`` in ``base.html``.
+
+Whoever renders a page imports this module where it renders one, never at its own
+import: Jinja and the templates' helpers take ~0.1 s to load, which the results
+server's start (its API, ``/healthz``) and the report's other formats do not need
+(``tests/api/test_start.py``; docs/benchmarks.md, "Server start").
 """
 
 from collections.abc import Callable, Sequence

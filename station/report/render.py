@@ -327,9 +327,7 @@ def _what_if_text(report: EolReport) -> list[str]:
 
 
 def as_html(report: EolReport) -> str:
-    """The report as a page. station.report.html is imported for it only: Jinja and the
-    page helpers take ~0.1 s to load, which the other formats, and the results server's
-    start, do not need (docs/benchmarks.md, "Server start")."""
+    """The report as a page (:mod:`station.report.html`, imported for it only)."""
     from station.report import html
 
     return html.report_page(report)

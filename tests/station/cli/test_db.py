@@ -9,7 +9,7 @@ import pytest
 from sqlalchemy import delete, func, select
 
 from db import Database, RunRepository
-from db.migrate import head_revision
+from db.migrate import HEAD_REVISION
 from db.models import ReportCounts, StationKey
 from db.repository import KeyHolder
 from tests.conftest import CliRunner
@@ -29,7 +29,7 @@ def test_db_upgrade_creates_the_embedded_database_in_the_data_dir(
     result = call_cli("db", "upgrade", env=_env(CALSTATION_DATA_DIR=str(tmp_path / "data")))
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "data" / "calstation.sqlite3").is_file()
-    assert f"at schema revision {head_revision()}" in result.stdout
+    assert f"at schema revision {HEAD_REVISION}" in result.stdout
 
 
 def test_db_upgrade_is_idempotent_on_a_migrated_database(
@@ -37,7 +37,7 @@ def test_db_upgrade_is_idempotent_on_a_migrated_database(
 ) -> None:
     result = call_cli("db", "upgrade", "--database-url", database_url, env=_env())
     assert result.returncode == 0, result.stderr
-    assert f"at schema revision {head_revision()}" in result.stdout
+    assert f"at schema revision {HEAD_REVISION}" in result.stdout
 
 
 def test_an_unreachable_database_is_one_line_and_exit_2(call_cli: CliRunner) -> None:
