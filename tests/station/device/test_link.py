@@ -112,9 +112,13 @@ def test_a_stream_faster_than_the_putters_own_is_read_unpaced() -> None:
     chunk = samples(0, 50)
     assert len(chunk) < link_module.PACE_BELOW_BYTES  # small: a paced reader rests after it
     with link.attended():  # keeps the reader from resting while the rate is measured
-        start = time.monotonic()
-        # 1 kB a call: far above 30 kB/s however busy the machine, unless calls took 33 ms.
-        while time.monotonic() - start <= link_module.RATE_WINDOW_S:
+        # 1 kB a call, back to back, until the link has judged a window of them unpaced
+        # (above 30 kB/s unless the calls took 33 ms each: a window the machine stalled
+        # is judged again on the next). Waiting on the link's own judgement, not on the
+        # clock: a worker descheduled for the whole window judged nothing before.
+        deadline = time.monotonic() + JOIN_S
+        while link._paced:
+            assert time.monotonic() < deadline, "the stream was never judged unpaced"
             link.data_received(chunk)
     reader = feed_in_thread(link, chunk)
     reader.join(JOIN_S)
