@@ -1,7 +1,8 @@
 """``GET /metrics``: the server's Prometheus metrics, scraped from a real server and parsed.
 
-Each test of a server starts one of its own, so its counts start at zero and every count
-asserted here is what the test itself caused.
+Every count asserted here is what the test itself caused: on the worker's shared server
+(whose tests run one at a time) the difference of a scrape before and one after; where
+the server's own shape is the subject (two worker processes), on a server of its own.
 """
 
 import uuid
@@ -42,33 +43,40 @@ def _key(database: Database, station: str) -> dict[str, str]:
         return {"Authorization": f"Bearer {RunRepository(session).create_key(station)}"}
 
 
+def counted(
+    before: dict[tuple[str, tuple[tuple[str, str], ...]], float],
+    after: dict[tuple[str, tuple[tuple[str, str], ...]], float],
+) -> dict[tuple[str, tuple[tuple[str, str], ...]], float]:
+    """What each counter counted between two scrapes (the series that moved)."""
+    return {key: v - before.get(key, 0.0) for key, v in after.items() if v != before.get(key)}
+
+
 def test_stored_runs_refusals_and_requests_are_counted(
-    database: Database, database_url: str
+    database: Database, client: httpx.Client
 ) -> None:
     st1, st2 = _key(database, "line1-st1"), _key(database, "line1-st2")
-    with serving(database_url) as base, httpx.Client(base_url=base, timeout=30) as client:
-        passed = make_record(serial="PT-100001")
-        failed = make_record(serial="PT-100002", verdict="fail", coefficients=None, quality=None)
-        other = make_record(serial="PT-100003", station_id="line1-st2", part_number="DIXX-D16")
-        for record, key in ((passed, st1), (failed, st1), (other, st2)):
-            body = record.model_dump(mode="json")
-            assert client.post(RUNS, json=body, headers=key).status_code == 201
-        # A retry is answered 200 and not counted again.
-        assert (
-            client.post(RUNS, json=passed.model_dump(mode="json"), headers=st1).status_code == 200
-        )
-        # Refused: another station's run, no key, a clash, a body that is not a run.
-        assert client.post(RUNS, json=other.model_dump(mode="json"), headers=st1).status_code == 403
-        assert client.post(RUNS, json=passed.model_dump(mode="json")).status_code == 401
-        clash = passed.model_copy(update={"operator_id": "op-9"}).model_dump(mode="json")
-        assert client.post(RUNS, json=clash, headers=st1).status_code == 409
-        assert client.post(RUNS, json={"serial": "x"}, headers=st1).status_code == 422
-        run_id = uuid.uuid4()
-        assert client.get(f"{RUNS}/{run_id}").status_code == 404
-        assert client.get(f"{RUNS}/{passed.run_id}").status_code == 200
-        assert client.get("/no/such/page").status_code == 404
+    before = scrape(client)
+    passed = make_record(serial="PT-100001")
+    failed = make_record(serial="PT-100002", verdict="fail", coefficients=None, quality=None)
+    other = make_record(serial="PT-100003", station_id="line1-st2", part_number="DIXX-D16")
+    for record, key in ((passed, st1), (failed, st1), (other, st2)):
+        body = record.model_dump(mode="json")
+        assert client.post(RUNS, json=body, headers=key).status_code == 201
+    # A retry is answered 200 and not counted again.
+    assert client.post(RUNS, json=passed.model_dump(mode="json"), headers=st1).status_code == 200
+    # Refused: another station's run, no key, a clash, a body that is not a run.
+    assert client.post(RUNS, json=other.model_dump(mode="json"), headers=st1).status_code == 403
+    assert client.post(RUNS, json=passed.model_dump(mode="json")).status_code == 401
+    clash = passed.model_copy(update={"operator_id": "op-9"}).model_dump(mode="json")
+    assert client.post(RUNS, json=clash, headers=st1).status_code == 409
+    assert client.post(RUNS, json={"serial": "x"}, headers=st1).status_code == 422
+    run_id = uuid.uuid4()
+    assert client.get(f"{RUNS}/{run_id}").status_code == 404
+    assert client.get(f"{RUNS}/{passed.run_id}").status_code == 200
+    assert client.get("/no/such/page").status_code == 404
 
-        samples = scrape(client)
+    after = scrape(client)
+    samples = counted(before, after)
 
     stored = "calstation_runs_stored_total"
     a12, d16 = {"part_number": "DIXX-A12"}, {"part_number": "DIXX-D16"}
@@ -104,8 +112,8 @@ def test_stored_runs_refusals_and_requests_are_counted(
 
     latency = "calstation_http_request_duration_seconds_count"
     assert value(samples, latency, route=RUNS, method="POST") == 8
-    assert value(samples, "calstation_report_pool_processes") == 1
-    assert value(samples, "calstation_report_pool_busy") == 0
+    assert value(after, "calstation_report_pool_processes") == 1
+    assert value(after, "calstation_report_pool_busy") == 0
 
 
 def test_a_report_counts_in_the_report_pool_and_every_worker_is_added_up(
