@@ -1,5 +1,7 @@
 """Fixtures shared by the whole suite."""
 
+import fcntl
+import json
 import os
 import subprocess
 import sys
@@ -54,6 +56,23 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
 
 
 CliRunner = Callable[..., subprocess.CompletedProcess[str]]
+
+
+def computed_once(
+    tmp_path_factory: pytest.TempPathFactory, name: str, compute: Callable[[], object]
+) -> object:
+    """``compute()`` (a JSON value) once a run: the first xdist worker to ask computes it
+    under a lock, the others read what it wrote (pytest-xdist's pattern for set-up that
+    must run once, with ``fcntl``'s lock). Without workers, computed here."""
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        return compute()
+    shared = tmp_path_factory.getbasetemp().parent  # the run's, shared by its workers
+    path = shared / f"{name}.json"
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not path.exists():
+            path.write_text(json.dumps(compute()))
+        return json.loads(path.read_text())
 
 
 @pytest.fixture

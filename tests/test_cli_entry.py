@@ -13,7 +13,7 @@ import typer
 
 from station import __version__
 from station.cli.main import COMMANDS
-from tests.conftest import REPO_ROOT, CliRunner
+from tests.conftest import REPO_ROOT, CliRunner, computed_once
 from tests.forked_cli import HEAVY
 
 
@@ -97,11 +97,17 @@ def _refused(command: str) -> list[str]:
 
 
 @pytest.fixture(scope="module")
-def forked() -> dict[str, Any]:
+def forked(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """Every command's help and refused argument, each in a process forked from one that
     loaded only the entry point (:mod:`tests.forked_cli`): its exit status and the heavy
-    modules it loaded. The entry point's own imports are the one-line answers' test, in
-    processes of their own."""
+    modules it loaded; run once for all workers. The entry point's own imports are the
+    one-line answers' test, in processes of their own."""
+    found = computed_once(tmp_path_factory, "forked-cli", _run_forked)
+    assert isinstance(found, dict)
+    return found
+
+
+def _run_forked() -> dict[str, Any]:
     lines = [_help(c) for c in EVERY_COMMAND] + [_refused(c) for c in REFUSED]
     result = subprocess.run(
         [sys.executable, "-m", "tests.forked_cli"],
