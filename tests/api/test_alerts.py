@@ -28,6 +28,8 @@ from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 from tests.servers import HUNG_SERVER_S, STATION, serving
 
+pytestmark = pytest.mark.long
+
 #: The rule: first-pass yield of st1's last 4 units below 75 %.
 RULES = """
 webhook = "{webhook}"
@@ -355,13 +357,14 @@ def test_a_station_outbox_backlog_fires_once_and_clears_when_it_drains(
 
 
 def test_a_run_with_a_bad_outbox_header_or_none_is_stored_without_a_report(
-    database: Database, database_url: str, station_key: str
+    database: Database, live_url: str, station_key: str
 ) -> None:
     # The header is monitoring: a good run is never refused for it (the station would
     # set the run aside as refused).
     bad = make_record(serial="PT000001", station_id=STATION)
     older = make_record(serial="PT000002", station_id=STATION)
-    with serving(database_url) as base, HttpStore(base, station_key) as store:
+    base = live_url  # no alert rules: the worker's shared server
+    with HttpStore(base, station_key) as store:
         for header in ("queued=-1; oldest_s=0; set_aside=0", "queued=1; oldest_s=5; set_aside=0;"):
             answer = httpx.post(
                 f"{base}/api/v1/runs",
