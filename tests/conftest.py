@@ -47,13 +47,6 @@ def examples(nightly: int) -> int:
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Tests marked ``long`` first, in their order: xdist hands tests out in this order,
-    so the longest start while every worker is busy and the run never ends waiting on
-    one of them alone (the soak shift collected last kept one core busy 30 s at the end)."""
-    items.sort(key=lambda item: item.get_closest_marker("long") is None)
-
-
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
     """``-n auto``: two workers a core. A third of a worker's time goes to waiting on
     the real processes its tests start (servers, stations, Chromium, the simulators at

@@ -17,7 +17,6 @@ import pytest
 from tests.conftest import REPO_ROOT
 
 
-@pytest.mark.long
 @pytest.mark.timeout(400)
 def test_a_shift_of_every_fault_loses_nothing_and_stores_every_run_once() -> None:
     args = ["--days", "1", "--shifts", "1", "--stations", "1", "--slots", "2", "--units", "2"]

@@ -28,8 +28,6 @@ from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 from tests.servers import HUNG_SERVER_S, STATION, serving
 
-pytestmark = pytest.mark.long
-
 #: The rule: first-pass yield of st1's last 4 units below 75 %.
 RULES = """
 webhook = "{webhook}"

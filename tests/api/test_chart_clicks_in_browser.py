@@ -13,8 +13,6 @@ from tests.browser import Browser
 from tests.db.records import T0, make_record
 from tests.servers import HUNG_SERVER_S, serving
 
-pytestmark = pytest.mark.long
-
 #: Units per day at the station the report is narrowed to, over three days.
 PER_DAY, DAYS = 3, 3
 

@@ -51,7 +51,6 @@ def _assert_stored_once(
 @on_postgresql
 # At night 2,000 serialised submissions: a minute on a busy 2-core machine, more under
 # heavy load. The timeout is only a safety net against a hang, never a speed assertion.
-@pytest.mark.long
 @pytest.mark.timeout(900)
 def test_concurrent_submitters_store_every_run_exactly_once(database: Database) -> None:
     batches = [

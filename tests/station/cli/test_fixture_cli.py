@@ -117,7 +117,6 @@ def test_ports_on_the_command_line_replace_the_files_and_one_slot_is_the_one_por
 # One slot and two as two tests, each of two whole units at 10×: neither waits for the
 # other (each is one of the suite's longest), and each keeps its own check.
 @pytest.mark.parametrize("slots", [1, 2], ids=["one-port", "two-slots"])
-@pytest.mark.long
 @pytest.mark.timeout(900)
 def test_a_stored_g_sensitivity_fit_is_applied_in_every_slot_as_on_one_port(
     run_cli: CliRunner, call_cli: CliRunner, tmp_path: Path, slots: int

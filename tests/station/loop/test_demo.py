@@ -13,8 +13,6 @@ from station.domain.products import load_products
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 
-pytestmark = pytest.mark.long
-
 
 def test_demo_json_estimates_land_on_the_truth(run_cli: CliRunner, tmp_path: Path) -> None:
     env_dir = tmp_path / "data"

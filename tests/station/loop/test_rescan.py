@@ -17,7 +17,7 @@ from tests.conftest import REPO_ROOT, CliRunner
 from tests.station.loop.test_station_terminal import SPEED, Station
 from tests.terminal import hang_guard
 
-pytestmark = [hang_guard, pytest.mark.long]
+pytestmark = hang_guard
 
 
 @pytest.fixture

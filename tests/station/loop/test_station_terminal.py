@@ -35,7 +35,7 @@ SPEED = 20.0
 POSE_ASKED = re.compile(r"pose (\d) of (\d): ([a-z ]+?)\x1b")
 VERDICT = re.compile(r"(PASS|FAIL)  unit (PT\d{6})")
 
-pytestmark = [hang_guard, pytest.mark.long]
+pytestmark = hang_guard
 
 
 class Station:

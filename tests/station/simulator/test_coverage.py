@@ -8,8 +8,6 @@ import pytest
 
 from station.simulator.coverage import GROUPS, simulate_coverage, simulate_gyro_matrix_coverage
 
-pytestmark = pytest.mark.long
-
 
 @pytest.mark.parametrize(("profile", "tilt_deg"), [("kxm52-production", 5.0), ("whole-unit", 0.0)])
 def test_the_truth_lies_within_the_expanded_uncertainty_95_percent_of_the_time(
