@@ -47,7 +47,7 @@ def examples(nightly: int) -> int:
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
-def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+def pytest_xdist_auto_num_workers() -> int:
     """``-n auto``: two workers a core. A third of a worker's time goes to waiting on
     the real processes its tests start (servers, stations, Chromium, the simulators at
     their clock): with one worker a core the cores idled that third (2 cores: 522 s of
