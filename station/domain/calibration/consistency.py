@@ -12,6 +12,10 @@ h_i the pose's leverage; :mod:`station.domain.calibration.solution`) is compared
   left out in turn and the fit redone; when exactly one such refit is consistent, that
   pose is excluded and named. When two are (the spare equations cannot tell them apart),
   or none is (more than one bad pose), the set is refused, naming what the evidence allows.
+* A pose far enough off can stop the fit over all poses from finding an ellipsoid, or
+  land it on a degenerate one, though the poses' geometry is sound: then no residuals
+  rank the candidates, and with N − p ≥ 2 every pose is left out in turn, judged as
+  above. When none explains the set, the fit's own refusal stands.
 * N − p = 1 (seven poses, six-parameter model): the residuals all lie along one vector,
   every pose's |t_i| is the same, and leaving out any one pose fits the other six exactly.
   The evidence cannot name the pose, so the set is refused without blaming one (the largest
@@ -31,13 +35,19 @@ catches 2-count ones.
 """
 
 import math
+from collections.abc import Iterable
 from contextlib import suppress
 from dataclasses import replace
 
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.calibration.errors import CalibrationError, InconsistentPosesError
+from station.domain.calibration.errors import (
+    CalibrationError,
+    IllConditionedError,
+    InconsistentPosesError,
+    NonPositiveScaleError,
+)
 from station.domain.calibration.geometry import GeometryLimits, refuse_beyond_datasheet
 from station.domain.calibration.least_squares import UNKNOWNS, solve_least_squares
 from station.domain.calibration.model import Model, apply
@@ -95,7 +105,19 @@ def solve_consistent(
         CalibrationError: any refusal of :func:`solve_least_squares`.
     """
     limit = residual_limit(max_residual_counts, limits.sensor)
-    fit = solve_least_squares(poses, model, limits, max_condition)
+    try:
+        fit = solve_least_squares(poses, model, limits, max_condition)
+    except (IllConditionedError, NonPositiveScaleError) as failed:
+        # A degenerate geometry is refused as such by the fit; here the geometry is
+        # sound, or leaving out a pose fits no better and the refusal stands.
+        judge = check_model(model, len(poses))
+        if len(poses) - UNKNOWNS[judge] < EXCLUSION_MIN_SPARE:
+            raise
+        every = range(len(poses))
+        found = _explained(poses, every, model, judge, limits, max_condition, limit)
+        if found is not None:
+            return found
+        raise failed
     judge, judged = model, fit
     if (wider := check_model(model, len(poses))) != model:
         # Poses on the axes only, say, have no cross-axis terms to fit: judge with six.
@@ -119,8 +141,36 @@ def solve_consistent(
             f"others{hint}: take the poses again, or add {EXCLUSION_MIN_SPARE - spare} or more"
         )
     order = np.argsort(-t, kind="stable")[:CANDIDATES]
+    candidates = [int(c) for c in order if t[c] > limit]
+    found = _explained(poses, candidates, model, judge, limits, max_condition, limit, head)
+    if found is not None:
+        return found
+    raise InconsistentPosesError(
+        f"{head} at pose {int(order[0]) + 1}, and leaving out any one pose does not explain "
+        f"it: more than one pose is off (moved or mislabelled){hint}; take them again"
+    )
+
+
+def _explained(
+    poses: FloatArray,
+    candidates: Iterable[int],
+    model: Model,
+    judge: Model,
+    limits: GeometryLimits,
+    max_condition: float,
+    limit: float,
+    head: str = "poses inconsistent: the fit over all poses failed",
+) -> Solution | None:
+    """The fit without the one candidate whose leaving out leaves the rest consistent
+    (judged with ``judge``, fitted with ``model``); None when no candidate does.
+
+    Raises:
+        InconsistentPosesError: more than one candidate does (named), or a pose no sensor
+            could read is among the poses.
+    """
+    n = len(poses)
     explained: list[tuple[int, Solution]] = []
-    for candidate in (int(c) for c in order if t[c] > limit):
+    for candidate in candidates:
         keep = np.arange(n) != candidate
         try:
             refit = solve_least_squares(poses[keep], judge, limits, max_condition)
@@ -144,10 +194,7 @@ def solve_consistent(
             f"{head}: {named} is off, and the poses cannot tell which: take them again",
             candidates=tuple(c for c, _ in explained),
         )
-    raise InconsistentPosesError(
-        f"{head} at pose {int(order[0]) + 1}, and leaving out any one pose does not explain "
-        f"it: more than one pose is off (moved or mislabelled){hint}; take them again"
-    )
+    return None
 
 
 def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solution:

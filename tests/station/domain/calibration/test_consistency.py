@@ -16,6 +16,7 @@ from station.domain.calibration import (
     CalibrationError,
     InconsistentPosesError,
     solve,
+    solve_least_squares,
 )
 from station.domain.calibration.residual import leverage
 from station.simulator.recording import pose_means, spread_directions
@@ -71,8 +72,6 @@ def test_seven_poses_with_an_outlier_are_refused_without_blaming_a_pose() -> Non
 
 
 def _studentised(poses: np.ndarray) -> np.ndarray:
-    from station.domain.calibration import solve_least_squares
-
     q = solve_least_squares(poses, "six").quality
     assert q.studentised_counts is not None
     return q.studentised_counts
@@ -85,6 +84,31 @@ def test_a_pose_clipped_at_4094_is_refused_as_at_the_rail() -> None:
     with pytest.raises(CalibrationError, match=r"pose 8: y is at the ADC rail") as info:
         solve(poses)
     assert info.value.pose == 7
+
+
+def test_a_pose_that_lands_the_whole_fit_on_a_degenerate_solution_is_excluded() -> None:
+    # Found by the property below: eight well-spread poses (condition 7 at the nominal
+    # sensor) of a unit at offsets 1841 and 779 counts/g, the first 144 counts short of
+    # gravity. The fit over all eight lands on a degenerate solution (condition 4.6e8);
+    # it was refused as "pose geometry degenerate", blaming a sound geometry.
+    poses = np.array(
+        [
+            [2230.32, 1591.64, 2276.49],
+            [2343.13, 1394.78, 1446.53],
+            [1459.5, 1378.75, 2338.49],
+            [2484.65, 2263.9, 1957.64],
+            [1507.14, 1445.67, 1258.55],
+            [1505.8, 2239.42, 2420.42],
+            [1985.08, 2344.82, 1264.53],
+            [1145.68, 2121.86, 1630.36],
+        ]
+    )
+    with pytest.raises(CalibrationError, match="degenerate"):
+        solve_least_squares(poses, "six")
+    solution = solve(poses, "six")
+    assert solution.excluded == (0,)
+    np.testing.assert_allclose(solution.calibration.offset, 1841.0, atol=0.5)
+    np.testing.assert_allclose(np.diag(solution.calibration.matrix), 1 / 779.0, rtol=1e-3)
 
 
 @settings(max_examples=60, deadline=None)
