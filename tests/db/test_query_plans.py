@@ -69,9 +69,13 @@ def test_reads_use_their_index(session: Session, connection: Connection, read: s
     repository = RunRepository(session)
     for i in range(3):
         repository.submit(make_record(verdict="fail", started_at=T0 + timedelta(minutes=i)))
-    for i in range(30):  # other units that passed: a failure is the rarer verdict
+    for i in range(30):  # other units, passed at other stations: each read's filter is selective
         repository.submit(
-            make_record(serial=f"PT-1{i:05d}", started_at=T0 + timedelta(minutes=3 + i))
+            make_record(
+                serial=f"PT-1{i:05d}",
+                station_id=f"line1-st{2 + i % 3}",
+                started_at=T0 + timedelta(minutes=3 + i),
+            )
         )
     session.flush()
     query, index = READS[read]
