@@ -25,12 +25,22 @@ _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def quaternion_product(p: FloatArray, q: FloatArray) -> FloatArray:
-    """Hamilton products ``p·q`` of scalar-last quaternions (..., 4): rotation q, then p."""
-    pv, pw = p[..., :3], p[..., 3:]
-    qv, qw = q[..., :3], q[..., 3:]
-    vector = pw * qv + qw * pv + np.cross(pv, qv)
-    scalar = pw * qw - np.sum(pv * qv, axis=-1, keepdims=True)
-    return np.concatenate([vector, scalar], axis=-1)
+    """Hamilton products ``p·q`` of scalar-last quaternions (..., 4): rotation q, then p.
+
+    Written out by component, ``(p_w q_v + q_w p_v + p_v × q_v, p_w q_w − p_v·q_v)``: half
+    the time of ``np.cross`` and a sum (the gyro matrix's fit calls it some 700 times a
+    unit, most of the fit's time)."""
+    px, py, pz, pw = np.moveaxis(p, -1, 0)
+    qx, qy, qz, qw = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            pw * qx + qw * px + py * qz - pz * qy,
+            pw * qy + qw * py + pz * qx - px * qz,
+            pw * qz + qw * pz + px * qy - py * qx,
+            pw * qw - px * qx - py * qy - pz * qz,
+        ],
+        axis=-1,
+    )
 
 
 def ordered_products(quaternions: FloatArray) -> FloatArray:
