@@ -137,7 +137,7 @@ def solve_least_squares(
     try:
         theta0 = param.pack(*algebraic_start(v, model))
     except NonPositiveScaleError:
-        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p, limits.sensor)
         raise
     # Imported here: scipy.optimize takes ~0.5 s to load, and the server imports this
@@ -146,13 +146,13 @@ def solve_least_squares(
 
     fit = least_squares(param.residual, theta0, jac=param.jacobian, method="lm", args=(v,))
     if fit.status <= 0 or not np.all(np.isfinite(fit.x)):
-        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_degenerate_geometry(v, model, max_condition)
         raise CalibrationError(
             f"the least-squares fit did not converge though the geometry is sound: {fit.message}"
         )
     offset_n, c_n = param.unpack(fit.x)
     if np.any(np.diag(c_n) <= 0):
-        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p, limits.sensor)
         raise NonPositiveScaleError(
             "the fit found a non-positive scale though the geometry is sound: a pose was not still"
@@ -163,7 +163,7 @@ def solve_least_squares(
     if not condition <= max_condition:
         # Sound poses whose fit lands on a degenerate solution: a pose no sensor could
         # read is the likelier cause, as for a non-positive scale.
-        _refuse_degenerate_geometry(v, model, max_condition)
+        refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p, limits.sensor)
         raise _degenerate(condition, model, max_condition)
 
@@ -196,7 +196,7 @@ def _degenerate(condition: float, model: Model, max_condition: float) -> IllCond
     )
 
 
-def _refuse_degenerate_geometry(v: FloatArray, model: Model, max_condition: float) -> None:
+def refuse_degenerate_geometry(v: FloatArray, model: Model, max_condition: float) -> None:
     """Raise the geometry refusal when the poses v (N, 3) cannot determine the model even
     for the nominal sensor: a failed fit on such poses is their geometry's fault."""
     c = np.eye(3)
