@@ -28,7 +28,6 @@ from station.domain.errors import InputError
 
 log = logging.getLogger(__name__)
 
-
 #: How many field errors the one-line ``detail`` names.
 DETAIL_FIELDS = 3
 

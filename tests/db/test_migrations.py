@@ -269,15 +269,20 @@ def test_no_revision_imports_project_code() -> None:
         assert imported & PROJECT_PACKAGES == set(), path.name
 
 
+def _execute(url: str, sql: str) -> None:
+    """Run one statement on the database at ``url``, committed."""
+    engine = make_engine(url)
+    with engine.begin() as connection:
+        connection.execute(text(sql))
+    engine.dispose()
+
+
 def test_a_database_written_by_a_newer_calstation_is_refused_in_one_line(
     tmp_path: Path,
 ) -> None:
     url = f"sqlite:///{tmp_path / 'newer.sqlite3'}"
     open_database(url).dispose()
-    engine = make_engine(url)
-    with engine.begin() as connection:
-        connection.execute(text("UPDATE alembic_version SET version_num = 'ffffffffffff'"))
-    engine.dispose()
+    _execute(url, "UPDATE alembic_version SET version_num = 'ffffffffffff'")
     with pytest.raises(SchemaOutOfDateError, match=r"ffffffffffff.*newer calstation"):
         open_database(url)
 
@@ -289,10 +294,7 @@ def test_a_server_database_with_the_head_and_another_revision_is_refused(
     empty_url: str,
 ) -> None:
     upgrade_database(empty_url)
-    engine = make_engine(empty_url)
-    with engine.begin() as connection:
-        connection.execute(text("INSERT INTO alembic_version (version_num) VALUES ('0019')"))
-    engine.dispose()
+    _execute(empty_url, "INSERT INTO alembic_version (version_num) VALUES ('0019')")
     with pytest.raises(SchemaOutOfDateError, match=rf"revision 0019, {HEAD_REVISION}, this"):
         open_database(empty_url)
 
