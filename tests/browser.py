@@ -19,11 +19,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
 from websockets.sync.client import ClientConnection, connect
 
 from tests.conftest import REPO_ROOT
+from tests.servers import local_get
 
 #: Screenshots land here (git-ignored), one PNG per page test.
 ARTIFACTS = REPO_ROOT / "artifacts"
@@ -217,7 +217,7 @@ def chromium_process(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[int
 def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
     """A Chromium of its own (:func:`chromium_process`), its first page."""
     with chromium_process(profile, flags) as port:
-        targets = httpx.get(f"http://127.0.0.1:{port}/json/list", timeout=10).json()
+        targets = local_get(f"http://127.0.0.1:{port}/json/list", timeout=10).json()
         page = next(t for t in targets if t["type"] == "page")
         with connect(page["webSocketDebuggerUrl"], max_size=None) as socket:
             yield Browser(socket)
@@ -227,7 +227,7 @@ def chromium(profile: Path, flags: tuple[str, ...] = ()) -> Iterator[Browser]:
 def fresh_page(port: int) -> Iterator[Browser]:
     """A new page of the Chromium at ``port``, in a browser context of its own (its own
     cookies, storage and cache, like a fresh profile), closed with its context after."""
-    version = httpx.get(f"http://127.0.0.1:{port}/json/version", timeout=10).json()
+    version = local_get(f"http://127.0.0.1:{port}/json/version", timeout=10).json()
     with connect(version["webSocketDebuggerUrl"], max_size=None) as socket:
         control = Browser(socket)
         context = control.call("Target.createBrowserContext")["browserContextId"]

@@ -2,12 +2,14 @@
 
 import os
 import socket
+import ssl
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import Any
 
 import httpx
 import pytest
@@ -16,6 +18,26 @@ from db import Database, RunRepository
 from tests.conftest import REPO_ROOT
 
 STATION = "line1-st1"
+#: Seconds after which a started server that never answered counts as hung.
+HUNG_SERVER_S = 300
+
+#: The TLS settings of the suite's HTTP clients, made once a process. httpx loads
+#: certifi's certificate store into every client it makes unless given a context: some
+#: 20–40 ms of CPU a client, which the polls of a starting server (every 50 ms) and of
+#: the alert loops paid on every call. The servers here speak plain HTTP anyway.
+_TLS = ssl.create_default_context()
+
+
+def local_client(base_url: str = "", *, timeout: float | None = None) -> httpx.Client:
+    """An HTTP client of a server the suite started; its time-out (default
+    :data:`HUNG_SERVER_S`) only ends a hung server."""
+    return httpx.Client(base_url=base_url, timeout=timeout or HUNG_SERVER_S, verify=_TLS)
+
+
+def local_get(url: str, **kwargs: Any) -> httpx.Response:
+    """``httpx.get`` of a server the suite started, as :func:`local_client`."""
+    kwargs.setdefault("timeout", HUNG_SERVER_S)
+    return httpx.get(url, verify=_TLS, **kwargs)
 
 
 @pytest.fixture
@@ -76,27 +98,24 @@ def server_process(
             # Not a speed check: a server that is still starting is waited for (a busy
             # two-core machine took 21 s), the bound only ends a server that hangs.
             deadline = time.monotonic() + HUNG_SERVER_S
-            while not _healthy(base):
-                if server.poll() is not None:
-                    log.seek(0)
-                    output = log.read().decode(errors="replace")
-                    pytest.fail(f"calstation serve exited {server.returncode}: {output}")
-                if time.monotonic() > deadline:
-                    pytest.fail(f"calstation serve hung: no /healthz in {HUNG_SERVER_S} s")
-                time.sleep(0.05)
+            with local_client(base, timeout=1) as probe:
+                while not _healthy(probe):
+                    if server.poll() is not None:
+                        log.seek(0)
+                        output = log.read().decode(errors="replace")
+                        pytest.fail(f"calstation serve exited {server.returncode}: {output}")
+                    if time.monotonic() > deadline:
+                        pytest.fail(f"calstation serve hung: no /healthz in {HUNG_SERVER_S} s")
+                    time.sleep(0.05)
             yield base, server
         finally:
             server.terminate()
             server.wait(timeout=10)
 
 
-#: Seconds after which a started server that never answered counts as hung.
-HUNG_SERVER_S = 300
-
-
-def _healthy(base: str) -> bool:
+def _healthy(probe: httpx.Client) -> bool:
     try:
-        return httpx.get(f"{base}/healthz", timeout=1).status_code == 200
+        return probe.get("/healthz").status_code == 200
     except httpx.TransportError:
         return False
 
@@ -120,7 +139,7 @@ def client(database: Database, live_url: str) -> Iterator[httpx.Client]:
     """An HTTP client of the live server; the database is emptied after the test. Its
     time-out only ends a hung server (a busy two-core machine took over 10 s for a
     report): no test's verdict hangs on how loaded the machine is."""
-    with httpx.Client(base_url=live_url, timeout=HUNG_SERVER_S) as client:
+    with local_client(live_url) as client:
         yield client
 
 

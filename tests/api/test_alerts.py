@@ -26,7 +26,7 @@ from station.results.outbox import Outbox
 from station.results.storage import HttpStore
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
-from tests.servers import HUNG_SERVER_S, STATION, serving
+from tests.servers import HUNG_SERVER_S, STATION, local_get, serving
 
 #: The rule: first-pass yield of st1's last 4 units below 75 %.
 RULES = """
@@ -126,7 +126,7 @@ def _store_offsets(
 
 
 def _alerts(base: str) -> dict[str, Any]:
-    answer = httpx.get(f"{base}/alerts", params={"format": "json"}, timeout=HUNG_SERVER_S)
+    answer = local_get(f"{base}/alerts", params={"format": "json"})
     assert answer.status_code == 200, answer.text
     found: dict[str, Any] = answer.json()
     return found
@@ -184,13 +184,11 @@ def test_an_alert_is_posted_once_per_event_and_again_after_it_clears_and_fires(
     # Restarted, as two server processes: the event is stored and delivered already.
     with serving(database_url, workers=2, **settings) as base:
         _rounds_later(base, 2, processes=2)
-        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
+        page = local_get(f"{base}/alerts").text
         link = page.split('<a class="runs" href="', 1)[1].split('"', 1)[0]
-        report = httpx.get(f"{base}{link.replace('&amp;', '&')}", timeout=HUNG_SERVER_S).text
+        report = local_get(f"{base}{link.replace('&amp;', '&')}").text
         assert "PT000001" in report
-        assert (
-            'href="/alerts"' in httpx.get(f"{base}/", timeout=HUNG_SERVER_S).text
-        )  # every page's navigation
+        assert 'href="/alerts"' in local_get(f"{base}/").text  # every page's navigation
         assert len(receiver.received) == 1
         _store(database, "pppp", 20)  # the last 4 all passed: the alert clears
         for _ in range(int(PATIENCE_S / ALERT_INTERVAL_S)):
@@ -250,7 +248,7 @@ def test_a_silent_station_fires_once_and_clears_when_it_runs_again(
             )
         shown = _rounds_later(base)
         assert shown["alerts"][0]["cleared_at"] is not None
-        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
+        page = local_get(f"{base}/alerts").text
         assert 'last run: <a class="serial" href="/units/PT000001">' in page
     assert len(receiver.received) == 1
 
@@ -341,7 +339,7 @@ def test_a_station_outbox_backlog_fires_once_and_clears_when_it_drains(
         evidence = posted["evidence"]
         assert (evidence["queued"], evidence["set_aside"]) == (3, 1)
         assert evidence["oldest_s"] >= 2 * 3600
-        page = httpx.get(f"{base}/alerts", timeout=HUNG_SERVER_S).text
+        page = local_get(f"{base}/alerts").text
         assert '<span class="outbox">3 runs queued, the oldest waiting 2' in page
         assert "1 files set aside (reported " in page
         # The operator dealt with the refused file; the runs' retry comes: all stored.
@@ -375,7 +373,7 @@ def test_a_run_with_a_bad_outbox_header_or_none_is_stored_without_a_report(
                 timeout=HUNG_SERVER_S,
             )
             assert answer.status_code in (200, 201), answer.text
-        stored = httpx.get(f"{base}/api/v1/runs/{bad.run_id}", timeout=HUNG_SERVER_S)
+        stored = local_get(f"{base}/api/v1/runs/{bad.run_id}")
         assert stored.status_code == 200
         assert store.submit(older).created  # a station that does not report its outbox
     with database.session() as session:

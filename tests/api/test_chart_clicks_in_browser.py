@@ -11,7 +11,7 @@ import pytest
 from db import Database, RunRepository
 from tests.browser import Browser
 from tests.db.records import T0, make_record
-from tests.servers import HUNG_SERVER_S, serving
+from tests.servers import HUNG_SERVER_S, local_get, serving
 
 #: Units per day at the station the report is narrowed to, over three days.
 PER_DAY, DAYS = 3, 3
@@ -59,7 +59,7 @@ def test_a_control_chart_point_opens_its_unit(
 ) -> None:
     _history(database)
     with serving(database_url) as base:
-        report: dict[str, Any] = httpx.get(
+        report: dict[str, Any] = local_get(
             f"{base}/api/v1/reports/eol", params={"station": "st1"}, timeout=HUNG_SERVER_S
         ).json()
         points = report["control_charts"][0]["points"]

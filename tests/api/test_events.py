@@ -7,7 +7,7 @@ import httpx
 import pytest
 
 from db import Database
-from tests.servers import serving
+from tests.servers import local_client, serving
 
 EVENTS = "/api/v1/events"
 #: The cap the test server gets (``CALSTATION_EVENT_LISTENERS``).
@@ -25,7 +25,7 @@ def test_a_listener_past_the_cap_gets_503_with_retry_after_until_one_leaves(
 ) -> None:
     with (
         serving(database_url, event_listeners=str(CAP)) as base,
-        httpx.Client(base_url=base, timeout=30) as client,
+        local_client(base, timeout=30) as client,
     ):
         first, rest = ExitStack(), ExitStack()
         with first, rest:

@@ -15,7 +15,7 @@ from api.metrics import documented_paths
 from api.settings import ApiSettings
 from db import Database, RunRepository
 from tests.db.records import make_record
-from tests.servers import serving
+from tests.servers import local_client, serving
 
 RUNS = "/api/v1/runs"
 
@@ -122,12 +122,12 @@ def test_a_report_counts_in_the_report_pool_and_every_worker_is_added_up(
     st1 = _key(database, "line1-st1")
     with (
         serving(database_url, workers=2) as base,
-        httpx.Client(base_url=base, timeout=60) as client,
+        local_client(base, timeout=60) as client,
     ):
         for n in range(6):
             # A client each: new connections, spread over the workers by the kernel.
             body = make_record(serial=f"PT-2000{n:02d}").model_dump(mode="json")
-            with httpx.Client(base_url=base, timeout=60) as own:
+            with local_client(base, timeout=60) as own:
                 assert own.post(RUNS, json=body, headers=st1).status_code == 201
         assert client.get("/api/v1/reports/eol").status_code == 200
         # Whichever worker answers a scrape, it shows every worker's counts.

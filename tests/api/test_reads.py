@@ -10,7 +10,7 @@ from sqlalchemy import text
 from db import Database, RunRepository, open_database
 from station.domain.records import RunRecord
 from tests.db.records import T0, make_record
-from tests.servers import serving
+from tests.servers import local_client, serving
 
 
 def _store(database: Database, *records: RunRecord) -> None:
@@ -168,7 +168,7 @@ def test_reads_can_require_a_station_key(
 ) -> None:
     record = make_record()
     _store(database, record)
-    with httpx.Client(base_url=keyed_url) as client:
+    with local_client(keyed_url) as client:
         path = f"/api/v1/units/{record.serial}"
         assert client.get(path).status_code == 401
         assert client.get(path, headers={"Authorization": "Bearer csk_wrong"}).status_code == 401
@@ -197,7 +197,7 @@ def test_a_lookup_the_database_cannot_answer_is_a_503_and_the_server_recovers(
     record = make_record()
     _store(database, record)
     path = f"/api/v1/units/{record.serial}"
-    with serving(url) as base, httpx.Client(base_url=base, timeout=10) as client:
+    with serving(url) as base, local_client(base, timeout=10) as client:
         assert client.get(path).status_code == 200
         with database.engine.begin() as connection:  # the table goes away under the server
             connection.execute(text("ALTER TABLE units RENAME TO units_away"))

@@ -9,14 +9,13 @@ from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 
-import httpx
 import pytest
 from sqlalchemy import Connection, text
 from sqlalchemy.exc import OperationalError
 
 from db import Database, make_engine
 from db.timeouts import is_statement_timeout
-from tests.servers import serving
+from tests.servers import local_client, serving
 
 EOL = "/api/v1/reports/eol"
 POSTGRES_ONLY = pytest.mark.parametrize(
@@ -60,7 +59,7 @@ def _waiting_on_a_lock(connection: Connection) -> bool:
 def test_a_report_past_the_read_timeout_answers_503_and_the_next_one_works(
     database: Database, database_url: str
 ) -> None:
-    with serving(database_url, read_timeout_s="0.5") as base, httpx.Client(base_url=base) as client:
+    with serving(database_url, read_timeout_s="0.5") as base, local_client(base) as client:
         with reports_blocked(database):
             slow = client.get(EOL, timeout=60)
         assert slow.status_code == 503
@@ -78,7 +77,7 @@ def test_a_report_that_finds_the_pool_busy_answers_503_and_the_first_one_finishe
     settings = {"report_pool_size": "1", "report_wait_s": "0.2", "read_timeout_s": "60"}
     with (
         serving(database_url, **settings) as base,
-        httpx.Client(base_url=base, timeout=60) as client,
+        local_client(base, timeout=60) as client,
         ThreadPoolExecutor(1) as background,
     ):
         with reports_blocked(database) as blocker:

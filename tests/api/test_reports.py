@@ -16,7 +16,7 @@ from db.models import Run, RunFailure
 from tests.databases import postgres_server_url
 from tests.db.eol_data import RUNS, insert_line_history
 from tests.db.records import T0, make_record
-from tests.servers import HUNG_SERVER_S, serving
+from tests.servers import local_client, serving
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
 
@@ -165,7 +165,7 @@ def test_the_plants_shifts_add_a_trend_per_shift_in_json_and_csv(database_url: s
     # night shift of 11-01 (12:00), 08:30–09:00 to 08:25, 13:00 to 12:00 of 11-02.
     with (
         serving(database_url, plant_shifts="12:00,08:25") as base,
-        httpx.Client(base_url=base, timeout=60) as client,
+        local_client(base, timeout=60) as client,
     ):
         report = client.get("/api/v1/reports/eol").json()
         text = client.get("/api/v1/reports/eol", params={"format": "csv"}).text
@@ -246,7 +246,7 @@ def export_url(migrated_database: Database, database_url: str) -> Iterator[str]:
 def export_client(database: Database, export_url: str) -> Iterator[httpx.Client]:
     """An HTTP client of :func:`export_url`'s server; the database is emptied after the
     test. Its time-out only ends a hung server, as :func:`tests.servers.client`'s."""
-    with httpx.Client(base_url=export_url, timeout=HUNG_SERVER_S) as client:
+    with local_client(export_url) as client:
         yield client
 
 
@@ -311,7 +311,7 @@ def test_an_export_while_the_database_refuses_connections_is_a_503_and_then_work
     try:
         with (
             serving(postgres_database_url) as base,
-            httpx.Client(base_url=base, timeout=30) as client,
+            local_client(base, timeout=30) as client,
             server.connect() as admin,
         ):
             assert client.get("/api/v1/reports/eol/runs.csv").status_code == 200

@@ -16,7 +16,7 @@ import pytest
 from db import Database, RunRepository
 from station.domain.records import RunRecord
 from tests.db.records import OUTCOMES, T0, make_record
-from tests.servers import serving
+from tests.servers import local_client, serving
 
 ZONE = "Europe/Berlin"
 
@@ -31,7 +31,7 @@ def plant_url(migrated_database: Database, database_url: str) -> Iterator[str]:
 @pytest.fixture
 def plant(database: Database, plant_url: str) -> Iterator[httpx.Client]:
     """A client of the plant's server; the database is emptied after the test."""
-    with httpx.Client(base_url=plant_url, timeout=30) as client:
+    with local_client(plant_url, timeout=30) as client:
         yield client
 
 

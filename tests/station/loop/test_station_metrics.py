@@ -19,7 +19,7 @@ from station.domain.errors import InputError
 from station.domain.limits import load_profile
 from station.loop.config import load_config
 from station.loop.demo import ScriptedOperator
-from tests.servers import free_port
+from tests.servers import free_port, local_get
 
 Samples = dict[tuple[str, tuple[tuple[str, str], ...]], float]
 
@@ -36,7 +36,7 @@ class ScrapingOperator(ScriptedOperator):
             return super().read()
         except EOFError:
             if self.scraped is None:
-                text = httpx.get(self.metrics_url, timeout=10).text
+                text = local_get(self.metrics_url, timeout=10).text
                 self.scraped = {
                     (s.name, tuple(sorted(s.labels.items()))): s.value
                     for family in text_string_to_metric_families(text)
@@ -102,7 +102,7 @@ def test_a_station_serves_its_outbox_units_cycle_time_and_disk(tmp_path: Path) -
     assert value("calstation_station_disk_free_bytes") > 0
     # The server stopped with the station.
     with pytest.raises(httpx.TransportError):
-        httpx.get(operator.metrics_url, timeout=2)
+        local_get(operator.metrics_url, timeout=2)
 
 
 def test_a_metrics_port_taken_is_one_line(tmp_path: Path) -> None:

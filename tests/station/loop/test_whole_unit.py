@@ -14,7 +14,6 @@ from collections.abc import Iterator
 from datetime import UTC, datetime
 from pathlib import Path
 
-import httpx
 import numpy as np
 import pytest
 
@@ -29,7 +28,7 @@ from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit
 from station.simulator.putter import VirtualPutter
 from station.simulator.sensor import GYRO_SENSE_AXIS
-from tests.servers import HUNG_SERVER_S
+from tests.servers import local_get
 
 SERIAL = "PT000417"
 #: Virtual seconds per real second: a whole unit (13 poses and a move) in a few seconds.
@@ -158,10 +157,10 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
     with HttpStore(live_url, station_key) as store:
         outcome = store.submit(record)
     assert outcome.created
-    run = httpx.get(f"{live_url}/api/v1/runs/{record.run_id}", timeout=HUNG_SERVER_S).json()
+    run = local_get(f"{live_url}/api/v1/runs/{record.run_id}").json()
     assert record.gyro_matrix is not None
     assert run["gyro_matrix"] == record.gyro_matrix.model_dump(mode="json")
-    unit = httpx.get(f"{live_url}/api/v1/units/{SERIAL}", timeout=HUNG_SERVER_S).json()
+    unit = local_get(f"{live_url}/api/v1/units/{SERIAL}").json()
     assert unit["holds"]["gyro_matrix"]["matrix"] == [list(r) for r in record.gyro_matrix.matrix]
     # Every coefficient of the whole unit carries U (k = 2): K's is at least twice its
     # fit's σ, more by the moves' geometry (the accelerometer calibration's uncertainty).
@@ -173,6 +172,6 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
     u_k, se_k = np.array(held["gyro_matrix"]), np.array(record.gyro_matrix.standard_errors)
     assert (u_k >= 2 * se_k * (1 - 1e-9)).all()
     assert (u_k > 2 * se_k * 1.001).any()
-    page = httpx.get(f"{live_url}/api/v1/units/{SERIAL}/certificate", timeout=HUNG_SERVER_S)
+    page = local_get(f"{live_url}/api/v1/units/{SERIAL}/certificate")
     assert page.status_code == 200
     assert "Gyro matrix K" in page.text

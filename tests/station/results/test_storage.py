@@ -21,7 +21,7 @@ from station.results.storage import (
     SubmissionRefusedError,
 )
 from tests.db.records import make_record
-from tests.servers import HUNG_SERVER_S, free_port
+from tests.servers import free_port, local_get
 
 
 def poison(record: RunRecord) -> RunRecord:
@@ -60,7 +60,7 @@ def test_the_http_store_submits_and_retries_against_a_live_server(
     assert (first.created, again.created) == (True, False)
     assert first.run.model_dump(exclude={"received_at"}) == record.model_dump()
     assert again.run == first.run
-    unit = httpx.get(f"{live_url}/api/v1/units/{record.serial}", timeout=HUNG_SERVER_S).json()
+    unit = local_get(f"{live_url}/api/v1/units/{record.serial}").json()
     assert unit["latest"]["run_id"] == unit["holds"]["run_id"] == str(record.run_id)
 
 
