@@ -36,7 +36,6 @@ from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from station.domain.arrays import FloatArray
 from station.domain.gyro.motion.errors import GyroMatrixError
@@ -246,6 +245,10 @@ def fit_gyro_matrix(
             + (f" ({why})" if why else "")
         )
     data = _Moves([moves[i] for i in used], bias, known_turn_deg)
+    # Imported here: scipy.optimize is a sixth of the station's imports (0.16 s), and
+    # only the whole unit's profile fits K (issue 28).
+    from scipy.optimize import least_squares
+
     result = least_squares(data.residual, np.eye(3).ravel(), method="lm", x_scale=1.0)
     k = result.x.reshape(3, 3)
     jac = np.asarray(result.jac)
