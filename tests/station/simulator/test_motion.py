@@ -63,3 +63,36 @@ def test_a_unit_that_never_settles_keeps_shaking() -> None:
 def test_a_move_needs_a_positive_time() -> None:
     with pytest.raises(ValueError, match="positive time"):
         model().move_to(pose("toe_up").rotation, now=0.0, duration=0.0)
+
+
+@pytest.mark.parametrize("seed", [0, 7])
+def test_a_move_queued_for_later_is_the_move_made_then(seed: int) -> None:
+    # Queued at once, or made when its time comes: the unit senses the same, sample for
+    # sample, before the second move (the first runs and settles) and after it.
+    first, second = pose("shaft_down").rotation, pose("toe_up").rotation
+    before, after = np.arange(0.0, 3.0, 0.002), np.arange(3.0, 6.0, 0.002)
+    queued = model(seed=seed)
+    queued.move_to(first, now=0.0, duration=1.0)
+    queued.move_to(second, now=3.0, duration=1.0)
+    made = model(seed=seed)
+    made.move_to(first, now=0.0, duration=1.0)
+    made_before = made.evaluate(before)
+    made.move_to(second, now=3.0, duration=1.0)
+    made_after = made.evaluate(after)
+    for got, want in ((queued.evaluate(before), made_before), (queued.evaluate(after), made_after)):
+        np.testing.assert_array_equal(got.force_g, want.force_g)
+        np.testing.assert_array_equal(got.rate_dps, want.rate_dps)
+    # The first move really ran: put down shaft down, then taken to toe up.
+    np.testing.assert_allclose(made_before.force_g[-1], pose("shaft_down").gravity_body, atol=1e-3)
+    np.testing.assert_allclose(made_after.force_g[-1], pose("toe_up").gravity_body, atol=1e-3)
+
+
+def test_a_move_made_before_a_queued_one_replaces_it() -> None:
+    motion = model()
+    motion.move_to(pose("toe_up").rotation, now=0.0, duration=1.0)
+    motion.move_to(pose("face_down").rotation, now=5.0, duration=1.0)
+    motion.move_to(pose("shaft_up").rotation, now=2.0, duration=1.0)
+    late = motion.evaluate(np.linspace(8.0, 9.0, 10))
+    np.testing.assert_allclose(
+        late.force_g, np.tile(pose("shaft_up").gravity_body, (10, 1)), atol=1e-3
+    )
