@@ -6,20 +6,24 @@ Every fitted pose's **studentised residual** t_i = r_i/√(1 − h_i) (counts al
 h_i the pose's leverage; :mod:`station.domain.calibration.solution`) is compared with a limit L:
 
 * max |t_i| ≤ L: the poses are consistent; nothing is left out.
-* N − p ≥ 2 (eight poses for the six-parameter model, eleven for nine): the poses with
-  the largest |t_i| are the candidates (for one bad pose k its |t_k| is the largest of
-  all, by Cauchy–Schwarz on the columns of I − H). Each of the first three above L is
-  left out in turn and the fit redone; when exactly one such refit is consistent, that
-  pose is excluded and named. When two are (the spare equations cannot tell them apart),
-  or none is (more than one bad pose), the set is refused, naming what the evidence allows.
+* N − p ≥ 2 (eight poses for the six-parameter model, eleven for nine): every pose is
+  left out in turn and the fit redone; when exactly one such refit is consistent and
+  every other pose is cleared (its refit made and inconsistent, or failed on a sound
+  geometry: the rest still hold the bad pose), that pose is excluded and named. When two
+  are (the spare equations cannot tell them apart), or none is (more than one bad pose),
+  or a pose's leaving out leaves a geometry too narrow to fit (that pose cannot be
+  cleared, and a good pose's refit may absorb it and look consistent: simulated
+  cap-shaped sets of 8–10 poses were calibrated wrong so, 43 of 6,000, when only the
+  three largest |t_i| were tried), the set is refused, naming what the evidence allows.
+  For one bad pose k its |t_k| is the largest of all to first order (Cauchy–Schwarz on
+  the columns of I − H), but a large error moves the fit far from that picture.
 * A pose far enough off can stop the fit over all poses from finding an ellipsoid, or
   land it on a degenerate one, though the poses' geometry is sound: then no residuals
   rank the candidates, and with N − p ≥ 2 every pose is left out in turn, judged as
-  above. A pose is excluded only when every one of those refits could be made: a pose
-  whose leaving out cannot be fitted (the rest coplanar, say) cannot be cleared, and a
-  good pose's refit may then absorb the bad one and look consistent (simulated
-  cap-shaped sets of 8–10 poses found sensitivities of 183–335 counts/g so). Otherwise,
-  and on a degenerate geometry, the fit's own refusal stands.
+  above: a pose whose leaving out cannot be fitted for the rest's geometry (coplanar,
+  say) cannot be cleared, and a good pose's refit may then absorb the bad one and look
+  consistent (simulated cap-shaped sets of 8–10 poses found sensitivities of 183–335
+  counts/g so). Then, and on a degenerate geometry, the fit's own refusal stands.
 * N − p = 1 (seven poses, six-parameter model): the residuals all lie along one vector,
   every pose's |t_i| is the same, and leaving out any one pose fits the other six exactly.
   The evidence cannot name the pose, so the set is refused without blaming one (the largest
@@ -39,7 +43,6 @@ catches 2-count ones.
 """
 
 import math
-from collections.abc import Iterable
 from contextlib import suppress
 from dataclasses import replace
 
@@ -48,9 +51,12 @@ import numpy as np
 from station.domain.arrays import FloatArray
 from station.domain.calibration.errors import (
     CalibrationError,
+    CoplanarPosesError,
+    DuplicatePoseError,
     IllConditionedError,
     InconsistentPosesError,
     NonPositiveScaleError,
+    TooFewPosesError,
 )
 from station.domain.calibration.geometry import GeometryLimits, refuse_beyond_datasheet
 from station.domain.calibration.least_squares import (
@@ -82,8 +88,6 @@ def pose_mean_noise_counts(sensor: SensorSpec = PUTTER_SENSOR) -> float:
 DEFAULT_RESIDUAL_LIMIT_COUNTS = NOISE_SIGMAS * pose_mean_noise_counts()
 #: Spare equations needed to find and leave out one pose (N ≥ p + 2).
 EXCLUSION_MIN_SPARE = 2
-#: Candidates tried, largest |studentised residual| first.
-CANDIDATES = 3
 
 
 def residual_limit(configured: float | None, sensor: SensorSpec = PUTTER_SENSOR) -> float:
@@ -120,11 +124,11 @@ def solve_consistent(
         if len(poses) - UNKNOWNS[judge] < EXCLUSION_MIN_SPARE:
             raise
         refuse_degenerate_geometry(normalise(poses), model, max_condition)
-        every = range(len(poses))
         head = f"poses inconsistent: the fit over all poses failed ({failed})"
-        found = _explained(
-            poses, every, model, judge, limits, max_condition, limit, head, every_refit=True
-        )
+        try:
+            found = _explained(poses, model, judge, limits, max_condition, limit, head)
+        except _UnclearedPoseError:
+            raise failed from None
         if found is not None:
             return found
         raise
@@ -150,53 +154,70 @@ def solve_consistent(
             f"{head}; with {n} poses ({spare} spare) one bad pose cannot be told from the "
             f"others{hint}: take the poses again, or add {EXCLUSION_MIN_SPARE - spare} or more"
         )
-    order = np.argsort(-t, kind="stable")[:CANDIDATES]
-    candidates = [int(c) for c in order if t[c] > limit]
-    found = _explained(poses, candidates, model, judge, limits, max_condition, limit, head)
+    worst_pose = int(np.argmax(t))
+    try:
+        found = _explained(poses, model, judge, limits, max_condition, limit, head)
+    except _UnclearedPoseError as unchecked:
+        refuse_beyond_datasheet(poses, limits.sensor)
+        raise InconsistentPosesError(
+            f"{head} at pose {worst_pose + 1}; without pose {unchecked.pose + 1} the other "
+            "poses are too narrow a geometry to fit, so no pose can be cleared or blamed: "
+            "take the poses again, spread wider"
+        ) from None
     if found is not None:
         return found
     raise InconsistentPosesError(
-        f"{head} at pose {int(order[0]) + 1}, and leaving out any one pose does not explain "
+        f"{head} at pose {worst_pose + 1}, and leaving out any one pose does not explain "
         f"it: more than one pose is off (moved or mislabelled){hint}; take them again"
     )
 
 
+class _UnclearedPoseError(Exception):
+    """Leaving out ``pose`` left poses that could not be fitted for their geometry: that
+    pose cannot be cleared, so no other pose can be blamed in its place."""
+
+    def __init__(self, pose: int) -> None:
+        super().__init__(pose)
+        self.pose = pose
+
+
 def _explained(
     poses: FloatArray,
-    candidates: Iterable[int],
     model: Model,
     judge: Model,
     limits: GeometryLimits,
     max_condition: float,
     limit: float,
     head: str,
-    *,
-    every_refit: bool = False,
 ) -> Solution | None:
-    """The fit without the one candidate whose leaving out leaves the rest consistent
-    (judged with ``judge``, fitted with ``model``); None when no candidate does, or,
-    with ``every_refit``, when leaving out any candidate left poses that could not be
-    fitted for their geometry (that candidate could not be cleared).
+    """The fit without the one pose whose leaving out leaves the rest consistent (judged
+    with ``judge``, fitted with ``model``); None when no pose does.
+
+    Every pose is left out in turn: a bad pose is excluded only when every other pose is
+    cleared, its leaving out refitted and found inconsistent. The largest studentised
+    residual is not enough to pick the candidates: on a cap-shaped set a large error
+    moves the fit far from its linear picture, and the bad pose can rank below good ones.
 
     Raises:
-        InconsistentPosesError: more than one candidate does (named), or a pose no sensor
+        InconsistentPosesError: more than one pose does (named), or a pose no sensor
             could read is among the poses.
+        _UnclearedPoseError: leaving out a pose left poses that could not be fitted for their
+            geometry (a pose that spoils the fit of a sound geometry is not that).
     """
     n = len(poses)
     explained: list[tuple[int, Solution]] = []
-    for candidate in candidates:
+    for candidate in range(n):
         keep = np.arange(n) != candidate
         try:
             refit = solve_least_squares(poses[keep], judge, limits, max_condition)
-        except (IllConditionedError, NonPositiveScaleError):
-            # On a sound geometry the rest still hold a pose that spoils their fit: this
-            # candidate is not the one. On a degenerate one it cannot be told.
-            if every_refit and not _sound_geometry(poses[keep], judge, max_condition):
-                return None
-            continue
-        except CalibrationError:  # screened out (coplanar, duplicates): untested
-            if every_refit:
-                return None
+        except (CoplanarPosesError, DuplicatePoseError, TooFewPosesError):
+            raise _UnclearedPoseError(candidate) from None  # the rest's geometry: untested
+        except CalibrationError:
+            # On a sound geometry the rest still hold a pose that spoils their fit (or
+            # that no sensor could read): this candidate is not the one. On a degenerate
+            # one it cannot be told.
+            if not _sound_geometry(poses[keep], judge, max_condition):
+                raise _UnclearedPoseError(candidate) from None
             continue
         if (refit.quality.studentised_max_counts or 0.0) <= limit:
             explained.append((candidate, refit))

@@ -135,6 +135,35 @@ def test_a_failed_fit_whose_bad_pose_cannot_be_cleared_is_refused_not_guessed() 
     assert not isinstance(info.value, InconsistentPosesError) or 5 not in info.value.candidates
 
 
+def test_a_bad_pose_whose_leaving_out_cannot_be_fitted_is_not_blamed_on_another() -> None:
+    # Nine poses in a cap (56° around one direction), the ninth 63 counts short along
+    # gravity: the fit over all poses succeeds. Leaving the ninth out leaves the rest too
+    # close to a plane to fit, so it cannot be cleared; leaving out the third leaves a
+    # consistent set, which was taken: sensitivities of 858.5, 789.7 and 850.8 counts/g
+    # (the truth 834.2, 836.3, 853.6), inside the shipped limits, a silent wrong pass.
+    # Of 6,000 such simulated sets of 8-10 poses, 43 were calibrated so.
+    poses = np.array(
+        [
+            [1386.52, 2433.07, 2483.57],
+            [1599.73, 2757.18, 2385.51],
+            [1259.32, 1911.53, 2352.07],
+            [1586.51, 2855.67, 2219.32],
+            [1483.75, 2756.65, 2290.09],
+            [1433.23, 2837.32, 2003.54],
+            [1104.1, 2256.05, 2087.96],
+            [1850.69, 2356.67, 2704.95],
+            [1473.59, 1662.49, 2288.57],
+        ]
+    )
+    refit = solve_least_squares(np.delete(poses, 2, axis=0), "six")
+    assert refit.quality.studentised_max_counts is not None
+    assert refit.quality.studentised_max_counts <= DEFAULT_RESIDUAL_LIMIT_COUNTS  # the trap
+    with pytest.raises(InconsistentPosesError, match="too narrow a geometry to fit") as info:
+        solve(poses, "six")
+    assert "pose 9" in str(info.value)
+    assert info.value.candidates == ()
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     unit=true_units(cross_axis=0.02),
