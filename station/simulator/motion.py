@@ -157,6 +157,8 @@ class MotionModel:
         if duration <= 0:
             raise ValueError(f"a move takes a positive time, got {duration}")
         kept = [move for move in self._moves if move.t0 < now]
+        # Before every move kept (a past already forgotten): from where the first starts.
+        base = kept[-1] if kept else self._moves[0]
         # The moves before the one the next sample to draw falls in are done with.
         while len(kept) > 1 and kept[1].t0 <= self._evaluated_to:
             kept.pop(0)
@@ -164,7 +166,7 @@ class MotionModel:
         heading = rng.uniform(0, 2 * np.pi)
         kept.append(
             _Move(
-                start=kept[-1].orientation(np.array([now]))[0],
+                start=base.orientation(np.array([now]))[0],
                 target=target,
                 t0=now,
                 duration=duration,

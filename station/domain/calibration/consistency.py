@@ -161,8 +161,8 @@ def solve_consistent(
         refuse_beyond_datasheet(poses, limits.sensor)
         raise InconsistentPosesError(
             f"{head} at pose {worst_pose + 1}; without pose {unchecked.pose + 1} the other "
-            "poses are too narrow a geometry to fit, so no pose can be cleared or blamed: "
-            "take the poses again, spread wider"
+            f"poses cannot be fitted ({unchecked.reason}), so no pose can be cleared or "
+            "blamed: take the poses again"
         ) from None
     if found is not None:
         return found
@@ -173,12 +173,14 @@ def solve_consistent(
 
 
 class _UnclearedPoseError(Exception):
-    """Leaving out ``pose`` left poses that could not be fitted for their geometry: that
-    pose cannot be cleared, so no other pose can be blamed in its place."""
+    """Leaving out ``pose`` left poses that could not be fitted for their geometry
+    (``reason``, the refit's refusal): that pose cannot be cleared, so no other pose can be
+    blamed in its place."""
 
-    def __init__(self, pose: int) -> None:
-        super().__init__(pose)
+    def __init__(self, pose: int, reason: str) -> None:
+        super().__init__(pose, reason)
         self.pose = pose
+        self.reason = reason
 
 
 def _explained(
@@ -210,14 +212,14 @@ def _explained(
         keep = np.arange(n) != candidate
         try:
             refit = solve_least_squares(poses[keep], judge, limits, max_condition)
-        except (CoplanarPosesError, DuplicatePoseError, TooFewPosesError):
-            raise _UnclearedPoseError(candidate) from None  # the rest's geometry: untested
-        except CalibrationError:
+        except (CoplanarPosesError, DuplicatePoseError, TooFewPosesError) as refused:
+            raise _UnclearedPoseError(candidate, str(refused)) from None  # untested
+        except CalibrationError as refused:
             # On a sound geometry the rest still hold a pose that spoils their fit (or
             # that no sensor could read): this candidate is not the one. On a degenerate
             # one it cannot be told.
             if not _sound_geometry(poses[keep], judge, max_condition):
-                raise _UnclearedPoseError(candidate) from None
+                raise _UnclearedPoseError(candidate, str(refused)) from None
             continue
         if (refit.quality.studentised_max_counts or 0.0) <= limit:
             explained.append((candidate, refit))

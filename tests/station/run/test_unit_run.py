@@ -220,18 +220,23 @@ def test_a_unit_inside_a_limit_but_within_u_of_it_passes_simple_and_fails_guarde
     shipped = load_profile()
     limit = Bounds(lower=shipped.sensitivity_counts_per_g.lower, upper=value + u / 2)
     edge = shipped.model_copy(update={"sensitivity_counts_per_g": limit})
+
+    # Each run's own unit: inside the limit, within its U of it.
+    def inside_but_within_u(record: RunRecord) -> None:
+        assert record.coefficients is not None
+        assert record.uncertainty is not None
+        assert record.uncertainty.sensitivity is not None
+        u_run = record.uncertainty.sensitivity.x
+        assert u_run == pytest.approx(u, rel=0.05)
+        assert limit.upper - u_run < record.coefficients.sensitivity.x <= limit.upper
+
     simple = run("simple", edge)
     assert simple.decision_rule == "simple"
+    inside_but_within_u(simple)
     assert simple.verdict == "pass", simple.failures
     guarded = run("guarded", edge.model_copy(update={"decision_rule": "guarded"}))
     assert guarded.decision_rule == "guarded"
-    assert guarded.coefficients is not None
-    assert guarded.uncertainty is not None
-    assert guarded.uncertainty.sensitivity is not None
-    # The guarded run's own unit: inside the limit, within its U of it.
-    u_guarded = guarded.uncertainty.sensitivity.x
-    assert u_guarded == pytest.approx(u, rel=0.05)
-    assert limit.upper - u_guarded < guarded.coefficients.sensitivity.x <= limit.upper
+    inside_but_within_u(guarded)
     assert guarded.verdict == "fail"
     assert [(f.code, f.axis) for f in guarded.failures] == [("sensitivity", "x")]
     assert guarded.failures[0].upper == limit.upper

@@ -96,3 +96,17 @@ def test_a_move_made_before_a_queued_one_replaces_it() -> None:
     np.testing.assert_allclose(
         late.force_g, np.tile(pose("shaft_up").gravity_body, (10, 1)), atol=1e-3
     )
+
+
+def test_a_move_queued_before_the_moves_kept_starts_from_where_they_started() -> None:
+    # The samples drawn past the first move let the model forget the still start; a move
+    # then queued before that first move begins from where it began.
+    motion = model("face_up")
+    motion.move_to(pose("toe_up").rotation, now=1.0, duration=1.0)
+    motion.evaluate(np.linspace(0.0, 4.0, 100))
+    motion.move_to(pose("face_down").rotation, now=5.0, duration=1.0)
+    motion.move_to(pose("shaft_up").rotation, now=0.5, duration=1.0)
+    late = motion.evaluate(np.linspace(8.0, 9.0, 10))
+    np.testing.assert_allclose(
+        late.force_g, np.tile(pose("shaft_up").gravity_body, (10, 1)), atol=1e-3
+    )
