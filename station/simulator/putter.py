@@ -17,7 +17,7 @@ import contextlib
 import logging
 import select
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Final
@@ -236,6 +236,14 @@ class VirtualPutter(Closing):
     def sleep(self, seconds: float) -> None:
         """Let ``seconds`` of simulated time pass."""
         self.clock.sleep(seconds, self._stop)
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Send nothing while the block runs: moves queued in it (:meth:`move_to` with
+        ``at_s``) all shape the samples after it, however long the caller takes (the
+        simulated time runs on, and the samples due go out after the block)."""
+        with self._lock:
+            yield
 
     # -- firmware ---------------------------------------------------------------------
 

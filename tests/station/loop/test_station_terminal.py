@@ -239,13 +239,15 @@ def test_motion_during_capture_is_said_at_once(tmp_path: Path) -> None:
         station.wait_asked()
         station.putter.move_to("face_up", 1.0)
         child.expect("pose 1 \\(face up\\) captured")
-        station.putter.move_to("face_down", 0.5)
-        # Picked up again mid-capture: 0.8 s after the tremor has died down, in the
-        # putter's time, so that the capture (2 s of samples, begun as the tremor fades)
-        # is 40-80 % done whatever the machine's load makes of the wall clock. (Waiting
-        # for the screen to show that much progress once missed it: a late redraw went
-        # from under a third straight to captured.)
-        station.putter.move_to("face_down", 2.0, at_s=station.putter.settled_at_s + 0.8)
+        # Put down, then picked up again mid-capture: 0.8 s after the tremor has died
+        # down, in the putter's time, so that the capture (2 s of samples, begun as the
+        # tremor fades) is 40-80 % done whatever the machine's load makes of the wall
+        # clock; both moves are queued before the putter sends a sample of either.
+        # (Waiting for the screen to show that much progress once missed it: a late
+        # redraw went from under a third straight to captured.)
+        with station.putter.held():
+            station.putter.move_to("face_down", 0.5)
+            station.putter.move_to("face_down", 2.0, at_s=station.putter.settled_at_s + 0.8)
         child.expect("moved during capture of face down: hold the putter still")
         station.asked = "face_down"
         assert station.follow() == "PASS"
