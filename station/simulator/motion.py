@@ -15,6 +15,7 @@ that never settles keeps its initial tremor.
 """
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Final
 
 import numpy as np
@@ -71,10 +72,17 @@ class _Move:
         s_dot = 30 * tau**2 * (1 - tau) ** 2 / self.duration
         return s, s_dot
 
+    @cached_property
+    def turn(self) -> FloatArray:
+        """φ = log(R₀⁻¹ R₁), the rotation vector of the whole move (body axes)."""
+        return np.asarray((self.start.inv() * self.target).as_rotvec(), dtype=np.float64)
+
+    def along(self, s: FloatArray) -> Rotation:
+        """R₀ · exp(s φ): the orientation a fraction ``s`` of the way."""
+        return self.start * Rotation.from_rotvec(s[:, None] * self.turn)
+
     def orientation(self, t: FloatArray) -> Rotation:
-        s, _ = self.phase(t)
-        phi = (self.start.inv() * self.target).as_rotvec()
-        return self.start * Rotation.from_rotvec(s[:, None] * phi)
+        return self.along(self.phase(t)[0])
 
     def settled_at(self, handling: Handling) -> float:
         return self.t0 + self.duration + 4.6 * handling.settle_time_constant_s
@@ -82,8 +90,7 @@ class _Move:
     def evaluate(self, t: FloatArray, h: Handling, never_settles: bool) -> Kinematics:
         T = self.duration
         s, s_dot = self.phase(t)
-        phi = (self.start.inv() * self.target).as_rotvec()
-        rate = s_dot[:, None] * phi
+        rate = s_dot[:, None] * self.turn
         tau = np.clip((t - self.t0) / T, 0.0, 1.0)
         moving = ((t > self.t0) & (t < self.t0 + T))[:, None]
         lift = h.lift_m * 2 * np.pi**2 / T**2 * np.cos(2 * np.pi * tau)
@@ -92,7 +99,7 @@ class _Move:
             np.where(moving, lift[:, None] * UP + carry[:, None] * self.carry_dir, 0.0)
             / STANDARD_GRAVITY
         )
-        orientation = self.start * Rotation.from_rotvec(s[:, None] * phi)
+        orientation = self.along(s)
         if self.tremor:
             after = np.maximum(t - (self.t0 + T), 0.0)
             envelope = (
