@@ -9,7 +9,9 @@ alone on this machine (best of several repeats): parsing every frame the unit st
 through the station's own link in 4 KiB chunks, judging one 1,024-sample window per
 pose, and the solve. The **station** figure is what ``bench_throughput.py`` measures: the
 process's CPU while the real station serves the units at 1× (the one-port station for
-one slot, the fixture for several), minus the virtual putters' own threads, per unit.
+one slot, the fixture for several), minus the virtual putters' own threads and the
+scripted operator's calls (its keys, and the putters it plugs in and moves: the person
+at the station and the units, run in the station's thread), per unit.
 Everything else the station does (the live view, journal, outbox, database) is in the
 station figure and not in the floor; the issue's target is a ratio of 5 or less.
 
@@ -112,8 +114,8 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
     """``cycles`` cycles of ``slots`` units at ``speed``: floor and station CPU per unit.
 
     Each cycle is timed from the moment its first unit is plugged in (the first from the
-    station's start, the last to the station's end), the virtual putters' CPU in it
-    taken off.
+    station's start, the last to the station's end), the virtual putters' and the
+    operator's CPU in it taken off.
     """
     events = Events()
     undo = instrument(events)
@@ -124,7 +126,10 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
 
     def station_cpu() -> float:
         putters = events.putter_cpu_s + sum(map(putter_cpu_s, live))
-        return time.process_time() - putters
+        operator = events.operator_cpu_s
+        if events.operator_since is not None:  # a cycle starts inside the operator's call
+            operator += time.thread_time() - events.operator_since
+        return time.process_time() - putters - operator
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
         if sum(map(len, events.units.values())) == len(marks) * slots:

@@ -29,7 +29,8 @@ units are taken from the queue); the figures are for a cycle in steady state, wh
 ``min(K, 7)`` of its K units were scanned ahead during the cycle before.
 
 **Station time**: the station's CPU per unit (process CPU minus the virtual putters'
-threads), counted once per unit in the cycle as if nothing of it overlapped.
+threads and the scripted operator's calls, which stand in for the units and the person),
+counted once per unit in the cycle as if nothing of it overlapped.
 
     cycle = K × (load + unload) + (K − A) × scan + A × confirm + 6 × move(K)
             + Σ_pose max(max_slot(device), scan if a label is scanned in it) + 0.51 s
@@ -105,21 +106,29 @@ class Unit:
 
 @dataclass
 class Events:
-    """Units by port, in the order they were plugged in; CPU of the putters' threads."""
+    """Units by port, in the order they were plugged in; CPU of the putters' threads and
+    of the scripted operator."""
 
     units: dict[str, list[Unit]] = field(default_factory=lambda: defaultdict(list))
     putter_cpu_s: float = 0.0
+    #: The scripted operator's CPU (its keys, the putters it plugs in and moves): the
+    #: person at the station and the units, run in the station's thread, not its work.
+    operator_cpu_s: float = 0.0
+    #: The main thread's CPU clock when the operator's call in progress began.
+    operator_since: float | None = None
     #: Units the next cycle's scan took from the labels scanned ahead.
     taken_ahead: int = 0
 
 
 def instrument(events: Events) -> Callable[[], None]:
-    """Note plug-ins, moves, accepted captures and the putters' CPU; returns the undo."""
+    """Note plug-ins, moves, accepted captures and the putters' and the operator's CPU;
+    returns the undo."""
     serve_pty = VirtualPutter.serve_pty
     move_to = VirtualPutter.move_to
     close = VirtualPutter.close
     accept = UnitRun._accept
     take = ScanAhead.take
+    scripted_read, fixture_read = ScriptedOperator.read, FixtureOperator.read
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
         url = serve_pty(self, alias)
@@ -142,6 +151,17 @@ def instrument(events: Events) -> Callable[[], None]:
         events.units[self.driver.url][-1].captures.append(result.last_seq)
         accept(self, result, target)
 
+    def operated(read: Callable[[Any], str]) -> Callable[[Any], str]:
+        def timed(self: Any) -> str:
+            events.operator_since = time.thread_time()
+            try:
+                return read(self)
+            finally:
+                events.operator_cpu_s += time.thread_time() - events.operator_since
+                events.operator_since = None
+
+        return timed
+
     def taken(self: ScanAhead, slot: Any) -> str | None:
         serial = take(self, slot)
         events.taken_ahead += serial is not None
@@ -152,6 +172,8 @@ def instrument(events: Events) -> Callable[[], None]:
     VirtualPutter.close = closed  # type: ignore[method-assign]
     UnitRun._accept = accepted  # type: ignore[method-assign]
     ScanAhead.take = taken  # type: ignore[method-assign]
+    ScriptedOperator.read = operated(scripted_read)  # type: ignore[method-assign]
+    FixtureOperator.read = operated(fixture_read)  # type: ignore[method-assign]
 
     def undo() -> None:
         VirtualPutter.serve_pty = serve_pty  # type: ignore[method-assign]
@@ -159,6 +181,8 @@ def instrument(events: Events) -> Callable[[], None]:
         VirtualPutter.close = close  # type: ignore[method-assign]
         UnitRun._accept = accept  # type: ignore[method-assign]
         ScanAhead.take = take  # type: ignore[method-assign]
+        ScriptedOperator.read = scripted_read  # type: ignore[method-assign]
+        FixtureOperator.read = fixture_read  # type: ignore[method-assign]
 
     return undo
 
@@ -215,7 +239,7 @@ def measure(slots: int, cycles: int, capture: str, speed: float, ahead: bool) ->
         with tempfile.TemporaryDirectory() as tmp:
             cpu = time.process_time()
             records = run_station(Path(tmp), slots, cycles, capture, speed, ahead)
-            cpu = time.process_time() - cpu - events.putter_cpu_s
+            cpu = time.process_time() - cpu - events.putter_cpu_s - events.operator_cpu_s
     finally:
         undo()
     assert len(records) == slots * cycles

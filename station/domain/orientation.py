@@ -90,8 +90,15 @@ def gravity_direction(accel_counts: FloatArray, zero_g: ZeroG | None = None) -> 
     """Unit vector of the sensed gravity reaction (body axes) from mean raw counts (3,)."""
     known = zero_g or ZeroG()
     g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
-    norm = float(np.linalg.norm(g))
+    norm = _length(g)
     return g / norm if norm > 0 else np.array([0.0, 0.0, 0.0])
+
+
+def _length(v: FloatArray) -> float:
+    """Euclidean length of ``v``: what :func:`numpy.linalg.norm` computes for a vector
+    (the square root of its dot product with itself), to the bit, without the wrapper's
+    overhead (the live view senses a window at every pass, per slot)."""
+    return math.sqrt(float(v @ v))
 
 
 def angle_deg(a: FloatArray, b: FloatArray) -> float:
@@ -120,8 +127,8 @@ class Sensed:
         """
         target = pose.gravity_body
         across = self.direction - float(self.direction @ target) * target
-        closest = self.direction - np.clip(across, -self.slack, self.slack)
-        norm = float(np.linalg.norm(closest))
+        closest = self.direction - np.minimum(np.maximum(across, -self.slack), self.slack)
+        norm = _length(closest)
         return norm > 0 and angle_deg(closest / norm, target) <= tolerance_deg
 
 
@@ -133,7 +140,7 @@ def sense(
     """The named pose (of ``candidates``, default all) nearest to the mean counts."""
     known = zero_g or ZeroG()
     g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
-    norm = float(np.linalg.norm(g))
+    norm = _length(g)
     if norm == 0:
         direction, slack = np.zeros(3), np.zeros(3)
     else:

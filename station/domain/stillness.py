@@ -172,44 +172,49 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     """
     acc = block.accel
     summary = block.summary()
+    sensor = limits.sensor
     reasons: list[str] = []
     motion = False
     span = block.span
     loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
-    # Whole-array operations, then plain floats per axis: the live view judges a window
-    # at every pass per slot, and numpy's per-call overhead is most of the cost.
-    at_rail = np.any((acc <= ADC_MIN) | (acc >= limits.sensor.adc_max), axis=0).tolist()
-    saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
+    # A few whole-array reductions, then plain floats per axis: the live view judges a
+    # window at every pass per slot, and numpy's per-call overhead is most of the cost.
+    lows, highs = acc.min(axis=0).tolist(), acc.max(axis=0).tolist()
+    saturated = tuple(
+        axis
+        for axis, low, high in zip(AXES, lows, highs, strict=True)
+        if low <= ADC_MIN or high >= sensor.adc_max
+    )
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
     quarter = max(1, len(block) // 4)
-    drift = np.abs(acc[-quarter:].sum(axis=0) / quarter - acc[:quarter].sum(axis=0) / quarter)
+    firsts, lasts = acc[:quarter].sum(axis=0).tolist(), acc[-quarter:].sum(axis=0).tolist()
+    spread_max, drift_max = limits.accel_std_max_counts, limits.accel_drift_max_counts
     spreads = summary.accel_std.tolist()
-    for axis, s, d in zip(AXES, spreads, drift.tolist(), strict=True):
+    for axis, s, first, last in zip(AXES, spreads, firsts, lasts, strict=True):
         if axis in saturated:
             continue
-        if s > limits.accel_std_max_counts:
-            reasons.append(f"accel {axis} spread {s:.1f} counts > {limits.accel_std_max_counts:g}")
+        if s > spread_max:
+            reasons.append(f"accel {axis} spread {s:.1f} counts > {spread_max:g}")
             motion = True
-        if d > limits.accel_drift_max_counts:
-            reasons.append(
-                f"accel {axis} drifted {d:.1f} counts > {limits.accel_drift_max_counts:g}"
-            )
+        if (drift := abs(last / quarter - first / quarter)) > drift_max:
+            reasons.append(f"accel {axis} drifted {drift:.1f} counts > {drift_max:g}")
             motion = True
-    nominal_g = (summary.accel_mean - limits.sensor.zero_g_counts) / limits.sensor.counts_per_g
-    magnitude = math.sqrt(float(nominal_g @ nominal_g))
+    zero, per_g = sensor.zero_g_counts, sensor.counts_per_g
+    magnitude = math.sqrt(sum(((m - zero) / per_g) ** 2 for m in summary.accel_mean.tolist()))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
-    turning = (summary.gyro_mean - limits.gyro_bias_dps).tolist()
-    for axis, rate, s in zip(AXES, turning, summary.gyro_std.tolist(), strict=True):
-        if abs(rate) > limits.gyro_rate_max_dps:
-            reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {limits.gyro_rate_max_dps:g}")
+    rate_max, gyro_spread_max = limits.gyro_rate_max_dps, limits.gyro_std_max_dps
+    rates = zip(summary.gyro_mean.tolist(), limits.gyro_bias_dps, strict=True)
+    for axis, (mean, bias), s in zip(AXES, rates, summary.gyro_std.tolist(), strict=True):
+        if abs(rate := mean - bias) > rate_max:
+            reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {rate_max:g}")
             motion = True
-        if s > limits.gyro_std_max_dps:
-            reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {limits.gyro_std_max_dps:g}")
+        if s > gyro_spread_max:
+            reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {gyro_spread_max:g}")
             motion = True
     return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary)
 
