@@ -20,16 +20,18 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from functools import partial
-from typing import Concatenate, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Concatenate, ParamSpec, TypeVar
 
 from sqlalchemy import Engine
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session
 
-from api.metrics import ServerMetrics
 from db import DatabaseUnavailableError, RunRepository, make_engine
 from db.timeouts import is_statement_timeout
 from station.domain.errors import CalstationError
+
+if TYPE_CHECKING:  # a report process imports this module: FastAPI's metrics stay out of it
+    from api.metrics import ServerMetrics
 
 P = ParamSpec("P")
 T = TypeVar("T")
@@ -96,7 +98,7 @@ class ReportPool:
         processes: int,
         wait_s: float,
         timeout_s: float,
-        metrics: ServerMetrics,
+        metrics: "ServerMetrics",
     ) -> None:
         self.wait_s = wait_s
         self._metrics = metrics
@@ -112,7 +114,8 @@ class ReportPool:
     async def run(
         self, work: Callable[Concatenate[RunRepository, P], T], *args: P.args, **kwargs: P.kwargs
     ) -> T:
-        """``work(repository, *args)`` in a report process; ``work`` is a module's function."""
+        """``work(repository, *args)`` in a report process; ``work`` is a module's function,
+        which the report process imports (:mod:`api.report_bodies`: no web framework)."""
         metrics = self._metrics
         metrics.report_waiting.inc()
         try:

@@ -37,8 +37,9 @@ from typing import Any
 
 from sqlalchemy import insert, make_url, text
 
+from api.report_bodies import dashboard_body, split_body
 from api.routes.alerts import LISTED_ALERTS
-from api.routes.reports import PAGE_UNITS, certificate_run, dashboard_body, split_body
+from api.routes.reports import PAGE_UNITS, certificate_run
 from db import RunRepository, make_engine, open_database
 from db.alerts import evaluate, recent_alerts
 from db.chart_queries import first_moving_ranges, latest_chart_points
@@ -192,7 +193,7 @@ def pages(session: Any, repeat: int, runs: int) -> None:
         return certificate_page(run, profile, at, repository.latest_gyro_fit(serial), earlier)
 
     def served(zone: str = "UTC", shifts: tuple[clock, ...] = (), page: int = 1) -> str:
-        # As ``GET /api/v1/reports/eol?format=html`` builds it (api.routes.reports.eol_body).
+        # As ``GET /api/v1/reports/eol?format=html`` builds it (api.report_bodies.eol_body).
         report = eol_report(
             session,
             ReportFilter(),

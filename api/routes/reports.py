@@ -31,14 +31,21 @@ from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 from api.deps import ReaderDep, ReadersDep, ReportPoolDep, SessionsDep
 from api.errors import answers_pages, invalid
 from api.language import LanguageDep
+from api.report_bodies import (
+    Pages,
+    Plant,
+    dashboard_body,
+    eol_body,
+    failing_runs_body,
+    split_body,
+)
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
-from db.holds import held_units
 from db.limits_profiles import keep_profile, stored_profiles
-from db.reports import CHART_POINTS, ReportQueries, eol_report
+from db.reports import CHART_POINTS
 from db.run_export import HEADER, run_page
-from db.split import SPLIT_PARAMETERS, SPLIT_RUNS, split_report
+from db.split import SPLIT_PARAMETERS, SPLIT_RUNS
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
@@ -46,16 +53,8 @@ from station.domain.quality.shifts import shift_start
 from station.domain.quality.split import SplitBy, SplitReport
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
 from station.domain.unit_state import counts
-from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment, start_of_day
-from station.report.render import MEDIA_TYPES, render
-
-#: Units on the dashboard's list, and points on each of its control charts.
-DASHBOARD_UNITS = 20
-DASHBOARD_CHART_POINTS = 60
-#: Units on hold the dashboard lists (the latest).
-DASHBOARD_HELD = 50
-#: Where the dashboard hears of stored runs (:mod:`api.routes.events`).
-EVENTS_PATH = "/api/v1/events"
+from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment
+from station.report.render import MEDIA_TYPES
 
 #: 503: the database is down, a read ran out of time, or the report pool stayed busy.
 UNAVAILABLE: dict[int | str, dict[str, Any]] = {
@@ -229,8 +228,8 @@ async def get_eol_report(
     """Yields, trend, failure Pareto, capability, control charts and a page of the held
     (or all) units of a period; with ``what_if``, a stored what-if's candidate limits
     beside them (the link a what-if's page gives)."""
-    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units, points=points)
-    plant = _Plant(zone, shifts)
+    pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units, points=points)
+    plant = Plant(zone, shifts)
     report_filter = period.filter(zone)
     candidate = None
     if what_if is not None:
@@ -293,8 +292,8 @@ async def post_eol_what_if(
     candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
     async with sessions() as session, session.begin():
         await session.run_sync(keep_profile, candidate)
-    pages = _Pages(held=listed == "held", size=units, offset=(page - 1) * units)
-    plant = _Plant(zone, shifts)
+    pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units)
+    plant = Plant(zone, shifts)
     body = await repository.run(eol_body, period.filter(zone), pages, format, plant, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
 
@@ -307,47 +306,6 @@ def _candidate(content: bytes, shown: str, name: str | None) -> LimitsProfile:
         raise invalid(("body", "limits"), f"{shown}: not UTF-8 text") from None
     except InputError as exc:
         raise invalid(("body", "limits"), str(exc)) from None
-
-
-@dataclass(frozen=True)
-class _Pages:
-    """Which units the list holds: held ones or all, ``size`` of them after ``offset``."""
-
-    held: bool
-    size: int
-    offset: int
-    points: int = CHART_POINTS
-
-
-@dataclass(frozen=True)
-class _Plant:
-    """The plant's time zone and shift start times, as the report shows its times."""
-
-    zone: str
-    shifts: tuple[time, ...]
-
-
-def eol_body(
-    repository: RunRepository,
-    filter: ReportFilter,
-    pages: _Pages,
-    format: str,
-    plant: _Plant,
-    candidate: LimitsProfile | None,
-) -> str:
-    """The report rendered (in a report process: :mod:`api.report_pool`)."""
-    report = eol_report(
-        repository.session,
-        filter,
-        candidate=candidate,
-        unit_limit=pages.size,
-        unit_offset=pages.offset,
-        held_only=pages.held,
-        chart_points=pages.points,
-        zone=plant.zone,
-        shifts=plant.shifts,
-    )
-    return render(report, format)
 
 
 SPLIT_TITLE = "Analysis by split"
@@ -389,27 +347,6 @@ async def get_split(
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
-def split_body(
-    repository: RunRepository,
-    filter: ReportFilter,
-    parameter: str,
-    by: SplitBy,
-    format: str,
-    zone: str,
-) -> str:
-    """The split (in a report process: :mod:`api.report_pool`)."""
-    report = split_report(repository.session, filter, parameter, by)
-    if format == "json":
-        return report.model_dump_json(indent=2) + "\n"
-    from station.report import html
-
-    return html.split_page(report, zone, SPLIT_PARAMETERS)
-
-
-#: The most runs the page of a Pareto bar lists (the latest).
-FAILING_RUNS = 200
-
-
 @router.get(
     "/reports/eol/failures",
     response_class=HTMLResponse,
@@ -433,14 +370,6 @@ async def get_failing_runs(
     lot) whose first failure reason is ``code``, the latest first."""
     body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
     return HTMLResponse(body)
-
-
-def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str, zone: str) -> str:
-    """The page of a Pareto bar's runs (in a report process: :mod:`api.report_pool`)."""
-    from station.report import html
-
-    runs = ReportQueries(repository.session, filter).failing_runs(code, FAILING_RUNS)
-    return html.failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
 
 
 @router.get(
@@ -571,21 +500,3 @@ async def get_dashboard(repository: ReportPoolDep, zone: PlantZoneDep) -> HTMLRe
     """The line dashboard: the plant's today: counts and yields, latest units, units on
     hold, Pareto, charts; it follows the line's stored runs without a reload."""
     return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC), zone))
-
-
-def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") -> str:
-    """The dashboard page at ``now`` (in a report process: :mod:`api.report_pool`): the
-    runs since the plant's midnight (its time ``zone``)."""
-    report = eol_report(
-        repository.session,
-        ReportFilter(since=start_of_day(now, zone)),
-        unit_limit=DASHBOARD_UNITS,
-        chart_points=DASHBOARD_CHART_POINTS,
-        now=now,
-        zone=zone,
-        open_holds=False,  # the dashboard lists the units on hold itself
-    )
-    from station.report import html
-
-    held = held_units(repository.session, DASHBOARD_HELD)
-    return html.dashboard_page(report, held.units, held.total, events=EVENTS_PATH)

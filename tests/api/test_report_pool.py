@@ -5,6 +5,8 @@ statement needs (PostgreSQL counts the wait toward ``statement_timeout``), or ru
 statement that never ends on its own.
 """
 
+import subprocess
+import sys
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -13,8 +15,11 @@ import pytest
 from sqlalchemy import Connection, text
 from sqlalchemy.exc import OperationalError
 
+from api.report_pool import _start
+from api.routes import reports
 from db import Database, make_engine
 from db.timeouts import is_statement_timeout
+from tests.conftest import REPO_ROOT
 from tests.servers import local_client, serving
 
 EOL = "/api/v1/reports/eol"
@@ -26,6 +31,26 @@ ENDLESS = {
     "sqlite": "WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) "
     "SELECT max(x) FROM c",
 }
+
+
+def test_a_report_process_imports_no_web_framework() -> None:
+    # A report process imports what it unpickles: the pool's initializer and the bodies
+    # the report routes hand it. Started from nothing, it must not load FastAPI for them.
+    handed = (
+        reports.eol_body,
+        reports.split_body,
+        reports.failing_runs_body,
+        reports.dashboard_body,
+    )
+    modules = sorted({_start.__module__, *(body.__module__ for body in handed)})
+    probe = (
+        f"import sys, {', '.join(modules)}; "
+        "print(sorted({'fastapi', 'starlette', 'uvicorn'} & set(sys.modules)))"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", probe], cwd=REPO_ROOT, capture_output=True, text=True, check=True
+    )
+    assert loaded.stdout.strip() == "[]", modules
 
 
 def test_a_statement_longer_than_the_timeout_is_ended(database_url: str) -> None:
