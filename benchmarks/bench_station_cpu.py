@@ -121,7 +121,7 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
     undo = instrument(events)
     serve_pty, close = VirtualPutter.serve_pty, VirtualPutter.close
     live: set[VirtualPutter] = set()
-    #: Process CPU less the putters' CPU so far, at the start of each cycle.
+    #: Process CPU less the putters' and the operator's CPU so far, at each cycle's start.
     marks: list[float] = []
 
     def station_cpu() -> float:

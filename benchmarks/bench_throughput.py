@@ -120,6 +120,10 @@ class Events:
     taken_ahead: int = 0
 
 
+#: The demo's scripted operators: their CPU is the person's and the units', not the station's.
+OPERATORS = (ScriptedOperator, FixtureOperator)
+
+
 def instrument(events: Events) -> Callable[[], None]:
     """Note plug-ins, moves, accepted captures and the putters' and the operator's CPU;
     returns the undo."""
@@ -128,7 +132,8 @@ def instrument(events: Events) -> Callable[[], None]:
     close = VirtualPutter.close
     accept = UnitRun._accept
     take = ScanAhead.take
-    scripted_read, fixture_read = ScriptedOperator.read, FixtureOperator.read
+    #: The operators' methods, kept to be restored: reading keys, and the last unplugs.
+    operating = [(cls, name, getattr(cls, name)) for cls in OPERATORS for name in ("read", "close")]
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
         url = serve_pty(self, alias)
@@ -151,11 +156,11 @@ def instrument(events: Events) -> Callable[[], None]:
         events.units[self.driver.url][-1].captures.append(result.last_seq)
         accept(self, result, target)
 
-    def operated(read: Callable[[Any], str]) -> Callable[[Any], str]:
-        def timed(self: Any) -> str:
+    def operated(method: Callable[[Any], Any]) -> Callable[[Any], Any]:
+        def timed(self: Any) -> Any:
             events.operator_since = time.thread_time()
             try:
-                return read(self)
+                return method(self)
             finally:
                 events.operator_cpu_s += time.thread_time() - events.operator_since
                 events.operator_since = None
@@ -172,8 +177,8 @@ def instrument(events: Events) -> Callable[[], None]:
     VirtualPutter.close = closed  # type: ignore[method-assign]
     UnitRun._accept = accepted  # type: ignore[method-assign]
     ScanAhead.take = taken  # type: ignore[method-assign]
-    ScriptedOperator.read = operated(scripted_read)  # type: ignore[method-assign]
-    FixtureOperator.read = operated(fixture_read)  # type: ignore[method-assign]
+    for cls, name, method in operating:
+        setattr(cls, name, operated(method))
 
     def undo() -> None:
         VirtualPutter.serve_pty = serve_pty  # type: ignore[method-assign]
@@ -181,8 +186,8 @@ def instrument(events: Events) -> Callable[[], None]:
         VirtualPutter.close = close  # type: ignore[method-assign]
         UnitRun._accept = accept  # type: ignore[method-assign]
         ScanAhead.take = take  # type: ignore[method-assign]
-        ScriptedOperator.read = scripted_read  # type: ignore[method-assign]
-        FixtureOperator.read = fixture_read  # type: ignore[method-assign]
+        for cls, name, method in operating:
+            setattr(cls, name, method)
 
     return undo
 

@@ -179,14 +179,10 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
         reasons.append(f"link lost {loss:.1%} of samples > {limits.max_loss_fraction:.1%}")
-    # A few whole-array reductions, then plain floats per axis: the live view judges a
-    # window at every pass per slot, and numpy's per-call overhead is most of the cost.
-    lows, highs = acc.min(axis=0).tolist(), acc.max(axis=0).tolist()
-    saturated = tuple(
-        axis
-        for axis, low, high in zip(AXES, lows, highs, strict=True)
-        if low <= ADC_MIN or high >= sensor.adc_max
-    )
+    # Whole-array operations, then plain floats per axis: the live view judges a window
+    # at every pass per slot, and numpy's per-call overhead is most of the cost.
+    at_rail = np.any((acc <= ADC_MIN) | (acc >= sensor.adc_max), axis=0).tolist()
+    saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
     quarter = max(1, len(block) // 4)
@@ -202,8 +198,8 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
         if (drift := abs(last / quarter - first / quarter)) > drift_max:
             reasons.append(f"accel {axis} drifted {drift:.1f} counts > {drift_max:g}")
             motion = True
-    zero, per_g = sensor.zero_g_counts, sensor.counts_per_g
-    magnitude = math.sqrt(sum(((m - zero) / per_g) ** 2 for m in summary.accel_mean.tolist()))
+    nominal_g = (summary.accel_mean - sensor.zero_g_counts) / sensor.counts_per_g
+    magnitude = math.sqrt(float(nominal_g @ nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
         motion = True
