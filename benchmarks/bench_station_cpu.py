@@ -126,10 +126,8 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
 
     def station_cpu() -> float:
         putters = events.putter_cpu_s + sum(map(putter_cpu_s, live))
-        operator = events.operator_cpu_s
-        if events.operator_since is not None:  # a cycle starts inside the operator's call
-            operator += time.thread_time() - events.operator_since
-        return time.process_time() - putters - operator
+        # A cycle starts inside the operator's call (it plugs the unit in).
+        return time.process_time() - putters - events.operator_cpu()
 
     def serve(self: VirtualPutter, alias: Any = None) -> str:
         if sum(map(len, events.units.values())) == len(marks) * slots:

@@ -119,6 +119,12 @@ class Events:
     #: Units the next cycle's scan took from the labels scanned ahead.
     taken_ahead: int = 0
 
+    def operator_cpu(self) -> float:
+        """The operator's CPU so far, its call in progress (in this thread) included."""
+        if self.operator_since is None:
+            return self.operator_cpu_s
+        return self.operator_cpu_s + time.thread_time() - self.operator_since
+
 
 #: The demo's scripted operators: their CPU is the person's and the units', not the station's.
 OPERATORS = (ScriptedOperator, FixtureOperator)
@@ -244,7 +250,7 @@ def measure(slots: int, cycles: int, capture: str, speed: float, ahead: bool) ->
         with tempfile.TemporaryDirectory() as tmp:
             cpu = time.process_time()
             records = run_station(Path(tmp), slots, cycles, capture, speed, ahead)
-            cpu = time.process_time() - cpu - events.putter_cpu_s - events.operator_cpu_s
+            cpu = time.process_time() - cpu - events.putter_cpu_s - events.operator_cpu()
     finally:
         undo()
     assert len(records) == slots * cycles
