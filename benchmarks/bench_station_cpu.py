@@ -79,11 +79,14 @@ def best_of(repeats: int, work: Callable[[], object]) -> float:
     return min(times)
 
 
+def still_stream(count: int, gyro: tuple[int, int, int] = (0, 0, 0)) -> bytes:
+    """``count`` sample frames of a putter lying face up and still, numbered from 0."""
+    return b"".join(encode_sample(i, (2048, 2048, 2867), gyro, 2500) for i in range(count))
+
+
 def parse_cost_per_frame() -> float:
     """CPU seconds to parse one sample frame through :class:`PutterLink` in big chunks."""
-    frames = b"".join(
-        encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(PARSE_FRAMES)
-    )
+    frames = still_stream(PARSE_FRAMES)
 
     def parse() -> None:
         link = PutterLink("floor", PARSE_FRAMES)
@@ -96,11 +99,7 @@ def parse_cost_per_frame() -> float:
 def pose_windows() -> list[SampleBlock]:
     """One still 1,024-sample window per pose, as the link stores them."""
     link = PutterLink("floor", POSES * WINDOW)
-    link.data_received(
-        b"".join(
-            encode_sample(i, (2048, 2048, 2867), (1, 0, 0), 2500) for i in range(POSES * WINDOW)
-        )
-    )
+    link.data_received(still_stream(POSES * WINDOW, gyro=(1, 0, 0)))
     block = link.raw.drain()
     return [block[k * WINDOW : (k + 1) * WINDOW] for k in range(POSES)]
 
@@ -134,7 +133,7 @@ def paced_floor_cost(frames: float, record: RunRecord, speed: float, slots: int)
     """
     passes = max(POSES, round(frames / (DEFAULT_RATE_HZ * speed * TICK_S)))
     count = round(frames)
-    data = b"".join(encode_sample(i, (2048, 2048, 2867), (0, 0, 0), 2500) for i in range(count))
+    data = still_stream(count)
     size = len(data) // count
     links = [PutterLink(f"floor{k}", count) for k in range(slots)]
     stillness = RunSettings().stillness
