@@ -2,6 +2,7 @@
 
     python benchmarks/bench_station_cpu.py                 # 1 and 8 slots, six cycles at 1×
     python benchmarks/bench_station_cpu.py --slots 1 --speed 2
+    python benchmarks/bench_station_cpu.py --slots 1 --tick-s 0.5   # two passes a second
 
 The **floor** is the work that follows the samples and nothing else, each part timed
 alone on this machine (best of several repeats): parsing every frame the unit streamed
@@ -29,8 +30,8 @@ own. (An earlier figure, the last cycle alone, held the compiling store whenever
 second run of one slot landed late.) That figure is compared with the floor.
 
 Beside it, **the floor's work alone at the station's pace** (:func:`paced_floor_cost`):
-the same work spread over the passes the station makes, four a second, each after a
-rest, nothing else in the process. A piece of work woken after a quarter second's rest
+the same work spread over the passes the station makes, four a second (``--tick-s``),
+each after a rest, nothing else in the process. A piece of work woken after a quarter second's rest
 takes several times its CPU in a tight loop on a virtual machine (its caches have gone
 cold), and at one slot every pass pays that for one unit. It is not a floor: in the
 station the same parse costs less than this, the pass's other work and the virtual
@@ -118,10 +119,12 @@ def judge_and_solve_cost(record: RunRecord) -> float:
     return best_of(20, work)
 
 
-def paced_floor_cost(frames: float, record: RunRecord, speed: float, slots: int) -> float:
+def paced_floor_cost(
+    frames: float, record: RunRecord, speed: float, slots: int, tick_s: float
+) -> float:
     """CPU seconds per unit of the floor's work done alone at the station's pace: each of
     ``slots`` units' ``frames`` parsed through its own link in as many pieces as the loop
-    makes passes over a unit (a pass every :data:`TICK_S` while the putters stream at
+    makes passes over a unit (a pass every ``tick_s`` while the putters stream at
     ``speed``), every slot's piece in each pass after the rest between two passes, one
     window per pose judged in the passes where the poses end and the solve in the last;
     the thread's CPU in the passes alone.
@@ -131,7 +134,7 @@ def paced_floor_cost(frames: float, record: RunRecord, speed: float, slots: int)
     operator the samples four times a second: each pass starts on caches the rest let go
     cold (see the module). Takes about one unit's time at ``speed`` of wall clock.
     """
-    passes = max(POSES, round(frames / (DEFAULT_RATE_HZ * speed * TICK_S)))
+    passes = max(POSES, round(frames / (DEFAULT_RATE_HZ * speed * tick_s)))
     count = round(frames)
     data = still_stream(count)
     size = len(data) // count
@@ -146,7 +149,7 @@ def paced_floor_cost(frames: float, record: RunRecord, speed: float, slots: int)
         for link in links:  # each link parses its piece and returns, never resting
             attended.enter_context(link.attended())
         for n in range(passes):
-            due += TICK_S
+            due += tick_s
             time.sleep(max(0.0, due - time.monotonic()))
             piece = data[n * count // passes * size : (n + 1) * count // passes * size]
             start = time.thread_time()
@@ -168,8 +171,9 @@ def putter_cpu_s(putter: VirtualPutter) -> float:
     return time.clock_gettime(time.pthread_getcpuclockid(thread.ident))
 
 
-def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
-    """``cycles`` cycles of ``slots`` units at ``speed``: floor and station CPU per unit.
+def measure(slots: int, speed: float, cycles: int, tick_s: float) -> dict[str, float]:
+    """``cycles`` cycles of ``slots`` units at ``speed``, a pass every ``tick_s``: floor
+    and station CPU per unit.
 
     Each cycle is timed from the moment its first unit is plugged in (the first from the
     station's start, the last to the station's end), the virtual putters' and the
@@ -202,7 +206,7 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
     try:
         with tempfile.TemporaryDirectory() as tmp:
             start = station_cpu()
-            records = run_station(Path(tmp), slots, cycles, "fixed", speed, ahead=False)
+            records = run_station(Path(tmp), slots, cycles, "fixed", speed, False, tick_s)
             marks.append(station_cpu())
     finally:
         VirtualPutter.serve_pty, VirtualPutter.close = serve_pty, close  # type: ignore[method-assign]
@@ -221,7 +225,7 @@ def measure(slots: int, speed: float, cycles: int) -> dict[str, float]:
     parse = parse_cost_per_frame() * frames
     judge_solve = judge_and_solve_cost(records[0])
     floor = parse + judge_solve
-    paced = paced_floor_cost(frames, records[0], speed, slots)
+    paced = paced_floor_cost(frames, records[0], speed, slots, tick_s)
     return {
         "frames": frames,
         "parse": parse,
@@ -241,13 +245,22 @@ def main() -> None:
     parser.add_argument(
         "--cycles", type=int, default=6, help=f"cycles per row (at least {FIRST_AT_WORK})"
     )
+    parser.add_argument(
+        "--tick-s",
+        type=float,
+        default=TICK_S,
+        help=f"seconds between the loop's passes (the station's: {TICK_S:g})",
+    )
     args = parser.parse_args()
     if args.cycles < FIRST_AT_WORK:
         parser.error(
             f"--cycles: at least {FIRST_AT_WORK} (the cycles before the "
             f"{FIRST_AT_WORK}th carry the station's start)"
         )
-    print(f"station CPU per unit at {args.speed:g}×, {args.cycles} cycles per row")
+    print(
+        f"station CPU per unit at {args.speed:g}×, {args.cycles} cycles per row, "
+        f"a pass every {args.tick_s:g} s"
+    )
     print(
         "| slots | frames per unit | parse | judge + solve | floor "
         "| station, first cycle | station at work | × floor "
@@ -255,7 +268,7 @@ def main() -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|")
     for slots in args.slots:
-        m = measure(slots, args.speed, args.cycles)
+        m = measure(slots, args.speed, args.cycles, args.tick_s)
         print(
             f"| {slots} | {m['frames']:.0f} | {m['parse'] * 1e3:.1f} ms "
             f"| {m['judge_solve'] * 1e3:.1f} ms | {m['floor'] * 1e3:.1f} ms "

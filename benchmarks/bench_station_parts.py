@@ -15,6 +15,7 @@ import argparse
 import functools
 import importlib
 import tempfile
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable
@@ -52,6 +53,8 @@ PARTS = (
     ("station.run.unit_run", "UnitRun", "_step_unit_output"),
     ("station.run.unit_run", "UnitRun", "_finish"),
     ("station.loop.demo", "ScriptedOperator", "read"),
+    # The store's two threads: a run stored (and the outbox synced), a unit looked up.
+    ("station.loop.results_link", "StoreWorker", "_run"),
 )
 #: Modules that import the timed functions by name: they get the timed one too.
 IMPORTERS = (
@@ -69,20 +72,22 @@ class Parts:
         self.on = False
         self.cpu_s: Counter[str] = Counter()
         self.calls: Counter[str] = Counter()
-        self._depth: Counter[str] = Counter()
+        #: Each thread's nesting of each part (the store's threads run beside the loop).
+        self._local = threading.local()
 
     def timed(self, label: str, work: Callable[..., Any]) -> Callable[..., Any]:
         @functools.wraps(work)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             if not self.on:
                 return work(*args, **kwargs)
-            self._depth[label] += 1
+            depth: Counter[str] = self._local.__dict__.setdefault("depth", Counter())
+            depth[label] += 1
             start = time.thread_time()
             try:
                 return work(*args, **kwargs)
             finally:
-                self._depth[label] -= 1
-                if not self._depth[label]:
+                depth[label] -= 1
+                if not depth[label]:
                     self.cpu_s[label] += time.thread_time() - start
                     self.calls[label] += 1
 

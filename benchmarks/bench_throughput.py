@@ -59,6 +59,7 @@ from station.loop.demo import MOVE_S, ScriptedOperator
 from station.loop.fixture.ahead import ScanAhead
 from station.loop.fixture.app import FixtureApp
 from station.loop.fixture.demo import FixtureOperator
+from station.loop.live_loop import TICK_S
 from station.results.storage import DatabaseStore
 from station.run.acquisition import PoseResult
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
@@ -199,9 +200,16 @@ def instrument(events: Events) -> Callable[[], None]:
 
 
 def run_station(
-    data: Path, slots: int, cycles: int, capture: str, speed: float, ahead: bool
+    data: Path,
+    slots: int,
+    cycles: int,
+    capture: str,
+    speed: float,
+    ahead: bool,
+    tick_s: float = TICK_S,
 ) -> list[Any]:
-    """The station on ``slots × cycles`` virtual units; their records.
+    """The station on ``slots × cycles`` virtual units, a pass every ``tick_s``; their
+    records.
 
     One slot scanning at load is today's one-port station; anything else the fixture.
     """
@@ -212,6 +220,7 @@ def run_station(
         "profile": load_profile(),
         "console": Console(quiet=True),
         "units": units,
+        "tick_s": tick_s,
     }
     operator: ScriptedOperator | FixtureOperator
     app: StationApp | FixtureApp
