@@ -31,11 +31,11 @@ second run of one slot landed late.) That figure is compared with the floor.
 
 Beside it, **the floor's work alone at the station's pace** (:func:`paced_floor_cost`):
 the same work spread over the passes the station makes, four a second (``--tick-s``),
-each after a rest, nothing else in the process. A piece of work woken after a quarter second's rest
-takes several times its CPU in a tight loop on a virtual machine (its caches have gone
-cold), and at one slot every pass pays that for one unit. It is not a floor: in the
-station the same parse costs less than this, the pass's other work and the virtual
-putters' threads keeping the caches warmer. It shows what the wakes weigh.
+each after a rest, nothing else in the process. A piece of work woken after a quarter
+second's rest takes several times its CPU in a tight loop on a virtual machine (its
+caches have gone cold), and at one slot every pass pays that for one unit. It is not a
+floor: in the station the same parse costs less than this, the pass's other work and the
+virtual putters' threads keeping the caches warmer. It shows what the wakes weigh.
 """
 
 import argparse
