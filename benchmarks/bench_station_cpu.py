@@ -131,8 +131,9 @@ def paced_floor_cost(
 
     The same work as the floor (:func:`parse_cost_per_frame`,
     :func:`judge_and_solve_cost`), spread as the station must spread it to show the
-    operator the samples four times a second: each pass starts on caches the rest let go
-    cold (see the module). Takes about one unit's time at ``speed`` of wall clock.
+    operator the samples every ``tick_s`` (four times a second at the station's pace):
+    each pass starts on caches the rest let go cold (see the module). Takes about one
+    unit's time at ``speed`` of wall clock.
     """
     passes = max(POSES, round(frames / (DEFAULT_RATE_HZ * speed * tick_s)))
     count = round(frames)
@@ -206,7 +207,9 @@ def measure(slots: int, speed: float, cycles: int, tick_s: float) -> dict[str, f
     try:
         with tempfile.TemporaryDirectory() as tmp:
             start = station_cpu()
-            records = run_station(Path(tmp), slots, cycles, "fixed", speed, False, tick_s)
+            records = run_station(
+                Path(tmp), slots, cycles, "fixed", speed, ahead=False, tick_s=tick_s
+            )
             marks.append(station_cpu())
     finally:
         VirtualPutter.serve_pty, VirtualPutter.close = serve_pty, close  # type: ignore[method-assign]
@@ -249,9 +252,12 @@ def main() -> None:
         "--tick-s",
         type=float,
         default=TICK_S,
-        help=f"seconds between the loop's passes (the station's: {TICK_S:g})",
+        help=f"wall-clock seconds between the loop's passes, whatever --speed (the "
+        f"station's: {TICK_S:g})",
     )
     args = parser.parse_args()
+    if args.tick_s <= 0:
+        parser.error("--tick-s: more than 0")
     if args.cycles < FIRST_AT_WORK:
         parser.error(
             f"--cycles: at least {FIRST_AT_WORK} (the cycles before the "

@@ -2,13 +2,14 @@
 
     python benchmarks/bench_station_parts.py              # 8 units at 1×, about 4 minutes
     python benchmarks/bench_station_parts.py --units 12
+    python benchmarks/bench_station_parts.py --tick-s 1   # a pass a second
 
 Runs the one-port station on virtual units at real speed, as ``bench_station_cpu.py``
-does, with each part below wrapped to add up its ``time.thread_time`` (the outermost call
-only, where a part calls itself). The sums start when the fourth unit is plugged in, as
-the station's figure at work does (the first units carry the station's start and the
-store's first statements). The wrappers add a little to every part. Prints a Markdown
-table, dearest first.
+does, with each part below wrapped to add up its ``time.thread_time`` (the outermost
+call in each thread only, where a part calls itself). The sums start when the fourth
+unit is plugged in, as the station's figure at work does (the first units carry the
+station's start and the store's first statements). The wrappers add a little to every
+part. Prints a Markdown table, dearest first.
 """
 
 import argparse
@@ -25,6 +26,7 @@ from typing import Any
 from bench_station_cpu import FIRST_AT_WORK
 from bench_throughput import run_station
 
+from station.loop.live_loop import TICK_S
 from station.simulator.putter import VirtualPutter
 
 #: (module, class or None for a function, name): the parts timed.
@@ -65,22 +67,32 @@ IMPORTERS = (
 )
 
 
+class Nesting(threading.local):
+    """How deep each part is in this thread's calls (the store's and the reader's threads
+    run beside the loop's)."""
+
+    def __init__(self) -> None:
+        self.depth: Counter[str] = Counter()
+
+
 class Parts:
-    """Thread CPU and calls of each part, while :attr:`on`."""
+    """Thread CPU and calls of each part, while :attr:`on`, summed over the threads."""
 
     def __init__(self) -> None:
         self.on = False
         self.cpu_s: Counter[str] = Counter()
         self.calls: Counter[str] = Counter()
-        #: Each thread's nesting of each part (the store's threads run beside the loop).
-        self._local = threading.local()
+        self._nesting = Nesting()
+        #: The sums are added to from several threads (the parse runs in the loop's and
+        #: the reader's, the store's work in two).
+        self._sums = threading.Lock()
 
     def timed(self, label: str, work: Callable[..., Any]) -> Callable[..., Any]:
         @functools.wraps(work)
         def wrapper(*args: Any, **kwargs: Any) -> Any:
             if not self.on:
                 return work(*args, **kwargs)
-            depth: Counter[str] = self._local.__dict__.setdefault("depth", Counter())
+            depth = self._nesting.depth
             depth[label] += 1
             start = time.thread_time()
             try:
@@ -88,8 +100,10 @@ class Parts:
             finally:
                 depth[label] -= 1
                 if not depth[label]:
-                    self.cpu_s[label] += time.thread_time() - start
-                    self.calls[label] += 1
+                    spent = time.thread_time() - start
+                    with self._sums:
+                        self.cpu_s[label] += spent
+                        self.calls[label] += 1
 
         return wrapper
 
@@ -111,9 +125,17 @@ def instrument(parts: Parts) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--units", type=int, default=8, help=f"more than {FIRST_AT_WORK - 1}")
+    parser.add_argument(
+        "--tick-s",
+        type=float,
+        default=TICK_S,
+        help=f"seconds between the loop's passes (the station's: {TICK_S:g})",
+    )
     args = parser.parse_args()
     if args.units < FIRST_AT_WORK:
         parser.error(f"--units: at least {FIRST_AT_WORK}")
+    if args.tick_s <= 0:
+        parser.error("--tick-s: more than 0")
     parts = Parts()
     instrument(parts)
     serve_pty = VirtualPutter.serve_pty
@@ -126,11 +148,16 @@ def main() -> None:
 
     VirtualPutter.serve_pty = serve  # type: ignore[method-assign]
     with tempfile.TemporaryDirectory() as tmp:
-        records = run_station(Path(tmp), 1, args.units, "fixed", 1.0, ahead=False)
+        records = run_station(
+            Path(tmp), 1, args.units, "fixed", 1.0, ahead=False, tick_s=args.tick_s
+        )
     parts.on = False
     assert all(r.verdict == "pass" for r in records), [r.failures for r in records]
     at_work = args.units - FIRST_AT_WORK + 1
-    print(f"one slot at 1×, per unit of the {at_work} from the {FIRST_AT_WORK}th on")
+    print(
+        f"one slot at 1×, a pass every {args.tick_s:g} s, "
+        f"per unit of the {at_work} from the {FIRST_AT_WORK}th on"
+    )
     print("| part | CPU a unit | calls a unit |\n|---|---|---|")
     for label, cpu_s in parts.cpu_s.most_common():
         calls = parts.calls[label] / at_work
