@@ -40,6 +40,7 @@ virtual putters' threads keeping the caches warmer. It shows what the wakes weig
 
 import argparse
 import contextlib
+import math
 import statistics
 import tempfile
 import time
@@ -164,6 +165,29 @@ def paced_floor_cost(
     return cpu / slots
 
 
+def seconds_between_passes(text: str) -> float:
+    """``--tick-s``: a positive, finite number of seconds."""
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0 < seconds < math.inf:
+        raise argparse.ArgumentTypeError(f"seconds, more than 0, got {text!r}")
+    return seconds
+
+
+def add_tick_option(parser: argparse.ArgumentParser) -> None:
+    """``--tick-s``: the wall-clock seconds between the station's passes (this script's and
+    ``bench_station_parts.py``'s)."""
+    parser.add_argument(
+        "--tick-s",
+        type=seconds_between_passes,
+        default=TICK_S,
+        help=f"wall-clock seconds between the loop's passes, whatever the speed (the "
+        f"station's: {TICK_S:g})",
+    )
+
+
 def putter_cpu_s(putter: VirtualPutter) -> float:
     """CPU seconds a virtual putter's thread has used so far (0 once it has ended)."""
     thread = putter._thread
@@ -248,16 +272,8 @@ def main() -> None:
     parser.add_argument(
         "--cycles", type=int, default=6, help=f"cycles per row (at least {FIRST_AT_WORK})"
     )
-    parser.add_argument(
-        "--tick-s",
-        type=float,
-        default=TICK_S,
-        help=f"wall-clock seconds between the loop's passes, whatever --speed (the "
-        f"station's: {TICK_S:g})",
-    )
+    add_tick_option(parser)
     args = parser.parse_args()
-    if args.tick_s <= 0:
-        parser.error("--tick-s: more than 0")
     if args.cycles < FIRST_AT_WORK:
         parser.error(
             f"--cycles: at least {FIRST_AT_WORK} (the cycles before the "

@@ -23,10 +23,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from bench_station_cpu import FIRST_AT_WORK
+from bench_station_cpu import FIRST_AT_WORK, add_tick_option
 from bench_throughput import run_station
 
-from station.loop.live_loop import TICK_S
 from station.simulator.putter import VirtualPutter
 
 #: (module, class or None for a function, name): the parts timed.
@@ -125,17 +124,10 @@ def instrument(parts: Parts) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--units", type=int, default=8, help=f"more than {FIRST_AT_WORK - 1}")
-    parser.add_argument(
-        "--tick-s",
-        type=float,
-        default=TICK_S,
-        help=f"seconds between the loop's passes (the station's: {TICK_S:g})",
-    )
+    add_tick_option(parser)
     args = parser.parse_args()
     if args.units < FIRST_AT_WORK:
         parser.error(f"--units: at least {FIRST_AT_WORK}")
-    if args.tick_s <= 0:
-        parser.error("--tick-s: more than 0")
     parts = Parts()
     instrument(parts)
     serve_pty = VirtualPutter.serve_pty
