@@ -5,14 +5,24 @@ unit; the server recomputes them with :func:`station.domain.calibration.solve` f
 poses (with the residual limit of the run's own limits profile, so a pose the station
 left out as inconsistent is left out again) and refuses the run when they disagree beyond
 the tolerances below, or when the poses left out differ.
+
+The poses are screened as the station screened them: in the counts of the run's own
+product's sensor (its rails, its counts per g; a DIXX-D16 run in 16-bit counts, never the
+12-bit putter's). A product this server does not ship (a station's own products file) has
+no sensor here: its run is re-solved over the wire's whole range, with the sensitivity the
+station submitted as counts per g; the arithmetic is checked, its rails were the
+station's to check.
 """
 
 import numpy as np
 
-from station.domain.calibration import CalibrationError, solve
+from station.domain.calibration import CalibrationError, GeometryLimits, solve
 from station.domain.errors import CalstationError
 from station.domain.limits import profile_of
-from station.domain.records import RunRecord
+from station.domain.products import shipped_sensor
+from station.domain.record_bounds import WIRE_COUNTS_MAX
+from station.domain.records import Coefficients, RunRecord
+from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 #: Offsets may differ by this much, counts (floating-point noise is ~1e-9).
 OFFSET_TOLERANCE_COUNTS = 1e-3
@@ -22,6 +32,24 @@ RELATIVE_TOLERANCE = 1e-6
 
 class CalibrationMismatchError(CalstationError):
     """The submitted coefficients are not what the submitted poses give."""
+
+
+def sensor_of(record: RunRecord, submitted: Coefficients) -> SensorSpec:
+    """The sensor whose counts ``record``'s poses are: its shipped product's, or for a
+    product this server does not know, the wire's range at the submitted sensitivity."""
+    shipped = shipped_sensor(record.part_number)
+    if shipped is not None:
+        return shipped
+    counts_per_g = max(float(np.mean(np.abs(submitted.sensitivity.as_tuple()))), 1.0)
+    middle = WIRE_COUNTS_MAX / 2
+    return PUTTER_SENSOR.model_copy(
+        update={
+            "adc_bits": WIRE_COUNTS_MAX.bit_length(),
+            "zero_g_counts": middle,
+            "counts_per_g": counts_per_g,
+            "range_g": min(200.0, middle / counts_per_g),
+        }
+    )
 
 
 def check_coefficients(record: RunRecord) -> None:
@@ -37,7 +65,12 @@ def check_coefficients(record: RunRecord) -> None:
     profile = profile_of(record.limits)
     limit = None if profile is None else profile.max_residual_counts
     try:
-        solution = solve(poses, model=record.model, max_residual_counts=limit)
+        solution = solve(
+            poses,
+            model=record.model,
+            limits=GeometryLimits(sensor=sensor_of(record, submitted)),
+            max_residual_counts=limit,
+        )
     except (CalibrationError, np.linalg.LinAlgError, FloatingPointError) as exc:
         # Numerical failures on absurd poses are the poses' fault too, not the server's.
         raise CalibrationMismatchError(

@@ -4,16 +4,27 @@ answer and the end-of-line report carry it and filter by it."""
 import csv
 import html
 import io
+import json
+import os
 import re
 from datetime import timedelta
+from pathlib import Path
 
 import httpx
+import pytest
 from sqlalchemy import text
 
 from db import Database, RunRepository
+from station.domain.limits import load_profile
+from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
+from tests.servers import STATION
 
 RANGE = {"from": "2026-11-01T00:00Z", "to": "2026-11-04T00:00Z"}
+#: A product the server does not ship (a plant's own products file): a 14-bit sensor.
+OWN_PRODUCT = "PLANT-X14"
+#: A DIXX-D16 unit's coefficients: 16-bit counts around 32 768, 8 192 counts/g.
+D16_UNIT = {"offset": (33010.5, 32540.25, 31980.0), "sensitivity": (8150.0, 8240.5, 8190.0)}
 
 
 def _store(database: Database) -> None:
@@ -148,10 +159,68 @@ def test_the_eol_report_has_a_row_per_product_in_json_csv_and_html(
 def test_a_submitted_run_keeps_its_product_and_a_retry_is_the_same_run(
     client: httpx.Client, station_key: str
 ) -> None:
-    record = make_record(serial="PT-000201", part_number="DIXX-D16")
+    record = make_record(serial="PT-000201", part_number="DIXX-D16", **D16_UNIT)
     headers = {"Authorization": f"Bearer {station_key}"}
     body = record.model_dump(mode="json")
     assert client.post("/api/v1/runs", json=body, headers=headers).status_code == 201
     assert client.post("/api/v1/runs", json=body, headers=headers).status_code == 200
-    other = {**body, "part_number": "DIXX-A12"}
+    other = {**body, "part_number": OWN_PRODUCT}
     assert client.post("/api/v1/runs", json=other, headers=headers).status_code == 409
+
+
+@pytest.mark.parametrize(
+    ("part_number", "offset", "sensitivity"),
+    [
+        ("DIXX-D16", D16_UNIT["offset"], D16_UNIT["sensitivity"]),
+        (OWN_PRODUCT, (8250.0, 8120.0, 8190.0), (2040.0, 2052.0, 2049.5)),
+    ],
+    ids=["d16", "own-product"],
+)
+def test_the_server_verifies_a_run_in_its_own_products_counts(
+    client: httpx.Client,
+    station_key: str,
+    part_number: str,
+    offset: tuple[float, float, float],
+    sensitivity: tuple[float, float, float],
+) -> None:
+    """A DIXX-D16 run reads tens of thousands of counts, far beyond the putter's 12-bit
+    rails: the server re-solves it in its own sensor's counts and stores it; tampered
+    coefficients of the same run are still refused."""
+    headers = {"Authorization": f"Bearer {station_key}"}
+    limits = load_profile(name="dixx-d16-production").ref.model_dump(mode="json")
+    record = make_record(
+        part_number=part_number, offset=offset, sensitivity=sensitivity, limits=limits
+    )
+    body = record.model_dump(mode="json")
+    answer = client.post("/api/v1/runs", json=body, headers=headers)
+    assert answer.status_code == 201, answer.text
+    assert answer.json()["part_number"] == part_number
+    tampered = make_record(
+        part_number=part_number, offset=offset, sensitivity=sensitivity, limits=limits
+    ).model_dump(mode="json")
+    tampered["coefficients"]["offset"]["y"] += 1.0
+    refused = client.post("/api/v1/runs", json=tampered, headers=headers)
+    assert refused.status_code == 422, refused.text
+    assert refused.json()["errors"][0]["msg"].startswith("offset[1]")
+
+
+@pytest.mark.timeout(120)
+def test_a_d16_station_stores_its_runs_through_the_server(
+    run_cli: CliRunner, tmp_path: Path, live_url: str, station_key: str, client: httpx.Client
+) -> None:
+    """issue 42's reproduction: ``demo --config`` of a station storing through the server,
+    two DIXX-D16 putters: both runs stored, none set aside as refused."""
+    config = tmp_path / "station.toml"
+    config.write_text(f'server_url = "{live_url}"\napi_key = "{station_key}"\n')
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")}
+    env["CALSTATION_DATA_DIR"] = str(tmp_path / "data")
+    result = run_cli(
+        "demo", "--config", str(config), "--station", STATION, "--part-number", "DIXX-D16",
+        "--units", "2", "--speed", "20", "--json", env=env, timeout=110,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert [u["verdict"] for u in json.loads(result.stdout)] == ["pass", "pass"]
+    refused = tmp_path / "data" / "outbox" / "refused"
+    assert not refused.exists() or not any(refused.iterdir())
+    runs = client.get("/api/v1/runs", params={"part_number": "DIXX-D16"}).json()["data"]
+    assert len(runs) == 2
