@@ -23,8 +23,9 @@ from tests.servers import STATION
 RANGE = {"from": "2026-11-01T00:00Z", "to": "2026-11-04T00:00Z"}
 #: A product the server does not ship (a plant's own products file): a 14-bit sensor.
 OWN_PRODUCT = "PLANT-X14"
-#: A DIXX-D16 unit's coefficients: 16-bit counts around 32 768, 8 192 counts/g.
-D16_UNIT = {"offset": (33010.5, 32540.25, 31980.0), "sensitivity": (8150.0, 8240.5, 8190.0)}
+#: A DIXX-D16 unit's offset and sensitivity: 16-bit counts around 32 768, 8 192 counts/g.
+D16_OFFSET = (33010.5, 32540.25, 31980.0)
+D16_SENSITIVITY = (8150.0, 8240.5, 8190.0)
 
 
 def _store(database: Database) -> None:
@@ -159,7 +160,9 @@ def test_the_eol_report_has_a_row_per_product_in_json_csv_and_html(
 def test_a_submitted_run_keeps_its_product_and_a_retry_is_the_same_run(
     client: httpx.Client, station_key: str
 ) -> None:
-    record = make_record(serial="PT-000201", part_number="DIXX-D16", **D16_UNIT)
+    record = make_record(
+        serial="PT-000201", part_number="DIXX-D16", offset=D16_OFFSET, sensitivity=D16_SENSITIVITY
+    )
     headers = {"Authorization": f"Bearer {station_key}"}
     body = record.model_dump(mode="json")
     assert client.post("/api/v1/runs", json=body, headers=headers).status_code == 201
@@ -171,7 +174,7 @@ def test_a_submitted_run_keeps_its_product_and_a_retry_is_the_same_run(
 @pytest.mark.parametrize(
     ("part_number", "offset", "sensitivity"),
     [
-        ("DIXX-D16", D16_UNIT["offset"], D16_UNIT["sensitivity"]),
+        ("DIXX-D16", D16_OFFSET, D16_SENSITIVITY),
         (OWN_PRODUCT, (8250.0, 8120.0, 8190.0), (2040.0, 2052.0, 2049.5)),
     ],
     ids=["d16", "own-product"],
