@@ -11,7 +11,6 @@ axis or pose) rather than free text.
 """
 
 import math
-import tomllib
 from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
@@ -45,6 +44,7 @@ from station.domain.records import (
     LimitsRef,
     document_sha256,
 )
+from station.domain.toml_text import parse_toml
 from station.domain.unit_state import DEFAULT_RETEST_LIMIT
 
 DEFAULT_PROFILE = "kxm52-production"
@@ -382,12 +382,7 @@ def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:
     nested deeper than the TOML reader's recursion goes (``x = [[[…]]]`` 900 deep) is
     one, not a ``RecursionError``.
     """
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{shown}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise InputError(f"{shown}: not a limits file: its values are nested too deeply") from None
+    data = parse_toml(text, shown)
     tables = data.get("profiles")
     if not isinstance(tables, dict) or not tables:
         raise InputError(f"{shown}: no [profiles.NAME] tables")

@@ -16,7 +16,6 @@ then a regular expression with named groups ``serial`` (required), ``part_number
 """
 
 import re
-import tomllib
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -29,6 +28,7 @@ from station.domain.errors import InputError, validation_problem
 from station.domain.limits import LimitsProfile
 from station.domain.run_settings import shipped_plan
 from station.domain.sensor_spec import SensorSpec
+from station.domain.toml_text import parse_toml
 
 
 class Product(BaseModel):
@@ -109,10 +109,7 @@ class Products(BaseModel):
 
 def parse_products(text: str, shown: str) -> Products:
     """The products of a TOML document ``text`` (``shown`` names it in errors)."""
-    try:
-        tables = tomllib.loads(text).get("products")
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{shown}: not valid TOML: {exc}") from None
+    tables = parse_toml(text, shown).get("products")
     if not isinstance(tables, dict) or not tables:
         raise InputError(f"{shown}: no [products.PART_NUMBER] table")
     products: dict[str, Product] = {}

@@ -5,7 +5,6 @@ Values come, last one winning, from the defaults here, a TOML file (``--config``
 """
 
 import re
-import tomllib
 from pathlib import Path
 from typing import Any, Self
 from urllib.parse import urlsplit
@@ -20,6 +19,7 @@ from station.domain.limits import load_profile
 from station.domain.products import LabelFormat, Product, Products, load_products
 from station.domain.quality.golden import GoldenUnit
 from station.domain.run_settings import RunSettings, shipped_plan
+from station.domain.toml_text import parse_toml
 from station.results.storage import DatabaseUrl, DataDir, default_data_dir
 
 #: Serial numbers on the putters' labels: PT and six digits.
@@ -182,13 +182,12 @@ def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
     values: dict[str, Any] = {}
     if path is not None:
         try:
-            values = tomllib.loads(path.read_text(encoding="utf-8"))
+            text = path.read_text(encoding="utf-8")
         except OSError as exc:
             raise InputError(
                 f"{path}: cannot read the station configuration: {exc.strerror}"
             ) from None
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(f"{path}: not valid TOML: {exc}") from None
+        values = parse_toml(text, str(path))
     if overrides.get("slots"):  # ports on the command line replace the file's
         values.pop("port", None)
         values.pop("slots", None)

@@ -400,7 +400,7 @@ def test_a_slow_webhook_gets_each_alert_once_from_two_server_processes(
         (None, "No such file or directory"),
         ('webhook = "nope"\n', "webhook: Input should be a valid URL"),
         ('webhook = "http://h/x"\n[[yield]]\nunits = 0\ngoal = 0.9\n', "yield.0.units"),
-        ("webhook = [", "not TOML"),
+        ("webhook = [", "not valid TOML"),
     ],
 )
 def test_an_unusable_alerts_file_stops_the_server_with_one_line(

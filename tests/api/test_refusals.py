@@ -161,12 +161,13 @@ SHIPPED_WITH_OFFSETS = (
     [
         ('[profiles.deep]\nversion = "1"\nx = ' + "[" * 900 + "]" * 900, "nested too deeply"),
         ("[profiles]\nx = 1\n", "profiles.x is not a table"),
+        ("x = " + "9" * 4301, "Exceeds the limit (4300 digits) for integer string conversion"),
         (
             SHIPPED_WITH_OFFSETS.replace("{OFFSETS}", "{ lower = -1e308, upper = 1e308 }"),
             "profile kxm52-production: offset_counts: Value error, lower -1e+308 outside",
         ),
     ],
-    ids=["nested-900-deep", "profile-not-a-table", "bounds-1e308"],
+    ids=["nested-900-deep", "profile-not-a-table", "integer-4301-digits", "bounds-1e308"],
 )
 def test_an_unusable_what_if_file_is_422_with_one_line_naming_the_problem(
     client: httpx.Client, station_key: str, content: str, words: str

@@ -49,7 +49,6 @@ The rules file is TOML (``CALSTATION_ALERTS_FILE``)::
     hours = 1
 """
 
-import tomllib
 from datetime import datetime
 from typing import Annotated, Literal
 
@@ -59,6 +58,7 @@ from station.domain.constants import Identifier
 from station.domain.errors import InputError, validation_problem
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.parameters import COEFFICIENTS
+from station.domain.toml_text import parse_toml
 
 #: The kinds of rule.
 RuleKind = Literal["yield", "silent", "western_electric", "cpk", "outbox"]
@@ -143,9 +143,7 @@ def parse_alert_rules(text: str, shown: str) -> AlertRules:
     """The rules of a TOML file (``shown``: its name in a problem), or an
     :class:`InputError` naming what is wrong."""
     try:
-        return AlertRules.model_validate(tomllib.loads(text))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{shown}: not TOML: {exc}") from None
+        return AlertRules.model_validate(parse_toml(text, shown))
     except ValidationError as exc:
         raise InputError(f"{shown}: {validation_problem(exc)}") from None
 

@@ -117,6 +117,24 @@ def test_bad_options_are_one_line_and_exit_2(
     assert len(result.stderr.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("command", [("report",), ("solve", "poses.csv")])
+def test_a_limits_file_with_a_huge_integer_is_one_line_and_exit_2(
+    run_cli: CliRunner, tmp_path: Path, command: tuple[str, ...]
+) -> None:
+    """An integer of 4 301 digits is more than Python converts: the TOML reader's
+    ValueError is the file's problem, named in one line, never a traceback."""
+    limits = tmp_path / "big.toml"
+    limits.write_text('[profiles.big]\nversion = "1"\nretest_limit = ' + "9" * 4301 + "\n")
+    (tmp_path / "poses.csv").write_text("ax,ay,az\n2031,1999,1143\n")
+    result = run_cli(
+        *command, "--limits", str(limits), cwd=tmp_path, env=_env(CALSTATION_DATA_DIR=str(tmp_path))
+    )
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.startswith("calstation: error: "), result.stderr
+    assert f"{limits}: not valid TOML: Exceeds the limit (4300 digits)" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.usefixtures("line")
 def test_the_plants_time_zone_reads_the_bounds_and_counts_its_days(
     call_cli: CliRunner, database_url: str

@@ -124,6 +124,7 @@ def test_bounds_contain_exactly_the_closed_interval(low: float, width: float, va
         (PROFILE + "bogus = 1\n", "profile line-a: bogus"),
         (PROFILE + "x = " + "[" * 900 + "]" * 900, "nested too deeply"),
         ("[profiles]\nx = 1\n", "profiles.x is not a table"),
+        (PROFILE + "x = " + "9" * 4301, r"Exceeds the limit \(4300 digits\)"),
     ],
 )
 def test_bad_profile_files_name_the_problem(tmp_path: Path, content: str, message: str) -> None:
