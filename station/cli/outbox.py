@@ -86,12 +86,17 @@ def show_command(
 ) -> None:
     """One run's record as stored in the outbox, and why it was set aside."""
     from station.results.outbox_admin import find
+    from station.results.outbox_files import UnreadableRecordError, read_bytes
 
     entry = find(_outbox(config_file, data_dir), run_id)
     out.print(f"{entry.state}: {entry.path}", markup=False)
     if entry.reason:
         out.print(f"reason: {entry.reason}", markup=False)
-    data = entry.path.read_bytes()
+    try:
+        data = read_bytes(entry.path)
+    except UnreadableRecordError as exc:
+        out.print(f"({exc})", markup=False)
+        return
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:

@@ -2,13 +2,18 @@
 
 A file in the outbox may be torn (power cut while another tool wrote it), empty, binary,
 not UTF-8, or a record that no longer validates (the model's bounds grew stricter
-since it was written). None of these may stop the outbox: the file is moved aside,
-next to a ``.reason.txt`` naming the problem, and kept for a person to look at
-(``calstation outbox``).
+since it was written); or no file at all under a record's name: a FIFO, a directory, a
+symbolic link, a device. None of these may stop the outbox: it is moved aside, next to
+a ``.reason.txt`` naming the problem, and kept for a person to look at (``calstation
+outbox``). A path is opened without following a link and without blocking (a FIFO
+with no writer would hold the sender and ``outbox list`` forever), and read only when
+it is a regular file.
 """
 
 import json
 import logging
+import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,12 +33,50 @@ class UnreadableRecordError(CalstationError):
     """An outbox file that is not a valid run record; the message is the reason."""
 
 
-def read_record(path: Path) -> RunRecord:
-    """The run record in ``path``; :class:`UnreadableRecordError` names why not."""
+#: What a path that is not a regular file is, by its ``st_mode`` type.
+_NOT_A_FILE = {
+    stat.S_IFIFO: "a FIFO",
+    stat.S_IFDIR: "a directory",
+    stat.S_IFLNK: "a symbolic link",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFSOCK: "a socket",
+}
+
+
+def read_bytes(path: Path) -> bytes:
+    """The bytes of the regular file ``path``; :class:`UnreadableRecordError` names why
+    not (what the path is when it is no regular file). Never blocks, never follows a
+    link."""
+    kind = _kind(path)
+    if kind is not None:
+        raise UnreadableRecordError(f"not a record file: {kind}")
     try:
-        data = path.read_bytes()
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_NOFOLLOW)
     except OSError as exc:
         raise UnreadableRecordError(f"cannot read the file: {exc.strerror or exc}") from None
+    with os.fdopen(fd, "rb") as handle:
+        kind = _NOT_A_FILE.get(stat.S_IFMT(os.fstat(fd).st_mode))  # replaced meanwhile
+        if kind is not None:
+            raise UnreadableRecordError(f"not a record file: {kind}")
+        try:
+            return handle.read()
+        except OSError as exc:
+            raise UnreadableRecordError(f"cannot read the file: {exc.strerror or exc}") from None
+
+
+def _kind(path: Path) -> str | None:
+    """What ``path`` is when it is no regular file (None: a regular file, or gone)."""
+    try:
+        mode = path.lstat().st_mode
+    except OSError:
+        return None
+    return _NOT_A_FILE.get(stat.S_IFMT(mode))
+
+
+def read_record(path: Path) -> RunRecord:
+    """The run record in ``path``; :class:`UnreadableRecordError` names why not."""
+    data = read_bytes(path)
     if not data.strip():
         raise UnreadableRecordError("empty file")
     try:
@@ -71,8 +114,8 @@ def summarise(path: Path) -> FileSummary:
     """Run id, serial and verdict of ``path`` as far as its JSON gives them."""
     fields: dict[str, Any] = {}
     try:
-        loaded = json.loads(path.read_bytes())
-    except (OSError, ValueError):
+        loaded = json.loads(read_bytes(path))
+    except (UnreadableRecordError, ValueError):
         loaded = None
     if isinstance(loaded, dict):
         fields = {k: v for k, v in loaded.items() if isinstance(v, str)}

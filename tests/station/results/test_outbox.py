@@ -25,6 +25,7 @@ from station.results.journal import DiscardedJournal, JournalFile, RunJournal
 from station.results.outbox import Outbox
 from station.results.outbox_files import UnreadableRecordError, read_record, reason_of
 from station.results.storage import DatabaseStore, HttpStore, SubmitOutcome
+from tests.conftest import CliRunner
 from tests.db.records import make_record
 from tests.station.results.test_storage import poison
 
@@ -361,3 +362,44 @@ def test_a_poison_run_the_server_fails_on_never_holds_up_the_runs_behind_it(
         assert database.is_sqlite
     else:
         assert result.failing + result.refused + result.unreadable == 1
+
+
+def _not_a_file(kind: str, path: Path, elsewhere: Path) -> None:
+    """Make ``path`` a FIFO, a directory or a symbolic link to a valid record."""
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "directory":
+        path.mkdir()
+        (path / "inside.json").write_bytes(GOOD)
+    else:
+        elsewhere.write_bytes(GOOD)
+        path.symlink_to(elsewhere)
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("kind", "reason"),
+    [("fifo", "a FIFO"), ("directory", "a directory"), ("symlink", "a symbolic link")],
+)
+def test_a_path_that_is_no_file_is_set_aside_unopened_and_the_runs_behind_it_are_stored(
+    tmp_path: Path, database: Database, run_cli: CliRunner, kind: str, reason: str
+) -> None:
+    """A FIFO named like a record would block a reader with no writer forever: the
+    sender and ``outbox list`` go by it without opening it, and it is set aside."""
+    outbox = Outbox(tmp_path / "data" / "outbox")
+    odd = outbox.directory / f"{uuid4()}.json"
+    _not_a_file(kind, odd, tmp_path / "elsewhere.json")
+    outbox.put(make_record(serial="PT-1"))
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CALSTATION_")}
+    env["CALSTATION_DATA_DIR"] = str(tmp_path / "data")
+    listed = run_cli("outbox", "list", env=env, timeout=30)
+    assert listed.returncode == 0, listed.stderr
+    assert odd.stem[:8] in listed.stdout
+    result = outbox.sync(DatabaseStore(database=database))
+    assert (result.stored, result.unreadable, result.pending) == (1, 1, 0)
+    kept = outbox.unreadable_dir / odd.name
+    assert os.path.lexists(kept)  # nothing removed: set aside as it was
+    assert reason_of(kept) == f"not a record file: {reason}"
+    shown = run_cli("outbox", "show", odd.stem, env=env, timeout=30)
+    assert shown.returncode == 0, shown.stderr
+    assert f"(not a record file: {reason})" in shown.stdout
