@@ -118,44 +118,40 @@ async def require_key(credentials: CredentialsDep, readers: ReadersDep) -> KeyHo
     return await _key_holder(credentials, readers)
 
 
+def _holder_in_scope(holder: KeyHolder, scope: str, needs: str) -> str:
+    """``holder``'s name when its key is of ``scope``; else a 403 naming the key's own
+    scope and holder, and what ``needs`` (what the request stores) takes."""
+    if holder.scope != scope:
+        raise HTTPException(
+            status.HTTP_403_FORBIDDEN,
+            f"this API key belongs to {holder.scope} {holder.holder}: {needs} "
+            f"(calstation keys create --{scope} ID)",
+        )
+    return holder.holder
+
+
 async def require_station(credentials: CredentialsDep, sessions: SessionsDep) -> str:
-    """The station whose key authorises a submission of runs; 403 for a lab key.
+    """The station whose key authorises a submission of runs; 403 for any other key.
 
     Looked up on the submissions' own pool: report readers never hold up a station.
     """
     holder = await _key_holder(credentials, sessions)
-    if holder.scope != "station":
-        raise HTTPException(
-            status.HTTP_403_FORBIDDEN,
-            f"this API key belongs to lab {holder.holder}: runs need their station's key "
-            "(calstation keys create --station ID)",
-        )
-    return holder.holder
+    return _holder_in_scope(holder, "station", "runs need their station's key")
 
 
 async def require_lab(credentials: CredentialsDep, sessions: SessionsDep) -> str:
-    """The lab whose key authorises storing a gyro fit; 403 for a station key."""
+    """The lab whose key authorises storing a gyro fit; 403 for any other key."""
     holder = await _key_holder(credentials, sessions)
-    if holder.scope != "lab":
-        raise HTTPException(
-            status.HTTP_403_FORBIDDEN,
-            f"this API key belongs to station {holder.holder}: gyro fits need a lab key "
-            "(calstation keys create --lab ID)",
-        )
-    return holder.holder
+    return _holder_in_scope(holder, "lab", "gyro fits need a lab key")
 
 
 async def require_quality(credentials: CredentialsDep, sessions: SessionsDep) -> str:
-    """The quality engineer whose key authorises a review of a unit on hold; 403 for
-    any other key."""
+    """The quality engineer whose key authorises a review of a unit on hold or keeps a
+    what-if's candidate profile; 403 for any other key."""
     holder = await _key_holder(credentials, sessions)
-    if holder.scope != "quality":
-        raise HTTPException(
-            status.HTTP_403_FORBIDDEN,
-            f"this API key belongs to {holder.scope} {holder.holder}: reviews of units on "
-            "hold need a quality key (calstation keys create --quality ID)",
-        )
-    return holder.holder
+    return _holder_in_scope(
+        holder, "quality", "reviews of units on hold and kept what-ifs need a quality key"
+    )
 
 
 StationDep = Annotated[str, Depends(require_station)]

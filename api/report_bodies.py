@@ -56,12 +56,15 @@ def eol_body(
     format: str,
     plant: Plant,
     candidate: LimitsProfile | None,
+    candidate_kept: bool = False,
 ) -> str:
-    """The end-of-line report rendered as ``format``."""
+    """The end-of-line report rendered as ``format``; ``candidate_kept``: the what-if's
+    candidate is stored (a link to it answers it again)."""
     report = eol_report(
         repository.session,
         filter,
         candidate=candidate,
+        candidate_kept=candidate_kept,
         unit_limit=pages.size,
         unit_offset=pages.offset,
         held_only=pages.held,

@@ -930,8 +930,10 @@ def _what_if(
     candidate: LimitsProfile,
     current: _Counts,
     hours: float | None,
+    kept: bool,
 ) -> WhatIf:
-    """The runs in range re-judged against ``candidate``: yields, Pareto, capability."""
+    """The runs in range re-judged against ``candidate``: yields, Pareto, capability;
+    ``kept``: the candidate is stored (its link answers it again)."""
     judged = rejudged(queries.session, queries.conditions(), candidate)
     counts = replace(
         current,
@@ -951,6 +953,7 @@ def _what_if(
         fail_to_pass=judged.fail_to_pass,
         flips=judged.flips,
         flips_total=judged.flips_total,
+        kept=kept,
     )
 
 
@@ -1025,6 +1028,7 @@ def eol_report(
     unit_offset: int = 0,
     shifts: Sequence[time] = (),
     open_holds: bool = True,
+    candidate_kept: bool = False,
 ) -> EolReport:
     """The end-of-line report over the runs ``filter`` selects.
 
@@ -1035,7 +1039,7 @@ def eol_report(
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
     held units (latest run failed), ``unit_offset`` skips the newest (pages);
-    ``open_holds``: count the open holds too.
+    ``open_holds``: count the open holds too; ``candidate_kept``: the candidate is stored.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
@@ -1081,7 +1085,9 @@ def eol_report(
     unattempted = queries.abort_only_units() if aborts else []
     abort_only = Counter(row.station_id for row in unattempted)
     line = _counts(counts, sum(aborts.values()), len(unattempted))
-    what_if = None if candidate is None else _what_if(queries, candidate, line, hours)
+    what_if = (
+        None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
+    )
     starts = [row.started_at for row in unattempted]
     trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
     generated_at = now or datetime.now(UTC)

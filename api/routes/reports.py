@@ -25,10 +25,18 @@ from fastapi import (
     status,
 )
 from fastapi.responses import HTMLResponse, Response, StreamingResponse
+from fastapi.security import HTTPAuthorizationCredentials
 from pydantic import BeforeValidator
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from api.deps import ReaderDep, ReadersDep, ReportPoolDep, SessionsDep
+from api.deps import (
+    CredentialsDep,
+    ReaderDep,
+    ReadersDep,
+    ReportPoolDep,
+    SessionsDep,
+    require_quality,
+)
 from api.errors import answers_pages, invalid
 from api.language import LanguageDep
 from api.report_bodies import (
@@ -240,7 +248,9 @@ async def get_eol_report(
                 f"no stored limits profile {what_if}: run the what-if with its file again",
             )
         candidate = stored[what_if]
-    body = await repository.run(eol_body, report_filter, pages, format, plant, candidate)
+    body = await repository.run(
+        eol_body, report_filter, pages, format, plant, candidate, candidate is not None
+    )
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -249,7 +259,14 @@ async def get_eol_report(
     response_class=Response,
     responses={
         **_REPORT_ANSWERS,
-        **problems(400, _400="the body is not multipart form data"),
+        **problems(
+            400,
+            401,
+            403,
+            _400="the body is not multipart form data",
+            _401="a key was given and it is unknown or revoked",
+            _403="a key was given and it is not a quality engineer's",
+        ),
         422: {
             **problems(422)[422],
             **_REFUSED_PAGE,
@@ -268,6 +285,7 @@ async def post_eol_what_if(
     period: PeriodDep,
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
+    credentials: CredentialsDep,
     limits: Annotated[
         UploadFile, File(description="the candidate limits file (TOML, as the station's)")
     ],
@@ -279,6 +297,15 @@ async def post_eol_what_if(
             "kxm52-production)"
         ),
     ] = None,
+    key: Annotated[
+        str | None,
+        Blank,
+        Form(
+            description="a quality key (or the request's bearer key): the candidate profile "
+            "is kept by its SHA-256, so `GET /reports/eol?what_if=SHA256` answers this "
+            "what-if again; without a key the what-if is answered and nothing is stored"
+        ),
+    ] = None,
     format: Format = "html",
     listed: Listed = "held",
     units: PageSize = PAGE_UNITS,
@@ -286,15 +313,23 @@ async def post_eol_what_if(
 ) -> Response:
     """The report of ``GET /reports/eol`` with its runs re-judged against a candidate
     limits profile (uploaded): yields, Pareto and capability beside the current ones, and
-    the units whose verdict would flip. No verdict is stored; the candidate profile is
-    kept by its SHA-256, so ``GET /reports/eol?what_if=SHA256`` (the page's link)
-    answers this what-if again."""
+    the units whose verdict would flip. No verdict is stored. With a quality key (typed
+    into the form or the bearer key) the candidate profile is kept by its SHA-256, so
+    ``GET /reports/eol?what_if=SHA256`` (the page's link) answers this what-if again;
+    without one, nothing is written."""
     candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
-    async with sessions() as session, session.begin():
-        await session.run_sync(keep_profile, candidate)
+    if key is not None:
+        credentials = HTTPAuthorizationCredentials(scheme="Bearer", credentials=key.strip())
+    kept = credentials is not None
+    if kept:
+        await require_quality(credentials, sessions)
+        async with sessions() as session, session.begin():
+            await session.run_sync(keep_profile, candidate)
     pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units)
     plant = Plant(zone, shifts)
-    body = await repository.run(eol_body, period.filter(zone), pages, format, plant, candidate)
+    body = await repository.run(
+        eol_body, period.filter(zone), pages, format, plant, candidate, kept
+    )
     return Response(body, media_type=MEDIA_TYPES[format])
 
 

@@ -93,9 +93,12 @@ def test_api_serves_the_fit_and_the_latest_runs_gyros(
     assert "+581 ppm/g" in plot  # the fitted line's legend, x gyro
 
 
+@pytest.mark.parametrize(("scope", "holder"), [("station", "line1-st1"), ("quality", "qe-ana")])
 def test_only_a_lab_key_stores_a_gyro_fit(
-    client: httpx.Client, station_key: str, centrifuge_log: Path
+    client: httpx.Client, database: Database, centrifuge_log: Path, scope: str, holder: str
 ) -> None:
+    with database.session() as session, session.begin():
+        key = RunRepository(session).create_key(holder, scope)
     log = read_log(centrifuge_log)
     body = {
         "source": "c.csv",
@@ -103,11 +106,11 @@ def test_only_a_lab_key_stores_a_gyro_fit(
         "dwells": GyroDwells.of(log).model_dump(),
     }
     answer = client.post(
-        "/api/v1/units/PT000010/gyro", json=body, headers={"Authorization": f"Bearer {station_key}"}
+        "/api/v1/units/PT000010/gyro", json=body, headers={"Authorization": f"Bearer {key}"}
     )
     assert answer.status_code == 403
     assert answer.json()["detail"] == (
-        "this API key belongs to station line1-st1: gyro fits need a lab key "
+        f"this API key belongs to {scope} {holder}: gyro fits need a lab key "
         "(calstation keys create --lab ID)"
     )
     assert client.get("/api/v1/units/PT000010/gyro").status_code == 404  # nothing stored

@@ -82,11 +82,19 @@ def test_a_station_submits_only_its_own_runs(client: httpx.Client, database: Dat
     )
 
 
-def test_a_lab_key_stores_no_runs(client: httpx.Client, lab_key: str) -> None:
+@pytest.mark.parametrize(("scope", "holder"), [("lab", "gyro-lab"), ("quality", "qe-ana")])
+def test_a_lab_or_quality_key_stores_no_runs_and_is_told_its_own_scope(
+    client: httpx.Client, database: Database, scope: str, holder: str
+) -> None:
+    with database.session() as session, session.begin():
+        key = RunRepository(session).create_key(holder, scope)
     record = make_record()
-    answer = client.post(RUNS, json=record.model_dump(mode="json"), headers=_auth(lab_key))
+    answer = client.post(RUNS, json=record.model_dump(mode="json"), headers=_auth(key))
     assert answer.status_code == 403
-    assert "belongs to lab gyro-lab: runs need their station's key" in answer.json()["detail"]
+    assert answer.json()["detail"] == (
+        f"this API key belongs to {scope} {holder}: runs need their station's key "
+        "(calstation keys create --station ID)"
+    )
     assert client.get(f"{RUNS}/{record.run_id}").status_code == 404
 
 

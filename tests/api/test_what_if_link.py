@@ -1,13 +1,16 @@
-"""A what-if's result names the units whose verdict would flip, and has a link that
-answers it again (the candidate profile kept by its SHA-256), on a live server."""
+"""A what-if's result names the units whose verdict would flip, and, run with a quality
+key, has a link that answers it again (the candidate profile kept by its SHA-256), on a
+live server; run without one, it stores nothing."""
 
 import re
 from importlib import resources
 
 import httpx
 import pytest
+from sqlalchemy import func, select
 
 from db import Database
+from db.models import StoredLimitsProfile
 from tests.db.eol_data import RUNS, insert_line_history
 
 RANGE = {"from": "2026-11-02T08:00:00Z", "to": "2026-11-02T10:00:00Z"}
@@ -44,14 +47,14 @@ def _expected_flips(upper: float) -> list[tuple[str, str, str, str]]:
 
 @pytest.mark.parametrize("upper", [2046.0, 2053.0])
 def test_a_what_if_lists_the_flipped_units_and_its_link_answers_it_again(
-    client: httpx.Client, database: Database, upper: float
+    client: httpx.Client, database: Database, quality_key: str, upper: float
 ) -> None:
     with database.session() as session:
         insert_line_history(session)
     expected = _expected_flips(upper)
     assert expected  # the narrower candidate fails passing units, the wider passes a failed one
     upload = {"limits": ("candidate.toml", _candidate(upper).encode())}
-    which = {"profile": "candidate"}
+    which = {"profile": "candidate", "key": quality_key}
     answer = client.post(
         "/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload, data=which
     )
@@ -60,6 +63,7 @@ def test_a_what_if_lists_the_flipped_units_and_its_link_answers_it_again(
     flips = [(f["serial"], f["before"], f["after"], f["check"]) for f in what_if["flips"]]
     assert flips == expected
     assert what_if["flips_total"] == len(expected)
+    assert what_if["kept"] is True
 
     page = client.post("/api/v1/reports/eol", params=RANGE, files=upload, data=which).text
     table = page.split('<table class="flips">', 1)[1].split("</table>", 1)[0]
@@ -90,3 +94,39 @@ def test_a_link_to_a_what_if_never_stored_is_refused_in_one_line(client: httpx.C
     plain = client.get("/api/v1/reports/eol", params={"what_if": "", "format": "json"})
     assert plain.status_code == 200, plain.text
     assert plain.json()["what_if"] is None
+
+
+def _profiles(database: Database) -> int:
+    with database.session() as session:
+        return int(session.scalar(select(func.count()).select_from(StoredLimitsProfile)) or 0)
+
+
+def test_an_anonymous_what_if_is_answered_and_stores_nothing(
+    client: httpx.Client, database: Database, station_key: str
+) -> None:
+    with database.session() as session:
+        insert_line_history(session)
+    before = _profiles(database)
+    for upper in (2046.0, 2047.0, 2048.0):
+        upload = {"limits": ("candidate.toml", _candidate(upper).encode())}
+        answer = client.post(
+            "/api/v1/reports/eol", params=RANGE, files=upload, data={"profile": "candidate"}
+        )
+        assert answer.status_code == 200, answer.text
+        assert 'id="what-if-link"' not in answer.text
+        assert "Nothing was stored: run it with a quality key" in answer.text
+    assert _profiles(database) == before
+    upload = {"limits": ("candidate.toml", _candidate(2046.0).encode())}
+    for key, status, words in (
+        (station_key, 403, "this API key belongs to station line1-st1: reviews of units"),
+        ("csk_not-a-key", 401, "unknown or revoked API key"),
+    ):
+        refused = client.post(
+            "/api/v1/reports/eol",
+            params={**RANGE, "format": "json"},
+            files=upload,
+            data={"profile": "candidate", "key": key},
+        )
+        assert refused.status_code == status, refused.text
+        assert words in refused.json()["detail"]
+    assert _profiles(database) == before

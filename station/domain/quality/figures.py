@@ -282,6 +282,12 @@ class WhatIf(_FigurePart):
         "first of them by serial, `flips_total` in all)",
     )
     flips_total: int = Field(0, description="units whose verdict would flip")
+    kept: bool = Field(
+        False,
+        description="the candidate profile is stored (the what-if was run with a quality "
+        "key): `GET /reports/eol?what_if=SHA256` answers it again; an anonymous what-if "
+        "stores nothing",
+    )
 
 
 class CoefficientRisk(_FigurePart):
