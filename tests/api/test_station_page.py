@@ -9,6 +9,7 @@ import numpy as np
 
 from db import Database, RunRepository
 from tests.db.records import T0, make_record
+from tests.servers import local_get, serving
 
 #: The golden unit's offset x per check: baseline the mean of the first three (2049).
 GOLDEN_X = [2048.0, 2049.0, 2050.0, 2051.0, 2057.0]
@@ -52,8 +53,10 @@ def test_a_station_page_shows_golden_drift_cycle_times_and_versions(
     deviations = [c["offset_deviation"][0] for c in health["golden"]]
     assert np.allclose(deviations, [x - baseline for x in GOLDEN_X])
     assert np.allclose(health["golden"][-1]["sensitivity_deviation"], 0.0, atol=1e-6)
-    assert len(health["drift"]) == 1
-    assert "offset x +8.00 counts" in health["drift"][0]
+    [drift] = health["drift"]
+    assert drift["serial"] == "GOLD-01"
+    assert drift["problem"].startswith("offset x +8.00 counts from its baseline")
+    assert drift["checked_at"] == (T0 + timedelta(hours=8 * 4)).isoformat().replace("+00:00", "Z")
     cycles = [c for c, _ in PRODUCTION]
     cycle = health["cycle_seconds"]
     assert cycle["n"] == len(cycles)
@@ -82,3 +85,16 @@ def test_a_station_within_tolerance_has_no_drift_and_an_unknown_one_is_a_404_pag
     assert missing.status_code == 404
     assert missing.headers["content-type"].startswith("text/html")
     assert client.get("/stations/bad station").status_code == 422
+
+
+def test_a_drift_warning_tells_its_check_in_the_plants_time_zone(
+    database: Database, database_url: str
+) -> None:
+    """UTC+14: the latest check, 2026-11-03 16:00 UTC, is 11-04 06:00 in the plant; the
+    warning says so, as the table of checks does, never UTC in a plant-zone page."""
+    _store(database, GOLDEN_X)
+    with serving(database_url, plant_timezone="Pacific/Kiritimati") as base:
+        page = local_get(f"{base}/stations/line1-st1").text
+    [warning] = re.findall(r'<p class="problem drift">(.*?)</p>', page)
+    assert "(checked 2026-11-04 06:00" in warning
+    assert "16:00" not in warning

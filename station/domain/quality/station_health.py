@@ -53,13 +53,22 @@ class VersionUse(_Part):
     last: datetime
 
 
+class DriftWarning(_Part):
+    """A golden unit's latest check that failed, or an axis of it beyond tolerance of its
+    baseline. ``checked_at`` is a moment (UTC): a page shows it in the plant's zone."""
+
+    serial: str = Field(description="the golden unit")
+    checked_at: datetime = Field(description="its latest check's start")
+    problem: str = Field(description="what is wrong, in words (no time)")
+
+
 class StationHealth(_Part):
     """A station's health over its latest runs (:mod:`db.station_health`)."""
 
     station_id: str
     golden: list[GoldenCheck] = Field(description="the latest golden checks, oldest first")
     golden_limit: int
-    drift: list[str] = Field(description="drift warnings, in words")
+    drift: list[DriftWarning] = Field(description="drift warnings")
     cycle_seconds: GroupStats | None = Field(description="cycle time of production runs")
     cycle_runs: int = Field(description="production runs the cycle times come from (the latest)")
     versions: list[VersionUse]
@@ -67,7 +76,7 @@ class StationHealth(_Part):
 
 def golden_checks(
     rows: Sequence[tuple[str, datetime, str, str, Triple | None, Triple | None]],
-) -> tuple[list[GoldenCheck], list[str]]:
+) -> tuple[list[GoldenCheck], list[DriftWarning]]:
     """The checks of ``rows`` (run id, start, serial, verdict, offset, sensitivity; oldest
     first) against each golden unit's baseline, and the drift warnings of its latest one."""
     by_serial: dict[str, list[tuple[Triple, Triple]]] = {}
@@ -101,9 +110,14 @@ def golden_checks(
     latest: dict[str, GoldenCheck] = {check.serial: check for check in checks}
     drift = []
     for serial, check in sorted(latest.items()):
-        when = check.started_at.isoformat(timespec="minutes")
         if check.verdict != "pass":
-            drift.append(f"golden unit {serial}: its latest check ({when}) failed at the station")
+            drift.append(
+                DriftWarning(
+                    serial=serial,
+                    checked_at=check.started_at,
+                    problem="its latest check failed at the station",
+                )
+            )
         for name, deviation, tolerance, unit in (
             ("offset", check.offset_deviation, OFFSET_TOLERANCE, "counts"),
             ("sensitivity", check.sensitivity_deviation, SENSITIVITY_TOLERANCE, "counts/g"),
@@ -111,8 +125,12 @@ def golden_checks(
             for axis, value in zip(AXES, deviation or (), strict=False):
                 if abs(value) > tolerance:
                     drift.append(
-                        f"golden unit {serial}: {name} {axis} {value:+.2f} {unit} from its "
-                        f"baseline at the latest check ({when}), beyond ± {tolerance:g}"
+                        DriftWarning(
+                            serial=serial,
+                            checked_at=check.started_at,
+                            problem=f"{name} {axis} {value:+.2f} {unit} from its baseline at "
+                            f"the latest check, beyond ± {tolerance:g}",
+                        )
                     )
     return checks, drift
 
