@@ -32,6 +32,7 @@ from station.domain.records import (
     FailureReason,
     GyroMatrixRecord,
     GyroSummary,
+    HoldReview,
     LimitsRef,
     Matrix3,
     Model,
@@ -51,6 +52,7 @@ __all__ = [
     "UnitAttempt",
     "UnitCalibration",
     "counts",
+    "deciding_review",
     "disposition",
     "wrote_unit",
 ]
@@ -220,6 +222,16 @@ class UnitCalibration(_UnitPart):
             latest=_attempt(run),
             gyro=run.gyro,
         )
+
+
+def deciding_review(runs: Sequence[Run], reviews: Sequence[HoldReview]) -> HoldReview | None:
+    """The unit's latest review (``reviews`` oldest first) if it came after its latest run
+    (``runs`` oldest first): it decides where the unit goes (released for a retest, or
+    scrapped) until the unit is calibrated again."""
+    review = reviews[-1] if reviews else None
+    if review is None or (runs and review.reviewed_at < runs[-1].finished_at):
+        return None
+    return review
 
 
 def _held(writer: Run) -> HeldCalibration | None:

@@ -22,7 +22,8 @@ from pydantic import ValidationError
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.i18n import tr
 from station.domain.records import HoldReview, RunRecord, RunSummary
-from station.domain.unit_state import UnitCalibration
+from station.domain.unit_state import UnitCalibration, deciding_review
+from station.results.outbox_files import UnreadableRecordError, read_bytes
 from station.results.storage import RunStore, StoreError
 
 Run = RunRecord | RunSummary
@@ -79,12 +80,12 @@ class UnitHistory:
                 unavailable = str(exc)
         for path in waiting:
             try:
-                text = path.read_text(encoding="utf-8")
+                text = read_bytes(path).decode("utf-8")
                 if serial in text:
                     record = RunRecord.model_validate_json(text)
                     if record.serial == serial:
                         runs.setdefault(str(record.run_id), record)
-            except (OSError, UnicodeDecodeError, ValidationError):
+            except (UnreadableRecordError, UnicodeDecodeError, ValidationError):
                 continue  # the outbox sets such files aside; they are no history
         ordered = sorted(runs.values(), key=lambda r: (r.started_at, str(r.run_id)))
         return cls(serial, tuple(ordered), unavailable, reviews)
@@ -92,10 +93,7 @@ class UnitHistory:
     @property
     def decided(self) -> HoldReview | None:
         """The latest review, if it came after the unit's latest run: it decides."""
-        review = self.reviews[-1] if self.reviews else None
-        if review is None or (self.runs and review.reviewed_at < self.runs[-1].finished_at):
-            return None
-        return review
+        return deciding_review(self.runs, self.reviews)
 
     @property
     def counted(self) -> tuple[Run, ...]:

@@ -35,7 +35,7 @@ from station.domain.quality.station_health import (
     StationHealth,
 )
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
-from station.domain.unit_state import UnitCalibration
+from station.domain.unit_state import UnitCalibration, deciding_review
 from station.report import formatting, svg
 from station.report.certificate import ENGLISH, check_rows, code_words, failure_words, identity
 from station.report.explanations import explanation
@@ -318,14 +318,18 @@ def unit_page(
     reviews: Sequence[HoldReview] = (),
 ) -> str:
     """A unit's page: its state and every one of its ``runs`` (oldest first, at least one),
-    its quality ``reviews`` (oldest first) and, when it is on hold, the form to review
-    it; times in the plant's ``zone``."""
+    its quality ``reviews`` (oldest first) and, when it is on hold and no review has
+    decided since its latest run, the form to review it; times in the plant's ``zone``.
+
+    A review after the latest run decides where the unit goes: released for a retest
+    (disposition ``retest``, next ``retest``) or scrapped (disposition ``scrapped``,
+    nothing next, no form: a scrapped unit is never calibrated again)."""
     unit = UnitCalibration.of_history(runs)
     return _env.get_template("unit.html").render(
         unit=unit,
+        decided=deciding_review(runs, reviews),
         runs=runs,
         reviews=reviews,
-        reviewed=any(review.run_id == runs[-1].run_id for review in reviews),
         generated_at=generated_at,
         zone=zone,
         document_title=failure_words(speaker("en"))[unit.verdict],

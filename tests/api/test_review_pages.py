@@ -61,6 +61,10 @@ def test_a_held_unit_is_reviewed_from_its_page_and_the_review_shows_on_its_pages
     rows = re.findall(r'<tr class="review">(.*?)</tr>', page.text, re.S)
     assert len(rows) == 1
     assert all(part in _text(rows[0]) for part in ("qe-ana", FORM["root_cause"], "scrap"))
+    # Scrapped: the page says so, offers nothing next and no form to review it again.
+    assert re.search(r'<b id="disposition" class="hold">scrapped</b>', page.text)
+    assert '<b id="next">–</b>' in page.text
+    assert '<form class="review"' not in page.text
     report = client.get("/api/v1/units/PT000410/certificate")
     assert "Failure report" in report.text
     assert len(re.findall(r'<tr class="review">', report.text)) == 1
@@ -134,3 +138,16 @@ def test_the_report_counts_open_holds_by_cause_until_reviewed(
     assert "Open holds (2)" in page
     csv = client.get("/api/v1/reports/eol", params={"format": "csv"}).text
     assert "open_holds,by_cause,pose_noise,1" in csv
+
+
+def test_a_unit_released_for_a_retest_says_so_and_offers_no_second_review(
+    client: httpx.Client, database: Database, quality_key: str
+) -> None:
+    _, latest = _store(database, "PT000411", FAILED, FAILED)
+    form = {**FORM, "decision": "retest", "run_id": latest, "key": quality_key}
+    assert client.post("/units/PT000411/reviews", data=form).status_code == 303
+    page = client.get("/units/PT000411").text
+    assert '<b id="disposition" class="hold">retest</b>' in page
+    assert '<b id="next">retest</b>' in page
+    assert "Released for a retest by qe-ana" in page
+    assert '<form class="review"' not in page
