@@ -49,10 +49,7 @@ def field(value: datetime | None, zone: str = "UTC") -> str:
     suffix = "Z" if local.tzinfo is UTC else ""
     if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0) and not suffix:
         return local.date().isoformat()
-    if local.microsecond:
-        timespec = "microseconds"
-    else:
-        timespec = "seconds" if local.second else "minutes"
+    timespec = "auto" if local.second or local.microsecond else "minutes"
     return local.replace(tzinfo=None).isoformat(timespec=timespec) + suffix
 
 
