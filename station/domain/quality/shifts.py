@@ -5,7 +5,8 @@ A plant names its shifts by their start times of day in its zone (``06:00,14:00,
 runs past midnight to the first of the next day and belongs to the day it started on,
 as a night shift does on a line's board. Start times are local wall-clock times, so with
 daylight saving time the shift across the change lasts an hour more or less (a start
-that falls in the skipped hour begins an hour later, :mod:`zoneinfo`'s ``fold=0``).
+that falls in the skipped hour begins an hour later, :mod:`zoneinfo`'s ``fold=0``; a
+date the zone skipped altogether, as Pacific/Kiritimati did 1994-12-31, has no shifts).
 
 At the ends of the calendar (:mod:`station.domain.quality.days`) the shifts are clamped:
 a start whose instant would lie outside the years 1…9999 is the range's end on its side
@@ -80,9 +81,11 @@ def plant_shifts(
     first = step(plant_date(start, zone), -1)  # its night shift
     last = step(plant_date(end, zone), 1)
     moments = [
-        (day, shift_name(at), utc(datetime.combine(day, at, tzinfo=local)))
+        (day, shift_name(at), begin)
         for day in (step(first, i) for i in range((last - first).days + 1))
         for at in starts
+        for begin in [utc(datetime.combine(day, at, tzinfo=local))]
+        if plant_date(begin, zone) == day  # not on a date the zone skipped
     ]
     if first == date.min:  # the night shift of the day before the first date
         moments.insert(0, (first, shift_name(starts[-1]), FIRST))
