@@ -30,7 +30,8 @@ def moment(value: datetime | None, zone: str = "UTC") -> str:
     saying so, where that zone's wall clock would leave the years 1…9999)."""
     if value is None:
         return "–"
-    return plant_time(value, zone).strftime("%Y-%m-%d %H:%M:%S %Z")
+    local = plant_time(value, zone)  # the year as ISO, 0001: strftime's %Y may drop zeros
+    return f"{local.date().isoformat()} {local:%H:%M:%S %Z}"
 
 
 def clock(value: datetime, zone: str = "UTC") -> str:

@@ -17,7 +17,7 @@ was wrong). It is clamped there, never overflowed:
   outside the range reads as the range's end on its side (:func:`utc`).
 """
 
-from datetime import MINYEAR, UTC, date, datetime, time, timedelta
+from datetime import MINYEAR, UTC, date, datetime, time, timedelta, tzinfo
 from zoneinfo import ZoneInfo
 
 EPOCH_DATE = date(1970, 1, 1)
@@ -36,13 +36,19 @@ def utc(local: datetime) -> datetime:
         return FIRST if local.year == MINYEAR else LAST
 
 
-def plant_time(moment: datetime, zone: str) -> datetime:
-    """``moment`` on the plant's wall clock (``zone``); in UTC (``tzinfo`` exactly
-    :data:`datetime.UTC`) when that wall-clock time would leave the years 1…9999."""
+def wall_clock(moment: datetime, zone: tzinfo | None = None) -> datetime:
+    """``moment`` on the wall clock of ``zone`` (None: the system's local time); in UTC
+    (``tzinfo`` exactly :data:`datetime.UTC`) when that wall-clock time would leave the
+    years 1…9999."""
     try:
-        return moment.astimezone(ZoneInfo(zone))
+        return moment.astimezone(zone)
     except OverflowError:
         return moment.astimezone(UTC)
+
+
+def plant_time(moment: datetime, zone: str) -> datetime:
+    """``moment`` on the plant's wall clock (``zone``, an IANA name), as :func:`wall_clock`."""
+    return wall_clock(moment, ZoneInfo(zone))
 
 
 def plant_date(moment: datetime, zone: str) -> date:
