@@ -2,7 +2,8 @@
 calendar (the years 1 and 9999) and on an ordinary day, on a real server in the plant
 zones at the extremes and with shift plans (issue 42: 500s from day + 1, plant_date and
 the shifts): the report in each format, its trend links to the first and last days and
-shifts, the split, dashboard, alerts, station, unit and certificate pages."""
+shifts, the split, dashboard, alerts, station, unit and certificate pages. A submitted
+moment beyond the calendar is a 422 naming its field."""
 
 import html
 import re
@@ -13,6 +14,7 @@ import pytest
 
 from db import Database
 from tests.calendar_ends import FAILING, GOLDEN, UNITS, store_calendar_ends
+from tests.db.records import make_record
 from tests.servers import STATION, local_client, serving
 
 EOL = "/api/v1/reports/eol"
@@ -92,3 +94,24 @@ def test_every_page_answers_over_the_years_1_and_9999(plant: httpx.Client) -> No
     # The year-1 unit's reference: the golden check at the first moment, the start of
     # its day and of its shift in every zone.
     assert GOLDEN in _ok(client, "/api/v1/units/PT-000001/certificate")
+
+
+@pytest.mark.parametrize(
+    ("field", "moment"),
+    [
+        ("started_at", "0001-01-01T00:30:00+01:00"),  # before the year 1 in UTC
+        ("finished_at", "9999-12-31T23:30:00-01:00"),  # past 9999 in UTC
+    ],
+)
+def test_a_submitted_moment_beyond_the_calendar_is_422_naming_its_field(
+    client: httpx.Client, station_key: str, field: str, moment: str
+) -> None:
+    body = make_record().model_dump(mode="json")
+    body[field] = moment
+    answer = client.post(
+        "/api/v1/runs", json=body, headers={"Authorization": f"Bearer {station_key}"}
+    )
+    assert answer.status_code == 422, answer.text
+    [error] = answer.json()["errors"]
+    assert error["loc"] == f"body.{field}"
+    assert "is outside the years 1…9999 in UTC" in error["msg"]
