@@ -15,9 +15,9 @@ from db.holds import held_units
 from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.split import SPLIT_PARAMETERS, split_report
 from station.domain.limits import LimitsProfile
+from station.domain.quality.days import day_start
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.split import SplitBy
-from station.report.period import start_of_day
 from station.report.render import render
 
 #: Units on the dashboard's list, and points on each of its control charts.
@@ -105,7 +105,7 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
     ``zone``)."""
     report = eol_report(
         repository.session,
-        ReportFilter(since=start_of_day(now, zone)),
+        ReportFilter(since=day_start(now, zone)),
         unit_limit=DASHBOARD_UNITS,
         chart_points=DASHBOARD_CHART_POINTS,
         now=now,

@@ -13,9 +13,8 @@ profiles: a few dozen) and applies the capability formulas of
 from collections import Counter, defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from datetime import UTC, datetime, time, timedelta
+from datetime import UTC, date, datetime, time, timedelta
 from typing import Any, NamedTuple
-from zoneinfo import ZoneInfo
 
 from sqlalchemy import (
     ColumnElement,
@@ -76,7 +75,15 @@ from station.domain.quality.capability import (
     tolerance,
 )
 from station.domain.quality.control import moving_range_sigma, western_electric
-from station.domain.quality.days import day_number, is_utc, midnight, plant_days
+from station.domain.quality.days import (
+    LAST,
+    day_number,
+    is_utc,
+    midnight,
+    plant_date,
+    plant_days,
+    step,
+)
 from station.domain.quality.figures import (
     HOLD_AGES,
     ChartPoint,
@@ -574,11 +581,17 @@ def split_days(
     if since is not None and first is not None:
         if until is not None and end is not None and first >= end:
             return None, [(since, until)] if since < until else []
-        if since < EPOCH + first * DAY:
-            edges.append((since, EPOCH + first * DAY))
-    if until is not None and end is not None and EPOCH + end * DAY < until:
-        edges.append((EPOCH + end * DAY, until))
+        if since < _day_start(first):
+            edges.append((since, _day_start(first)))
+    if until is not None and end is not None and _day_start(end) < until:
+        edges.append((_day_start(end), until))
     return (first, end), edges
+
+
+def _day_start(day: int) -> datetime:
+    """The start of the roll-ups' ``day``; the calendar's end (:data:`LAST`) for the day
+    after its last date, which a moment of that date rounds up to."""
+    return EPOCH + day * DAY if day <= day_number(date.max) else LAST
 
 
 # -- assembling the report -------------------------------------------------------------
@@ -988,8 +1001,7 @@ def _trend(
         parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
         return queries.daily_counts(key), parameters
 
-    local = ZoneInfo(zone)
-    per_day = Counter(day_number(at.astimezone(local).date()) for at in unattempted)
+    per_day = Counter(day_number(plant_date(at, zone)) for at in unattempted)
     per_shift = Counter(
         i for at in unattempted for i, p in enumerate(periods) if p.start <= at < p.end
     )
@@ -1004,7 +1016,7 @@ def _trend(
         return trend_days(days, by_day.without(per_day)), []
     # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
     # runs of the first shift before its midnight, which no listed day shows.
-    before = days[0] - timedelta(days=1)
+    before = step(days[0], -1)
     base, width = day_number(before), len(periods)
     key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
     rows = sums(min(since, periods[0].start), key)

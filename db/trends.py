@@ -14,7 +14,7 @@ aggregated, in any zone.
 
 from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
-from datetime import date, datetime, timedelta
+from datetime import date, datetime
 from typing import Any
 
 from sqlalchemy import ColumnElement, Integer, Row, case, literal
@@ -22,7 +22,7 @@ from sqlalchemy import ColumnElement, Integer, Row, case, literal
 from db.models import Run
 from db.rollups import MOMENT_VALUES, TREND_COUNT_VALUES
 from station.domain.quality.capability import cpk, shifted_moments, tolerance
-from station.domain.quality.days import day_number, midnight
+from station.domain.quality.days import day_end, day_number
 from station.domain.quality.figures import TrendDay, TrendShift
 from station.domain.quality.parameters import PARAMETERS, FamilyBounds
 from station.domain.quality.shifts import Shift
@@ -43,7 +43,7 @@ def period_key(ends: Sequence[tuple[datetime, int]], last: int) -> ColumnElement
 def day_key(days: Sequence[date], zone: str) -> ColumnElement[int]:
     """Each run's plant day number, for runs from the first of ``days`` to the end of
     the last."""
-    ends = [(midnight(day + timedelta(days=1), zone), day_number(day)) for day in days[:-1]]
+    ends = [(day_end(day, zone), day_number(day)) for day in days[:-1]]
     return period_key(ends, day_number(days[-1]))
 
 

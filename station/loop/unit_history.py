@@ -13,7 +13,7 @@ unavailable and goes on. The same runs decide where the unit goes after its verd
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 
@@ -21,6 +21,7 @@ from pydantic import ValidationError
 
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.i18n import tr
+from station.domain.quality.days import wall_clock
 from station.domain.records import HoldReview, RunRecord, RunSummary
 from station.domain.unit_state import UnitCalibration, deciding_review
 from station.results.outbox_files import UnreadableRecordError, read_bytes
@@ -47,10 +48,12 @@ class ScanDecision:
 
 
 def local_time(moment: datetime, now: datetime | None = None) -> str:
-    """``10:42`` today, else ``2026-11-02 10:42``, in the station's local time."""
-    here = moment.astimezone()
+    """``10:42`` today, else ``2026-11-02 10:42``, in the station's local time (in UTC,
+    saying so, where that would leave the years 1…9999: a clock set wrong)."""
+    here = wall_clock(moment)
     today = (now or datetime.now().astimezone()).date()
-    return here.strftime("%H:%M" if here.date() == today else "%Y-%m-%d %H:%M")
+    shown = f"{here:%H:%M}" if here.date() == today else f"{here.date().isoformat()} {here:%H:%M}"
+    return f"{shown} UTC" if here.tzinfo is UTC else shown
 
 
 @dataclass(frozen=True)

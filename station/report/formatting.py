@@ -1,8 +1,9 @@
 """How numbers read in the text and HTML renderings (the same in both)."""
 
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Protocol
-from zoneinfo import ZoneInfo
+
+from station.domain.quality.days import plant_time
 
 
 def percent(value: float | None) -> str:
@@ -25,26 +26,32 @@ def seconds(value: float | None) -> str:
 
 
 def moment(value: datetime | None, zone: str = "UTC") -> str:
-    """A moment to the second, in the plant's time ``zone`` (an IANA name)."""
+    """A moment to the second, in the plant's time ``zone`` (an IANA name; in UTC, and
+    saying so, where that zone's wall clock would leave the years 1…9999)."""
     if value is None:
         return "–"
-    return value.astimezone(ZoneInfo(zone)).strftime("%Y-%m-%d %H:%M:%S %Z")
+    local = plant_time(value, zone)  # the year as ISO, 0001: strftime's %Y may drop zeros
+    return f"{local.date().isoformat()} {local:%H:%M:%S %Z}"
 
 
 def clock(value: datetime, zone: str = "UTC") -> str:
-    """A chart's time label in the plant's ``zone``: ``11-02 14:05``."""
-    return value.astimezone(ZoneInfo(zone)).strftime("%m-%d %H:%M")
+    """A chart's time label in the plant's ``zone`` (as :func:`moment`): ``11-02 14:05``."""
+    return plant_time(value, zone).strftime("%m-%d %H:%M")
 
 
 def field(value: datetime | None, zone: str = "UTC") -> str:
-    """A moment as the report's form shows it, in the plant's ``zone``: a date at
-    midnight, else the date and time (``2026-11-02``, ``2026-11-02T14:30``)."""
+    """A moment as the report's form shows it, in the plant's ``zone``, exactly: a date
+    at midnight, else the date and time to the minute, second or microsecond
+    (``2026-11-02``, ``2026-11-02T14:30``); with ``Z`` where it stays in UTC (beyond the
+    zone's years 1…9999, :func:`station.domain.quality.days.plant_time`)."""
     if value is None:
         return ""
-    local = value.astimezone(ZoneInfo(zone))
-    if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0):
+    local = plant_time(value, zone)
+    suffix = "Z" if local.tzinfo is UTC else ""
+    if (local.hour, local.minute, local.second, local.microsecond) == (0, 0, 0, 0) and not suffix:
         return local.date().isoformat()
-    return local.replace(tzinfo=None).isoformat(timespec="seconds" if local.second else "minutes")
+    timespec = "auto" if local.second or local.microsecond else "minutes"
+    return local.replace(tzinfo=None).isoformat(timespec=timespec) + suffix
 
 
 class Reason(Protocol):

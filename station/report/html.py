@@ -12,7 +12,7 @@ server's start (its API, ``/healthz``) and the report's other formats do not nee
 """
 
 from collections.abc import Callable, Sequence
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any, Final, get_args
 from urllib.parse import urlencode
 
@@ -24,7 +24,7 @@ from station.domain.i18n import Language, speaker
 from station.domain.limits import LimitsProfile
 from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
-from station.domain.quality.days import midnight
+from station.domain.quality.days import day_end, midnight
 from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.split import NO_VALUE, SplitBy, SplitReport
@@ -198,7 +198,6 @@ def failing_runs_page(
 
 #: A unit's page (``serial_link`` in ``base.html``).
 UNIT_PATH = "/units/"
-ONE_DAY = timedelta(days=1)
 
 
 def _chart_runs(tokens: Sequence[str], span: tuple[float, float], href: str) -> Markup:
@@ -287,7 +286,7 @@ def report_page(report: EolReport) -> str:
         day_runs=trend_runs(
             report,
             [
-                (midnight(d.day, report.timezone), midnight(d.day + ONE_DAY, report.timezone))
+                (midnight(d.day, report.timezone), day_end(d.day, report.timezone))
                 for d in report.trend
             ],
         ),

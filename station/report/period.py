@@ -2,21 +2,18 @@
 unless they name one (stored times stay UTC).
 
 One place for the CLI (``--from``/``--to``) and the API (``from``/``to``): a bound must
-read as a date or time, stay a valid moment once shifted to UTC, and leave room for the
-report to round it to its whole day (:data:`EARLIEST` … :data:`LATEST`); ``from`` must
-come before ``to``.
+read as a date or time and stay a valid moment once shifted to UTC (any moment of the
+years 1…9999 in UTC, :data:`~station.domain.quality.days.FIRST` …
+:data:`~station.domain.quality.days.LAST`: the report's days and shifts are clamped at
+those ends); ``from`` must come before ``to``.
 """
 
 import re
-from datetime import UTC, date, datetime, time
+from datetime import UTC, date, datetime
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from station.domain.errors import InputError
-
-#: The range a bound may take: a day inside what a date can hold at either end, for the
-#: report splits its period at midnights (the day after ``from``, the day of ``to``).
-EARLIEST = datetime(1, 1, 2, tzinfo=UTC)
-LATEST = datetime(9999, 12, 31, tzinfo=UTC)
+from station.domain.quality.days import FIRST, LAST, midnight
 
 #: The most units a report lists (``--units``, ``units=``): years of a line's output.
 MAX_LISTED_UNITS = 1_000_000
@@ -35,33 +32,33 @@ def plant_zone(name: str) -> str:
 
 
 def parse_moment(text: str, *, name: str, zone: str = "UTC") -> datetime:
-    """``2026-11-02`` (the plant's midnight), ``2026-11-02T14:00`` (the plant's time) or
-    with a zone, in UTC; ``zone`` is the plant's time zone (IANA name).
+    """``2026-11-02`` (the plant's midnight, :func:`~station.domain.quality.days.midnight`:
+    the first date's is :data:`~station.domain.quality.days.FIRST`), ``2026-11-02T14:00``
+    (the plant's time) or with a zone, in UTC; ``zone`` is the plant's time zone (IANA name).
 
     Raises :class:`InputError` naming the option ``name`` for anything else, or for a
-    moment outside :data:`EARLIEST` … :data:`LATEST` (UTC).
+    moment outside :data:`~station.domain.quality.days.FIRST` …
+    :data:`~station.domain.quality.days.LAST` (UTC).
     """
+    try:
+        return midnight(date.fromisoformat(text), zone)
+    except ValueError:
+        pass
     try:
         moment = datetime.fromisoformat(text)
     except ValueError:
-        try:
-            moment = datetime.combine(date.fromisoformat(text), time())
-        except ValueError:
-            raise InputError(
-                f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or "
-                f"2026-11-02T14:00Z){_written_as_iso(text)}"
-            ) from None
+        raise InputError(
+            f"{name} {text!r} is not an ISO date or time (e.g. 2026-11-02 or "
+            f"2026-11-02T14:00Z){_written_as_iso(text)}"
+        ) from None
     try:
         local = moment.replace(tzinfo=ZoneInfo(zone)) if moment.tzinfo is None else moment
-        utc = local.astimezone(UTC)
+        return local.astimezone(UTC)
     except OverflowError:  # the zone shifts it past year 1 or 9999
-        utc = None
-    if utc is None or not EARLIEST <= utc <= LATEST:
         raise InputError(
             f"{name} {text!r} is out of range: give a moment from "
-            f"{EARLIEST.date().isoformat()} to {LATEST.date().isoformat()} (UTC)"
-        )
-    return utc
+            f"{FIRST.isoformat()} to {LAST.isoformat()}"
+        ) from None
 
 
 def _written_as_iso(text: str) -> str:
@@ -100,9 +97,3 @@ def parse_period(
     end = parse_moment(until, name=names[1], zone=zone) if until else None
     check_order(start, end, names=names)
     return start, end
-
-
-def start_of_day(now: datetime, zone: str = "UTC") -> datetime:
-    """The plant's midnight (in its ``zone``) that began the day ``now`` is in, in UTC."""
-    local = ZoneInfo(zone)
-    return datetime.combine(now.astimezone(local).date(), time(), tzinfo=local).astimezone(UTC)

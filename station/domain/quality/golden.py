@@ -16,6 +16,7 @@ from datetime import datetime, time, timedelta
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.domain.quality.days import wall_clock
 from station.domain.records import SERIAL_PATTERN, RunRecord
 from station.domain.sensor import AXES
 
@@ -86,17 +87,17 @@ def disagreements(unit: GoldenUnit, record: RunRecord) -> list[str]:
 def due(unit: GoldenUnit, last_ok: datetime | None, now: datetime) -> bool:
     """Whether the golden unit must be checked before the next production unit.
 
-    ``last_ok`` and ``now`` are aware datetimes; shift starts are in ``now``'s time zone.
+    ``last_ok`` and ``now`` are aware datetimes; shift starts are in ``now``'s time zone
+    (a ``last_ok`` that zone cannot show, of a clock set to the year 1 or 9999, in UTC).
     """
     if last_ok is None or now - last_ok >= timedelta(hours=unit.period_h):
         return True
     local = now.astimezone()
-    since = last_ok.astimezone(local.tzinfo)
-    day = since.date()
-    while day <= local.date():
+    since = wall_clock(last_ok, local.tzinfo)
+    for offset in range((local.date() - since.date()).days + 1):
+        day = since.date() + timedelta(days=offset)
         for start in unit.shift_starts:
             moment = datetime.combine(day, start, tzinfo=local.tzinfo)
             if since < moment <= local:
                 return True
-        day += timedelta(days=1)
     return False

@@ -5,16 +5,25 @@ A plant names its shifts by their start times of day in its zone (``06:00,14:00,
 runs past midnight to the first of the next day and belongs to the day it started on,
 as a night shift does on a line's board. Start times are local wall-clock times, so with
 daylight saving time the shift across the change lasts an hour more or less (a start
-that falls in the skipped hour begins an hour later, :mod:`zoneinfo`'s ``fold=0``).
+that falls in the skipped hour begins an hour later, :mod:`zoneinfo`'s ``fold=0``; a
+date the zone skipped altogether, as Pacific/Kiritimati did 1994-12-31, has no shifts).
+
+At the ends of the calendar (:mod:`station.domain.quality.days`) the shifts are clamped:
+a start whose instant would lie outside the years 1…9999 is the range's end on its side
+(a shift that would lie wholly outside has no length and is left out); the moments before
+the first date's first start belong to the night shift of the day before it, kept on the
+first date (named after the last start, starting at :data:`~station.domain.quality.days.FIRST`);
+the last date's last shift ends at :data:`~station.domain.quality.days.LAST`.
 """
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from datetime import UTC, date, datetime, time, timedelta
+from datetime import date, datetime, time
 from itertools import pairwise
 from zoneinfo import ZoneInfo
 
 from station.domain.errors import InputError
+from station.domain.quality.days import FIRST, LAST, day_start, plant_date, step, utc
 
 #: The most shifts a day may be cut into (a start every hour).
 MAX_SHIFTS = 24
@@ -69,17 +78,23 @@ def plant_shifts(
     if not starts:
         return []
     local = ZoneInfo(zone)
-    first = start.astimezone(local).date() - timedelta(days=1)  # its night shift
-    last = end.astimezone(local).date()
+    first = step(plant_date(start, zone), -1)  # its night shift
+    last = step(plant_date(end, zone), 1)
     moments = [
-        (day, at, datetime.combine(day, at, tzinfo=local).astimezone(UTC))
-        for day in (first + timedelta(days=i) for i in range((last - first).days + 2))
+        (day, shift_name(at), begin)
+        for day in (step(first, i) for i in range((last - first).days + 1))
         for at in starts
+        for begin in [utc(datetime.combine(day, at, tzinfo=local))]
+        if plant_date(begin, zone) == day  # not on a date the zone skipped
     ]
+    if first == date.min:  # the night shift of the day before the first date
+        moments.insert(0, (first, shift_name(starts[-1]), FIRST))
+    if last == date.max:  # the end of the last date's last shift
+        moments.append((last, "", LAST))
     shifts = [
-        Shift(day=day, name=shift_name(at), start=begin, end=following)
-        for (day, at, begin), (_, _, following) in pairwise(moments)
-        if following > start and begin <= end
+        Shift(day=day, name=name, start=begin, end=following)
+        for (day, name, begin), (_, _, following) in pairwise(moments)
+        if begin < following and following > start and begin <= end
     ]
     return shifts[-latest:]
 
@@ -90,5 +105,4 @@ def shift_start(moment: datetime, zone: str, starts: Sequence[time]) -> datetime
     a certificate's golden-unit check is looked for in (``docs/report.md``)."""
     if starts:
         return plant_shifts(moment, moment, zone, starts, 1)[0].start
-    local = moment.astimezone(ZoneInfo(zone))
-    return datetime.combine(local.date(), time(), tzinfo=ZoneInfo(zone)).astimezone(UTC)
+    return day_start(moment, zone)

@@ -1,6 +1,6 @@
 """Reading the report's time bounds."""
 
-from datetime import UTC, datetime, timedelta, timezone
+from datetime import UTC, date, datetime, timedelta, timezone
 
 import pytest
 from hypothesis import given
@@ -8,14 +8,12 @@ from hypothesis import strategies as st
 
 from db.reports import split_days
 from station.domain.errors import InputError
+from station.domain.quality.days import FIRST, LAST, day_number, day_start
 from station.report.period import (
-    EARLIEST,
-    LATEST,
     check_order,
     parse_moment,
     parse_period,
     plant_zone,
-    start_of_day,
 )
 
 
@@ -39,26 +37,32 @@ def test_anything_else_names_the_option() -> None:
         parse_moment("2026-13-01", name="--to")
 
 
-def test_start_of_day_is_midnight_utc() -> None:
-    assert start_of_day(datetime(2026, 11, 2, 23, 59, tzinfo=UTC)) == datetime(
-        2026, 11, 2, tzinfo=UTC
-    )
-
-
 @pytest.mark.parametrize(
-    "text",
+    ("text", "zone"),
     [
-        "9999-12-31T23:00:00-05:00",  # past year 9999 in UTC
-        "0001-01-01T00:00:00+01:00",  # before year 1 in UTC
-        "9999-12-31T00:00:01",  # no whole day after it
-        "0001-01-01",  # no whole day before it
+        ("9999-12-31T23:00:00-05:00", "UTC"),  # past year 9999 in UTC
+        ("0001-01-01T00:00:00+01:00", "UTC"),  # before year 1 in UTC
+        ("9999-12-31T23:00", "Etc/GMT+12"),  # the plant's time, past 9999 in UTC
+        ("0001-01-01T13:59", "Etc/GMT-14"),  # the plant's time (+14), before year 1
     ],
 )
-def test_a_moment_out_of_range_names_the_option_and_the_range(text: str) -> None:
+def test_a_moment_out_of_range_names_the_option_and_the_range(text: str, zone: str) -> None:
     with pytest.raises(
-        InputError, match=r"^--from '.*' is out of range: .*0001-01-02 to 9999-12-31"
+        InputError,
+        match=r"^--from '.*' is out of range: give a moment from 0001-01-01T00:00:00\+00:00 "
+        r"to 9999-12-31T23:59:59.999999\+00:00$",
     ):
-        parse_moment(text, name="--from")
+        parse_moment(text, name="--from", zone=zone)
+
+
+@pytest.mark.parametrize("zone", ["UTC", "Pacific/Kiritimati", "Etc/GMT+12", "Europe/Berlin"])
+def test_the_first_and_last_dates_are_days_of_the_plant_in_any_zone(zone: str) -> None:
+    """The plant's first day starts at the first moment whatever the zone; its last day's
+    midnight is a moment of the range too."""
+    assert parse_moment("0001-01-01", name="--from", zone=zone) == FIRST
+    last = parse_moment("9999-12-31", name="--from", zone=zone)
+    assert last.date() in (date(9999, 12, 30), date(9999, 12, 31))
+    assert parse_moment("9999-12-31T23:59:59.999999Z", name="--to", zone=zone) == LAST
 
 
 @given(
@@ -70,28 +74,29 @@ def test_any_iso_moment_is_its_utc_instant_or_out_of_range(
 ) -> None:
     zone = timezone(timedelta(minutes=offset_min))
     text = naive.replace(tzinfo=zone).isoformat()
-    # The instant, as a distance from EARLIEST (timedelta holds the whole range).
-    since_earliest = naive - EARLIEST.replace(tzinfo=None) - timedelta(minutes=offset_min)
-    inside = timedelta(0) <= since_earliest <= LATEST - EARLIEST
+    # The instant, as a distance from FIRST (timedelta holds the whole range).
+    since_first = naive - FIRST.replace(tzinfo=None) - timedelta(minutes=offset_min)
+    inside = timedelta(0) <= since_first <= LAST - FIRST
     if not inside:
         with pytest.raises(InputError, match="out of range"):
             parse_moment(text, name="from")
         return
     moment = parse_moment(text, name="from")
     assert moment.tzinfo == UTC
-    assert moment - EARLIEST == since_earliest
+    assert moment - FIRST == since_first
 
 
 def test_the_report_can_split_the_widest_period_into_days() -> None:
-    days, edges = split_days(EARLIEST, LATEST)
+    last_midnight = datetime(9999, 12, 31, tzinfo=UTC)
+    days, edges = split_days(FIRST, last_midnight)
     assert days is not None
     assert edges == []
     second = timedelta(seconds=1)
-    days, edges = split_days(EARLIEST + second, LATEST - second)
-    assert edges == [
-        (EARLIEST + second, EARLIEST + timedelta(days=1)),
-        (LATEST - timedelta(days=1), LATEST - second),
-    ]
+    days, edges = split_days(FIRST + second, LAST - second)
+    assert edges == [(FIRST + second, FIRST + timedelta(days=1)), (last_midnight, LAST - second)]
+    # A moment of the last date rounds up to the calendar's end: no whole day follows.
+    days, edges = split_days(LAST - second, None)
+    assert (days, edges) == ((day_number(date.max) + 1, None), [(LAST - second, LAST)])
 
 
 def test_a_period_must_run_forwards() -> None:
@@ -106,11 +111,11 @@ def test_a_period_must_run_forwards() -> None:
 
 
 def test_the_api_checks_parsed_bounds_the_same_way() -> None:
-    check_order(EARLIEST, LATEST)
-    with pytest.raises(InputError, match=r"^from 9999-12-31 00:00\+00:00 is not before to 0001"):
-        check_order(LATEST, EARLIEST, names=("from", "to"))
+    check_order(FIRST, LAST)
+    with pytest.raises(InputError, match=r"^from 9999-12-31 23:59\+00:00 is not before to 0001"):
+        check_order(LAST, FIRST, names=("from", "to"))
     with pytest.raises(InputError, match="the period holds nothing"):
-        check_order(EARLIEST, EARLIEST)
+        check_order(FIRST, FIRST)
 
 
 @pytest.mark.parametrize(
@@ -125,7 +130,7 @@ def test_the_api_checks_parsed_bounds_the_same_way() -> None:
     ],
 )
 def test_today_is_the_plants_day(zone: str, now: datetime, midnight: str) -> None:
-    assert start_of_day(now, zone).isoformat() == midnight
+    assert day_start(now, zone).isoformat() == midnight
 
 
 def test_dates_without_a_zone_are_the_plants_and_an_unknown_zone_is_refused() -> None:
