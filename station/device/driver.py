@@ -85,12 +85,13 @@ class PutterDriver(Closing):
         self._rate_hz = DEFAULT_RATE_HZ
         self._link = PutterLink(self._name, buffer_rows, adc_max)
         self._command_lock = threading.Lock()
+        # The stubs ask for serial.Serial; the thread needs only read, in_waiting,
+        # cancel_read and write, and this reset_input_buffer, which every pyserial port has.
+        tty = cast(serial.Serial, port)
         # What the unit sent before the port was opened (an earlier run's stream, left in
         # the port's buffer) is never read.
-        port.reset_input_buffer()
-        # The stubs ask for serial.Serial; the thread needs only read, in_waiting,
-        # cancel_read and write, which every pyserial port has.
-        self._reader = ReaderThread(cast(serial.Serial, port), lambda: self._link)
+        tty.reset_input_buffer()
+        self._reader = ReaderThread(tty, lambda: self._link)
         self._reader.name = "putter-reader"
         self._reader.start()
         self._reader.connect()

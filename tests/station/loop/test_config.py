@@ -35,6 +35,12 @@ def test_flags_override_the_file_and_the_environment(
             "head_up",
         ),
         ('serial_pattern = "(["\n', "serial_pattern: not a regular expression"),
+        # Read by RE2 (linear time): what needs backtracking is refused at start-up.
+        ("serial_pattern = '^(P)\\1$'\n", "serial_pattern: not a regular expression the station"),
+        (
+            "[label]\npattern = '(?P<serial>PT\\d+)(?=/)'\n",
+            "label: pattern is not a regular expression the station reads",
+        ),
         ('station_id = "has space"\n', "station_id"),
         ('lot = "L 7"\n', "lot"),
         ("bogus = 1\n", "bogus"),
