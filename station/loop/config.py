@@ -175,8 +175,12 @@ def _products_of(data: dict[str, Any]) -> Products:
     return load_products(Path(products_file) if products_file else None)
 
 
-def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
-    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top."""
+def load_config(
+    path: Path | None, overrides: dict[str, Any], defaults: dict[str, Any] | None = None
+) -> StationConfig:
+    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top;
+    ``defaults`` (a command's own, e.g. the demo's station id) stand only for what none of
+    the file, the environment and ``overrides`` gives."""
     values: dict[str, Any] = {}
     if path is not None:
         try:
@@ -192,7 +196,9 @@ def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
         values.pop("slots", None)
     values.update({k: v for k, v in overrides.items() if v is not None})
     try:
-        return StationConfig(**values)
+        config = StationConfig(**values)
+        unset = {k: v for k, v in (defaults or {}).items() if k not in config.model_fields_set}
+        return StationConfig(**unset, **values) if unset else config
     except ValidationError as exc:
         where = f"{path}: " if path is not None else ""
         raise InputError(f"{where}station configuration: {validation_problem(exc)}") from None
