@@ -203,13 +203,15 @@ def demo_command(
     config = _load_config(
         config_file,
         {
-            "station_id": station or "demo-station",
-            "operator_id": operator or "demo-operator",
-            "lot": lot or "demo-lot",
+            "station_id": station,
+            "operator_id": operator,
+            "lot": lot,
             "limits_profile": profile,
             "part_number": part_number,
             "language": language,
         },
+        # The demo's own ids, where neither the file, the environment nor a flag names one.
+        defaults={"station_id": "demo-station", "operator_id": "demo-operator", "lot": "demo-lot"},
     )
     sensor = config.product.sensor
     prepare_data_dir(config.data_dir)
@@ -288,13 +290,16 @@ def demo_command(
         )
 
 
-def _load_config(config_file: Path | None, overrides: dict[str, Any]) -> StationConfig:
-    """The station's configuration; its language is the operator's from here on, so the
-    refusals that follow are in it too."""
+def _load_config(
+    config_file: Path | None, overrides: dict[str, Any], defaults: dict[str, Any] | None = None
+) -> StationConfig:
+    """The station's configuration (:func:`station.loop.config.load_config`, for ``run``
+    and ``demo`` alike); its language is the operator's from here on, so the refusals that
+    follow are in it too."""
     from station.domain.i18n import set_language
     from station.loop.config import load_config
 
-    config = load_config(config_file, overrides)
+    config = load_config(config_file, overrides, defaults)
     set_language(config.language)
     return config
 

@@ -61,7 +61,9 @@ _FAILURE_POLL_S = 0.05
 class PutterDriver(Closing):
     """A putter on a serial link.
 
-    Open it with :meth:`open`; use it as a context manager or call :meth:`close`.
+    Open it with :meth:`open`; use it as a context manager or call :meth:`close`. It
+    reads only what the unit sends once it is open: the port's input is flushed first
+    (``reset_input_buffer``), and :meth:`start_stream` starts a fresh stream.
     Samples come out as :class:`~station.domain.samples.SampleBlock`: ``seq`` is the
     unwrapped sequence number (counting from 0 at each :meth:`start_stream`, gaps
     preserved), ``accel`` in ADC counts (in g from :meth:`drain_calibrated`), ``gyro``
@@ -84,8 +86,12 @@ class PutterDriver(Closing):
         self._link = PutterLink(self._name, buffer_rows, adc_max)
         self._command_lock = threading.Lock()
         # The stubs ask for serial.Serial; the thread needs only read, in_waiting,
-        # cancel_read and write, which every pyserial port has.
-        self._reader = ReaderThread(cast(serial.Serial, port), lambda: self._link)
+        # cancel_read and write, and this reset_input_buffer, which every pyserial port has.
+        tty = cast(serial.Serial, port)
+        # What the unit sent before the port was opened (an earlier run's stream, left in
+        # the port's buffer) is never read.
+        tty.reset_input_buffer()
+        self._reader = ReaderThread(tty, lambda: self._link)
         self._reader.name = "putter-reader"
         self._reader.start()
         self._reader.connect()
@@ -232,12 +238,16 @@ class PutterDriver(Closing):
         self._rate_hz = rate_hz
 
     def start_stream(self, calibrated: bool = False) -> None:
-        """Start streaming raw samples, or calibrated ones (the unit applies its calibration).
+        """Start a fresh stream of raw samples, or calibrated ones (the unit applies its
+        calibration).
 
-        The unit restarts its sequence numbers; so does the driver's count.
+        The unit restarts its sequence numbers; so does the driver's count. Only samples
+        the unit sends after acknowledging the command are handed out: those held and not
+        drained yet, and those of an earlier stream still on their way, are dropped
+        (:meth:`PutterLink.restart_stream`).
         """
         mode = StreamMode.CALIBRATED if calibrated else StreamMode.RAW
-        self._link.restart_sequence()
+        self._link.restart_stream()
         self._command(FrameType.START_STREAM, bytes((mode,)), FrameType.ACK)
 
     def stop_stream(self) -> None:

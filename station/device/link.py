@@ -75,6 +75,9 @@ class PutterLink(Protocol):
         self.closing = False
         self._parser = FrameParser()
         self._seq = SequenceTracker()
+        #: A START_STREAM was sent and its ACK is not in yet: every sample received until
+        #: then is of an earlier stream (:meth:`restart_stream`).
+        self._starting = False
         self._samples = 0
         self._lock = threading.Lock()
         self._failure: DeviceError | None = None
@@ -161,10 +164,13 @@ class PutterLink(Protocol):
         finally:
             self._port_lock.release()
 
-    def restart_sequence(self) -> None:
-        """The unit is about to count its samples from 0 again."""
-        with self._lock:
-            self._seq.restart()
+    def restart_stream(self) -> None:
+        """A START_STREAM is about to be sent: the unit counts its samples from 0 again
+        once it acknowledges it, and nothing received before that ACK is of the new
+        stream. Every sample until the ACK is dropped (an earlier stream's, still in the
+        port's or the unit's buffers, or sent while the command was on its way), and at
+        the ACK the samples held and not yet drained go too (:meth:`_received`)."""
+        self._starting = True
 
     def fail(self, failure: DeviceError) -> None:
         """Record the first failure and wake everyone waiting for samples."""
@@ -194,10 +200,16 @@ class PutterLink(Protocol):
         replies: list[Frame] = []
         for frame in frames:  # one pass: a station's pass parses some 125 frames a slot
             if frame.type == FrameType.SAMPLE:
-                raw.append(frame.payload)
+                if not self._starting:
+                    raw.append(frame.payload)
             elif frame.type == FrameType.CAL_SAMPLE:
-                calibrated.append(frame.payload)
+                if not self._starting:
+                    calibrated.append(frame.payload)
             else:
+                if self._starting and _starts_stream(frame):
+                    raw.clear()
+                    calibrated.clear()
+                    self._fresh_stream()
                 replies.append(frame)
         if raw:
             block = decode_samples(raw)
@@ -251,6 +263,16 @@ class PutterLink(Protocol):
             log.error("putter reader stopped", exc_info=exc)
             self.fail(ProtocolError(f"putter at {self.name}: reader stopped: {exc!r}"))
 
+    def _fresh_stream(self) -> None:
+        """The unit acknowledged START_STREAM: its samples from here on are the new
+        stream's, counted from 0; none held from before is handed out (only the reader's
+        thread stores samples, so none of an earlier stream can follow)."""
+        with self._lock:
+            self._seq.restart()
+        self.raw.drain()
+        self.calibrated.drain()
+        self._starting = False
+
     def _store(self, block: SampleBlock, buffer: SampleBuffer) -> None:
         if not len(block):
             return
@@ -258,3 +280,8 @@ class PutterLink(Protocol):
             block.seq[:] = self._seq.unwrap(block.seq)
             self._samples += len(block)
         buffer.append(block)
+
+
+def _starts_stream(frame: Frame) -> bool:
+    """Whether ``frame`` is the unit's ACK of a START_STREAM."""
+    return frame.type == FrameType.ACK and frame.payload[:1] == bytes((FrameType.START_STREAM,))

@@ -15,7 +15,6 @@ then a regular expression with named groups ``serial`` (required), ``part_number
 ``revision`` and ``lot`` (:class:`Label`).
 """
 
-import re
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -26,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 from station.domain.constants import Identifier, PartNumber
 from station.domain.errors import InputError, validation_problem
 from station.domain.limits import LimitsProfile
+from station.domain.patterns import full_match, pattern_groups
 from station.domain.run_settings import shipped_plan
 from station.domain.sensor_spec import SensorSpec
 from station.domain.toml_text import parse_toml
@@ -171,10 +171,9 @@ class LabelFormat(BaseModel):
     @model_validator(mode="after")
     def _groups(self) -> Self:
         try:
-            compiled = re.compile(self.pattern)
-        except re.error as exc:
-            raise ValueError(f"pattern is not a regular expression: {exc}") from None
-        groups = set(compiled.groupindex)
+            groups = pattern_groups(self.pattern)
+        except ValueError as exc:
+            raise ValueError(f"pattern is {exc}") from None
         if "serial" not in groups:
             raise ValueError("pattern has no (?P<serial>…) group")
         unknown = sorted(groups - set(LABEL_GROUPS))
@@ -188,10 +187,7 @@ class LabelFormat(BaseModel):
             text = text[len(self.prefix) :]
         if self.suffix and text.endswith(self.suffix):
             text = text[: -len(self.suffix)]
-        match = re.fullmatch(self.pattern, text)
-        if match is None:
-            return None
-        found = {k: v for k, v in match.groupdict().items() if v}
-        if "serial" not in found:
+        found = full_match(self.pattern, text)
+        if found is None or "serial" not in found:
             return None
         return Label(**found)

@@ -180,9 +180,15 @@ class StationApp(FrontEnd):
                 self._key(event)
 
     def _label(self, text: str) -> None:
-        """A label scanned during the unit: the next unit's (not the unit on the station)."""
+        """A label scanned during the unit: the next unit's (not the unit on the station),
+        checked at once as every scan is (:meth:`UnitLifecycle.label_refused`); a label
+        refused never replaces the one queued."""
         run = self.run
         assert run is not None
+        refused = self.lifecycle.label_refused(text)
+        if refused is not None:
+            run.messages.say("warn", refused)
+            return
         if text == self.slot.serial:
             run.messages.say(
                 "warn", tr("{serial} is the unit on the station now: finish it first", serial=text)

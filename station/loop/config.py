@@ -16,6 +16,7 @@ from station.domain.constants import DEFAULT_PART_NUMBER, MAX_SLOTS, PART_NUMBER
 from station.domain.errors import InputError, validation_problem
 from station.domain.i18n import Language
 from station.domain.limits import load_profile
+from station.domain.patterns import compile_pattern
 from station.domain.products import LabelFormat, Product, Products, load_products
 from station.domain.quality.golden import GoldenUnit
 from station.domain.run_settings import RunSettings, shipped_plan
@@ -109,10 +110,7 @@ class StationConfig(BaseSettings):
     @field_validator("serial_pattern")
     @classmethod
     def _compiles(cls, value: str) -> str:
-        try:
-            re.compile(value)
-        except re.error as exc:
-            raise ValueError(f"not a regular expression: {exc}") from None
+        compile_pattern(value)  # RE2's, as every scan matches it: refused now, in one line
         return value
 
     @field_validator("server_url")
@@ -177,8 +175,12 @@ def _products_of(data: dict[str, Any]) -> Products:
     return load_products(Path(products_file) if products_file else None)
 
 
-def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
-    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top."""
+def load_config(
+    path: Path | None, overrides: dict[str, Any], defaults: dict[str, Any] | None = None
+) -> StationConfig:
+    """The configuration from ``path`` (TOML, optional) with ``overrides`` on top;
+    ``defaults`` (a command's own, e.g. the demo's station id) stand only for what none of
+    the file, the environment and ``overrides`` gives."""
     values: dict[str, Any] = {}
     if path is not None:
         try:
@@ -193,7 +195,9 @@ def load_config(path: Path | None, overrides: dict[str, Any]) -> StationConfig:
         values.pop("slots", None)
     values.update({k: v for k, v in overrides.items() if v is not None})
     try:
-        return StationConfig(**values)
+        config = StationConfig(**values)
+        unset = {k: v for k, v in (defaults or {}).items() if k not in config.model_fields_set}
+        return StationConfig(**unset, **values) if unset else config
     except ValidationError as exc:
         where = f"{path}: " if path is not None else ""
         raise InputError(f"{where}station configuration: {validation_problem(exc)}") from None

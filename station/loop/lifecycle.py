@@ -13,8 +13,10 @@ place:
   (:meth:`station.loop.results_link.ResultsLink.look_up`), and once it is there
   (:meth:`UnitLifecycle.scanned`) it decides (:class:`station.loop.unit_history.UnitHistory`:
   passed already, ask; sent to rework or no attempts left, refuse);
-- **the start** (:meth:`UnitLifecycle.start`): the unit opened on its slot's port (the
-  serial it reports checked against its label, which catches a unit in the wrong slot),
+- **the start** (:meth:`UnitLifecycle.start`): the unit opened on its slot's port, its
+  input flushed and its stream a fresh one (:func:`station.run.unit_run.open_unit`: no
+  sample sent before, such as a previous run's, is judged; the serial it reports checked
+  against its label, which catches a unit in the wrong slot),
   its journal (new, or the interrupted one resumed), and its run
   (:class:`station.run.unit_run.UnitRun`) with what its record needs: its earlier runs
   or that it is the golden unit, and the stored [Park2014]_ g-sensitivity fit of a
@@ -247,7 +249,8 @@ class UnitLifecycle:
         return label
 
     def label_refused(self, text: str) -> str | None:
-        """Why a label scanned ahead is refused (None: it is read)."""
+        """Why a label scanned ahead, during a unit or a cycle, is refused (None: it is
+        read): the check of every scan (:meth:`read_label`), for every front-end."""
         label = self.read_label(text)
         return label.text if isinstance(label, Said) else None
 

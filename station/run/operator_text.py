@@ -8,13 +8,13 @@ place, so every screen says the same thing the same way.
 """
 
 import errno
-import re
 from collections.abc import Callable
 
 from rich.cells import cell_len, set_cell_size
 
 from station.device import DeviceTimeoutError, NoReplyError
 from station.domain.i18n import tr
+from station.domain.patterns import full_match
 from station.domain.poses import Pose
 from station.run.acquisition import StillnessThresholds, WindowVerdict
 
@@ -90,7 +90,7 @@ def disposition_word(disposition: str) -> str:
 
 def not_a_serial(text: str, pattern: str) -> str | None:
     """Why ``text`` scanned at a prompt is refused as a serial number (None: it is one)."""
-    if re.fullmatch(pattern, text):
+    if full_match(pattern, text) is not None:
         return None
     return tr(
         "{text} is not a serial number (expected {pattern})", text=repr(text), pattern=pattern

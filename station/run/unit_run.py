@@ -60,8 +60,9 @@ from station.run.writeback import write_and_read_back
 
 
 def open_unit(port: str, serial: str, adc_max: int = ADC_MAX) -> PutterDriver:
-    """Open the unit on ``port``, check it is ``serial``, start its raw stream (of
-    accelerometer counts up to ``adc_max``, its product's sensor's)."""
+    """Open the unit on ``port`` (its input flushed), check it is ``serial``, start a fresh
+    raw stream (of accelerometer counts up to ``adc_max``, its product's sensor's): no
+    sample the unit sent before is handed out (:class:`station.device.PutterDriver`)."""
     driver = PutterDriver.open(port, adc_max=adc_max)
     try:
         driver.identify(expected_serial=serial)

@@ -196,6 +196,27 @@ def test_pulling_the_cable_keeps_every_sample_taken_then_says_disconnected(
         driver.identify()
 
 
+def test_a_unit_opened_again_hands_out_none_of_the_stream_it_sent_before() -> None:
+    # An earlier run ended on a saturated axis without stopping the stream (the station
+    # just closes the port): the unit streamed its rail counts into the port for a
+    # second more. Repaired on the same cable, the next run's stream is its own: from 0,
+    # off the rail.
+    with VirtualPutter(seed=11, serial="PT000042", speed=SPEED) as unit:
+        url = unit.serve_pty()
+        unit.faults.saturate_axis = "x"
+        with PutterDriver.open(url) as earlier:
+            earlier.start_stream()
+            assert (earlier.wait_samples(100, timeout=HANG_S).accel[:, 0] == 4095).all()
+        unit.sleep(1.0)
+        unit.faults.saturate_axis = None
+        with PutterDriver.open(url) as driver:
+            driver.identify(expected_serial="PT000042")
+            driver.start_stream()
+            rows = driver.wait_samples(1000, timeout=HANG_S)
+    np.testing.assert_array_equal(rows.seq, np.arange(1000))
+    np.testing.assert_allclose(rows.accel.mean(axis=0), static_reading(unit, "face_up"), atol=0.5)
+
+
 def test_after_a_replug_the_unit_answers_again(unit: VirtualPutter, driver: PutterDriver) -> None:
     driver.start_stream()
     driver.wait_samples(100, timeout=2.0)

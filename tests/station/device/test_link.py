@@ -3,6 +3,7 @@ and the station's pass reads the port itself; the reader reads at once while som
 on the port, on a stream faster than the putter's own, and when nobody read for a while."""
 
 import contextlib
+import itertools
 import os
 import queue
 import threading
@@ -12,6 +13,8 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 import serial
+from hypothesis import given
+from hypothesis import strategies as st
 
 from station.device import DeviceDisconnectedError, ProtocolError, PutterDriver
 from station.device import link as link_module
@@ -273,3 +276,44 @@ def test_a_reply_is_handed_over_once_the_samples_read_before_it_are_stored() -> 
         link.data_received(samples(0, 5) + encode_frame(FrameType.ACK, b"\x00"))
     assert stored_at_reply == [5]
     assert link.replies.get_nowait().type == FrameType.ACK
+
+
+def _stream(first: int, count: int, x: int) -> bytes:
+    return b"".join(
+        encode_sample(i % 65536, (x, 2048, 2867), (0, 0, 0), 2500)
+        for i in range(first, first + count)
+    )
+
+
+@given(
+    held=st.integers(0, 20),
+    late=st.integers(0, 40),
+    other_ack=st.booleans(),
+    fresh=st.integers(0, 40),
+    cuts=st.lists(st.integers(0, 2000), max_size=6),
+)
+def test_a_fresh_stream_hands_out_only_what_the_unit_sent_after_its_start_was_acknowledged(
+    held: int, late: int, other_ack: bool, fresh: int, cuts: list[int]
+) -> None:
+    """Samples of an earlier stream (at the rail, 4095) held undrained when the stream is
+    restarted, or still arriving before the unit acknowledges START_STREAM (an ACK of
+    another command ends nothing), never come out; the new stream's do, from 0, however
+    the port cuts the bytes into chunks."""
+    link = PutterLink("test", 1024)
+    with link.attended():  # a command waits for its reply: the reader does not rest
+        link.data_received(_stream(1000, held, 4095))
+        link.restart_stream()
+        wire = _stream(1000 + held, late, 4095)
+        if other_ack:
+            wire += encode_frame(FrameType.ACK, bytes((FrameType.SET_RATE,)))
+        wire += encode_frame(FrameType.ACK, bytes((FrameType.START_STREAM,)))
+        wire += _stream(0, fresh, 2048)
+        bounds = sorted({0, len(wire), *(c for c in cuts if c < len(wire))})
+        for start, end in itertools.pairwise(bounds):
+            link.data_received(wire[start:end])
+    rows = link.raw.drain()
+    np.testing.assert_array_equal(rows.seq, np.arange(fresh))
+    assert (rows.accel[:, 0] == 2048).all()
+    assert link.stats().lost_samples == 0
+    acked = [link.replies.get_nowait().payload[0] for _ in range(link.replies.qsize())]
+    assert acked == [*([FrameType.SET_RATE] if other_ack else []), FrameType.START_STREAM]

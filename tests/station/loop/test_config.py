@@ -25,6 +25,26 @@ def test_flags_override_the_file_and_the_environment(
     assert config.journal_path.name == "journal-line1-st3.json"
 
 
+def test_a_commands_defaults_stand_only_for_what_nothing_else_names(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "station.toml"
+    path.write_text('station_id = "line1-st3"\n')
+    monkeypatch.setenv("CALSTATION_OPERATOR_ID", "bob")
+    demo = {"station_id": "demo-station", "operator_id": "demo-operator", "lot": "demo-lot"}
+    config = load_config(path, {"lot": None}, demo)
+    assert (config.station_id, config.operator_id, config.lot) == ("line1-st3", "bob", "demo-lot")
+    flagged = load_config(path, {"station_id": "st-9", "lot": "L7"}, demo)
+    assert (flagged.station_id, flagged.lot) == ("st-9", "L7")
+    monkeypatch.delenv("CALSTATION_OPERATOR_ID")
+    bare = load_config(None, {}, demo)
+    assert (bare.station_id, bare.operator_id, bare.lot) == (
+        "demo-station",
+        "demo-operator",
+        "demo-lot",
+    )
+
+
 @pytest.mark.parametrize(
     ("content", "message"),
     [
@@ -35,6 +55,12 @@ def test_flags_override_the_file_and_the_environment(
             "head_up",
         ),
         ('serial_pattern = "(["\n', "serial_pattern: not a regular expression"),
+        # Read by RE2 (linear time): what needs backtracking is refused at start-up.
+        ("serial_pattern = '^(P)\\1$'\n", "serial_pattern: not a regular expression the station"),
+        (
+            "[label]\npattern = '(?P<serial>PT\\d+)(?=/)'\n",
+            "label: pattern is not a regular expression the station reads",
+        ),
         ('station_id = "has space"\n', "station_id"),
         ('lot = "L 7"\n', "lot"),
         ("bogus = 1\n", "bogus"),

@@ -132,6 +132,24 @@ def test_a_demo_of_a_product_records_its_part_number(run_cli: CliRunner, tmp_pat
     assert stored == [(unit["serial"], "DIXX-A12")]
 
 
+def test_a_demo_with_a_configuration_runs_as_the_station_it_names(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    env = {**os.environ, "CALSTATION_DATA_DIR": str(tmp_path)}
+    for name in ("CALSTATION_DATABASE_URL", "CALSTATION_STATION_ID", "CALSTATION_OPERATOR_ID"):
+        env.pop(name, None)
+    config = tmp_path / "station.toml"
+    config.write_text('station_id = "line2-st9"\noperator_id = "qa-ann"\n')
+    args = ("demo", "--units", "1", "--json", "--speed", "20", "--config", str(config))
+    result = run_cli(*args, env=env, timeout=180)
+    assert result.returncode == 0, result.stderr
+    [unit] = json.loads(result.stdout)
+    with sqlite3.connect(tmp_path / "calstation.sqlite3") as db:
+        stored = db.execute("select serial, station_id, operator_id, lot from runs").fetchall()
+    # The file's ids; the demo's own lot, which the file leaves unnamed.
+    assert stored == [(unit["serial"], "line2-st9", "qa-ann", "demo-lot")]
+
+
 @pytest.mark.parametrize(
     ("part_number", "line"),
     [

@@ -6,15 +6,16 @@ SQLite results database.
 
 import json
 import os
+import sqlite3
 from collections.abc import Iterator
 from pathlib import Path
 
+import pexpect
 import pytest
 
 from station.domain.faults import Faults
-from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT, CliRunner
-from tests.station.loop.test_station_terminal import SPEED, Station
+from tests.station.loop.test_station_terminal import POSE_ASKED, Station
 from tests.terminal import hang_guard
 
 pytestmark = hang_guard
@@ -103,12 +104,17 @@ def test_a_unit_sent_to_rework_is_refused_until_a_review_releases_it(
             *review, "--decision", "retest", "--root-cause", "cracked joint", env=env
         )
         assert released.returncode == 0, released.stderr
-        broken.putter.close()  # to the repair bench, and back repaired
-        broken.putter = VirtualPutter(seed=5, serial="PT000042", speed=SPEED)
-        broken.putter.serve_pty(broken.port)
+        # Repaired on its own cable: the unit streamed its rail counts into the port all
+        # the while, and the new run starts from a flushed port and a fresh stream.
+        broken.putter.faults.saturate_axis = None
         broken.asked = None
         broken.scan()
-        broken.wait_asked()  # the new run is under way (the last verdict was on screen)
+        # The new run asks for its first pose (the last verdict was on screen until then);
+        # judged on the rail counts left in the port, it was stored at once, failed.
+        while child.expect([POSE_ASKED, pexpect.TIMEOUT], timeout=0.2) == 1:
+            with sqlite3.connect(broken.database) as db:
+                (runs,) = db.execute("select count(*) from runs").fetchone()
+            assert runs == 1, "the new run was judged before a pose was asked"
         assert broken.follow() == "PASS"
         child.expect("next: SHIP")
         again = run_cli(*review, "--decision", "scrap", "--root-cause", "too late", env=env)

@@ -15,9 +15,15 @@ from station.loop.fixture.ahead import ScanAhead
 from station.loop.prompt import Label, LabelReader
 from station.loop.slot import Slot
 from station.results.journal import JournalFile
+from station.run.operator_text import not_a_serial
 from station.run.unit_run import UnitRun
 
 PATTERN = r"^PT\d{6}$"
+
+
+def refuse(text: str) -> str | None:
+    """The station's check of a scan without a label form: a serial number."""
+    return not_a_serial(text, PATTERN)
 
 
 def slots(count: int, inside: dict[int, str]) -> list[Slot]:
@@ -44,7 +50,7 @@ def test_the_queue_holds_each_serial_once_in_the_lowest_free_slots(
 ) -> None:
     fixture = slots(count, {n: s for n, s in inside.items() if n <= count})
     said: list[str] = []
-    ahead = ScanAhead(fixture, serial_pattern=PATTERN, tell=said.append)
+    ahead = ScanAhead(fixture, tell=said.append, refuse=refuse)
     expected: list[str] = []  # the model: serials in scan order, slots 1, 2, ... in turn
     running = {s.serial for s in fixture if s.run is not None}
     for entry in typed:
@@ -66,7 +72,7 @@ def test_the_queue_holds_each_serial_once_in_the_lowest_free_slots(
 def test_each_refusal_says_why_in_one_line() -> None:
     fixture = slots(2, {1: "PT000001"})
     said: list[str] = []
-    ahead = ScanAhead(fixture, serial_pattern=PATTERN, tell=said.append)
+    ahead = ScanAhead(fixture, tell=said.append, refuse=refuse)
     for label in ("PT000009", "PT000001", "nope", "PT000009", "PT000008", "PT000007", "\x7f"):
         ahead.scanned(label if label == "\x7f" else Label(label))
     assert said == [

@@ -285,6 +285,8 @@ def test_a_label_scanned_during_a_run_is_the_next_unit_never_keys(station: Stati
     station.follow(until_pose=4)  # poses 1-3 taken: the digits of a label would redo 1 and 2
     child.send("PT000125\r")  # the scanner's burst, Enter included
     child.expect("next unit PT000125 scanned: Enter at the prompt takes it")
+    child.send("ray1\r")  # refused at once: PT000125 stays the next unit
+    child.expect(re.escape(r"'ray1' is not a serial number (expected ^PT\d{6}$)"))
     assert station.follow() == "PASS"
     child.expect(r"\(Enter: PT000125, scanned during the last unit\)")
     child.send("\r")  # PT000042 is still on the port: PT000125 is the one scanned
