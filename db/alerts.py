@@ -16,7 +16,7 @@ from itertools import pairwise
 from statistics import fmean, stdev
 from typing import Any
 
-from sqlalchemy import Row, func, select, update
+from sqlalchemy import ColumnElement, Row, func, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
@@ -66,7 +66,7 @@ def _yield_check(session: Session, rule: YieldRule) -> _Check:
     the goal or not. A first attempt is the yield definition's (:mod:`db.rollups`): a
     production run, the unit's first that the operator did not abort."""
     check = _Check("yield", rule.scope, f"yield:{rule.scope}:{rule.units}:{rule.goal}")
-    scope = [RunFacts.line_first.is_(True), PRODUCTION]
+    scope: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), PRODUCTION]
     if rule.station is not None:
         scope.append(Run.station_id == rule.station)
     latest = (Run.started_at.desc(), Run.id.desc())
