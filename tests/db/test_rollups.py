@@ -26,12 +26,21 @@ from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
 from db.holds import held_units
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
+from db.models import (
+    ReportCounts,
+    ReportFailures,
+    ReportParameters,
+    Run,
+    RunFacts,
+    RunFailure,
+    Unit,
+)
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.domain.limits import Bounds, load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import PARAMETERS
+from station.domain.unit_state import UnitCalibration
 from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
@@ -541,9 +550,17 @@ def _yields_agree(session: Session, history: list[Planned], f: ReportFilter) -> 
             _check_group(row.summary, history, [r for r in chosen if getattr(r, key) == name])
         assert sum(r.summary.retests for r in rows) == report.summary.retests
         assert sum(r.summary.units_tested for r in rows) == report.summary.units_tested
+    latest = _latest_attempts(history)
     on_hold = held_units(session, 50)
-    held = {s for s, r in _latest_attempts(history).items() if not r.passed}
+    held = {s for s, r in latest.items() if not r.passed}
     assert ({u.serial for u in on_hold.units}, on_hold.total) == (held, len(held))
+    # The unit answers (GET /api/v1/units/{serial}) by the same definition.
+    for serial in {r.serial for r in history}:
+        stored = session.scalar(select(Unit.calibration).where(Unit.serial == serial))
+        answer = UnitCalibration.model_validate_json(stored or "")
+        assert answer.attempts == sum(_attempt(r) for r in history if r.serial == serial)
+        if serial in latest:
+            assert answer.verdict == ("pass" if latest[serial].passed else "fail")
 
 
 @settings(
