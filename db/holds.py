@@ -1,4 +1,4 @@
-"""The units on hold: units whose latest run failed, with what each one holds.
+"""The units on hold: units whose latest attempt failed, with what each one holds.
 
 A unit is on hold when its latest attempt (on the line, aborts aside:
 ``run_facts.line_latest``, the yield definition of :mod:`db.rollups`) failed; a unit with

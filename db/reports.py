@@ -147,12 +147,12 @@ def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
 
 
 def latest_run_aliases() -> tuple[type[Run], type[RunFacts]]:
-    """A unit's latest run and its facts, as aliases to join beside the runs selected."""
+    """A unit's latest attempt and its facts, as aliases to join beside the runs selected."""
     return aliased(Run, name="latest"), aliased(RunFacts, name="latest_facts")
 
 
 def latest_counted(latest: type[Run], facts: type[RunFacts]) -> ColumnElement[bool]:
-    """``facts`` are those of ``latest`` and it is its unit's latest run that counts
+    """``facts`` are those of ``latest`` and it is its unit's latest attempt
     (:mod:`db.rollups`, ``line_latest``)."""
     return and_(facts.run_pk == latest.id, facts.line_latest.is_(True))
 
@@ -381,8 +381,8 @@ class ReportQueries:
         return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
     def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
-        """The units the yield table counts (``held``: those on hold), newest first run
-        first, each with its latest run (wherever and whenever it was), run count and
+        """The units the yield table counts (``held``: those on hold), newest first attempt
+        first, each with its latest attempt (wherever and whenever it was), run count and
         that run's first failure code; ``offset`` skips the newest (a page)."""
         # The page first (the units' first runs, cheap conditions: a walk of
         # ix_runs_started_at, OFFSET included), then the latest run of its units only.
@@ -421,7 +421,7 @@ class ReportQueries:
         return [row for row in self.session.execute(stmt)]
 
     def open_holds(self, now: datetime) -> OpenHolds:
-        """The held units the yield table counts whose failed latest run no review has
+        """The held units the yield table counts whose failed latest attempt no review has
         closed, counted by the age of that run at ``now`` and by its first failure reason:
         one grouped statement (the held units' first runs, then each one's latest run)."""
         latest, latest_facts = latest_run_aliases()
@@ -954,7 +954,7 @@ def eol_report(
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest run failed), ``unit_offset`` skips the newest (pages);
+    held units (latest attempt failed), ``unit_offset`` skips the newest (pages);
     ``open_holds``: count the open holds too.
     """
     queries = ReportQueries(session, filter)
