@@ -16,7 +16,7 @@ from itertools import pairwise
 from statistics import fmean, stdev
 from typing import Any
 
-from sqlalchemy import Row, func, select, update
+from sqlalchemy import ColumnElement, Row, func, select, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
@@ -24,6 +24,7 @@ from db.engine import for_dialect
 from db.limits_profiles import stored_profiles
 from db.models import Run, RunFacts, StoredAlert
 from db.outbox_reports import latest_outboxes
+from db.rollups import PRODUCTION
 from station.domain.quality.alerts import (
     Alert,
     AlertRules,
@@ -60,34 +61,42 @@ class _Check:
 
 
 def _yield_check(session: Session, rule: YieldRule) -> _Check:
-    """The first runs of the last ``units`` units (production runs, not golden-unit
-    checks) and their first-pass yield, below the goal or not."""
+    """The first attempts of the last ``units`` units of one product (the product of the
+    latest of them, at the rule's station or anywhere) and their first-pass yield, below
+    the goal or not. A first attempt is the yield definition's (:mod:`db.rollups`): a
+    production run, the unit's first that the operator did not abort."""
     check = _Check("yield", rule.scope, f"yield:{rule.scope}:{rule.units}:{rule.goal}")
+    scope: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), PRODUCTION]
+    if rule.station is not None:
+        scope.append(Run.station_id == rule.station)
+    latest = (Run.started_at.desc(), Run.id.desc())
+    first = select(Run).join(RunFacts, RunFacts.run_pk == Run.id).where(*scope)
+    # One product's units: a yield over two products would mix two processes.
+    product = first.with_only_columns(Run.part_number).order_by(*latest).limit(1)
     stmt = (
-        select(Run.run_id, Run.serial, Run.started_at, Run.verdict)
-        .join(RunFacts, RunFacts.run_pk == Run.id)
-        .where(RunFacts.line_first.is_(True), Run.purpose.is_(None))
-        .order_by(Run.started_at.desc(), Run.id.desc())
+        first.with_only_columns(Run.run_id, Run.serial, Run.started_at, Run.verdict)
+        .where(Run.part_number == product.scalar_subquery())
+        .order_by(*latest)
         .limit(rule.units)
     )
-    if rule.station is not None:
-        stmt = stmt.where(Run.station_id == rule.station)
     rows = session.execute(stmt).all()
     passed = sum(row.verdict == "pass" for row in rows)
     if len(rows) < rule.units or passed / rule.units >= rule.goal:
         return check
+    part_number = session.scalar(product)
     evidence = {
         "units": rule.units,
         "passed": passed,
         "first_pass_yield": passed / rule.units,
         "goal": rule.goal,
         "station": rule.station,
+        "part_number": part_number,
         "since": min(row.started_at for row in rows).isoformat(),
         "failed": [row.serial for row in rows if row.verdict != "pass"],
     }
     message = (
-        f"first-pass yield {passed / rule.units:.1%} of the last {rule.units} units at "
-        f"{rule.scope}, below the goal {rule.goal:.1%}"
+        f"first-pass yield {passed / rule.units:.1%} of the last {rule.units} {part_number} "
+        f"units at {rule.scope}, below the goal {rule.goal:.1%}"
     )
     return replace(check, evidence=evidence, message=message, tipped_by=str(rows[0].run_id))
 

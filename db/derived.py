@@ -2,11 +2,10 @@
 
 The unit answers (:mod:`db.units`) and the report's facts and roll-ups
 (:mod:`db.rollups`) are functions of ``runs``. The migrations create their tables
-only; when they are empty beside stored runs (a migration just added them), or this
-software defines them differently from the software that wrote them (answers of an
-older shape; a unit's latest run no longer an operator's abort), :func:`rewrite_if_stale`
-writes both from ``runs`` in the upgrade's transaction: ``calstation db upgrade``, or
-any opening of the embedded SQLite database.
+only; when they are empty beside stored runs (a migration just added them, or emptied
+facts of an older yield definition, as 0021 did), or the answers are of an older shape,
+:func:`rewrite_if_stale` writes both from ``runs`` in the upgrade's transaction:
+``calstation db upgrade``, or any opening of the embedded SQLite database.
 """
 
 from sqlalchemy import Connection, select

@@ -1,15 +1,16 @@
-"""The units on hold: units whose latest run failed, with what each one holds.
+"""The units on hold: units whose latest attempt failed, with what each one holds.
 
-A unit is on hold when its latest run (on the line, aborts aside: ``run_facts.line_latest``,
-the end-of-line report's own rule, :mod:`db.rollups`) failed. The line dashboard lists the
+A unit is on hold when its latest attempt (on the line, aborts aside:
+``run_facts.line_latest``, the yield definition of :mod:`db.rollups`) failed; a unit with
+nothing but aborts was never attempted and is not on hold. The line dashboard lists the
 latest of them, any day, with the answer ``GET /api/v1/units/{serial}`` gives
 (:class:`station.domain.unit_state.UnitCalibration`: its attempts, where the station sent it, and
 ``holds``, the coefficients of its last verified write-back), read from ``units``.
 
 The list walks ``ix_runs_verdict_started_at`` backwards over the failing runs and stops at
 ``limit`` units. The count comes from the report's daily roll-ups, kept up to date at
-every submission: units (each counted once, at its first run) less those whose latest run
-passed, summed over every day; a sum over a few rows a day instead of a walk over every
+every submission: units (each counted once, at its first attempt) less those whose latest
+attempt passed, summed over every day; a sum over a few rows a day instead of a walk over every
 failing run.
 """
 
@@ -20,9 +21,8 @@ from sqlalchemy import ColumnElement, exists, func, select
 from sqlalchemy.orm import Session
 
 from db.models import HoldReview as ReviewRow
-from db.models import ReportCounts, Run, RunFacts, RunFailure, Unit
-from db.rollups import aborted
-from station.domain.unit_state import ABORTED, UnitCalibration
+from db.models import ReportCounts, Run, RunFacts, Unit
+from station.domain.unit_state import UnitCalibration
 
 
 @dataclass(frozen=True)
@@ -34,10 +34,9 @@ class HeldUnits:
 
 
 def held_units(session: Session, limit: int) -> HeldUnits:
-    """The latest ``limit`` units on hold (their latest run failed), and how many there are."""
-    # A unit whose runs are all aborts was never attempted: not on hold (its latest run
-    # is an abort only then, for the latest run is the latest that counts).
-    on_hold = (Run.verdict == "fail", RunFacts.line_latest, ~aborted(Run.id))
+    """The latest ``limit`` units on hold (their latest attempt failed), and how many
+    there are."""
+    on_hold = (Run.verdict == "fail", RunFacts.line_latest)
     answers = session.scalars(
         select(Unit.calibration)
         .select_from(Run)
@@ -50,20 +49,8 @@ def held_units(session: Session, limit: int) -> HeldUnits:
     total = session.scalar(select(func.sum(ReportCounts.line_units - ReportCounts.line_final_pass)))
     return HeldUnits(
         units=[UnitCalibration.model_validate_json(answer) for answer in answers],
-        total=(total or 0) - abort_only_units(session),
+        total=total or 0,
     )
-
-
-def abort_only_units(session: Session) -> int:
-    """Units whose every run is an operator's abort (their latest run is an abort): never
-    attempted, neither on hold nor shipped. Found from the aborts' failure rows
-    (``ix_run_failures_code``), not from a walk over the runs."""
-    stmt = (
-        select(func.count(func.distinct(RunFailure.run_pk)))
-        .join(RunFacts, RunFacts.run_pk == RunFailure.run_pk)
-        .where(RunFailure.code == ABORTED, RunFacts.line_latest.is_(True))
-    )
-    return int(session.execute(stmt).scalar_one())
 
 
 def unreviewed(run: Any) -> ColumnElement[bool]:

@@ -254,13 +254,13 @@ class StationKey(Base):
 class RunFacts(Base):
     """What the report derives from one run and the runs around it (:mod:`db.rollups`).
 
-    Order is ``(started_at, id)``. ``line_first``: no earlier run of the unit;
-    ``line_latest``: no later one; ``noise_*``: the run's pose noise summed over its
-    poses; ``line_final_pass``: ``line_first`` and the unit's
-    latest run passed; ``unit_runs``: how many runs the unit has. ``station_*``: the
-    same among the unit's runs at the run's station. ``chart_previous``, for a run with
-    coefficients: the latest earlier run of the line with coefficients (the other end of
-    this run's moving range).
+    Order is ``(started_at, id)``. ``attempt``: the run is an attempt (not an operator's
+    abort, :mod:`db.rollups`); ``line_first``: it is the unit's first attempt (no earlier
+    attempt of the unit); ``line_latest``: its latest (no later one); ``noise_*``: the
+    run's pose noise summed over its poses; ``line_final_pass``: ``line_first`` and the
+    unit's latest attempt passed; ``unit_runs``: how many runs the unit has, aborts
+    included. ``chart_previous``, for a run with coefficients: the latest earlier run of
+    the line with coefficients (the other end of this run's moving range).
     """
 
     __tablename__ = "run_facts"
@@ -280,12 +280,11 @@ class RunFacts(Base):
     noise_squares_x: Mapped[float | None] = mapped_column(Double())
     noise_squares_y: Mapped[float | None] = mapped_column(Double())
     noise_squares_z: Mapped[float | None] = mapped_column(Double())
+    attempt: Mapped[bool] = mapped_column(Boolean())
     line_first: Mapped[bool] = mapped_column(Boolean())
     line_latest: Mapped[bool] = mapped_column(Boolean())
     line_final_pass: Mapped[bool] = mapped_column(Boolean())
     unit_runs: Mapped[int] = mapped_column(Integer())
-    station_first: Mapped[bool] = mapped_column(Boolean())
-    station_final_pass: Mapped[bool] = mapped_column(Boolean())
     chart_previous: Mapped[int | None] = mapped_column(BigId)
 
 
@@ -304,7 +303,12 @@ class _Bucket:
 
 
 class ReportCounts(_Bucket, Base):
-    """Per bucket and limits profile: the runs' counts, times and unit flags (sums)."""
+    """Per bucket and limits profile: the runs' counts, times and unit flags (sums).
+
+    ``line_units``: units whose first attempt is in the bucket, ``line_first_pass`` /
+    ``line_final_pass``: of those, the units whose first / latest attempt passed;
+    ``retests``: attempts that are not their unit's first; ``aborts``: operator aborts
+    (runs, never attempts)."""
 
     __tablename__ = "report_counts"
 
@@ -320,10 +324,8 @@ class ReportCounts(_Bucket, Base):
     line_units: Mapped[int] = mapped_column(Integer())
     line_first_pass: Mapped[int] = mapped_column(Integer())
     line_final_pass: Mapped[int] = mapped_column(Integer())
-    listed: Mapped[int] = mapped_column(Integer())
-    units: Mapped[int] = mapped_column(Integer())
-    first_pass: Mapped[int] = mapped_column(Integer())
-    final_pass: Mapped[int] = mapped_column(Integer())
+    retests: Mapped[int] = mapped_column(Integer())
+    aborts: Mapped[int] = mapped_column(Integer())
     charted: Mapped[int] = mapped_column(Integer())
     mr_offset_x: Mapped[float] = mapped_column(Double())
     mr_offset_y: Mapped[float] = mapped_column(Double())

@@ -23,7 +23,6 @@ from sqlalchemy import (
     Select,
     and_,
     case,
-    exists,
     func,
     literal,
     or_,
@@ -52,7 +51,6 @@ from db.rollups import (
     PRODUCT_COUNT_VALUES,
     PRODUCTION,
     TREND_COUNT_VALUES,
-    aborted,
     count_contributions,
     failure_contributions,
     parameter_contributions,
@@ -80,7 +78,6 @@ from station.domain.quality.days import (
     day_number,
     is_utc,
     midnight,
-    plant_date,
     plant_days,
     step,
 )
@@ -157,12 +154,12 @@ def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
 
 
 def latest_run_aliases() -> tuple[type[Run], type[RunFacts]]:
-    """A unit's latest run and its facts, as aliases to join beside the runs selected."""
+    """A unit's latest attempt and its facts, as aliases to join beside the runs selected."""
     return aliased(Run, name="latest"), aliased(RunFacts, name="latest_facts")
 
 
 def latest_counted(latest: type[Run], facts: type[RunFacts]) -> ColumnElement[bool]:
-    """``facts`` are those of ``latest`` and it is its unit's latest run that counts
+    """``facts`` are those of ``latest`` and it is its unit's latest attempt
     (:mod:`db.rollups`, ``line_latest``)."""
     return and_(facts.run_pk == latest.id, facts.line_latest.is_(True))
 
@@ -287,9 +284,10 @@ class ReportQueries:
     def station_counts(self) -> list[Row[Any]]:
         """Per station and limits profile: the sums of ``report_counts`` over the range.
 
-        Runs, passes and station time; units counted at their first run on the line
-        (``line_*``) and at their first run at the station, with first and final passes;
-        units listed (latest runs); runs with coefficients and their moving ranges.
+        Runs, passes and station time; units counted at their first attempt on the line
+        (``line_*``) with first and final passes; the station's retests (its attempts that
+        are not their unit's first) and aborts; runs with coefficients and their moving
+        ranges (:mod:`db.rollups`, the yield definition).
         """
         group = ["station_id", *LIMITS]
         edges = self._edge_conditions()
@@ -301,26 +299,14 @@ class ReportQueries:
 
     def product_counts(self) -> list[Row[Any]]:
         """Per part number: the counts :meth:`station_counts` sums per station (units,
-        runs, passes, station time), from the roll-ups and the partial days as theirs."""
+        runs, passes, retests, aborts, station time), from the roll-ups and the partial
+        days as theirs."""
         group = ["part_number"]
         edges = self._edge_conditions()
         values = PRODUCT_COUNT_VALUES
         raw = [] if edges is None else [count_contributions(group, edges, values=values)]
         rows = self._merged(ReportCounts, values, group, self._rolled_conditions(ReportCounts), raw)
         return sorted(rows, key=lambda row: str(row.part_number))
-
-    def product_aborts(self) -> dict[str, int]:
-        """Per part number: the runs the operator aborted (first failure ``aborted``),
-        from ``report_failures`` and the partial days."""
-        group = ["part_number"]
-        edges = self._edge_conditions()
-        aborted = RunFacts.first_failure == ABORTED
-        raw = [] if edges is None else [failure_contributions(group, [*edges, aborted])]
-        rolled = self._rolled_conditions(ReportFailures)
-        if rolled is not None:
-            rolled.append(ReportFailures.code == ABORTED)
-        rows = self._merged(ReportFailures, FAILURE_VALUES, group, rolled, raw)
-        return {str(row.part_number): int(row.runs) for row in rows}
 
     # -- failures ----------------------------------------------------------------------
 
@@ -395,15 +381,15 @@ class ReportQueries:
     # -- units -------------------------------------------------------------------------
 
     def _selected(self, held: bool) -> list[ColumnElement[bool]]:
-        """The units the report counts, by their first run on the line: that run is in
-        range and matches the filter (``held``: and the unit's latest run, wherever and
-        whenever it was, failed). The yield table counts the same units."""
+        """The units the report counts, by their first attempt on the line: that run is
+        in range and matches the filter (``held``: and the unit's latest attempt, wherever
+        and whenever it was, failed). The yield table counts the same units."""
         where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions()]
         return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
     def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
-        """The units the yield table counts (``held``: those on hold), newest first run
-        first, each with its latest run (wherever and whenever it was), run count and
+        """The units the yield table counts (``held``: those on hold), newest first attempt
+        first, each with its latest attempt (wherever and whenever it was), run count and
         that run's first failure code; ``offset`` skips the newest (a page)."""
         # The page first (the units' first runs, cheap conditions: a walk of
         # ix_runs_started_at, OFFSET included), then the latest run of its units only.
@@ -416,7 +402,7 @@ class ReportQueries:
                 RunFacts.unit_runs.label("runs"),
             )
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._selected(held), ~and_(aborted(Run.id), self._only_aborts()))
+            .where(*self._selected(held))
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
             .offset(offset or None)
@@ -441,21 +427,8 @@ class ReportQueries:
         )
         return [row for row in self.session.execute(stmt)]
 
-    @staticmethod
-    def _only_aborts() -> ColumnElement[bool]:
-        """Whether the unit of the run in ``runs`` has nothing but aborts: its latest run
-        (the latest that counts, :mod:`db.rollups`) is one. Asked only of a unit whose
-        first run was aborted."""
-        latest = aliased(Run, name="only")
-        facts = aliased(RunFacts, name="only_facts")
-        return exists().where(
-            latest.serial == Run.serial,
-            latest_counted(latest, facts),
-            aborted(latest.id),
-        )
-
     def open_holds(self, now: datetime) -> OpenHolds:
-        """The held units the yield table counts whose failed latest run no review has
+        """The held units the yield table counts whose failed latest attempt no review has
         closed, counted by the age of that run at ``now`` and by its first failure reason:
         one grouped statement (the held units' first runs, then each one's latest run)."""
         latest, latest_facts = latest_run_aliases()
@@ -473,7 +446,6 @@ class ReportQueries:
             .join(latest_facts, latest_counted(latest, latest_facts))
             .where(
                 *self._selected(True),
-                ~and_(aborted(Run.id), self._only_aborts()),
                 latest.verdict == "fail",
                 unreviewed(latest),
             )
@@ -516,29 +488,6 @@ class ReportQueries:
             .limit(limit)
         )
         return self.session.execute(stmt).all()
-
-    def abort_only_units(self) -> list[Row[str, str, datetime]]:
-        """The units the filter selects (first run on the line among its runs) whose
-        every run is an operator's abort, never attempted: the station, product and start
-        of each one's first run. From the aborts' failure rows (``ix_run_failures_code``): no
-        walk over the runs."""
-        latest, latest_facts = latest_run_aliases()
-        stmt = (
-            select(Run.station_id, Run.part_number, Run.started_at)
-            .distinct()
-            .select_from(RunFailure)
-            .join(Run, Run.id == RunFailure.run_pk)
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .join(latest, latest.serial == Run.serial)
-            .join(latest_facts, latest_counted(latest, latest_facts))
-            .where(
-                RunFailure.code == ABORTED,
-                RunFacts.line_first.is_(True),
-                *self.conditions(),
-                aborted(latest.id),
-            )
-        )
-        return [row for row in self.session.execute(stmt)]
 
 
 def _risks(
@@ -603,49 +552,48 @@ def _ratio(part: float, whole: float) -> float | None:
 
 @dataclass(frozen=True)
 class _Counts:
-    """What a summary is computed from (one station, or the line): ``units`` without
-    the units that were never attempted (only aborts), ``aborted`` the runs the operator
-    aborted (no attempts)."""
+    """What a summary is computed from (one station, or the line), by the yield
+    definition of :mod:`db.rollups`: ``units`` whose first attempt is among the runs,
+    ``first_pass`` / ``final_pass`` of them whose first / latest attempt passed,
+    ``retests`` the attempts that are not their unit's first, ``aborted`` the runs the
+    operator aborted (no attempts)."""
 
     runs: int
     runs_passed: int
     units: int
     first_pass: int
     final_pass: int
+    retests: int
+    aborted: int
     seconds: float | None
     poses: int
-    aborted: int = 0
-    abort_only: int = 0
 
 
 def _total(rows: Sequence[Row[Any]], column: str) -> int:
     return sum(int(row._mapping[column]) for row in rows)
 
 
-def _counts(rows: Sequence[Row[Any]], aborted: int = 0, abort_only: int = 0) -> _Counts:
-    """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of their days):
-    a unit counts where its first run on the line is, so a station's units are those
-    whose first attempt was there, and the stations' rows add up to the line's.
-    ``aborted``: the rows' aborted runs; ``abort_only``: their units with nothing but
-    aborts, which are no units tested."""
+def _counts(rows: Sequence[Row[Any]]) -> _Counts:
+    """The counts of ``rows`` of :meth:`ReportQueries.station_counts` (or of
+    :meth:`ReportQueries.product_counts`): a unit counts where its first attempt on the
+    line is and a retest where it ran, so a station's units are those whose first
+    attempt was there, its retests its own, and the stations' rows add up to the
+    line's."""
     return _Counts(
-        aborted=aborted,
-        abort_only=abort_only,
         runs=_total(rows, "runs"),
         runs_passed=_total(rows, "runs_passed"),
-        units=_total(rows, "line_units") - abort_only,
+        units=_total(rows, "line_units"),
         first_pass=_total(rows, "line_first_pass"),
         final_pass=_total(rows, "line_final_pass"),
+        retests=_total(rows, "retests"),
+        aborted=_total(rows, "aborts"),
         seconds=_total(rows, "duration_ms") / 1000 if rows else None,
         poses=_total(rows, "poses"),
     )
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    # An abort is no attempt: not a retest (a unit's first run aborted and retested
-    # after the range would make it -1: never below none).
-    retests = max(0, n.runs - n.aborted - n.units)
-    seconds = n.seconds
+    seconds, retests = n.seconds, n.retests
     return Summary(
         aborted_runs=n.aborted,
         runs=n.runs,
@@ -683,24 +631,11 @@ def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
     return float((end - start).total_seconds() / 3600)
 
 
-def _products(
-    queries: ReportQueries,
-    unattempted: Sequence[Row[str, str, datetime]],
-    hours: float | None,
-) -> list[ProductSummary]:
+def _products(queries: ReportQueries, hours: float | None) -> list[ProductSummary]:
     """Each product's summary: a unit is one product's, so the rows add up to the
-    line's as the stations' do. Each one's row of :meth:`ReportQueries.product_counts`,
-    with its aborted runs, less its ``unattempted`` units (nothing but aborts)."""
-    aborts = queries.product_aborts()
-    abort_only = Counter(row.part_number for row in unattempted)
+    line's as the stations' do. Each one's row of :meth:`ReportQueries.product_counts`."""
     return [
-        ProductSummary(
-            part_number=row.part_number,
-            summary=_summary(
-                _counts([row], aborts.get(row.part_number, 0), abort_only[row.part_number]),
-                hours,
-            ),
-        )
+        ProductSummary(part_number=row.part_number, summary=_summary(_counts([row]), hours))
         for row in queries.product_counts()
     ]
 
@@ -712,15 +647,6 @@ class _FailingRow(NamedTuple):
     station_id: str
     operator_id: str
     runs: int
-
-
-def _aborted(rows: Sequence[Row[Any]]) -> dict[str, int]:
-    """Aborted runs per station, from :meth:`ReportQueries.first_failures`'s rows."""
-    counts: dict[str, int] = defaultdict(int)
-    for row in rows:
-        if row.code == ABORTED:
-            counts[row.station_id] += int(row.runs)
-    return counts
 
 
 def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
@@ -946,13 +872,16 @@ def _what_if(
     kept: bool,
 ) -> WhatIf:
     """The runs in range re-judged against ``candidate``: yields, Pareto, capability;
-    ``kept``: the candidate is stored (its link answers it again)."""
+    ``kept``: the candidate is stored (its link answers it again).
+
+    A candidate judges attempts again and leaves aborts aborts: the attempts, so the
+    units, retests and aborts, are the report's (``current``)."""
     judged = rejudged(queries.session, queries.conditions(), candidate)
     counts = replace(
         current,
         runs=judged.runs,
         runs_passed=judged.runs_passed,
-        units=judged.units - current.abort_only,
+        units=judged.units,
         first_pass=judged.first_pass,
         final_pass=judged.final_pass,
     )
@@ -977,11 +906,9 @@ def _trend(
     bounds: FamilyBounds | None,
     zone: str,
     shifts: Sequence[time],
-    unattempted: Sequence[datetime] = (),
 ) -> tuple[list[TrendDay], list[TrendShift]]:
     """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times); ``unattempted``: the
-    first runs of the units with nothing but aborts, which no period counts as units.
+    over their shifts when the plant has ``shifts`` (start times).
 
     In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
     another zone one scan numbers each run with its day and its shift together.
@@ -1001,19 +928,15 @@ def _trend(
         parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
         return queries.daily_counts(key), parameters
 
-    per_day = Counter(day_number(plant_date(at, zone)) for at in unattempted)
-    per_shift = Counter(
-        i for at in unattempted for i, p in enumerate(periods) if p.start <= at < p.end
-    )
     if is_utc(zone):
-        by_day = PeriodSums.of_rows(*sums(since, None), bounds).without(per_day)
+        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
         if not periods:
             return trend_days(days, by_day), []
         by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift.without(per_shift))
+        return trend_days(days, by_day), trend_shifts(periods, by_shift)
     if not periods:
         by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
-        return trend_days(days, by_day.without(per_day)), []
+        return trend_days(days, by_day), []
     # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
     # runs of the first shift before its midnight, which no listed day shows.
     before = step(days[0], -1)
@@ -1022,9 +945,7 @@ def _trend(
     rows = sums(min(since, periods[0].start), key)
     by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
     by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
-    return trend_days(days, by_day.without(per_day)), trend_shifts(
-        periods, by_shift.without(per_shift)
-    )
+    return trend_days(days, by_day), trend_shifts(periods, by_shift)
 
 
 def eol_report(
@@ -1050,7 +971,7 @@ def eol_report(
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest run failed), ``unit_offset`` skips the newest (pages);
+    held units (latest attempt failed), ``unit_offset`` skips the newest (pages);
     ``open_holds``: count the open holds too; ``candidate_kept``: the candidate is stored.
     """
     queries = ReportQueries(session, filter)
@@ -1093,15 +1014,11 @@ def eol_report(
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
     points = latest_chart_points(session, queries.conditions(), chart_points)
     failures = queries.first_failures()
-    aborts = _aborted(failures)
-    unattempted = queries.abort_only_units() if aborts else []
-    abort_only = Counter(row.station_id for row in unattempted)
-    line = _counts(counts, sum(aborts.values()), len(unattempted))
+    line = _counts(counts)
     what_if = (
         None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
     )
-    starts = [row.started_at for row in unattempted]
-    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts, starts)
+    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
     generated_at = now or datetime.now(UTC)
     return EolReport(
         generated_at=generated_at,
@@ -1112,13 +1029,11 @@ def eol_report(
         stations=[
             StationSummary(
                 station_id=station,
-                summary=_summary(
-                    _counts(rows_, aborts.get(station, 0), abort_only.get(station, 0)), hours
-                ),
+                summary=_summary(_counts(rows_), hours),
             )
             for station, rows_ in sorted(by_station.items())
         ],
-        products=_products(queries, unattempted, hours),
+        products=_products(queries, hours),
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],

@@ -6,14 +6,32 @@ run: the migration, the benchmark), :func:`record_run` (one submission, in its
 transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
 
 - ``run_facts``: per run, its first failure code, pose count, gyro bias, whether it is
-  its unit's first or latest run (on the line, at its station), whether the unit's latest
-  run passed (on its first run), the unit's run count and the previous run of the line
-  with coefficients. A unit's latest run is its latest that is not an operator's abort
-  (an abort wrote nothing into the unit), or its latest if all are aborts.
+  an attempt and its unit's first or latest attempt, whether the unit's latest attempt
+  passed (on its first attempt), the unit's run count and the previous run of the line
+  with coefficients.
 - ``report_counts``, ``report_failures``, ``report_parameters``: per day (UTC) × station ×
   operator × lot × product (part number), the sums, minima and maxima of what each run
-  contributes (counts, first and final passes, moving ranges; failing runs by first
-  reason; n, Σ(x − c), Σ(x − c)², min, max and histogram bins of every parameter).
+  contributes (counts, first and final passes, retests, aborts, moving ranges; failing
+  runs by first reason; n, Σ(x − c), Σ(x − c)², min, max and histogram bins of every
+  parameter).
+
+**The yield definition**, the one every yield figure (the report's summary, station,
+product and trend rows, the what-if, the units list, open holds, the dashboard's units
+on hold, the yield alert) reads from these facts:
+
+- an **attempt** is a production run (not a golden-unit check) that the operator did not
+  abort. An abort is a run, never an attempt: it wrote nothing into the unit and says
+  nothing about it (:func:`station.domain.unit_state.counts`, the unit answers' rule);
+  it is counted apart (``aborts``);
+- a unit's **first attempt** is its earliest attempt ever, its **latest attempt** its
+  latest ever, wherever and whenever they are. A unit counts in the cohort (units
+  tested) of the selection that holds its first attempt, with its first-pass (that
+  attempt passed) and its final pass (its latest attempt passed); a selection that holds
+  only later attempts of a unit counts them as retests and not the unit. A unit with
+  nothing but aborts was never attempted: in no cohort, never on hold;
+- **retests** are attempts that are not their unit's first attempt, each counted at its
+  own station, day and product: so a station's retests are its own attempts, and the
+  stations' retests add up to the line's.
 
 A submission can change facts of runs stored before it: a late run becomes its unit's
 first, a retest makes the previous run no longer the latest, a run slotted in between
@@ -136,10 +154,8 @@ COUNT_VALUES: dict[str, str] = {
     "line_units": "sum",
     "line_first_pass": "sum",
     "line_final_pass": "sum",
-    "listed": "sum",
-    "units": "sum",
-    "first_pass": "sum",
-    "final_pass": "sum",
+    "retests": "sum",
+    "aborts": "sum",
     "charted": "sum",
     **{f"mr_{name}": "sum" for name in COEFFICIENTS},
 }
@@ -148,7 +164,7 @@ TREND_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")
 }
-#: The columns a product's summary reads (its aborted runs come from ``report_failures``).
+#: The columns a product's summary reads.
 PRODUCT_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in (
@@ -159,6 +175,8 @@ PRODUCT_COUNT_VALUES: dict[str, str] = {
         "line_units",
         "line_first_pass",
         "line_final_pass",
+        "retests",
+        "aborts",
     )
 }
 FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
@@ -318,33 +336,26 @@ PRODUCTION = Run.purpose.is_(None)
 def aborted(run_pk: Any) -> ColumnElement[bool]:
     """Whether the run ``run_pk`` was aborted by the operator (one of its failures says
     so): it says nothing about the unit, is no attempt and no failure of it
-    (:func:`station.domain.unit_state.counts`)."""
+    (:func:`station.domain.unit_state.counts`; the yield definition above)."""
     failure = aliased(RunFailure, name="abort")  # apart from a RunFailure outside
     return exists().where(failure.run_pk == run_pk, failure.code == _ABORTED)
 
 
 def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
-    """The ``run_facts`` rows of the runs ``where`` selects (see :class:`RunFacts`)."""
+    """The ``run_facts`` rows of the runs ``where`` selects (see :class:`RunFacts`), by
+    the yield definition of this module."""
     other = aliased(Run, name="other")
     earlier = tuple_(other.started_at, other.id) < tuple_(Run.started_at, Run.id)
+    later = tuple_(other.started_at, other.id) > tuple_(Run.started_at, Run.id)
     unit = other.serial == Run.serial
-    at_station = and_(unit, other.station_id == Run.station_id)
     newest = (other.started_at.desc(), other.id.desc())
-    # A unit's latest run is its latest that counts: an operator's abort wrote nothing
-    # and says nothing about the unit (station.domain.unit_state), unless all its runs are aborts.
-    counted_newest = (case((aborted(other.id), _ONE), else_=_ZERO), *newest)
-
-    def latest(column: Any, *among: ColumnElement[bool]) -> Any:
-        """``column`` of the unit's latest run that counts, among the runs ``among``."""
-        stmt = select(column).where(*among).order_by(*counted_newest).limit(1)
-        return stmt.scalar_subquery()
-
-    def latest_passed(*among: ColumnElement[bool]) -> ColumnElement[bool]:
-        passed: ColumnElement[bool] = latest(other.verdict, *among) == _PASS
-        return passed
-
-    line_first = ~exists().where(unit, earlier)
-    station_first = ~exists().where(at_station, earlier)
+    attempt = ~aborted(Run.id)
+    # The unit's attempts: its production runs the operator did not abort.
+    unit_attempt = and_(unit, other.purpose.is_(None), ~aborted(other.id))
+    line_first = and_(attempt, ~exists().where(unit_attempt, earlier))
+    latest_verdict = (
+        select(other.verdict).where(unit_attempt).order_by(*newest).limit(1).scalar_subquery()
+    )
     bias = {a: Run.gyro[("bias", a)].as_float() for a in "xyz"}
     return select(
         Run.id,
@@ -359,12 +370,11 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
             select(func.sum(total)).where(RunPose.run_pk == Run.id).scalar_subquery()
             for total in NOISE_TOTALS.values()
         ),
+        attempt,
         line_first,
-        Run.id == latest(other.id, unit),
-        and_(line_first, latest_passed(unit)),
+        and_(attempt, ~exists().where(unit_attempt, later)),
+        and_(line_first, latest_verdict == _PASS),
         select(func.count()).select_from(other).where(unit).scalar_subquery(),
-        station_first,
-        and_(station_first, latest_passed(at_station)),
         case(
             (
                 Run.offset_x.is_not(None),
@@ -386,12 +396,11 @@ _FACT_COLUMNS = (
     "gyro_bias_y",
     "gyro_bias_z",
     *NOISE_TOTALS,
+    "attempt",
     "line_first",
     "line_latest",
     "line_final_pass",
     "unit_runs",
-    "station_first",
-    "station_final_pass",
     "chart_previous",
 )
 
@@ -438,10 +447,8 @@ def count_contributions(
         "line_units": _count_if(facts.line_first),
         "line_first_pass": _count_if(and_(facts.line_first, passed)),
         "line_final_pass": _count_if(facts.line_final_pass),
-        "listed": _count_if(facts.line_latest),
-        "units": _count_if(facts.station_first),
-        "first_pass": _count_if(and_(facts.station_first, passed)),
-        "final_pass": _count_if(facts.station_final_pass),
+        "retests": _count_if(and_(facts.attempt, ~facts.line_first)),
+        "aborts": _count_if(~facts.attempt),
         "charted": func.count(Run.offset_x),
         **{
             f"mr_{name}": func.coalesce(

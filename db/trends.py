@@ -5,11 +5,12 @@ days, and :class:`db.reports.ReportQueries` adds up the roll-ups as for the rest
 report; in another zone a day starts at a local midnight that cuts the roll-ups' days,
 so each run is numbered with its plant day (:func:`day_key`, a ``CASE`` over the days'
 starts) and the runs of the trend's days are aggregated instead (at most
-:data:`TREND_DAYS` of them). Units count on the day of their first run on the line, as
-in the summary, so the days' units add up to the summary's over the same runs. The
-plant's shifts (:mod:`station.domain.quality.shifts`) cut the same days finer: each run is
-numbered with its shift (:func:`shift_key`) and the runs of the trend's shifts are
-aggregated, in any zone.
+:data:`TREND_DAYS` of them). Units count on the day of their first attempt on the line
+(the yield definition of :mod:`db.rollups`), as in the summary, so the days' units add
+up to the summary's over the same runs. The plant's shifts
+(:mod:`station.domain.quality.shifts`) cut the same days finer: each run is numbered with
+its shift (:func:`shift_key`) and the runs of the trend's shifts are aggregated, in any
+zone.
 """
 
 from collections import defaultdict
@@ -79,15 +80,6 @@ class PeriodSums:
         self.counts = counts
         self.stats = stats
         self.bounds = bounds
-        #: Units per period with nothing but aborts: no units tested (:meth:`without`).
-        self.unattempted: Mapping[int, int] = {}
-
-    def without(self, unattempted: Mapping[int, int]) -> "PeriodSums":
-        """These sums less the ``unattempted`` units (nothing but operator aborts, first
-        run in the period) per period: their first and final runs failed, so only the
-        units change."""
-        self.unattempted = unattempted
-        return self
 
     @classmethod
     def of_rows(
@@ -133,7 +125,7 @@ class PeriodSums:
             else (
                 int(row["runs"]),
                 int(row["runs_passed"]),
-                int(row["line_units"]) - self.unattempted.get(n, 0),
+                int(row["line_units"]),
                 int(row["line_first_pass"]),
                 int(row["line_final_pass"]),
             )

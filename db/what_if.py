@@ -5,10 +5,11 @@ error, gyro bias, the coefficients' uncertainties, so a candidate with the guard
 decision rule can be compared with the simple one) and stored failures are read a page
 at a time and judged again by
 :func:`station.domain.judging.rejudge`, the station's own checks. What the report needs is
-counted on the way: the runs that pass, the units whose first run on the line is in
-range (the report's cohort) with their first and final passes — a unit's latest run may
-lie after the range, so those runs are judged too — the failing runs by their new first
-failure reason, the verdicts that change, and the cohort's units whose latest run's
+counted on the way: the runs that pass, the units whose first attempt on the line is in
+range (the report's cohort, by the yield definition of :mod:`db.rollups`) with their
+first and final passes — a unit's latest attempt may lie after the range, so those runs
+are judged too — the failing runs by their new first
+failure reason, the verdicts that change, and the cohort's units whose latest attempt's
 verdict flips.
 """
 
@@ -45,7 +46,7 @@ class Rejudged:
     fail_to_pass: int = 0
     #: Failing runs per (first failure code, station, operator).
     failures: Counter[tuple[str, str, str]] = field(default_factory=Counter)
-    #: The cohort's units whose latest run's verdict flips (the first by serial).
+    #: The cohort's units whose latest attempt's verdict flips (the first by serial).
     flips: list[VerdictFlip] = field(default_factory=list)
     flips_total: int = 0
 
@@ -214,7 +215,7 @@ def rejudged(
             counts.first_pass += passed
         if row.line_latest:
             final[row.serial] = run
-    # The cohort's latest runs outside the selection (after the range, or of another
+    # The cohort's latest attempts outside the selection (after the range, or of another
     # station, operator or lot); those in it are judged already.
     first_in_range = (
         select(Run.serial)

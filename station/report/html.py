@@ -121,7 +121,10 @@ def trend_charts(
     that has one."""
     charts = [
         svg.trend_chart(
-            f"units per {per} (first run on the line)", periods, [], bars=[d.units for d in trend]
+            f"units per {per} (first attempt on the line)",
+            periods,
+            [],
+            bars=[d.units for d in trend],
         ),
         svg.trend_chart(
             f"yield per {per}",
@@ -241,7 +244,7 @@ def control_chart_runs(report: EolReport) -> Markup:
 def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) -> Markup:
     """A trend chart's period (a day or a shift, ``periods`` their start and end, each
     ending where the next starts) opens the report of that period, every unit listed: the
-    units its points count (their first run on the line in the period and the report's
+    units its points count (their first attempt on the line in the period and the report's
     range, station, operator and lot)."""
     f, zone = report.filter, report.timezone
     bounds = [start for start, _ in periods] + [end for _, end in periods[-1:]]

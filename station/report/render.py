@@ -219,7 +219,7 @@ def as_text(report: EolReport) -> str:
             [summary_cells(p.part_number, p.summary) for p in report.products],
         ),
         "",
-        f"Trend per day ({report.timezone}; units counted on the day of their first run)",
+        f"Trend per day ({report.timezone}; units counted on the day of their first attempt)",
         *_trend_table("day", [d.day.isoformat() for d in report.trend], report.trend),
         *(
             [

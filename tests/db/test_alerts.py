@@ -83,3 +83,48 @@ def test_a_cpk_rule_judges_the_runs_of_the_latest_runs_product(database: Databas
                 )
             )
     assert _round(database, rules) == []
+
+
+def test_a_yield_rule_judges_the_first_attempts_of_the_latest_units_product(
+    database: Database,
+) -> None:
+    """The last 4 units of both products would be 3 of 4 (75 % < 80 %); the A12 units'
+    are 4 of 4, one of them passed at its first attempt after an aborted run. A D16 unit
+    failing last turns the rule to the D16 units: 1 of 4."""
+    rules = f"{WEBHOOK}[[yield]]\nunits = 4\ngoal = 0.8\n"
+    plan = [
+        ("D0", "DIXX-D16", "pass"),
+        ("A0", "DIXX-A12", "pass"),
+        ("D1", "DIXX-D16", "fail"),
+        ("A1", "DIXX-A12", "aborted"),
+        ("A1", "DIXX-A12", "pass"),
+        ("D2", "DIXX-D16", "fail"),
+        ("A2", "DIXX-A12", "pass"),
+        ("A3", "DIXX-A12", "pass"),
+    ]
+
+    def store(*runs: tuple[str, str, str]) -> None:
+        with database.session() as session, session.begin():
+            repository = RunRepository(session)
+            for minute, (serial, product, outcome) in enumerate(runs, len(stored)):
+                code = "aborted" if outcome == "aborted" else "offset"
+                repository.submit(
+                    make_record(
+                        serial=serial,
+                        part_number=product,
+                        station_id="st1",
+                        started_at=T0 + timedelta(minutes=minute),
+                        verdict="pass" if outcome == "pass" else "fail",
+                        failures=[] if outcome == "pass" else [{"code": code, "message": "-"}],
+                    )
+                )
+            stored.extend(runs)
+
+    stored: list[tuple[str, str, str]] = []
+    store(*plan)
+    assert _round(database, rules) == []
+    store(("D3", "DIXX-D16", "fail"))
+    (alert,) = _round(database, rules)
+    evidence = alert.evidence
+    assert (evidence["part_number"], evidence["passed"]) == ("DIXX-D16", 1)
+    assert sorted(evidence["failed"]) == ["D1", "D2", "D3"]

@@ -199,6 +199,47 @@ def test_the_product_migration_rebuilds_the_roll_ups_per_part_number(empty_url: 
         engine.dispose()
 
 
+def test_the_yield_migration_recounts_attempts_retests_and_aborts(empty_url: str) -> None:
+    """Revision 0021 counts attempts: from 0020, whose facts took an aborted first run for
+    the unit's first, the upgrade writes the facts and roll-ups anew, and U1 (aborted at
+    st1, passed at st2) is first-pass at st2 with no retest; U2's retest is st2's."""
+    engine = make_engine(empty_url)
+    plan = [
+        ("U1", "st1", [{"code": "aborted", "message": "aborted by the operator"}]),
+        ("U1", "st2", []),
+        ("U2", "st1", [{"code": "offset", "message": "out of limits"}]),
+        ("U2", "st2", []),
+    ]
+    try:
+        upgrade(engine)
+        with Session(engine) as session:
+            for hour, (serial, station, failures) in enumerate(plan):
+                RunRepository(session).submit(
+                    make_record(
+                        serial=serial,
+                        station_id=station,
+                        verdict="fail" if failures else "pass",
+                        failures=failures,
+                        started_at=T0 + timedelta(hours=hour),
+                    )
+                )
+            session.commit()
+            submitted = rollup_rows(session)
+        with engine.begin() as connection:
+            command.downgrade(alembic_config(connection), "0020")
+        assert "attempt" not in {c["name"] for c in inspect(engine).get_columns("run_facts")}
+        upgrade(engine)
+        with Session(engine) as session:
+            assert rollup_rows(session) == submitted
+            report = eol_report(session, ReportFilter())
+            rows = {s.station_id: s.summary for s in report.stations}
+            st1, st2 = rows["st1"], rows["st2"]
+            assert (st1.units_tested, st1.retests, st1.aborted_runs) == (1, 0, 1)
+            assert (st2.units_tested, st2.first_pass_units, st2.retests) == (1, 1, 1)
+    finally:
+        engine.dispose()
+
+
 def test_the_key_scope_migration_makes_every_existing_key_a_station_key(empty_url: str) -> None:
     engine = make_engine(empty_url)
     upgrade(engine, "0004")

@@ -1,16 +1,18 @@
 """The report's roll-ups stay exact: random line histories, submitted in random order.
 
-Each history (retests, several stations, operators and lots, runs over three days) is
-submitted in a shuffled order, so runs arrive late and retests land before the runs
-they follow; some runs are operator aborts, which are a unit's latest run only when all its
-runs are. The report, which adds up roll-ups and partial days, must then equal the
-definitions computed here straight from the runs; rebuilding the roll-ups from the raw
-tables must give the rows the submissions left.
+Each history (retests at the same or another station, three stations, operators and
+lots, runs over three days) is submitted in a shuffled order, so runs arrive late and
+retests land before the runs they follow; some runs are operator aborts (a unit's first
+run, its latest, or all of them), which are runs but never attempts. The report, which
+adds up roll-ups and partial days, must then equal the yield definition computed here
+straight from the runs (:func:`expected_figures`, written apart from the SQL of
+:mod:`db.rollups`), before and after rebuilding the roll-ups from the raw tables, which
+must give the rows the submissions left.
 """
 
 import math
 import statistics
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from datetime import UTC, date, datetime, time, timedelta
 from itertools import pairwise
 from typing import Any
@@ -23,18 +25,29 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
+from db.holds import held_units
+from db.models import (
+    ReportCounts,
+    ReportFailures,
+    ReportParameters,
+    Run,
+    RunFacts,
+    RunFailure,
+    Unit,
+)
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.domain.limits import Bounds, load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import PARAMETERS
+from station.domain.unit_state import UnitCalibration
 from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record
 
 DAY0 = T0.replace(hour=0)
 PRODUCTS = ("DIXX-A12", "DIXX-D16")
+STATIONS = ("st1", "st2", "st3")
 MOMENTS = [None, DAY0, DAY0 + timedelta(days=1), T0 + timedelta(hours=20), DAY0 + timedelta(days=3)]
 
 
@@ -59,8 +72,8 @@ class Planned:
 
 @st.composite
 def histories(draw: st.DrawFn) -> list[Planned]:
-    """Up to 12 runs of up to 4 units (each of one of two products) over three days, each
-    start a distinct minute."""
+    """Up to 12 runs of up to 4 units (each of one of two products) at three stations over
+    three days, each start a distinct minute."""
     minutes = draw(st.lists(st.integers(0, 3 * 24 * 60), min_size=1, max_size=12, unique=True))
     products = {s: draw(st.sampled_from(PRODUCTS)) for s in ("U1", "U2", "U3", "U4")}
     runs = []
@@ -71,7 +84,7 @@ def histories(draw: st.DrawFn) -> list[Planned]:
             Planned(
                 serial=serial,
                 part_number=products[serial],
-                station=draw(st.sampled_from(["st1", "st2"])),
+                station=draw(st.sampled_from(STATIONS)),
                 operator=draw(st.sampled_from(["op-a", "op-b"])),
                 lot=draw(st.sampled_from([None, "L1", "L2"])),
                 started_at=T0 + timedelta(minutes=minute),
@@ -87,7 +100,7 @@ filters = st.builds(
     ReportFilter,
     since=st.sampled_from(MOMENTS[:4]),
     until=st.sampled_from([None, *MOMENTS[2:]]),
-    station_id=st.sampled_from([None, "st1"]),
+    station_id=st.sampled_from([None, "st1", "st2"]),
     operator_id=st.sampled_from([None, "op-b"]),
     lot=st.sampled_from([None, "L1"]),
     part_number=st.sampled_from([None, "DIXX-D16"]),
@@ -122,21 +135,43 @@ def _selected(run: Planned, f: ReportFilter) -> bool:
     )
 
 
-def _expected_counts(
-    history: list[Planned], chosen: list[Planned], same: Any
-) -> tuple[int, int, int, int, int]:
-    """(runs, passed, units, first passes, final passes), units counted at their first
-    run among the runs ``same`` groups with it, not the units with nothing but aborts."""
-    first = [r for r in chosen if r == min((o for o in history if same(o, r)), key=_start)]
-    latest = {id(r): max((o for o in history if same(o, r)), key=_latest) for r in first}
-    # a unit with nothing but aborts (its latest run is one) was never attempted
-    first = [r for r in first if latest[id(r)].code != "aborted"]
-    return (
-        len(chosen),
-        sum(r.passed for r in chosen),
-        len(first),
-        sum(r.passed for r in first),
-        sum(latest[id(r)].passed for r in first),
+@dataclass(frozen=True)
+class Expected:
+    """A row of the report by the yield definition, computed from the runs."""
+
+    runs: int
+    runs_passed: int
+    units: int
+    first_pass: int
+    final_pass: int
+    retests: int
+    aborts: int
+
+
+def _attempt(run: Planned) -> bool:
+    """An attempt: a run the operator did not abort."""
+    return run.code != "aborted"
+
+
+def expected_figures(history: list[Planned], chosen: list[Planned]) -> Expected:
+    """The figures of the runs ``chosen`` (of ``history``, every run of the line): a unit
+    counts where its first attempt ever is, passes first if that attempt passed and
+    finally if its latest attempt ever passed; an attempt that is not its unit's first
+    is a retest wherever it is; an abort is a run, never an attempt."""
+    first: dict[str, Planned] = {}
+    latest: dict[str, Planned] = {}
+    for run in sorted(filter(_attempt, history), key=_start):
+        first.setdefault(run.serial, run)
+        latest[run.serial] = run
+    cohort = [r for r in chosen if _attempt(r) and first[r.serial] == r]
+    return Expected(
+        runs=len(chosen),
+        runs_passed=sum(r.passed for r in chosen),
+        units=len(cohort),
+        first_pass=sum(r.passed for r in cohort),
+        final_pass=sum(latest[r.serial].passed for r in cohort),
+        retests=sum(_attempt(r) and first[r.serial] != r for r in chosen),
+        aborts=sum(not _attempt(r) for r in chosen),
     )
 
 
@@ -144,68 +179,70 @@ def _start(run: Planned) -> datetime:
     return run.started_at
 
 
-def _latest(run: Planned) -> tuple[bool, datetime]:
-    """Order of a unit's latest run: an operator's abort only when all its runs are."""
-    return (run.code != "aborted", run.started_at)
+def _latest_attempts(history: list[Planned]) -> dict[str, Planned]:
+    """Each attempted unit's latest attempt."""
+    return {r.serial: r for r in sorted(filter(_attempt, history), key=_start)}
 
 
-def _check_group(summary: Any, history: list[Planned], runs: list[Planned], same: Any) -> None:
-    """A row of the report (a station's, a product's) against its ``runs``: the counts,
-    the operator's aborts and the retests."""
-    assert _counts_of(summary) == _expected_counts(history, runs, same)
-    aborts = sum(r.code == "aborted" for r in runs)
-    assert summary.aborted_runs == aborts
-    assert summary.retests == max(0, len(runs) - aborts - summary.units_tested)
+def _check_group(summary: Any, history: list[Planned], runs: list[Planned]) -> None:
+    """A row of the report (the line's, a station's, a product's) against its ``runs``."""
+    assert _figures(summary) == expected_figures(history, runs)
 
 
-def _counts_of(summary: Any) -> tuple[int, int, int, int, int]:
-    return (
-        summary.runs,
-        summary.runs_passed,
-        summary.units_tested,
-        summary.first_pass_units,
-        summary.units_passed,
+def _figures(summary: Any) -> Expected:
+    return Expected(
+        runs=summary.runs,
+        runs_passed=summary.runs_passed,
+        units=summary.units_tested,
+        first_pass=summary.first_pass_units,
+        final_pass=summary.units_passed,
+        retests=summary.retests,
+        aborts=summary.aborted_runs,
     )
 
 
 def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     chosen = sorted((r for r in history if _selected(r, f)), key=_start)
-
-    def unit(a: Planned, b: Planned) -> bool:
-        return a.serial == b.serial
-
-    assert _counts_of(report.summary) == _expected_counts(history, chosen, unit)
+    _check_group(report.summary, history, chosen)
     assert report.summary.poses == 7 * len(chosen)
     stations = {s.station_id: s.summary for s in report.stations}
     assert sorted(stations) == sorted({r.station for r in chosen})
     for station, summary in stations.items():
-        # A station's row: the units whose first run on the line was there (and is
-        # selected), their first and final passes, and every run at the station.
-        _check_group(summary, history, [r for r in chosen if r.station == station], unit)
-    # So the rows add up to the "all" row, on a filtered page too.
-    for field in ("runs", "runs_passed", "units_tested", "first_pass_units", "units_passed"):
-        assert sum(getattr(s, field) for s in stations.values()) == getattr(report.summary, field)
+        # A station's row: the units whose first attempt on the line was there (and is
+        # selected), their first and final passes, every run at the station, and its
+        # own retests (its attempts that are not their unit's first) and aborts.
+        _check_group(summary, history, [r for r in chosen if r.station == station])
     products = {p.part_number: p.summary for p in report.products}
     assert sorted(products) == sorted({r.part_number for r in chosen})
     for part_number, summary in products.items():
         # A product's row: its units (a unit is one product's) and its runs.
         of = [r for r in chosen if r.part_number == part_number]
-        _check_group(summary, history, of, unit)
+        _check_group(summary, history, of)
         assert summary.poses == 7 * len(of)
+    # So the rows add up to the "all" row, on a filtered page too.
+    for rows in (stations.values(), products.values()):
+        added = [_figures(row) for row in rows]
+        for field in (f.name for f in fields(Expected)):
+            total = getattr(_figures(report.summary), field)
+            assert sum(getattr(row, field) for row in added) == total
     _check_trend(report, history, chosen)
     # an operator's abort is no failure category
     codes = [r.code for r in chosen if r.code not in (None, "aborted")]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
-    # the units listed are the units counted: first run selected, not only aborts
-    latest = {r.serial: r for r in sorted(history, key=_latest)}
-    first = {r.serial: r for r in sorted(history, key=_start, reverse=True)}
-    listed = {
-        serial for serial, r in first.items() if r in chosen and latest[serial].code != "aborted"
-    }
+    # the units listed are the units counted: first attempt selected (never a unit with
+    # nothing but aborts), each with its latest attempt
+    latest = _latest_attempts(history)
+    first = {r.serial: r for r in sorted(filter(_attempt, history), key=_start, reverse=True)}
+    listed = {serial for serial, r in first.items() if r in chosen}
     assert report.units_total == report.summary.units_tested == len(listed)
-    assert {u.serial for u in report.units} == listed
-    held = {u.serial for u in report.units if u.disposition == "hold"}
+    assert {u.serial: u.last_started_at for u in report.units} == {
+        s: latest[s].started_at for s in listed
+    }
+    held = {s for s in listed if not latest[s].passed}
+    assert {u.serial for u in report.units if u.disposition == "hold"} == held
     assert report.units_held == report.summary.units_failed == len(held)
+    assert report.open_holds is not None
+    assert report.open_holds.total == len(held)  # no review closed any
 
     xs = [r.offset_x for r in chosen if r.charted]
     params = {p.name: p for p in report.parameters}
@@ -250,12 +287,7 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
     assert {day_of(r) for r in chosen} <= set(days)
     for trend_day in report.trend:
         that_day = [r for r in chosen if day_of(r) == trend_day.day]
-        runs, passed, units, first, final = _expected_counts(
-            history, that_day, lambda a, b: a.serial == b.serial
-        )
-        assert (trend_day.runs, trend_day.runs_passed, trend_day.units) == (runs, passed, units)
-        assert trend_day.first_pass_yield == (first / units if units else None)
-        assert trend_day.final_yield == (final / units if units else None)
+        _check_period(trend_day, expected_figures(history, that_day))
         xs = [r.offset_x for r in that_day if r.charted]
         params = {p.name: p for p in report.parameters}
         lower, upper = params["offset_x"].lower, params["offset_x"].upper
@@ -271,15 +303,22 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
     assert sum(d.runs for d in report.trend) == report.summary.runs
     for shift in report.shift_trend:
         in_shift = [r for r in chosen if shift.start <= r.started_at < shift.end]
-        runs, passed, units, first, final = _expected_counts(
-            history, in_shift, lambda a, b: a.serial == b.serial
-        )
-        assert (shift.runs, shift.runs_passed, shift.units) == (runs, passed, units)
-        assert shift.first_pass_yield == (first / units if units else None)
-        assert shift.final_yield == (final / units if units else None)
+        _check_period(shift, expected_figures(history, in_shift))
     if report.shift_trend:
         assert sum(s.units for s in report.shift_trend) == report.summary.units_tested
         assert sum(s.runs for s in report.shift_trend) == report.summary.runs
+
+
+def _check_period(period: Any, figures: Expected) -> None:
+    """A day's or a shift's runs, units and yields."""
+    units = figures.units
+    assert (period.runs, period.runs_passed, period.units) == (
+        figures.runs,
+        figures.runs_passed,
+        units,
+    )
+    assert period.first_pass_yield == (figures.first_pass / units if units else None)
+    assert period.final_yield == (figures.final_pass / units if units else None)
 
 
 def stored_verdicts(session: Session) -> list[tuple[Any, ...]]:
@@ -313,8 +352,7 @@ def _check_what_if(report: EolReport, history: list[Planned], f: ReportFilter) -
         if report.limits_profiles
         else True
     )
-    expected = _expected_counts(again, chosen, lambda a, b: a.serial == b.serial)
-    assert _counts_of(what_if.summary) == expected
+    assert _figures(what_if.summary) == expected_figures(again, chosen)
     codes = [r.code for r in chosen if r.code not in (None, "aborted")]
     assert {e.code: e.count for e in what_if.pareto} == {c: codes.count(c) for c in set(codes)}
     before = sorted((r for r in history if _selected(r, f)), key=_start)
@@ -389,9 +427,14 @@ def test_late_runs_and_retests_keep_the_report_exact(
             _check_what_if(report, history, report_filter)
         else:
             assert report.what_if is None
+        on_hold = held_units(session, 50)
+        held = {s for s, r in _latest_attempts(history).items() if not r.passed}
+        assert {u.serial for u in on_hold.units} == held
+        assert on_hold.total == len(held)
         kept = rollup_rows(session)
         rebuild(session.connection())
         assert rollup_rows(session) == kept
+        _check(eol_report(session, report_filter, zone=zone, shifts=shifts), history, report_filter)
 
 
 @settings(max_examples=examples(200), deadline=None)
@@ -450,3 +493,172 @@ def test_runs_of_one_unit_in_the_year_1_and_the_last_moment_of_9999_are_rolled_u
     kept = rollup_rows(session)
     rebuild(session.connection())
     assert rollup_rows(session) == kept
+
+
+@st.composite
+def unit_histories(draw: st.DrawFn) -> list[Planned]:
+    """Up to 4 units of up to 4 runs each at three stations over three days: retests at
+    the same station or another, aborts as a unit's first, latest or every run."""
+    count = draw(st.integers(1, 4))
+    serials = [f"U{i}" for i in range(count)]
+    plans = {s: draw(st.integers(1, 4)) for s in serials}
+    total = sum(plans.values())
+    minutes = draw(
+        st.lists(st.integers(0, 3 * 24 * 60), min_size=total, max_size=total, unique=True)
+    )
+    codes = st.sampled_from([None, "offset", "aborted"])
+    runs, taken = [], iter(minutes)
+    for serial in serials:
+        product = draw(st.sampled_from(PRODUCTS))
+        for _ in range(plans[serial]):
+            code = draw(codes)
+            runs.append(
+                Planned(
+                    serial=serial,
+                    part_number=product,
+                    station=draw(st.sampled_from(STATIONS)),
+                    operator="op-a",
+                    lot=None,
+                    started_at=T0 + timedelta(minutes=next(taken)),
+                    code=code,
+                    charted=code is None,
+                    offset_x=2048.0,
+                )
+            )
+    return runs
+
+
+windows = st.builds(
+    ReportFilter,
+    since=st.sampled_from(MOMENTS[:4]),
+    until=st.sampled_from([None, *MOMENTS[2:]]),
+    station_id=st.sampled_from([None, *STATIONS]),
+)
+
+
+def _yields_agree(session: Session, history: list[Planned], f: ReportFilter) -> None:
+    """The summary's, each station's and each product's yields, retests and aborts equal
+    the definition's; the rows add up to the line's; the units on hold are the units whose
+    latest attempt failed."""
+    report = eol_report(session, f, open_holds=False)
+    chosen = [r for r in history if _selected(r, f)]
+    _check_group(report.summary, history, chosen)
+    for rows, key in ((report.stations, "station"), (report.products, "part_number")):
+        by_key = {getattr(r, "station_id", None) or getattr(r, "part_number", ""): r for r in rows}
+        assert sorted(by_key) == sorted({getattr(r, key) for r in chosen})
+        for name, row in by_key.items():
+            _check_group(row.summary, history, [r for r in chosen if getattr(r, key) == name])
+        assert sum(r.summary.retests for r in rows) == report.summary.retests
+        assert sum(r.summary.units_tested for r in rows) == report.summary.units_tested
+    latest = _latest_attempts(history)
+    on_hold = held_units(session, 50)
+    held = {s for s, r in latest.items() if not r.passed}
+    assert ({u.serial for u in on_hold.units}, on_hold.total) == (held, len(held))
+    # The unit answers (GET /api/v1/units/{serial}) by the same definition.
+    for serial in {r.serial for r in history}:
+        stored = session.scalar(select(Unit.calibration).where(Unit.serial == serial))
+        answer = UnitCalibration.model_validate_json(stored or "")
+        assert answer.attempts == sum(_attempt(r) for r in history if r.serial == serial)
+        if serial in latest:
+            assert answer.verdict == ("pass" if latest[serial].passed else "fail")
+
+
+@settings(
+    max_examples=examples(120),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(history=unit_histories(), order=st.randoms(use_true_random=False), report_filter=windows)
+def test_yields_retests_and_aborts_follow_the_one_definition(
+    migrated_database: Database, history: list[Planned], order: Any, report_filter: ReportFilter
+) -> None:
+    """Submitted in a shuffled order, then rebuilt: the roll-ups give the definition's
+    figures both ways (and the same rows)."""
+    submitted = list(history)
+    order.shuffle(submitted)
+    with rolled_back(migrated_database) as session:
+        repository = RunRepository(session)
+        for run in submitted:
+            repository.submit(_record(run))
+        session.flush()
+        _yields_agree(session, history, report_filter)
+        kept = rollup_rows(session)
+        rebuild(session.connection())
+        assert rollup_rows(session) == kept
+        _yields_agree(session, history, report_filter)
+
+
+def _run(serial: str, station: str, day: int, hour: int, code: str | None) -> Planned:
+    return Planned(
+        serial=serial,
+        part_number=PRODUCTS[0],
+        station=station,
+        operator="op-a",
+        lot=None,
+        started_at=DAY0 + timedelta(days=day, hours=hour),
+        code=code,
+        charted=code is None,
+        offset_x=2048.0,
+    )
+
+
+#: Day 0: U1 aborted at st1, then passed at st2; U2 failed at st1, passed at st2; U3
+#: failed at st1, retested there on day 1 (failed), then passed at st3 on day 1; U4 only
+#: aborted. Day 1: U5 passed at st3 first time.
+ISSUE_42 = [
+    _run("U1", "st1", 0, 8, "aborted"),
+    _run("U1", "st2", 0, 9, None),
+    _run("U2", "st1", 0, 10, "offset"),
+    _run("U2", "st2", 0, 11, None),
+    _run("U3", "st1", 0, 12, "offset"),
+    _run("U4", "st1", 0, 13, "aborted"),
+    _run("U3", "st1", 1, 8, "offset"),
+    _run("U3", "st3", 1, 9, None),
+    _run("U5", "st3", 1, 10, None),
+]
+
+
+@pytest.mark.parametrize(
+    ("since", "line", "stations"),
+    [
+        # (units, first passes, final passes, retests, aborts) of the line and per station
+        (
+            None,
+            (4, 2, 4, 3, 2),
+            {"st1": (2, 0, 2, 1, 2), "st2": (1, 1, 1, 1, 0), "st3": (1, 1, 1, 1, 0)},
+        ),
+        # Day 1 alone holds only U3's later attempts: retests, and no unit of the day's.
+        (
+            DAY0 + timedelta(days=1),
+            (1, 1, 1, 2, 0),
+            {"st1": (0, 0, 0, 1, 0), "st3": (1, 1, 1, 1, 0)},
+        ),
+    ],
+)
+def test_a_first_run_aborted_and_retests_elsewhere_count_where_each_attempt_ran(
+    session: Session,
+    since: datetime | None,
+    line: tuple[int, ...],
+    stations: dict[str, tuple[int, ...]],
+) -> None:
+    """Issue 42: U1's aborted first run is no attempt, so its pass at st2 is its first
+    (first-pass, no retest); each retest is its own station's, never another's cohort;
+    U4, aborted only, is no unit; a window holding only later attempts counts retests."""
+    repository = RunRepository(session)
+    for run in reversed(ISSUE_42):
+        repository.submit(_record(run))
+    session.flush()
+
+    def five(summary: Any) -> tuple[int, ...]:
+        return (
+            summary.units_tested,
+            summary.first_pass_units,
+            summary.units_passed,
+            summary.retests,
+            summary.aborted_runs,
+        )
+
+    report = eol_report(session, ReportFilter(since=since))
+    assert five(report.summary) == line
+    assert {s.station_id: five(s.summary) for s in report.stations} == stations
+    assert held_units(session, 10).total == 0  # U4 was never attempted: not on hold

@@ -32,30 +32,30 @@ class ReportFilter(_FigurePart):
 
 
 class Summary(_FigurePart):
-    """Counts and yields of the runs in range.
+    """Counts and yields of the runs in range, by the yield definition of
+    :mod:`db.rollups`.
 
-    A unit's first and latest run are its first and latest run *ever* on the line, by
-    start time. The units are those whose first run is in range (the cohort of
-    first-pass and final yield); retests are the runs in range that are not a unit's
-    first. A station's summary counts the units whose first run (their first attempt)
-    was at the station and the station's runs, so the stations' summaries add up to
-    the line's.
+    An attempt is a run the operator did not abort (an abort is not an attempt). A
+    unit's first and latest attempt are its first and latest attempt *ever* on the line,
+    by start time. The units are those whose first attempt is in range (the cohort of
+    first-pass and final yield); retests are the attempts in range that are not a unit's
+    first. A station's summary counts the units whose first attempt was at the station,
+    the station's runs and its own retests, so the stations' summaries add up to the
+    line's.
     """
 
     runs: int
     runs_passed: int
-    units_tested: int = Field(
-        description="units whose first run is in range, those with nothing but operator "
-        "aborts aside"
-    )
-    units_passed: int = Field(description="units whose latest run passed")
+    units_tested: int = Field(description="units whose first attempt (run not aborted) is in range")
+    units_passed: int = Field(description="units whose latest attempt passed")
     units_failed: int
-    first_pass_units: int = Field(description="units whose first run passed")
+    first_pass_units: int = Field(description="units whose first attempt passed")
     report_yield: float | None = Field(description="run yield: passing runs / runs")
-    first_pass_yield: float | None = Field(description="units whose first run passed / units")
-    final_yield: float | None = Field(description="units whose latest run passed / units")
+    first_pass_yield: float | None = Field(description="units whose first attempt passed / units")
+    final_yield: float | None = Field(description="units whose latest attempt passed / units")
     retests: int = Field(
-        description="runs that are not a unit's first, operator aborts aside (no attempts)"
+        description="attempts (runs not aborted) in range that are not their unit's first, "
+        "each its own station's"
     )
     retest_rate: float | None = Field(description="retests / units")
     aborted_runs: int = Field(
