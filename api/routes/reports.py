@@ -39,6 +39,7 @@ from api.report_bodies import (
     failing_runs_body,
     split_body,
 )
+from api.report_pool import ReportPool
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
@@ -187,7 +188,8 @@ WhatIfId = Annotated[
     Blank,
     Query(
         description="a what-if's candidate limits profile by its SHA-256, as the what-if "
-        "(`POST`) stored it: the report re-judged against it, as that what-if answered",
+        "(`POST`) stored it: the report re-judged against it, as that what-if answered; "
+        "refused (422) when the runs selected are of more than one product",
     ),
 ]
 Format = Literal["json", "csv", "html"]
@@ -240,8 +242,24 @@ async def get_eol_report(
                 f"no stored limits profile {what_if}: run the what-if with its file again",
             )
         candidate = stored[what_if]
-    body = await repository.run(eol_body, report_filter, pages, format, plant, candidate)
+    body = await _report(repository, report_filter, pages, format, plant, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
+
+
+async def _report(
+    repository: ReportPool,
+    filter: ReportFilter,
+    pages: Pages,
+    format: str,
+    plant: Plant,
+    candidate: LimitsProfile | None,
+) -> str:
+    """The report's body; a 422 when a ``candidate`` is asked of runs of several products
+    (a profile is one product's)."""
+    try:
+        return await repository.run(eol_body, filter, pages, format, plant, candidate)
+    except InputError as exc:
+        raise invalid(("query", "part_number"), str(exc)) from None
 
 
 @router.post(
@@ -255,8 +273,10 @@ async def get_eol_report(
             **_REFUSED_PAGE,
             "description": "a parameter is invalid, or the limits file is not one (not UTF-8, "
             "not TOML, nested too deeply, a profile that is not a table or a bound outside "
-            "what its quantity can take): `errors` names `body.limits` and says which; as "
-            "HTML (the default format) a page saying why in one line",
+            "what its quantity can take): `errors` names `body.limits` and says which; or the "
+            "runs selected are of more than one product (a candidate profile is one "
+            "product's: `errors` names `query.part_number`); as HTML (the default format) a "
+            "page saying why in one line",
         },
     },
     summary="Report with what-if limits",
@@ -290,11 +310,11 @@ async def post_eol_what_if(
     kept by its SHA-256, so ``GET /reports/eol?what_if=SHA256`` (the page's link)
     answers this what-if again."""
     candidate = _candidate(await limits.read(), limits.filename or "limits file", profile)
-    async with sessions() as session, session.begin():
-        await session.run_sync(keep_profile, candidate)
     pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units)
     plant = Plant(zone, shifts)
-    body = await repository.run(eol_body, period.filter(zone), pages, format, plant, candidate)
+    body = await _report(repository, period.filter(zone), pages, format, plant, candidate)
+    async with sessions() as session, session.begin():
+        await session.run_sync(keep_profile, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
