@@ -207,7 +207,7 @@ ChartPoints = Annotated[
         ge=10,
         le=MAX_CHART_POINTS,
         description="runs each control chart plots: the latest of the period (and station, "
-        "operator, lot); its limits come from every run of it",
+        "operator, lot, product); its limits come from every run of it",
     ),
 ]
 
@@ -387,7 +387,7 @@ async def get_failing_runs(
     code: Annotated[str, Query(pattern=IDENTIFIER_PATTERN, description="first failure reason")],
 ) -> HTMLResponse:
     """The runs behind a Pareto bar: failing runs of the period (and station, operator,
-    lot) whose first failure reason is ``code``, the latest first."""
+    lot, product) whose first failure reason is ``code``, the latest first."""
     body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
     return HTMLResponse(body)
 
@@ -408,7 +408,7 @@ async def get_failing_runs(
 async def get_run_export(
     period: PeriodDep, zone: PlantZoneDep, readers: ReadersDep, page_size: ExportPageSizeDep
 ) -> StreamingResponse:
-    """Every run of a period (and station, operator, lot) as CSV, streamed a page of runs
+    """Every run of a period (and station, operator, lot, product) as CSV, streamed a page of runs
     at a time: any length of period, in constant memory.
 
     The first page is read before the answer starts, so a database that does not answer
