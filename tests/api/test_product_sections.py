@@ -257,6 +257,11 @@ def test_a_what_if_is_one_products(
     assert "Traceback" not in result.stderr
     one = call_cli(*cli, "--part-number", A12, "--database-url", database_url, env=env)
     assert one.returncode == 0, one.stderr
+    text = call_cli(*cli[:5], "--database-url", database_url, env=env)
+    assert text.returncode == 0, text.stderr
+    for part in (A12, D16):
+        assert f"Parameters of product {part} against limits profile" in text.stdout
+        assert f"Control charts of product {part}" in text.stdout
 
 
 class _Links(HTMLParser):
