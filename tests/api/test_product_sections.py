@@ -196,6 +196,12 @@ def test_the_split_judges_each_station_against_its_own_products_limits(
     assert page.count('<section class="product"') == 2
 
 
+def _profiles(database: Database) -> int:
+    """The limits profiles stored."""
+    with database.session() as session:
+        return int(session.execute(text("SELECT count(*) FROM limits_profiles")).scalar_one())
+
+
 def _candidate(upper: float) -> bytes:
     """The shipped limits file with kxm52-production's offsets' upper limit at ``upper``."""
     shipped = "offset_counts = { lower = 1841.0, upper = 2255.0 }"
@@ -213,6 +219,7 @@ def test_a_what_if_is_one_products(
     raw = _raw(database)
     upload = {"limits": ("candidate.toml", _candidate(2080.0))}
     which = {"profile": "kxm52-production"}
+    stored = _profiles(database)
     refused = client.post(
         "/api/v1/reports/eol", params={**RANGE, "format": "json"}, files=upload, data=which
     )
@@ -225,6 +232,7 @@ def test_a_what_if_is_one_products(
     page = client.post("/api/v1/reports/eol", params=RANGE, files=upload, data=which)
     assert page.status_code == 422
     assert 'id="problem"' in page.text
+    assert _profiles(database) == stored  # a refused candidate is not kept
 
     a12 = [r for r in raw if r.part_number == A12]
     answer = client.post(
