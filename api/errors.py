@@ -58,7 +58,7 @@ def _validation_answer(errors: Sequence[dict[str, Any]]) -> JSONResponse:
 #: endpoint with its page's title and its default ``format``.
 _PAGE_ROUTES: dict[Callable[..., Any], tuple[str, str, bool]] = {}
 #: The report form's fields, shown again on the page of a refused request.
-FORM_FIELDS = ("from", "to", "station", "operator", "lot", "list")
+FORM_FIELDS = ("from", "to", "station", "operator", "lot", "part_number", "list")
 
 Endpoint = TypeVar("Endpoint", bound=Callable[..., Any])
 

@@ -12,7 +12,7 @@ profiles: a few dozen) and applies the capability formulas of
 
 from collections import Counter, defaultdict
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import UTC, date, datetime, time, timedelta
 from typing import Any, NamedTuple
 
@@ -59,6 +59,7 @@ from db.rollups import (
 from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
 from db.what_if import rejudged
 from station.domain.calibration.uncertainty import COVERAGE_FACTOR
+from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile
 from station.domain.quality.capability import (
     D2,
@@ -94,6 +95,7 @@ from station.domain.quality.figures import (
     OpenHolds,
     ParameterStats,
     ParetoEntry,
+    ProductSection,
     ProductSummary,
     ReportFilter,
     StationSummary,
@@ -948,6 +950,93 @@ def _trend(
     return trend_days(days, by_day), trend_shifts(periods, by_shift)
 
 
+def several_products(parts: Sequence[str]) -> str:
+    """Why a what-if is refused over the runs of several products (``parts``): a candidate
+    limits profile is one product's."""
+    return (
+        f"a what-if's candidate limits profile is one product's, and the runs selected are "
+        f"of {len(parts)} products ({', '.join(parts)}): choose one (part_number)"
+    )
+
+
+def _profiles_used(counts: Sequence[Row[Any]]) -> list[LimitsRef]:
+    """The limits profiles the runs of ``counts`` (:meth:`ReportQueries.station_counts`)
+    were judged by."""
+    return [
+        LimitsRef(name=name, version=version, sha256=sha)
+        for name, version, sha in sorted(
+            {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
+        )
+    ]
+
+
+@dataclass(frozen=True)
+class _Statistics:
+    """The statistics of coefficients of one product's runs (none: runs of several
+    products, which no statistic spans): the ``bounds`` they are judged against and
+    where they come from, capability, control charts and near-limit runs."""
+
+    bounds: FamilyBounds | None = None
+    source: str = ""
+    parameters: list[ParameterStats] = field(default_factory=list)
+    charts: list[ControlChart] = field(default_factory=list)
+    near_limits: NearLimits | None = None
+
+
+def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int) -> _Statistics:
+    """The statistics of the runs ``queries`` select (of one product), ``counts`` their
+    :meth:`ReportQueries.station_counts`, against the profile :func:`report_bounds`
+    picks; ``points`` on each control chart."""
+    session = queries.session
+    bounds, source = report_bounds(session, counts)
+    parameters: list[ParameterStats] = []
+    if bounds is not None:
+        parameters, rolled = _capability(queries, bounds)
+        if not rolled:
+            source += "; statistics from the runs, not the roll-ups' other bounds"
+    if parameters:
+        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
+        parameters = [
+            p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
+            for p in parameters
+        ]
+    limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
+    charted = latest_chart_points(session, queries.conditions(), points)
+    return _Statistics(
+        bounds=bounds,
+        source=source,
+        parameters=parameters,
+        charts=_charts(limits, charted),
+        near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
+    )
+
+
+def _section(
+    session: Session,
+    filter: ReportFilter,
+    points: int,
+    zone: str,
+    shifts: Sequence[time],
+) -> ProductSection:
+    """One product's section of a report over several: ``filter`` narrowed to it."""
+    assert filter.part_number is not None
+    queries = ReportQueries(session, filter)
+    counts = queries.station_counts()
+    stats = _statistics(queries, counts, points)
+    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
+    return ProductSection(
+        part_number=filter.part_number,
+        filter=filter,
+        bounds_source=stats.source,
+        limits_profiles=_profiles_used(counts),
+        parameters=stats.parameters,
+        control_charts=stats.charts,
+        near_limits=stats.near_limits,
+        trend=trend,
+        shift_trend=shift_trend,
+    )
+
+
 def eol_report(
     session: Session,
     filter: ReportFilter,
@@ -966,8 +1055,12 @@ def eol_report(
     """The end-of-line report over the runs ``filter`` selects.
 
     Capability is measured against the stored profile :func:`report_bounds` picks for
-    the runs in range. A ``candidate`` profile adds the what-if: the runs re-judged
-    against it (:mod:`db.what_if`), nothing stored changed. ``unit_limit`` cuts the unit
+    the runs in range. Runs of several products get no such statistic over them all:
+    each product gets a section of its own (:class:`ProductSection`), its runs against
+    its own profile; counts and yields stay the line's, with a row per product. A
+    ``candidate`` profile adds the what-if: the runs re-judged against it
+    (:mod:`db.what_if`), nothing stored changed; a profile is one product's, so runs of
+    several products refuse it (:class:`InputError`). ``unit_limit`` cuts the unit
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
     times, for a trend per shift too. ``held_only`` lists only the
@@ -976,25 +1069,7 @@ def eol_report(
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
-    used = [
-        LimitsRef(name=name, version=version, sha256=sha)
-        for name, version, sha in sorted(
-            {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
-        )
-    ]
-    bounds, bounds_source = report_bounds(session, counts)
     hours = _hours(filter, counts)
-    parameters: list[ParameterStats] = []
-    if bounds is not None:
-        parameters, rolled = _capability(queries, bounds)
-        if not rolled:
-            bounds_source += "; statistics from the runs, not the roll-ups' other bounds"
-    if parameters:
-        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
-        parameters = [
-            p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
-            for p in parameters
-        ]
     by_station: dict[str, list[Row[Any]]] = defaultdict(list)
     for row in counts:
         by_station[row.station_id].append(row)
@@ -1011,20 +1086,37 @@ def eol_report(
         )
         for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
-    limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
-    points = latest_chart_points(session, queries.conditions(), chart_points)
     failures = queries.first_failures()
     line = _counts(counts)
+    products = _products(queries, hours)
+    several = [p.part_number for p in products] if len(products) > 1 else []
+    if candidate is not None and several:
+        raise InputError(several_products(several))
+    stats = _Statistics() if several else _statistics(queries, counts, chart_points)
     what_if = (
         None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
     )
-    trend, shift_trend = _trend(session, filter, counts, bounds, zone, shifts)
+    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
+    sections = [
+        _section(
+            session,
+            filter.model_copy(update={"part_number": part}),
+            chart_points,
+            zone,
+            shifts,
+        )
+        for part in several
+    ]
     generated_at = now or datetime.now(UTC)
     return EolReport(
         generated_at=generated_at,
         filter=filter,
-        bounds_source=bounds_source,
-        limits_profiles=used,
+        bounds_source=(
+            f"each product against its own limits profile ({len(several)} products in range)"
+            if several
+            else stats.source
+        ),
+        limits_profiles=_profiles_used(counts),
         summary=_summary(line, hours),
         stations=[
             StationSummary(
@@ -1033,14 +1125,14 @@ def eol_report(
             )
             for station, rows_ in sorted(by_station.items())
         ],
-        products=_products(queries, hours),
+        products=products,
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
         shift_trend=shift_trend,
         pareto=_pareto(failures),
-        parameters=parameters,
-        control_charts=_charts(limits, points),
+        parameters=stats.parameters,
+        control_charts=stats.charts,
         units=units,
         units_total=line.units,
         units_held=line.units - line.final_pass,
@@ -1048,6 +1140,7 @@ def eol_report(
         units_offset=unit_offset,
         units_limit=unit_limit,
         what_if=what_if,
-        near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
+        near_limits=stats.near_limits,
         open_holds=queries.open_holds(generated_at) if open_holds else None,
+        product_sections=sections,
     )

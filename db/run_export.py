@@ -15,8 +15,8 @@ from db.models import Run, RunFacts
 from db.reports import conditions
 from station.domain.quality.figures import ReportFilter
 
-#: The export's columns, in order: the run's identity, its verdict and first failure
-#: reason, its limits profile, its coefficients, verification error and gyro biases.
+#: The export's columns, in order: the run's identity (its product too), its verdict and
+#: first failure reason, its limits profile, its coefficients, verification error and gyro biases.
 COLUMNS: tuple[tuple[str, Any], ...] = (
     ("run_id", Run.run_id),
     ("serial", Run.serial),
@@ -25,6 +25,7 @@ COLUMNS: tuple[tuple[str, Any], ...] = (
     ("station_id", Run.station_id),
     ("operator_id", Run.operator_id),
     ("lot", Run.lot),
+    ("part_number", Run.part_number),
     ("verdict", Run.verdict),
     ("first_failure", RunFacts.first_failure),
     ("limits_name", Run.limits_name),

@@ -4,7 +4,8 @@
 One walk of ``ix_runs_started_at`` backwards over the runs the report's filter selects,
 at most :data:`SPLIT_RUNS` of them, reading the parameter and the split's column only;
 the groups' figures are computed from that sample (the page says so). The limits are the
-report's (:func:`db.reports.report_bounds`).
+report's (:func:`db.reports.report_bounds`); over runs of several products, each
+product's own, in a section of its own.
 """
 
 from collections import defaultdict
@@ -40,7 +41,35 @@ def split_report(
     session: Session, filter: ReportFilter, parameter: str, by: SplitBy, runs: int = SPLIT_RUNS
 ) -> SplitReport:
     """``parameter`` (one of :data:`SPLIT_PARAMETERS`) over the latest ``runs`` runs
-    ``filter`` selects, split by ``by``."""
+    ``filter`` selects, split by ``by``; over runs of several products, a section per
+    product (its latest ``runs`` runs, against its own limits)."""
+    parts = [row.part_number for row in ReportQueries(session, filter).product_counts()]
+    if len(parts) < 2:
+        return _split(session, filter, parameter, by, runs)
+    sections = [
+        _split(session, filter.model_copy(update={"part_number": part}), parameter, by, runs)
+        for part in parts
+    ]
+    return SplitReport(
+        parameter=parameter,
+        unit=sections[0].unit,
+        by=by,
+        filter=filter,
+        lower=None,
+        upper=None,
+        bounds_source=f"each product against its own limits profile ({len(parts)} products)",
+        sampled_runs=sum(s.sampled_runs for s in sections),
+        sample_limit=runs,
+        groups=[],
+        groups_total=sum(s.groups_total for s in sections),
+        sections=sections,
+    )
+
+
+def _split(
+    session: Session, filter: ReportFilter, parameter: str, by: SplitBy, runs: int
+) -> SplitReport:
+    """The split of the runs of one product (or none) ``filter`` selects."""
     spec = next(spec for spec in PARAMETERS if spec.name == parameter)
     queries = ReportQueries(session, filter)
     bounds, bounds_source = report_bounds(session, queries.station_counts())
@@ -71,4 +100,5 @@ def split_report(
         sample_limit=runs,
         groups=[group_stats(name, v, lower, upper) for name, v in sorted(largest)],
         groups_total=len(values),
+        part_number=filter.part_number,
     )

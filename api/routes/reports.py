@@ -47,6 +47,7 @@ from api.report_bodies import (
     failing_runs_body,
     split_body,
 )
+from api.report_pool import ReportPool
 from api.responses import problems
 from api.schemas import Problem
 from db import RunRepository
@@ -195,7 +196,8 @@ WhatIfId = Annotated[
     Blank,
     Query(
         description="a what-if's candidate limits profile by its SHA-256, as the what-if "
-        "(`POST`) stored it: the report re-judged against it, as that what-if answered",
+        "(`POST`) stored it: the report re-judged against it, as that what-if answered; "
+        "refused (422) when the runs selected are of more than one product",
     ),
 ]
 Format = Literal["json", "csv", "html"]
@@ -213,7 +215,7 @@ ChartPoints = Annotated[
         ge=10,
         le=MAX_CHART_POINTS,
         description="runs each control chart plots: the latest of the period (and station, "
-        "operator, lot); its limits come from every run of it",
+        "operator, lot, product); its limits come from every run of it",
     ),
 ]
 
@@ -248,10 +250,29 @@ async def get_eol_report(
                 f"no stored limits profile {what_if}: run the what-if with its file again",
             )
         candidate = stored[what_if]
-    body = await repository.run(
-        eol_body, report_filter, pages, format, plant, candidate, candidate is not None
+    body = await _report(
+        repository, report_filter, pages, format, plant, candidate, candidate is not None
     )
     return Response(body, media_type=MEDIA_TYPES[format])
+
+
+async def _report(
+    repository: ReportPool,
+    filter: ReportFilter,
+    pages: Pages,
+    format: str,
+    plant: Plant,
+    candidate: LimitsProfile | None,
+    candidate_kept: bool,
+) -> str:
+    """The report's body; a 422 when a ``candidate`` is asked of runs of several products
+    (a profile is one product's). ``candidate_kept``: the candidate is stored."""
+    try:
+        return await repository.run(
+            eol_body, filter, pages, format, plant, candidate, candidate_kept
+        )
+    except InputError as exc:
+        raise invalid(("query", "part_number"), str(exc)) from None
 
 
 @router.post(
@@ -272,8 +293,10 @@ async def get_eol_report(
             **_REFUSED_PAGE,
             "description": "a parameter is invalid, or the limits file is not one (not UTF-8, "
             "not TOML, nested too deeply, a profile that is not a table or a bound outside "
-            "what its quantity can take): `errors` names `body.limits` and says which; as "
-            "HTML (the default format) a page saying why in one line",
+            "what its quantity can take): `errors` names `body.limits` and says which; or the "
+            "runs selected are of more than one product (a candidate profile is one "
+            "product's: `errors` names `query.part_number`); as HTML (the default format) a "
+            "page saying why in one line",
         },
     },
     summary="Report with what-if limits",
@@ -323,13 +346,12 @@ async def post_eol_what_if(
     kept = credentials is not None
     if kept:
         await require_quality(credentials, sessions)
-        async with sessions() as session, session.begin():
-            await session.run_sync(keep_profile, candidate)
     pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units)
     plant = Plant(zone, shifts)
-    body = await repository.run(
-        eol_body, period.filter(zone), pages, format, plant, candidate, kept
-    )
+    body = await _report(repository, period.filter(zone), pages, format, plant, candidate, kept)
+    if kept:  # after the report: a refused what-if stores nothing
+        async with sessions() as session, session.begin():
+            await session.run_sync(keep_profile, candidate)
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -402,7 +424,7 @@ async def get_failing_runs(
     code: Annotated[str, Query(pattern=IDENTIFIER_PATTERN, description="first failure reason")],
 ) -> HTMLResponse:
     """The runs behind a Pareto bar: failing runs of the period (and station, operator,
-    lot) whose first failure reason is ``code``, the latest first."""
+    lot, product) whose first failure reason is ``code``, the latest first."""
     body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
     return HTMLResponse(body)
 
@@ -423,7 +445,7 @@ async def get_failing_runs(
 async def get_run_export(
     period: PeriodDep, zone: PlantZoneDep, readers: ReadersDep, page_size: ExportPageSizeDep
 ) -> StreamingResponse:
-    """Every run of a period (and station, operator, lot) as CSV, streamed a page of runs
+    """Every run of a period (and station, operator, lot, product) as CSV, streamed a page of runs
     at a time: any length of period, in constant memory.
 
     The first page is read before the answer starts, so a database that does not answer

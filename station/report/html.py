@@ -12,6 +12,7 @@ server's start (its API, ``/healthz``) and the report's other formats do not nee
 """
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from datetime import datetime
 from typing import Any, Final, get_args
 from urllib.parse import urlencode
@@ -25,7 +26,14 @@ from station.domain.limits import LimitsProfile
 from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.days import day_end, midnight
-from station.domain.quality.figures import EolReport, ReportFilter, TrendFigures
+from station.domain.quality.figures import (
+    ControlChart,
+    EolReport,
+    ParameterStats,
+    ReportFilter,
+    TrendDay,
+    TrendFigures,
+)
 from station.domain.quality.parameters import profile_bounds
 from station.domain.quality.split import NO_VALUE, SplitBy, SplitReport
 from station.domain.quality.station_health import (
@@ -46,11 +54,13 @@ from station.report.tables import (
     RISK_HEADER,
     SUMMARY_HEADER,
     WHAT_IF_HEADER,
+    Statistics,
     capability_cells,
     listed,
     near_limits_line,
     parameter_cells,
     risk_cells,
+    statistics_of,
     summary_cells,
     what_if_cells,
 )
@@ -109,34 +119,38 @@ _env.globals.update(serial_link=_base.serial_link)  # type: ignore[attr-defined]
 
 
 def trend_charts(
-    report: EolReport,
+    parameters: Sequence[ParameterStats],
     trend: Sequence[TrendFigures],
     periods: Sequence[tuple[str, str]],
     per: str,
     *,
-    cpk: bool = True,
+    counts: bool = True,
 ) -> list[str]:
     """A trend as charts (``per`` "day" or "shift", ``periods`` its axis labels and
-    names): units, first-pass and final yield, and (``cpk``) the Cpk of each parameter
-    that has one."""
-    charts = [
-        svg.trend_chart(
-            f"units per {per} (first attempt on the line)",
-            periods,
-            [],
-            bars=[d.units for d in trend],
-        ),
-        svg.trend_chart(
-            f"yield per {per}",
-            periods,
-            [
-                ("first-pass", [d.first_pass_yield for d in trend]),
-                ("final", [d.final_yield for d in trend]),
-            ],
-            percent_axis=True,
-        ),
-    ]
-    for p in report.parameters if cpk else []:
+    names): (``counts``) units, first-pass and final yield, and the Cpk of each of
+    ``parameters`` that has one."""
+    charts = (
+        [
+            svg.trend_chart(
+                f"units per {per} (first attempt on the line)",
+                periods,
+                [],
+                bars=[d.units for d in trend],
+            ),
+            svg.trend_chart(
+                f"yield per {per}",
+                periods,
+                [
+                    ("first-pass", [d.first_pass_yield for d in trend]),
+                    ("final", [d.final_yield for d in trend]),
+                ],
+                percent_axis=True,
+            ),
+        ]
+        if counts
+        else []
+    )
+    for p in parameters:
         values = [d.cpk.get(p.name) for d in trend]
         if any(v is not None for v in values):
             charts.append(
@@ -147,10 +161,11 @@ def trend_charts(
     return charts
 
 
-def day_charts(report: EolReport) -> list[str]:
-    """The trend per plant day as charts."""
-    days = [(d.day.strftime("%m-%d"), d.day.isoformat()) for d in report.trend]
-    return trend_charts(report, report.trend, days, "day")
+def day_charts(stats: Statistics, *, counts: bool = True) -> list[str]:
+    """The trend per plant day as charts: the line's, or (not ``counts``) a product
+    section's Cpk."""
+    days = [(d.day.strftime("%m-%d"), d.day.isoformat()) for d in stats.trend]
+    return trend_charts(stats.parameters, stats.trend, days, "day", counts=counts)
 
 
 def shift_charts(report: EolReport) -> list[str]:
@@ -161,7 +176,7 @@ def shift_charts(report: EolReport) -> list[str]:
         (f"{s.day.strftime('%m-%d')} {s.shift}", f"{s.day.isoformat()} {s.shift}")
         for s in report.shift_trend
     ]
-    return trend_charts(report, report.shift_trend, shifts, "shift", cpk=False)
+    return trend_charts([], report.shift_trend, shifts, "shift")
 
 
 #: The report (``GET``), and where a what-if is answered again by its profile's SHA-256.
@@ -170,22 +185,51 @@ REPORT_PATH = "/api/v1/reports/eol"
 FAILING_RUNS_PATH = "/api/v1/reports/eol/failures"
 
 
-def filter_query(filter: ReportFilter, zone: str) -> dict[str, str]:
-    """The report's filter as the query of its form (empty fields left out)."""
-    fields = {
+#: The CSV export of the runs, and the split page.
+RUNS_CSV_PATH = "/api/v1/reports/eol/runs.csv"
+SPLIT_PATH = "/api/v1/reports/split"
+
+
+def filter_fields(filter: ReportFilter, zone: str) -> dict[str, str]:
+    """The report's filter as its form's fields, every one (empty: no filter); times in
+    the plant's ``zone``."""
+    return {
         "from": formatting.field(filter.since, zone),
         "to": formatting.field(filter.until, zone),
         "station": filter.station_id or "",
         "operator": filter.operator_id or "",
         "lot": filter.lot or "",
+        "part_number": filter.part_number or "",
     }
-    return {name: value for name, value in fields.items() if value}
+
+
+def filter_query(filter: ReportFilter, zone: str) -> dict[str, str]:
+    """The report's filter as query parameters (empty fields left out). Every link, form
+    and export of the pages builds its query from it (:func:`href`), so a filter once
+    chosen is kept by all of them."""
+    return {name: value for name, value in filter_fields(filter, zone).items() if value}
+
+
+def href(filter: ReportFilter, zone: str, path: str = REPORT_PATH, **params: object) -> str:
+    """The address of ``path`` under ``filter`` with ``params`` besides: a param overrides
+    the filter's field of its name, ``None`` leaves it out."""
+    query = filter_query(filter, zone)
+    for name, value in params.items():
+        if value is None:
+            query.pop(name, None)
+        else:
+            query[name] = str(value)
+    return f"{path}?{urlencode(query)}"
+
+
+_env.globals.update(
+    href=href, report_path=REPORT_PATH, runs_csv_path=RUNS_CSV_PATH, split_path=SPLIT_PATH
+)
 
 
 def runs_link(filter: ReportFilter, zone: str) -> Callable[[str], str]:
     """The address of the runs behind a Pareto bar (its reason) under ``filter``."""
-    query = filter_query(filter, zone)
-    return lambda code: f"{FAILING_RUNS_PATH}?{urlencode({'code': code, **query})}"
+    return lambda code: href(filter, zone, FAILING_RUNS_PATH, code=code)
 
 
 def failing_runs_page(
@@ -193,9 +237,13 @@ def failing_runs_page(
 ) -> str:
     """The failing runs whose first failure reason is ``code`` (a Pareto bar's runs),
     the latest ``limit`` of them, times in the plant's ``zone``."""
-    query = urlencode({"format": "html", **filter_query(filter, zone)})
     return _env.get_template("failing_runs.html").render(
-        filter=filter, zone=zone, code=code, runs=runs, limit=limit, report_query=query
+        filter=filter,
+        zone=zone,
+        code=code,
+        runs=runs,
+        limit=limit,
+        report_link=href(filter, zone, format="html"),
     )
 
 
@@ -234,30 +282,37 @@ def _chart_runs(tokens: Sequence[str], span: tuple[float, float], href: str) -> 
     )
 
 
-def control_chart_runs(report: EolReport) -> Markup:
-    """A control chart's point opens its run's unit page (every chart plots the same runs)."""
-    points = report.control_charts[0].points if report.control_charts else []
+def control_chart_runs(charts: Sequence[ControlChart]) -> Markup:
+    """A control chart's point opens its run's unit page (every chart of ``charts`` plots
+    the same runs)."""
+    points = charts[0].points if charts else []
     span = (svg.control_x(0, len(points)), svg.control_x(len(points) - 1, len(points)))
     return _chart_runs([p.serial for p in points], span, UNIT_PATH + "{0}")
 
 
-def trend_runs(report: EolReport, periods: Sequence[tuple[datetime, datetime]]) -> Markup:
+def trend_runs(
+    filter: ReportFilter, zone: str, periods: Sequence[tuple[datetime, datetime]]
+) -> Markup:
     """A trend chart's period (a day or a shift, ``periods`` their start and end, each
     ending where the next starts) opens the report of that period, every unit listed: the
     units its points count (their first attempt on the line in the period and the report's
-    range, station, operator and lot)."""
-    f, zone = report.filter, report.timezone
+    range, and the rest of its ``filter``)."""
     bounds = [start for start, _ in periods] + [end for _, end in periods[-1:]]
-    if bounds and f.since:
-        bounds[0] = max(bounds[0], f.since)
-    if bounds and f.until:
-        bounds[-1] = min(bounds[-1], f.until)
-    query = {
-        name: value for name, value in filter_query(f, zone).items() if name not in ("from", "to")
-    }
-    href = "?" + urlencode({"format": "html", "list": "all", **query}) + "&from={0}&to={1}"
+    if bounds and filter.since:
+        bounds[0] = max(bounds[0], filter.since)
+    if bounds and filter.until:
+        bounds[-1] = min(bounds[-1], filter.until)
+    # The period's bounds replace the filter's; "{0}" and "{1}" stay as they are.
+    rest = filter.model_copy(update={"since": None, "until": None})
+    link = href(rest, zone, format="html", list="all")
     span = (svg.trend_x(0, len(periods)), svg.trend_x(len(periods) - 1, len(periods)))
-    return _chart_runs([formatting.field(b, zone) for b in bounds], span, href)
+    return _chart_runs([formatting.field(b, zone) for b in bounds], span, link + "&from={0}&to={1}")
+
+
+def day_runs(filter: ReportFilter, zone: str, trend: Sequence[TrendDay]) -> Markup:
+    """A trend per day's day opens the report of that day (:func:`trend_runs`)."""
+    days = [(midnight(d.day, zone), day_end(d.day, zone)) for d in trend]
+    return trend_runs(filter, zone, days)
 
 
 def what_if_link(report: EolReport) -> str | None:
@@ -265,35 +320,68 @@ def what_if_link(report: EolReport) -> str | None:
     profile by SHA-256 (stored by the what-if)."""
     if report.what_if is None:
         return None
-    query = {
-        "format": "html",
-        "what_if": report.what_if.limits.sha256,
-        **filter_query(report.filter, report.timezone),
-    }
-    return f"{REPORT_PATH}?{urlencode(query)}"
+    return href(report.filter, report.timezone, format="html", what_if=report.what_if.limits.sha256)
+
+
+@dataclass(frozen=True)
+class StatisticsBlock:
+    """The statistics of one product on the report's page: the report's own when its runs
+    are of one product (``part_number`` None), else a product's section, with the cells,
+    charts and links the page shows for it."""
+
+    part_number: str | None
+    stats: Statistics
+    filter: ReportFilter
+    parameter_rows: list[list[str]]
+    cpk_charts: list[Markup]
+    day_runs: Markup
+    control_runs: Markup
+
+
+def statistics_blocks(report: EolReport) -> list[StatisticsBlock]:
+    """The report's statistics as the page shows them: one block over its runs, or one
+    per product when they are of several."""
+    return [
+        StatisticsBlock(
+            part_number=getattr(stats, "part_number", None),
+            stats=stats,
+            filter=stats.filter,
+            parameter_rows=parameter_cells(stats),
+            cpk_charts=(
+                [Markup(c) for c in day_charts(stats, counts=False)]
+                if report.product_sections
+                else []
+            ),
+            day_runs=day_runs(stats.filter, report.timezone, stats.trend),
+            control_runs=control_chart_runs(stats.control_charts),
+        )
+        for stats in statistics_of(report)
+    ]
 
 
 def report_page(report: EolReport) -> str:
     """The end-of-line report as one self-contained HTML page."""
+    f, zone = report.filter, report.timezone
     return _env.get_template("report.html").render(
         what_if_link=what_if_link(report),
         report=report,
-        runs_link=runs_link(report.filter, report.timezone),
-        export_query=urlencode(filter_query(report.filter, report.timezone)),
-        parameter_rows=parameter_cells(report),
+        form={**filter_fields(f, zone), "list": report.units_listed},
+        runs_link=runs_link(f, zone),
+        page_link=lambda offset: href(
+            f,
+            zone,
+            format="html",
+            list=report.units_listed,
+            units=report.units_limit,
+            page=offset // (report.units_limit or 1) + 1,
+        ),
         trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
         shift_charts=(
             [Markup(chart) for chart in shift_charts(report)] if report.shift_trend else []
         ),
-        control_runs=control_chart_runs(report),
-        day_runs=trend_runs(
-            report,
-            [
-                (midnight(d.day, report.timezone), day_end(d.day, report.timezone))
-                for d in report.trend
-            ],
-        ),
-        shift_runs=trend_runs(report, [(s.start, s.end) for s in report.shift_trend]),
+        day_runs=day_runs(f, zone, report.trend),
+        shift_runs=trend_runs(f, zone, [(s.start, s.end) for s in report.shift_trend]),
+        blocks=statistics_blocks(report),
     )
 
 
@@ -302,14 +390,15 @@ def dashboard_page(
 ) -> str:
     """The line dashboard over ``report`` (today's runs) and the latest ``held`` units on
     hold (of ``held_total``); it follows the server-sent events at ``events`` and brings
-    itself up to date after each stored run, without a reload."""
+    itself up to date after each stored run, without a reload. Its control charts are a
+    product's: one set per product when today's runs are of several."""
     return _env.get_template("dashboard.html").render(
         report=report,
         held=held,
         held_total=held_total,
         events=events,
         runs_link=runs_link(report.filter, report.timezone),
-        control_runs=control_chart_runs(report),
+        blocks=statistics_blocks(report),
     )
 
 
@@ -370,31 +459,31 @@ REPORT_NARROWED_BY: Final[dict[str, str]] = {
 
 def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str:
     """A parameter split by a run's column (:mod:`station.domain.quality.split`): box
-    plots and each group's figures, a form to choose another ``parameters`` or split."""
-    query = {"parameter": report.parameter, "by": report.by}
-    form = filter_query(report.filter, zone)
-    if report.filter.part_number:
-        form["part_number"] = report.filter.part_number
+    plots and each group's figures (a block per product when the runs are of several),
+    a form to choose another ``parameters`` or split."""
     narrowing = REPORT_NARROWED_BY.get(report.by)
 
-    def group_link(group: str) -> str | None:
-        """The report of a group's runs (with every unit listed), where the report can be
-        narrowed to it: a station, operator, lot or product, not a slot or a version."""
+    def group_link(section: SplitReport, group: str) -> str | None:
+        """The report of a group's runs (with every unit listed, of the ``section``'s
+        product), where the report can be narrowed to it: a station, operator, lot or
+        product, not a slot or a version."""
         if narrowing is None or group == NO_VALUE:
             return None
-        query = {"format": "html", "list": "all", **form, narrowing: group}
-        return f"/api/v1/reports/eol?{urlencode(query)}"
+        return href(section.filter, zone, format="html", list="all", **{narrowing: group})
 
     return _env.get_template("split.html").render(
         report=report,
+        sections=report.sections or [report],
         zone=zone,
         parameters=parameters,
         splits=get_args(SplitBy),
-        form=form,
+        form=filter_query(report.filter, zone),
         group_link=group_link,
         no_value=NO_VALUE,
-        report_query=urlencode({"format": "html", **form}),
-        json_query=urlencode({**query, **form, "format": "json"}),
+        report_link=href(report.filter, zone, format="html"),
+        json_link=href(
+            report.filter, zone, SPLIT_PATH, parameter=report.parameter, by=report.by, format="json"
+        ),
     )
 
 

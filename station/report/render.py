@@ -20,12 +20,14 @@ from station.report.tables import (
     RISK_HEADER,
     SUMMARY_HEADER,
     WHAT_IF_HEADER,
+    Statistics,
     capability_cells,
     flip_cells,
     listed,
     near_limits_line,
     parameter_cells,
     risk_cells,
+    statistics_of,
     summary_cells,
     what_if_cells,
 )
@@ -75,6 +77,40 @@ def _trend_table(per: str, names: Sequence[str], trend: Sequence[TrendFigures]) 
     )
 
 
+def _statistics_rows(doc: Mapping[str, Any], prefix: str) -> Iterator[tuple[str, str, str, Cell]]:
+    """The rows of a set of statistics of coefficients (the report's, or a product
+    section's, each item after ``prefix``: the part number and a slash)."""
+    for stats in doc["parameters"]:
+        for key, value in stats.items():
+            if key not in ("name", "histogram"):
+                yield ("parameter", f"{prefix}{stats['name']}", key, value)
+        hist = stats["histogram"]
+        yield ("histogram", f"{prefix}{stats['name']}", "start", hist["start"])
+        yield ("histogram", f"{prefix}{stats['name']}", "width", hist["width"])
+        for i, count in enumerate(hist["counts"]):
+            yield ("histogram", f"{prefix}{stats['name']}", f"bin:{i}", count)
+    for chart in doc["control_charts"]:
+        for key, value in chart.items():
+            if key not in ("name", "points"):
+                yield ("control_chart", f"{prefix}{chart['name']}", key, value)
+        for point in chart["points"]:
+            yield (
+                "control_point",
+                f"{prefix}{chart['name']}",
+                f"{point['started_at']} {point['serial']}",
+                point["value"],
+            )
+    near = doc.get("near_limits")
+    if near is not None:
+        for key, value in near.items():
+            if key != "risks":
+                yield ("near_limits", prefix.rstrip("/"), key, value)
+        for risk in near["risks"]:
+            for key, value in risk.items():
+                if key != "name":
+                    yield ("near_limits", f"{prefix}risk:{risk['name']}", key, value)
+
+
 def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
     """The report as ``(section, item, metric, value)`` rows."""
     doc = report.model_dump(mode="json")
@@ -105,26 +141,7 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
             yield ("pareto", entry["code"], f"station:{station}", n)
         for operator, n in entry["by_operator"].items():
             yield ("pareto", entry["code"], f"operator:{operator}", n)
-    for stats in doc["parameters"]:
-        for key, value in stats.items():
-            if key not in ("name", "histogram"):
-                yield ("parameter", stats["name"], key, value)
-        hist = stats["histogram"]
-        yield ("histogram", stats["name"], "start", hist["start"])
-        yield ("histogram", stats["name"], "width", hist["width"])
-        for i, count in enumerate(hist["counts"]):
-            yield ("histogram", stats["name"], f"bin:{i}", count)
-    for chart in doc["control_charts"]:
-        for key, value in chart.items():
-            if key not in ("name", "points"):
-                yield ("control_chart", chart["name"], key, value)
-        for point in chart["points"]:
-            yield (
-                "control_point",
-                chart["name"],
-                f"{point['started_at']} {point['serial']}",
-                point["value"],
-            )
+    yield from _statistics_rows(doc, "")
     what_if = doc["what_if"]
     if what_if is not None:
         for key, value in what_if["limits"].items():
@@ -142,15 +159,15 @@ def rows(report: EolReport) -> Iterator[tuple[str, str, str, Cell]]:
         for stats in what_if["parameters"]:
             for key in ("lower", "upper", "count", "cp", "cpk", "out_of_limits", "marginal"):
                 yield ("what_if", f"parameter:{stats['name']}", key, stats[key])
-    near = doc.get("near_limits")
-    if near is not None:
-        for key, value in near.items():
-            if key != "risks":
-                yield ("near_limits", "", key, value)
-        for risk in near["risks"]:
-            for key, value in risk.items():
-                if key != "name":
-                    yield ("near_limits", f"risk:{risk['name']}", key, value)
+    for section in doc["product_sections"]:
+        part = section["part_number"]
+        yield ("product_section", part, "bounds_source", section["bounds_source"])
+        for ref in section["limits_profiles"]:
+            yield ("product_section", part, f"limits:{ref['name']}@{ref['version']}", ref["sha256"])
+        for day in section["trend"]:
+            for name, cpk in day["cpk"].items():
+                yield ("trend", f"{part}/{day['day']}", f"cpk:{name}", cpk)
+        yield from _statistics_rows(section, f"{part}/")
     holds = doc["open_holds"]
     if holds is not None:
         yield ("open_holds", "", "total", holds["total"])
@@ -198,6 +215,7 @@ def as_text(report: EolReport) -> str:
             ("station", f.station_id),
             ("operator", f.operator_id),
             ("lot", f.lot),
+            ("product", f.part_number),
         )
         if value
     )
@@ -252,32 +270,7 @@ def as_text(report: EolReport) -> str:
             ],
         ),
         "",
-        f"Parameters against {report.bounds_source}",
-        *_table(PARAMETER_HEADER, parameter_cells(report)),
-        *([near_limits_line(report)] if report.near_limits is not None else []),
-        *(
-            _table(RISK_HEADER, risk_cells(report))
-            if report.near_limits is not None and report.near_limits.risks
-            else []
-        ),
-        "",
-        "Control charts (I-MR, limits from every run in range)",
-        *_table(
-            ["coefficient", "n", "mean", "MR-bar", "LCL", "UCL", "MR UCL"],
-            [
-                [
-                    c.name,
-                    number(c.count),
-                    number(c.mean),
-                    number(c.mr_bar),
-                    number(c.lcl),
-                    number(c.ucl),
-                    number(c.mr_ucl),
-                ]
-                for c in report.control_charts
-            ],
-        ),
-        "",
+        *(line for stats in statistics_of(report) for line in _statistics_text(stats)),
         *_what_if_text(report),
         f"Units ({listed(report)}, newest first run first)",
         *_table(
@@ -297,6 +290,41 @@ def as_text(report: EolReport) -> str:
         ),
     ]
     return "\n".join(out) + "\n"
+
+
+def _statistics_text(stats: Statistics) -> list[str]:
+    """A set of statistics of coefficients as text: the report's, or a product section's
+    (its part number named)."""
+    part = getattr(stats, "part_number", None)
+    of = f" of product {part}" if part else ""
+    return [
+        f"Parameters{of} against {stats.bounds_source}",
+        *_table(PARAMETER_HEADER, parameter_cells(stats)),
+        *([near_limits_line(stats)] if stats.near_limits is not None else []),
+        *(
+            _table(RISK_HEADER, risk_cells(stats))
+            if stats.near_limits is not None and stats.near_limits.risks
+            else []
+        ),
+        "",
+        f"Control charts{of} (I-MR, limits from every run in range)",
+        *_table(
+            ["coefficient", "n", "mean", "MR-bar", "LCL", "UCL", "MR UCL"],
+            [
+                [
+                    c.name,
+                    number(c.count),
+                    number(c.mean),
+                    number(c.mr_bar),
+                    number(c.lcl),
+                    number(c.ucl),
+                    number(c.mr_ucl),
+                ]
+                for c in stats.control_charts
+            ],
+        ),
+        "",
+    ]
 
 
 def _what_if_text(report: EolReport) -> list[str]:

@@ -1,7 +1,19 @@
 """The summary and parameter tables' cells, shared by the text and HTML renderings."""
 
-from station.domain.quality.figures import EolReport, Summary
+from station.domain.quality.figures import EolReport, ProductSection, Summary
 from station.report.formatting import number, percent, seconds
+
+#: What holds a set of statistics of coefficients: a report over one product's runs, or
+#: a product's section of a report over several.
+Statistics = EolReport | ProductSection
+
+
+def statistics_of(report: EolReport) -> list[Statistics]:
+    """The report's sets of statistics of coefficients: its own over one product's runs,
+    or each product's section over several products' runs."""
+    sections: list[Statistics] = [*report.product_sections]
+    return sections or [report]
+
 
 SUMMARY_HEADER = [
     "",
@@ -59,7 +71,7 @@ PARAMETER_HEADER = [
 ]
 
 
-def parameter_cells(report: EolReport) -> list[list[str]]:
+def parameter_cells(report: Statistics) -> list[list[str]]:
     """The parameter table's cells (text and HTML)."""
     return [
         [
@@ -144,7 +156,7 @@ def capability_cells(report: EolReport) -> list[list[str]]:
     ]
 
 
-def near_limits_line(report: EolReport) -> str:
+def near_limits_line(report: Statistics) -> str:
     """The passing runs accepted within one U of a limit, in words (text and HTML)."""
     near = report.near_limits
     if near is None:
@@ -167,7 +179,7 @@ RISK_HEADER = [
 ]
 
 
-def risk_cells(report: EolReport) -> list[list[str]]:
+def risk_cells(report: Statistics) -> list[list[str]]:
     """The rows of :data:`RISK_HEADER`, one per coefficient with an uncertainty."""
     near = report.near_limits
     if near is None:

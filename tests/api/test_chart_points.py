@@ -42,4 +42,5 @@ def test_control_charts_plot_the_latest_points_of_the_period_or_lot(
     assert refused.status_code == 422
     assert 'id="problem"' in refused.text
     page = client.get("/api/v1/reports/eol", params={"format": "html", "lot": "lot-a"}).text
-    assert 'class="more-points" href="?format=html&amp;points=1000&amp;lot=lot-a"' in page
+    more = 'class="more-points" href="/api/v1/reports/eol?lot=lot-a&amp;format=html&amp;list=held'
+    assert more + '&amp;points=1000"' in page

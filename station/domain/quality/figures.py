@@ -317,6 +317,29 @@ class NearLimits(_FigurePart):
     )
 
 
+class ProductSection(_FigurePart):
+    """One product's statistics in a report whose runs are of several products: its runs
+    only (``filter`` narrowed to its part number), judged against its own limits profile
+    (the latest of its runs'): capability, distributions, control charts, near-limit runs
+    and the Cpk of its trend. No statistic of coefficients spans two products."""
+
+    part_number: str
+    filter: ReportFilter = Field(description="the report's filter narrowed to this product")
+    bounds_source: str = Field(description="where this product's capability limits come from")
+    limits_profiles: list[LimitsRef] = Field(description="profiles its runs were judged by")
+    parameters: list[ParameterStats]
+    control_charts: list[ControlChart]
+    near_limits: NearLimits | None = Field(
+        None, description="its passing runs accepted within one U of its limits"
+    )
+    trend: list[TrendDay] = Field(
+        default_factory=list, description="its own trend per plant day, Cpk included"
+    )
+    shift_trend: list[TrendShift] = Field(
+        default_factory=list, description="its own trend per shift, when shifts are configured"
+    )
+
+
 class EolReport(_FigurePart):
     """The end-of-line report over ``filter``."""
 
@@ -369,4 +392,11 @@ class EolReport(_FigurePart):
     near_limits: NearLimits | None = Field(
         None,
         description="passing runs accepted within one U of a limit (None: no limits to judge)",
+    )
+    product_sections: list[ProductSection] = Field(
+        default_factory=list,
+        description="when the runs in range are of more than one product: each product's "
+        "statistics against its own limits profile; the report's own `parameters`, "
+        "`control_charts`, `near_limits` and trend Cpk are then empty (never one statistic "
+        "over two products), its counts and yields the line's",
     )

@@ -55,7 +55,8 @@ class GroupStats(_FigurePart):
 
 class SplitReport(_FigurePart):
     """``parameter`` over the runs ``filter`` selects (the latest ``sample_limit`` of
-    them: ``sampled_runs``), split by ``by``: the largest groups first."""
+    them: ``sampled_runs``), split by ``by``: the largest groups first; over runs of
+    several products, a section per product instead."""
 
     parameter: str
     unit: str
@@ -68,6 +69,15 @@ class SplitReport(_FigurePart):
     sample_limit: int
     groups: list[GroupStats]
     groups_total: int = Field(description="groups in the sample (the page shows the largest)")
+    part_number: str | None = Field(
+        None, description="the product of a section (its runs only, against its own limits)"
+    )
+    sections: list["SplitReport"] = Field(
+        default_factory=list,
+        description="when the runs are of more than one product: the split of each product's "
+        "runs against its own limits profile; the report's own `groups` are then empty "
+        "(a group's Cpk never spans two products)",
+    )
 
 
 def group_stats(
