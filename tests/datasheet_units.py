@@ -41,7 +41,7 @@ class Datasheet:
     @property
     def adc_max(self) -> int:
         """The largest count the ADC gives: ``2**bits − 1``."""
-        return 2**self.adc_bits - 1
+        return int(2**self.adc_bits) - 1
 
 
 #: DIXX-A12: KXM52-1050 behind the 12-bit ADS7829: 0…4095, zero g 2048, 819.2 counts/g
@@ -73,7 +73,8 @@ class Unit:
     sensitivity: tuple[float, float, float]
 
     def pose_means(self) -> list[tuple[float, float, float]]:
-        """The mean counts of the six poses of :data:`POSES`: ``offset + sensitivity·g``."""
+        """The mean counts of the six poses of :data:`POSES`: ``offset + sensitivity·g``,
+        each within the ADC's ``0…adc_max`` (a unit beyond would read its rail)."""
         means = []
         for _, axis, sign in POSES:
             means.append(
@@ -82,6 +83,8 @@ class Unit:
                     for a in range(3)
                 )
             )
+        if not all(0 <= c <= self.product.adc_max for mean in means for c in mean):
+            raise ValueError(f"{self.serial}: a pose beyond the ADC of {self.product.part_number}")
         return means  # type: ignore[return-value]
 
     def coefficients(self) -> tuple[list[float], list[float]]:
@@ -158,9 +161,7 @@ def run_payload(
                 "std": _xyz([product.pose_std_counts] * 3),
                 "sample_count": 1024,
             }
-            for index, ((name, _, _), mean) in enumerate(
-                zip(POSES, unit.pose_means(), strict=True)
-            )
+            for index, ((name, _, _), mean) in enumerate(zip(POSES, unit.pose_means(), strict=True))
         ],
     }
     if aborted:
@@ -187,7 +188,9 @@ def run_payload(
         "coefficients": {
             "offset": _xyz(offset),
             "sensitivity": _xyz(sensitivity),
-            "matrix": [[1.0 / s if i == j else 0.0 for j in range(3)] for i, s in enumerate(sensitivity)],
+            "matrix": [
+                [1.0 / s if i == j else 0.0 for j in range(3)] for i, s in enumerate(sensitivity)
+            ],
         },
     }
 

@@ -151,11 +151,19 @@ class Capability:
         if mean is not None and std:
             if lower is not None and upper is not None:
                 cp = (upper - lower) / (6 * std)
-            sides = [s for s in (None if upper is None else upper - mean,
-                                 None if lower is None else mean - lower) if s is not None]
+            sides = [
+                s
+                for s in (
+                    None if upper is None else upper - mean,
+                    None if lower is None else mean - lower,
+                )
+                if s is not None
+            ]
             cpk = min(sides) / (3 * std) if sides else None
         out = sum(
-            1 for v in values if (lower is not None and v < lower) or (upper is not None and v > upper)
+            1
+            for v in values
+            if (lower is not None and v < lower) or (upper is not None and v > upper)
         )
         return cls(n, mean, std, cp, cpk, out)
 
