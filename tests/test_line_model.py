@@ -306,17 +306,10 @@ def _machine(base: str, database: Database) -> type[RuleBasedStateMachine]:
         @invariant()
         def a_plant_days_report_holds_that_days_runs(self) -> None:
             for day in PLANT_DAYS:
-                since = datetime.combine(day, time(), PLANT_ZONE).astimezone(UTC)
-                until = datetime.combine(day + timedelta(days=1), time(), PLANT_ZONE).astimezone(
-                    UTC
-                )
-                report = self._report(
-                    **{"from": day.isoformat(), "to": (day + timedelta(days=1)).isoformat()}
-                )
-                selection = Selection(since=since, until=until)
-                self._same_summary(
-                    report["summary"], self.line.counts(selection), f"report of {day}"
-                )
+                next_day = (day + timedelta(days=1)).isoformat()
+                report = self._report(**{"from": day.isoformat(), "to": next_day})
+                counts = self.line.counts(_plant_day(day))
+                self._same_summary(report["summary"], counts, f"report of {day}")
 
         @invariant()
         def every_unit_answers_its_runs(self) -> None:
@@ -368,8 +361,7 @@ def _machine(base: str, database: Database) -> type[RuleBasedStateMachine]:
             page = self.http.get("/")
             assert page.status_code == 200, page.text
             html = page.text
-            midnight = datetime.combine(datetime.now(PLANT_ZONE).date(), time(), PLANT_ZONE)
-            today = Selection(since=midnight.astimezone(UTC))
+            today = _plant_day(datetime.now(PLANT_ZONE).date())
             counts = self.line.counts(today)
             tiles = {
                 "units-tested": str(counts.units_tested),
@@ -522,8 +514,14 @@ def _quantity(parameter: str) -> str:
     return "offset_counts" if parameter.startswith("offset") else "sensitivity_counts_per_g"
 
 
+def _plant_day(day: date) -> Selection:
+    """The runs of one day of the plant, from its midnight to the next (in UTC)."""
+    since, until = (datetime.combine(d, time(), PLANT_ZONE) for d in (day, day + timedelta(days=1)))
+    return Selection(since=since.astimezone(UTC), until=until.astimezone(UTC))
+
+
 def _product_today(product: Datasheet, today: Selection) -> Selection:
-    return Selection(part_number=product.part_number, since=today.since)
+    return Selection(part_number=product.part_number, since=today.since, until=today.until)
 
 
 def _close(got: float | None, want: float | None) -> bool:
