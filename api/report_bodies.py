@@ -15,7 +15,7 @@ from db.holds import held_units
 from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.split import SPLIT_PARAMETERS, split_report
 from station.domain.limits import LimitsProfile
-from station.domain.quality.days import day_start
+from station.domain.quality.days import day_end, midnight, plant_date
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.split import SplitBy
 from station.report.render import render
@@ -101,11 +101,13 @@ def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str
 
 
 def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") -> str:
-    """The dashboard page at ``now``: the runs since the plant's midnight (its time
-    ``zone``)."""
+    """The dashboard page at ``now``: the runs of the plant's day (its time ``zone``),
+    from its midnight to the next (a run a station's clock dated later is no run of
+    today)."""
+    today = plant_date(now, zone)
     report = eol_report(
         repository.session,
-        ReportFilter(since=day_start(now, zone)),
+        ReportFilter(since=midnight(today, zone), until=day_end(today, zone)),
         unit_limit=DASHBOARD_UNITS,
         chart_points=DASHBOARD_CHART_POINTS,
         now=now,

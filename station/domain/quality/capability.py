@@ -133,14 +133,22 @@ def capability_warning(cpk_value: float | None, out_of_limits: int, count: int) 
 MAX_DATA_BINS = 30
 #: Tukey's far-out fences: values beyond Q1 − k·IQR or Q3 + k·IQR are binned apart.
 FAR_OUT = 3.0
+#: Values whose span is within this fraction of their magnitude (or below the smallest
+#: normal double) are one value to the histogram: bins narrower than a few doubles'
+#: spacing cannot be made (a solver's ``32276.0`` beside ``32276.000000000004``), so
+#: they get one bin around them, :data:`ONE_VALUE_HALF_WIDTH` of it either side.
+SAME_VALUE = 1e-9
+ONE_VALUE_HALF_WIDTH = 1e-6
+SMALLEST_SPAN = float(np.finfo(float).smallest_normal)
 
 
 def data_bins(values: Sequence[float]) -> tuple[list[float], list[int], int, int]:
     """Bins from the values themselves: edges, counts, and the values below and above
     Tukey's far-out fences (``Q1 − 3·IQR``, ``Q3 + 3·IQR``), counted apart so a few
     outliers do not squeeze the rest into one bar. The bins span the values within the
-    fences, of the Freedman–Diaconis width (``2·IQR·n^(-1/3)``; Sturges where the IQR
-    is 0), at most :data:`MAX_DATA_BINS`."""
+    fences, of the Freedman–Diaconis width (``2·IQR·n^(-1/3)`` of all n values; Sturges'
+    ``⌈log₂ n⌉ + 1`` bins where the IQR is 0), at most :data:`MAX_DATA_BINS`; values
+    within :data:`SAME_VALUE` of each other are one value, in one bin around it."""
     data = np.asarray(values, dtype=float)
     if data.size == 0:
         return [], [], 0, 0
@@ -150,14 +158,16 @@ def data_bins(values: Sequence[float]) -> tuple[list[float], list[int], int, int
     if spread > 0:
         low, high = max(low, q1 - FAR_OUT * spread), min(high, q3 + FAR_OUT * spread)
     inside = data[(data >= low) & (data <= high)]
-    if high <= low:  # one value: one bin around it
-        half = abs(low) * 1e-6 or 1e-6
-        low, high = low - half, high + half
-    edges = np.histogram_bin_edges(
-        inside, bins="fd" if spread > 0 else "sturges", range=(low, high)
-    )
-    if len(edges) - 1 > MAX_DATA_BINS:
-        edges = np.linspace(low, high, MAX_DATA_BINS + 1)
-    counts, edges = np.histogram(inside, bins=edges)
     below, above = int((data < low).sum()), int((data > high).sum())
+    scale = max(abs(low), abs(high))
+    one_value = high - low <= max(SAME_VALUE * scale, SMALLEST_SPAN)
+    if one_value:
+        half = max(scale * ONE_VALUE_HALF_WIDTH, SMALLEST_SPAN / ONE_VALUE_HALF_WIDTH)
+        low, high = low - half, high + half
+        bins = 1
+    elif spread > 0:
+        bins = math.ceil((high - low) / (2 * spread * data.size ** (-1 / 3)))
+    else:
+        bins = math.ceil(math.log2(data.size)) + 1
+    counts, edges = np.histogram(inside, bins=min(bins, MAX_DATA_BINS), range=(low, high))
     return [float(e) for e in edges], [int(c) for c in counts], below, above

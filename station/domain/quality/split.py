@@ -88,7 +88,9 @@ def group_stats(
     q1, median, q3 = (float(q) for q in np.percentile(data, [25, 50, 75]))
     iqr = q3 - q1
     low_fence, high_fence = q1 - FENCE * iqr, q3 + FENCE * iqr
-    inside = data[(data >= low_fence) & (data <= high_fence)]
+    # Each whisker from its own side: values a few doubles apart may have both
+    # quartiles (interpolated) between two neighbours, and no value within the fences.
+    above_low, below_high = data[data >= low_fence], data[data <= high_fence]
     mean = float(data.mean())
     sd = float(data.std(ddof=1)) if data.size > 1 else None
     out = int(np.count_nonzero(data < lower)) if lower is not None else 0
@@ -104,9 +106,9 @@ def group_stats(
         median=median,
         q3=q3,
         maximum=float(data[-1]),
-        whisker_low=float(inside[0]),
-        whisker_high=float(inside[-1]),
-        outliers=int(data.size - inside.size),
+        whisker_low=float(above_low[0]),
+        whisker_high=float(below_high[-1]),
+        outliers=int(data.size - above_low.size + data.size - below_high.size),
         out_of_limits=out,
         cpk=capability,
         ppm_observed=observed_ppm(out, int(data.size)),

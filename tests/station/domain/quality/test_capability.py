@@ -1,8 +1,10 @@
 """Capability math against direct formulas, for arbitrary data (hypothesis)."""
 
+import itertools
 import math
 import statistics
 
+import numpy as np
 import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
@@ -10,8 +12,10 @@ from hypothesis import strategies as st
 from station.domain.quality.capability import (
     D4,
     HISTOGRAM_BINS,
+    MAX_DATA_BINS,
     cp,
     cpk,
+    data_bins,
     histogram_bins,
     individuals_limits,
     marginal_zones,
@@ -84,3 +88,26 @@ def test_individuals_limits_are_three_short_term_sigmas(mean: float, mr_bar: flo
     assert ucl - mean == pytest.approx(mean - lcl)
     assert ucl - mean == pytest.approx(2.66 * mr_bar, rel=1e-3, abs=1e-12)
     assert mr_ucl == pytest.approx(D4 * mr_bar)
+
+
+@st.composite
+def near_equal(draw: st.DrawFn) -> list[float]:
+    """Values a few doubles apart, as a solver gives for units alike (``32276.0`` and
+    ``32276.000000000004``): the histogram's and the box plot's hardest data."""
+    base = draw(st.floats(min_value=-1e6, max_value=1e6))
+    steps = draw(st.lists(st.integers(0, 8), min_size=1, max_size=50))
+    return [float(base + s * np.spacing(base)) for s in steps]
+
+
+spread_out = st.lists(st.floats(min_value=-1e6, max_value=1e6), min_size=1, max_size=200)
+
+
+@given(st.one_of(near_equal(), spread_out))
+def test_data_bins_hold_every_value_in_increasing_bins(xs: list[float]) -> None:
+    edges, counts, below, above = data_bins(xs)
+    assert all(a < b for a, b in itertools.pairwise(edges))
+    assert 1 <= len(counts) <= MAX_DATA_BINS
+    assert len(edges) == len(counts) + 1
+    assert sum(counts) + below + above == len(xs)
+    assert below <= sum(1 for x in xs if x < np.percentile(xs, 25))
+    assert above <= sum(1 for x in xs if x > np.percentile(xs, 75))
