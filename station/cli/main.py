@@ -47,7 +47,7 @@ COMMANDS: dict[str, Command] = {
     "solve": Command(
         "station.cli.solve",
         "solve_command",
-        "Compute offsets and sensitivities from still-pose means (ADC counts).",
+        "Compute offsets and sensitivities from still-pose means, in the declared units.",
     ),
     "simulate": Command(
         "station.cli.simulate",

@@ -19,7 +19,13 @@ from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.calibration import Solution, Uncertainty
+    from station.domain.calibration.units import DeclaredUnits
     from station.domain.posefile import PoseFile
+
+#: Decimals the screen shows of an offset or its U, by declared unit (counts: the caller's).
+OFFSET_DECIMALS = {"counts": 0, "g": 3, "m/s2": 2}
+#: Decimals added for a sensitivity given as a scale factor rather than in counts/g.
+SCALE_DECIMALS = 3
 
 
 class ModelChoice(StrEnum):
@@ -30,7 +36,7 @@ class ModelChoice(StrEnum):
 
 
 class AccelUnitsChoice(StrEnum):
-    """What a stream's accelerometer columns are in."""
+    """What the accelerometer's readings are in (a stream's columns, a pose file's means)."""
 
     counts = "counts"
     g = "g"
@@ -91,8 +97,8 @@ def solve_command(
     accel_units: Annotated[
         AccelUnitsChoice,
         typer.Option(
-            help="With --stream: the accelerometer columns in ADC counts (zero 2048, 819.2 "
-            "counts/g), in g or in m/s²."
+            help="The accelerometer's readings in ADC counts, in g or in m/s²; the results "
+            "are given in the same unit (docs/calibration.md)."
         ),
     ] = AccelUnitsChoice.counts,
     gyro_units: Annotated[
@@ -119,10 +125,9 @@ def solve_command(
         ),
     ] = None,
 ) -> None:
-    """Compute offsets and sensitivities from still-pose means (ADC counts)."""
+    """Compute offsets and sensitivities from still-pose means, in the declared units."""
     declared = (
-        accel_units is not AccelUnitsChoice.counts
-        or gyro_units is not GyroUnitsChoice.dps
+        gyro_units is not GyroUnitsChoice.dps
         or time_units is not TimeUnitsChoice.s
         or rate is not None
         or known_turn_deg is not None
@@ -133,7 +138,7 @@ def solve_command(
         from station.domain.gyro.motion.stream_units import StreamUnits
 
         try:
-            units = StreamUnits(accel_units.value, gyro_units.value, time_units.value, rate)
+            stream_units = StreamUnits(accel_units.value, gyro_units.value, time_units.value, rate)
         except StreamError as exc:
             raise InputError(f"--rate: {exc}") from None
         solve_stream(
@@ -141,14 +146,14 @@ def solve_command(
             model.value,
             as_json=as_json,
             still_window_s=still_window,
-            units=units,
+            units=stream_units,
             known_turn_deg=known_turn_deg,
         )
         return
     if declared:
         raise InputError(
-            "--accel-units, --gyro-units, --time-units, --rate and --known-turn-deg describe "
-            "a raw stream: use them with --stream"
+            "--gyro-units, --time-units, --rate and --known-turn-deg describe a raw stream: "
+            "use them with --stream"
         )
     from station.domain.calibration import (
         CalibrationError,
@@ -156,24 +161,48 @@ def solve_command(
         accelerometer_budget,
         solve,
     )
+    from station.domain.calibration.units import DeclaredUnits
     from station.domain.limits import load_profile
     from station.domain.posefile import read_pose_file
 
+    units = DeclaredUnits(accel_units.value)
+    if units.accel != "counts" and (limits is not None or profile is not None):
+        raise InputError(
+            f"--limits/--profile: a profile's limits are in its product's ADC counts, the "
+            f"poses in {units.accel}: no limit applies to them; leave out --limits and --profile"
+        )
     max_residual = load_profile(limits, profile).max_residual_counts
     pose_file = read_pose_file(file)
+    poses = units.to_counts(pose_file.poses)
+    spread = None if pose_file.spread is None else units.spread_to_counts(pose_file.spread)
     try:
-        solution = solve(pose_file.poses, model.value, max_residual_counts=max_residual)
+        solution = solve(poses, model.value, max_residual_counts=max_residual)
     except CalibrationError as exc:
         raise InputError(f"{pose_file.where(exc.pose)}: {exc}") from None
-    budget = accelerometer_budget(solution, pose_file.poses, pose_file.spread, pose_file.samples)
+    budget = accelerometer_budget(solution, poses, spread, pose_file.samples)
     uncertainty = Uncertainty.of_budget(budget)
     if as_json:
-        print_json(solution.to_dict() | {"uncertainty": uncertainty.to_dict()})
+        print_json(units.restate(solution.to_dict() | {"uncertainty": uncertainty.to_dict()}))
     else:
-        out.print(_table(solution, pose_file, uncertainty))
+        out.print(_table(solution, pose_file, uncertainty, units))
 
 
-def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) -> Table:
+def unit_headers(units: DeclaredUnits) -> tuple[str, str]:
+    """The offset's and the sensitivity's column titles in the declared units."""
+    sensitivity = "counts/g" if units.accel == "counts" else "scale factor"
+    return f"offset ({units.accel})", f"sensitivity ({sensitivity})"
+
+
+def unit_decimals(units: DeclaredUnits, counts_decimals: int) -> tuple[int, int]:
+    """Decimals of an offset and of a sensitivity, ``counts_decimals`` for counts."""
+    offset = counts_decimals + OFFSET_DECIMALS[units.accel]
+    scale = 0 if units.accel == "counts" else SCALE_DECIMALS
+    return offset, counts_decimals + scale
+
+
+def _table(
+    solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty, units: DeclaredUnits
+) -> Table:
     from station.domain.calibration import MIN_DOF_SHOWN, SENSITIVITY_CONVENTION
 
     cal, q = solution.calibration, solution.quality
@@ -183,24 +212,28 @@ def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) ->
         title=f"{pose_file.path}: {solution.poses} poses, {cal.model}-parameter model "
         f"({solution.method})"
     )
+    offset_header, sensitivity_header = unit_headers(units)
     table.add_column("axis")
-    table.add_column("offset (counts)", justify="right")
-    table.add_column("sensitivity (counts/g)", justify="right")
+    table.add_column(offset_header, justify="right")
+    table.add_column(sensitivity_header, justify="right")
     table.add_column(f"U offset (k = {uncertainty.k:g})", justify="right")
     table.add_column(f"U sensitivity (k = {uncertainty.k:g})", justify="right")
-    u_off, u_sens = uncertainty.offset, uncertainty.sensitivity
+    do, ds = unit_decimals(units, 4)
+    offset, sensitivity = units.offset(cal.offset), units.sensitivity(cal.sensitivity)
+    u_off = None if uncertainty.offset is None else units.spread(uncertainty.offset)
+    u_sens = None if uncertainty.sensitivity is None else units.sensitivity(uncertainty.sensitivity)
     for i, axis in enumerate(AXES):
-        off = f"{cal.offset[i]:.4f}"
-        sens = f"{cal.sensitivity[i]:.4f}"
+        off = f"{offset[i]:.{do}f}"
+        sens = f"{sensitivity[i]:.{ds}f}"
         if shown and se is not None:
-            off += f" ± {se.offset[i]:.4f}"
-            sens += f" ± {se.sensitivity[i]:.4f}"
+            off += f" ± {units.spread(se.offset)[i]:.{do}f}"
+            sens += f" ± {units.sensitivity(se.sensitivity)[i]:.{ds}f}"
         table.add_row(
             axis,
             off,
             sens,
-            "—" if u_off is None else f"± {u_off[i]:.4f}",
-            "—" if u_sens is None else f"± {u_sens[i]:.4f}",
+            "—" if u_off is None else f"± {u_off[i]:.{do}f}",
+            "—" if u_sens is None else f"± {u_sens[i]:.{ds}f}",
         )
     lines = [
         f"residual |g|−1: rms {q.residual_rms_mg:.3f} mg, max {q.residual_max_mg:.3f} mg",
@@ -223,17 +256,23 @@ def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) ->
             else f"no ± shown: {se.dof} degree(s) of freedom, too few to estimate the noise"
         )
     if q.studentised_max_counts is not None:
+        worst = units.residual(q.studentised_max_counts)
+        limit = solution.residual_limit_counts
+        shown_limit = "none" if limit is None else f"{units.residual(limit):.3g}"
         lines.append(
-            f"studentised residual max {q.studentised_max_counts:.3g} counts "
-            f"(limit {solution.residual_limit_counts:g}, {solution.checked_with}-parameter check)"
+            f"studentised residual max {worst:.3g} {units.accel} "
+            f"(limit {shown_limit}, {solution.checked_with}-parameter check)"
         )
     if solution.k is not None:
         lines.insert(0, f"k1 = {solution.k[0]:.6f}, k2 = {solution.k[1]:.6f}")
     if cal.model == "nine":
         lines.append(f"sensitivity = {SENSITIVITY_CONVENTION['nine']}")
+        maps = (
+            "counts → g" if units.accel == "counts" else f"{units.accel} − offset → {units.accel}"
+        )
         lines.append(
-            "matrix (counts → g): "
-            + "; ".join(" ".join(f"{v:+.6e}" for v in row) for row in cal.matrix)
+            f"matrix ({maps}): "
+            + "; ".join(" ".join(f"{v:+.6e}" for v in row) for row in units.matrix(cal.matrix))
         )
     if q.near_duplicates:
         lines.insert(
@@ -242,10 +281,11 @@ def _table(solution: Solution, pose_file: PoseFile, uncertainty: Uncertainty) ->
             "(they add little; least squares needs no rule against them)",
         )
     for pose in solution.excluded:
+        off_by = units.residual(float(q.pose_g[pose] - 1) * units.counts_per_g)
         lines.insert(
             0,
             f"EXCLUDED pose {pose + 1} ({pose_file.where(pose)}): inconsistent with the others, "
-            f"{(q.pose_g[pose] - 1) * 819.2:+.1f} counts off; fit redone without it",
+            f"{off_by:+.{unit_decimals(units, 1)[0]}f} {units.accel} off; fit redone without it",
         )
     table.caption = "\n".join(lines)
     return table

@@ -20,6 +20,7 @@ from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.calibration import Model
+    from station.domain.calibration.units import DeclaredUnits
     from station.domain.gyro.motion import StreamCalibration
     from station.domain.gyro.motion.stream_units import StreamUnits
 
@@ -61,14 +62,22 @@ def solve_stream(
         raise InputError(f"{file}: accelerometer{where}: {exc}") from None
     except (StreamError, GyroMatrixError) as exc:
         raise InputError(f"{file}: {exc}") from None
+    accel = declared.accelerometer
     if as_json:
-        print_json(result.to_dict())
+        print_json(accel.restate(result.to_dict()) | {"units": _units(declared)})
     else:
-        out.print(_table(result, file, stream.rate_hz))
+        out.print(_table(result, file, stream.rate_hz, accel))
 
 
-def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
+def _units(declared: StreamUnits) -> dict[str, str]:
+    """The JSON's ``units``: the accelerometer's as declared, the gyro bias in deg/s."""
+    return declared.accelerometer.names() | {"gyro_bias": "deg/s", "gyro_matrix": "1"}
+
+
+def _table(result: StreamCalibration, file: Path, rate_hz: float, units: DeclaredUnits) -> Table:
     import numpy as np
+
+    from station.cli.solve import unit_decimals, unit_headers
 
     cal, gyro = result.accel.calibration, result.gyro
     se = gyro.standard_errors
@@ -76,16 +85,21 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float) -> Table:
         title=f"{file}: {len(result.stills)} still poses at {rate_hz:.4g} samples/s, "
         f"{cal.model}-parameter accelerometer, {len(gyro.used)} moves"
     )
+    offset_header, sensitivity_header = unit_headers(units)
     table.add_column("axis")
-    table.add_column("offset (counts)", justify="right")
-    table.add_column("sensitivity (counts/g)", justify="right")
+    table.add_column(offset_header, justify="right")
+    table.add_column(sensitivity_header, justify="right")
     table.add_column("gyro bias (deg/s)", justify="right")
     u = result.uncertainty
+    do, ds = unit_decimals(units, 3)
+    offset, sensitivity = units.offset(cal.offset), units.sensitivity(cal.sensitivity)
+    u_off = None if u.offset is None else units.spread(u.offset)
+    u_sens = None if u.sensitivity is None else units.sensitivity(u.sensitivity)
     for i, axis in enumerate(AXES):
         table.add_row(
             axis,
-            _with_u(cal.offset[i], u.offset, i, 3),
-            _with_u(cal.sensitivity[i], u.sensitivity, i, 3),
+            _with_u(offset[i], u_off, i, do),
+            _with_u(sensitivity[i], u_sens, i, ds),
             _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
         )
     lines = [

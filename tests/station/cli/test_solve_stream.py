@@ -193,16 +193,26 @@ def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
         ("ms.csv", in_ms, ("--time-units", "ms"), "milliseconds? use --time-units ms"),
         ("rate.csv", in_ms, ("--rate", "200"), "milliseconds? use --time-units ms"),
     ]
+    # The accelerometer's results come in the unit declared (offset in it, sensitivity as
+    # a scale factor for g and m/s²): the counts' answer restated.
+    per_unit = {"g": (819.2, 1.0), "m/s2": (819.2 / 9.80665, 1.0)}
     for name, table, declared, refusal in cases:
         path = _write(tmp_path / name, table)
         assert refusal in _refused(call_cli, path), name
         data = _solved(call_cli, path, *declared)
+        counts_per_unit, _ = per_unit.get(declared[1], (1.0, 1.0))
+        restated = declared[1] in per_unit
         for key in ("offset", "sensitivity"):
             got, want = data[key], reference[key]
             assert isinstance(got, dict)
             assert isinstance(want, dict)
             for axis in "xyz":
-                assert got[axis] == pytest.approx(want[axis], rel=1e-9), (name, key, axis)
+                expected = want[axis]
+                if restated and key == "offset":
+                    expected = (want[axis] - 2048.0) / counts_per_unit
+                elif restated:
+                    expected = want[axis] / 819.2
+                assert got[axis] == pytest.approx(expected, rel=1e-9, abs=1e-8), (name, key, axis)
         gyro, want_gyro = data["gyro"], reference["gyro"]
         assert isinstance(gyro, dict)
         assert isinstance(want_gyro, dict)
@@ -212,12 +222,12 @@ def test_declared_units_give_the_same_calibration_and_undeclared_ones_are_named(
 def test_units_are_for_streams_and_a_rate_must_be_one(call_cli: CliRunner, tmp_path: Path) -> None:
     poses = tmp_path / "poses.csv"
     poses.write_text("ax,ay,az\n2031,1999,1143\n")
-    for option, value in (("--accel-units", "g"), ("--known-turn-deg", "360")):
+    for option, value in (("--gyro-units", "rads"), ("--known-turn-deg", "360")):
         result = call_cli("solve", str(poses), option, value)
         assert result.returncode == 2
         assert result.stderr.strip().splitlines() == [
-            "calstation: error: --accel-units, --gyro-units, --time-units, --rate and "
-            "--known-turn-deg describe a raw stream: use them with --stream"
+            "calstation: error: --gyro-units, --time-units, --rate and --known-turn-deg "
+            "describe a raw stream: use them with --stream"
         ]
     rate = _refused(call_cli, poses, "--rate", "0")
     assert "--rate" in rate

@@ -24,16 +24,14 @@ from typing import Final, Literal
 
 import numpy as np
 
+from station.domain.calibration.units import STANDARD_GRAVITY, AccelUnits, DeclaredUnits
 from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.stream import RecordedStream
 from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
-AccelUnits = Literal["counts", "g", "m/s2"]
 GyroUnits = Literal["dps", "rads"]
 TimeUnits = Literal["s", "ms"]
 
-#: Standard gravity, m/s² (the definition of 1 g).
-STANDARD_GRAVITY: Final = 9.80665
 #: Fewer samples a second than this is no IMU recording: the time column is not seconds.
 MIN_RATE_HZ: Final = 5.0
 #: A hand turns a putter at tens to hundreds of deg/s: a gyro peaking below this while the
@@ -59,6 +57,11 @@ class StreamUnits:
             raise StreamError(f"stream: rate {self.rate_hz:g} samples/s is not a positive rate")
 
     @property
+    def accelerometer(self) -> DeclaredUnits:
+        """The accelerometer's declared unit, which its results are stated in."""
+        return DeclaredUnits(self.accel, self.zero_counts, self.counts_per_g)
+
+    @property
     def declared(self) -> bool:
         """Whether anything but the station's own units was declared."""
         return self != StreamUnits()
@@ -66,11 +69,7 @@ class StreamUnits:
 
 def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
     """``stream`` as read (its columns in ``units``) in counts, deg/s and seconds."""
-    accel = stream.accel_counts
-    if units.accel == "g":
-        accel = units.zero_counts + accel * units.counts_per_g
-    elif units.accel == "m/s2":
-        accel = units.zero_counts + accel / STANDARD_GRAVITY * units.counts_per_g
+    accel = units.accelerometer.to_counts(stream.accel_counts)
     gyro = np.degrees(stream.gyro_dps) if units.gyro == "rads" else stream.gyro_dps
     if units.rate_hz is not None:
         t = np.arange(len(stream.t), dtype=np.float64) / units.rate_hz
