@@ -45,17 +45,26 @@ def solve_stream(
         stream_thresholds,
     )
     from station.domain.gyro.motion.stream_file import read_stream_file
-    from station.domain.gyro.motion.stream_units import StreamUnits, check_units, convert
+    from station.domain.gyro.motion.stream_units import (
+        StreamUnits,
+        check_declared,
+        check_turns,
+        check_units,
+        convert,
+    )
 
     declared = units or StreamUnits()
     try:
-        stream = convert(read_stream_file(file), declared)
+        raw = read_stream_file(file)
+        check_declared(raw, declared)
+        stream = convert(raw, declared)
         check_units(stream, declared)
         result = calibrate_stream(
             stream,
             model,
             thresholds=stream_thresholds(stream.rate_hz, still_window_s),
             known_turn_deg=known_turn_deg,
+            check_moves=lambda moves, bias: check_turns(moves, bias, declared),
         )
     except CalibrationError as exc:
         where = "" if exc.pose is None else f" (still pose {exc.pose} from 0)"

@@ -150,6 +150,8 @@ class _Moves:
             ],
             dtype=bool,
         )
+        #: What each move that returns to the pose it left sweeps, degrees (its raw rates).
+        self.returned_deg = np.degrees(np.linalg.norm(swept[returns], axis=1))
         self.turns = (
             np.flatnonzero(
                 returns & (np.linalg.norm(swept, axis=1) > np.radians(known_turn_deg) / 2)
@@ -204,6 +206,12 @@ class _Moves:
         return np.asarray(np.degrees(np.arccos(cos)), dtype=np.float64)
 
 
+#: A declared whole turn is found when a returning move's raw rates sweep within this
+#: fraction of its angle (a gyro's scale error is a few per cent; a wrong unit or a turn
+#: of another size is far beyond it).
+TURN_TOLERANCE: Final = 0.25
+
+
 def fit_gyro_matrix(
     moves: list[Move],
     bias_dps: FloatArray,
@@ -223,7 +231,9 @@ def fit_gyro_matrix(
 
     Raises:
         ValueError: ``min_moves`` below 5 (no degree of freedom left).
-        GyroMatrixError: fewer than ``min_moves`` usable moves, or moves whose axes
+        GyroMatrixError: ``known_turn_deg`` given and no returning move sweeps within
+            :data:`TURN_TOLERANCE` of it; fewer
+            than ``min_moves`` usable moves, or moves whose axes
             do not determine all nine elements (condition number above
             :data:`MAX_CONDITION`).
     """
@@ -245,6 +255,17 @@ def fit_gyro_matrix(
             + (f" ({why})" if why else "")
         )
     data = _Moves([moves[i] for i in used], bias, known_turn_deg)
+    if (
+        known_turn_deg is not None
+        and not (np.abs(data.returned_deg / known_turn_deg - 1.0) <= TURN_TOLERANCE).any()
+    ):
+        swept = ", ".join(f"{a:.0f}°" for a in data.returned_deg) or "none"
+        raise GyroMatrixError(
+            f"whole turns of {known_turn_deg:g}° declared, but no move that returns within "
+            f"{SAME_POSE_DEG:g}° to the pose it left sweeps within "
+            f"{TURN_TOLERANCE:.0%} of it (theirs: {swept}): leave out --known-turn-deg, "
+            "or declare the angle the turns sweep"
+        )
     # Imported here: scipy.optimize is a sixth of the station's imports (0.16 s), and
     # only the whole unit's profile fits K (issue 28).
     from scipy.optimize import least_squares

@@ -19,6 +19,7 @@ each sample's sequence number is its time in median steps, so a gap counts again
 window's link loss as it does live.
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import pairwise
 from typing import Final
@@ -42,6 +43,7 @@ from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
 from station.domain.samples import SampleBlock
+from station.domain.sensor import AXES
 from station.domain.stillness import (
     StillnessThresholds,
     StillSegment,
@@ -55,6 +57,10 @@ HOPS_PER_WINDOW: Final = 16
 #: a little into a move can still pass (the start of a minimum-jerk turn is slow), and
 #: the first tenth of a degree of the turn must be integrated, not averaged into the pose.
 EDGE_TRIM: Final = 4
+#: No MEMS gyro's bias reaches this (the MPU-6050's zero-rate output is within ±20 deg/s,
+#: a fifth of this of its smallest range, ±250 deg/s): a still rate beyond it is an output's
+#: zero not taken off, or the wrong units.
+MAX_GYRO_BIAS_DPS: Final = 50.0
 #: Fewest still poses for each accelerometer model (its unknowns).
 MIN_POSES: Final[dict[Model, int]] = {"six": 6, "nine": 9}
 
@@ -211,14 +217,18 @@ def calibrate_stream(
     thresholds: StillnessThresholds | None = None,
     min_moves: int = MIN_MOVES,
     known_turn_deg: float | None = None,
+    check_moves: Callable[[list[Move], FloatArray], None] | None = None,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
 
     ``min_moves`` and ``known_turn_deg`` (the angle of the recording's whole turns, when
     it declares one) go to :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
+    ``check_moves(moves, bias_dps)``, when given, may refuse the moves before K is fitted
+    (:func:`station.domain.gyro.motion.stream_units.check_turns`).
 
     Raises:
-        StreamError: fewer still poses than ``model`` needs.
+        StreamError: fewer still poses than ``model`` needs; a gyro bias beyond
+            :data:`MAX_GYRO_BIAS_DPS`; what ``check_moves`` raises.
         station.domain.calibration.CalibrationError: the poses cannot calibrate the accelerometer.
         GyroMatrixError: the moves cannot determine K.
     """
@@ -252,6 +262,16 @@ def calibrate_stream(
         )
         for i, (a, b) in enumerate(pairwise(stills))
     ]
+    if check_moves is not None:
+        check_moves(moves, bias)
+    beyond = np.flatnonzero(np.abs(bias) > MAX_GYRO_BIAS_DPS)
+    if len(beyond):
+        axis = AXES[int(beyond[0])]
+        raise StreamError(
+            f"stream: gyro {axis} reads {bias[beyond[0]]:+.4g} deg/s at rest, beyond the "
+            f"{MAX_GYRO_BIAS_DPS:g} deg/s a MEMS gyro's bias reaches: an output's zero not "
+            "taken off (32768 of a 16-bit one?), or the gyro units"
+        )
     gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
     gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])

@@ -11,12 +11,25 @@ Table 1), deg/s and seconds. Another IMU's recording declares its own:
 - time ``s`` or ``ms`` (``t → t/1000``), or a sample ``rate`` (``t → i/rate``: the time
   column is then ignored).
 
-The checks (:func:`check_units`) catch the common mistakes in the operator's terms, each
-a :class:`StreamError` naming what the stream reads and the option that fits it: an
-accelerometer that reads about 1 or 9.8 at rest (in g or m/s², not counts); a time
-column whose steps make fewer than :data:`MIN_RATE_HZ` samples a second (milliseconds);
-gyros whose largest rate is below :data:`MAX_RADS_PEAK` while the gravity direction turns
-by more than :data:`TURNED_DEG` (rad/s, not deg/s).
+Every declared quantity is checked against the data; a contradiction is a
+:class:`StreamError`, one line naming what the stream reads and the declaration (or the
+option) it contradicts:
+
+- :func:`check_declared`, on the columns as read: a declared ``rate`` against the time
+  column's own (when that column reads as time at all); an accelerometer declared in g or
+  m/s² against gravity's magnitude at rest (1 g: 1 or 9.81; counts read hundreds);
+- :func:`check_units`, on the stream in the station's units: an accelerometer in counts
+  that reads about 1 or 9.8 at rest (g or m/s²) or whose gravity is no 1 g of the
+  putter's counts; a time column whose steps make fewer than :data:`MIN_RATE_HZ` or more
+  than :data:`MAX_RATE_HZ` samples a second (milliseconds, or seconds declared
+  milliseconds); gyros whose largest rate is below :data:`MAX_RADS_PEAK` while the
+  gravity direction turns by more than :data:`TURNED_DEG` (rad/s, not deg/s);
+- :func:`check_turns`, on the moves between the still poses: how far the gyros turn
+  against how far gravity turns between the two poses. A rotation by θ turns any
+  direction by at most θ, so the angle a move's rates sweep is at least gravity's (a turn
+  about the vertical adds to it); the median over the moves below :data:`MIN_TURN_RATIO`
+  or above :data:`MAX_TURN_RATIO` (deg/s read as rad/s is 57 times too far) contradicts
+  the gyro units.
 """
 
 from dataclasses import dataclass
@@ -24,8 +37,11 @@ from typing import Final, Literal
 
 import numpy as np
 
+from station.domain.arrays import FloatArray
 from station.domain.calibration.units import STANDARD_GRAVITY, AccelUnits, DeclaredUnits
 from station.domain.gyro.motion.errors import StreamError
+from station.domain.gyro.motion.integrate import step_rotvecs
+from station.domain.gyro.motion.moves import Move
 from station.domain.gyro.motion.stream import RecordedStream
 from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
@@ -39,6 +55,24 @@ MIN_RATE_HZ: Final = 5.0
 MAX_RADS_PEAK: Final = 15.0
 #: How far the gravity direction must turn over the recording for the gyro check to apply.
 TURNED_DEG: Final = 45.0
+#: More samples a second than this is no IMU's output (the fastest MEMS gyros give 32 kHz):
+#: a time column in seconds read as milliseconds.
+MAX_RATE_HZ: Final = 40_000.0
+#: A declared rate and the time column's own that differ by more than this fraction
+#: contradict each other.
+RATE_TOLERANCE: Final = 0.1
+#: Gravity at rest reads within this fraction of 1 g in the declared unit.
+GRAVITY_TOLERANCE: Final = 0.3
+#: Readings beyond this many g at rest are ADC counts, whatever was declared.
+COUNTS_AT_REST_G: Final = 20.0
+#: Moves whose gravity directions differ by less than this say nothing of the gyro units.
+MIN_GRAVITY_TURN_DEG: Final = 20.0
+#: The median move turns at least this fraction of gravity's turn (1 in theory; noise and
+#: a move's ends averaged into its poses take a little).
+MIN_TURN_RATIO: Final = 0.5
+#: ... and at most this many times it (a hand's move adds a turn about the vertical, a few
+#: times the tilt at most; deg/s read as rad/s is 57 times).
+MAX_TURN_RATIO: Final = 10.0
 
 
 @dataclass(frozen=True)
@@ -80,6 +114,43 @@ def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
     return RecordedStream(t=t, accel_counts=accel, gyro_dps=gyro)
 
 
+def _near(value: float, expected: float) -> bool:
+    return abs(value / expected - 1.0) <= GRAVITY_TOLERANCE
+
+
+def check_declared(raw: RecordedStream, units: StreamUnits) -> None:
+    """Refuse a stream as read (before :func:`convert`) whose numbers contradict a declared
+    rate or a declared accelerometer unit (module docstring), naming the declaration."""
+    if units.rate_hz is not None:
+        seconds = raw.t / 1000.0 if units.time == "ms" else raw.t
+        own = float(1.0 / np.median(np.diff(seconds)))
+        if MIN_RATE_HZ <= own <= MAX_RATE_HZ and abs(own / units.rate_hz - 1) > RATE_TOLERANCE:
+            raise StreamError(
+                f"stream: --rate {units.rate_hz:g} samples/s, but the time column steps "
+                f"{1.0 / own:.4g} s ({own:.4g} samples/s): give that rate, or leave out --rate"
+            )
+    if units.accel == "counts":
+        return
+    shown = {"g": "g", "m/s2": "m/s²"}[units.accel]
+    reads = float(np.median(np.linalg.norm(raw.accel_counts, axis=1)))
+    per_g = units.accelerometer.per_g
+    if _near(reads, per_g):
+        return
+    said = (
+        f"stream: --accel-units {units.accel}, but the accelerometer reads {reads:.3g} "
+        f"{shown} at rest"
+    )
+    if reads > COUNTS_AT_REST_G * per_g:
+        raise StreamError(
+            f"{said}: ADC counts? take off the sensor's zero, divide by its counts per g "
+            "and use --accel-units g (the putter's own counts: --accel-units counts)"
+        )
+    for other, option, unit in ((1.0, "g", "g"), (STANDARD_GRAVITY, "m/s2", "m/s²")):
+        if option != units.accel and _near(reads, other):
+            raise StreamError(f"{said}: {unit}? use --accel-units {option}")
+    raise StreamError(f"{said}, not 1 g ({per_g:g} {shown}): another unit, or a scale applied?")
+
+
 def check_units(stream: RecordedStream, units: StreamUnits) -> None:
     """Refuse a stream (in the station's units, after :func:`convert`) whose numbers say
     its columns are in other units than ``units`` declares, saying which option fits."""
@@ -90,14 +161,30 @@ def check_units(stream: RecordedStream, units: StreamUnits) -> None:
             f"stream: time steps {1.0 / rate:.4g} s apart ({rate:.4g} samples/s): "
             f"{hint} give the rate with --rate HZ"
         )
+    if units.rate_hz is None and rate > MAX_RATE_HZ:
+        hint = "seconds? use --time-units s, or" if units.time == "ms" else "so"
+        raise StreamError(
+            f"stream: time steps {1.0 / rate:.4g} s apart ({rate:.4g} samples/s): "
+            f"{hint} give the rate with --rate HZ"
+        )
     if units.accel == "counts":
         at_rest = float(np.median(np.linalg.norm(stream.accel_counts, axis=1)))
         for reads, unit, option in ((1.0, "g", "g"), (STANDARD_GRAVITY, "m/s²", "m/s2")):
-            if 0.7 * reads <= at_rest <= 1.3 * reads:
+            if _near(at_rest, reads):
                 raise StreamError(
                     f"stream: accelerometer reads {at_rest:.3g} at rest: {unit}? use "
                     f"--accel-units {option}"
                 )
+        gravity = (
+            float(np.median(np.linalg.norm(stream.accel_counts - units.zero_counts, axis=1)))
+            / units.counts_per_g
+        )
+        if not _near(gravity, 1.0):
+            raise StreamError(
+                f"stream: accelerometer reads {gravity:.3g} g at rest in the putter's counts "
+                f"(zero {units.zero_counts:g}, {units.counts_per_g:g} counts/g): another "
+                "sensor's counts? convert them to g and use --accel-units g"
+            )
     if units.gyro == "dps":
         peak = float(np.max(np.abs(stream.gyro_dps)))
         turned = _turned_deg(stream.accel_counts - units.zero_counts)
@@ -117,3 +204,38 @@ def _turned_deg(accel: np.ndarray) -> float:
     directions = accel[usable] / norms[usable, None]
     cosines = np.clip(directions @ directions[0], -1.0, 1.0)
     return float(np.degrees(np.arccos(cosines.min())))
+
+
+def check_turns(moves: list[Move], bias_dps: FloatArray, units: StreamUnits) -> None:
+    """Refuse gyro units that the moves contradict: the median, over the moves whose
+    gravity directions differ by :data:`MIN_GRAVITY_TURN_DEG` or more, of the angle the
+    gyros (bias off) sweep over the move, Σ|φ_k| (the path's length on SO(3), never less
+    than the net rotation's angle, and unlike it not folded at 180°), against the angle
+    between those directions (module docstring)."""
+    ratios = []
+    for move in moves:
+        tilt = float(
+            np.degrees(np.arccos(np.clip(move.gravity_before @ move.gravity_after, -1, 1)))
+        )
+        if tilt < MIN_GRAVITY_TURN_DEG or move.problem() is not None:
+            continue
+        steps = step_rotvecs(move.t, np.radians(move.rates_dps - bias_dps))
+        ratios.append(float(np.degrees(np.linalg.norm(steps, axis=1).sum())) / tilt)
+    if not ratios:
+        return
+    ratio = float(np.median(ratios))
+    if MIN_TURN_RATIO <= ratio <= MAX_TURN_RATIO:
+        return
+    said = (
+        f"stream: the gyros turn {ratio:.3g} times as far as gravity turns between the "
+        f"poses (median of {len(ratios)} moves)"
+    )
+    if units.gyro == "rads":
+        hint = "deg/s? use --gyro-units dps" if ratio > MAX_TURN_RATIO else "not rad/s?"
+        raise StreamError(f"{said}: --gyro-units rads, but {hint}")
+    hint = (
+        "rad/s? use --gyro-units rads"
+        if ratio < MIN_TURN_RATIO
+        else "not deg/s (raw counts?): convert them to deg/s or rad/s"
+    )
+    raise StreamError(f"{said}: {hint}")
