@@ -91,9 +91,13 @@ def solve_command(
         ),
     ] = False,
     still_window: Annotated[
-        float,
-        typer.Option(help="With --stream: seconds a still window lasts.", min=0.01),
-    ] = STILL_WINDOW_S,
+        float | None,
+        typer.Option(
+            help="With --stream: seconds a still window lasts (default: fitted to the "
+            f"recording's rests, at most {STILL_WINDOW_S:g} s).",
+            min=0.01,
+        ),
+    ] = None,
     accel_units: Annotated[
         AccelUnitsChoice,
         typer.Option(

@@ -30,7 +30,7 @@ def solve_stream(
     model: Model,
     *,
     as_json: bool,
-    still_window_s: float,
+    still_window_s: float | None,
     units: StreamUnits | None = None,
     known_turn_deg: float | None = None,
 ) -> None:
@@ -62,7 +62,9 @@ def solve_stream(
         result = calibrate_stream(
             stream,
             model,
-            thresholds=stream_thresholds(stream.rate_hz, still_window_s),
+            thresholds=None
+            if still_window_s is None
+            else stream_thresholds(stream.rate_hz, still_window_s),
             known_turn_deg=known_turn_deg,
             check_moves=lambda moves, bias: check_turns(moves, bias, declared),
         )
@@ -89,10 +91,11 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
     from station.cli.solve import unit_decimals, unit_headers
 
     cal, gyro = result.accel.calibration, result.gyro
-    se = gyro.standard_errors
+    fitted = f"{len(result.moves)} moves" if gyro is None else f"{len(gyro.used)} moves fitted"
     table = Table(
-        title=f"{file}: {len(result.stills)} still poses at {rate_hz:.4g} samples/s, "
-        f"{cal.model}-parameter accelerometer, {len(gyro.used)} moves"
+        title=f"{file}: {len(result.stills)} still poses (still window "
+        f"{result.still_window_s:.3g} s) at {rate_hz:.4g} samples/s, "
+        f"{cal.model}-parameter accelerometer, {fitted}"
     )
     offset_header, sensitivity_header = unit_headers(units)
     table.add_column("axis")
@@ -111,6 +114,17 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
             _with_u(sensitivity[i], u_sens, i, ds),
             _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
         )
+    accel_line = f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg"
+    if gyro is None:
+        table.caption = "\n".join(
+            [
+                f"gyro K not determined: {result.gyro_not_determined}",
+                f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md)",
+                accel_line,
+            ]
+        )
+        return table
+    se = gyro.standard_errors
     lines = [
         f"gyro K {axis}: "
         + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
@@ -121,11 +135,11 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
         f"± of K: 1-σ standard errors (U = {u.k:g}σ)"
     )
     lines += [
-        f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg",
+        accel_line,
         f"moves: residual rms {gyro.residual_rms_deg:.3f}° with K, "
         f"median {float(np.median(gyro.residual_identity_deg)):.3f}° without (K = I)",
     ]
-    lines += [f"move {u.index} unusable: {u.reason}" for u in gyro.unusable]
+    lines += [f"move {m.index} unusable: {m.reason}" for m in gyro.unusable]
     table.caption = "\n".join(lines)
     return table
 

@@ -95,7 +95,7 @@ def test_text_output_names_k_and_the_residuals(
     path = _write(tmp_path / "log.csv", rows)
     result = call_cli("solve", str(path), "--stream", "--model", "nine")
     assert result.returncode == 0, result.stderr
-    assert "12 still poses at 200 samples/s" in result.stdout
+    assert "12 still poses (still window 0.75 s) at 200 samples/s" in result.stdout
     assert "gyro K z:" in result.stdout
 
 

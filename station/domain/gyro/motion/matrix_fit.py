@@ -38,7 +38,7 @@ from typing import Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.gyro.motion.errors import GyroMatrixError
+from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
 from station.domain.gyro.motion.integrate import integrate_steps, step_rotvecs
 from station.domain.gyro.motion.moves import GAP_FACTOR, Move
 
@@ -231,8 +231,9 @@ def fit_gyro_matrix(
 
     Raises:
         ValueError: ``min_moves`` below 5 (no degree of freedom left).
-        GyroMatrixError: ``known_turn_deg`` given and no returning move sweeps within
-            :data:`TURN_TOLERANCE` of it; fewer
+        StreamError: ``known_turn_deg`` given and no returning move sweeps within
+            :data:`TURN_TOLERANCE` of it (the declaration contradicts the recording).
+        GyroMatrixError: fewer
             than ``min_moves`` usable moves, or moves whose axes
             do not determine all nine elements (condition number above
             :data:`MAX_CONDITION`).
@@ -260,7 +261,7 @@ def fit_gyro_matrix(
         and not (np.abs(data.returned_deg / known_turn_deg - 1.0) <= TURN_TOLERANCE).any()
     ):
         swept = ", ".join(f"{a:.0f}°" for a in data.returned_deg) or "none"
-        raise GyroMatrixError(
+        raise StreamError(
             f"whole turns of {known_turn_deg:g}° declared, but no move that returns within "
             f"{SAME_POSE_DEG:g}° to the pose it left sweeps within "
             f"{TURN_TOLERANCE:.0%} of it (theirs: {swept}): leave out --known-turn-deg, "

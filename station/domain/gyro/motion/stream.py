@@ -4,15 +4,17 @@ The stream is the unit's raw output over the procedure of [Tedaldi2014]_: still 
 in varied orientations, with a hand move between each two. From it:
 
 1. the still poses, by the station's own stillness judge
-   (:func:`station.domain.stillness.still_segments`, windows of ``still_window_s``) with
-   its limits fitted to the recording's own gyro bias and noise
-   (:func:`adapted_thresholds`), each trimmed by a quarter window at both ends;
+   (:func:`station.domain.stillness.still_segments`) on windows fitted to the
+   recording's rests (:func:`chosen_window`) or as given, with its limits fitted to the
+   recording's own gyro bias and noise (:func:`adapted_thresholds`), each trimmed by a
+   quarter window at both ends;
 2. the accelerometer calibration from the poses' mean counts
    (:func:`station.domain.calibration.solve`, [Song2006]_);
 3. the gyro bias, the mean rate over every still sample;
 4. the moves between consecutive poses, with each pose's gravity direction
    ``u = C·(ā − o) / |C·(ā − o)|`` in the calibrated accelerometer's frame;
-5. K from the moves (:func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`).
+5. K from the moves (:func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`),
+   or the reason the moves cannot determine it (the rest is calibrated all the same).
 
 Sample times come from ``t``; the sample rate is the inverse of the median step, and
 each sample's sequence number is its time in median steps, so a gap counts against a
@@ -39,7 +41,7 @@ from station.domain.calibration import (
     solve,
 )
 from station.domain.constants import STILL_WINDOW_S
-from station.domain.gyro.motion.errors import StreamError
+from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
 from station.domain.samples import SampleBlock
@@ -116,9 +118,13 @@ class StreamCalibration:
         gravity: shape (stills, 3), each still's gravity direction, calibrated frame.
         bias_dps: shape (3,), mean gyro rate over all still samples, deg/s.
         moves: the moves between consecutive stills.
-        gyro: K fitted from the moves.
+        gyro: K fitted from the moves, or None when they cannot determine it.
         uncertainty: expanded uncertainties (k = 2) of the accelerometer's coefficients,
             the gyro bias and K (:mod:`station.domain.calibration.uncertainty`).
+        gyro_not_determined: why the moves cannot determine K (too few usable ones, or
+            about too few axes), when they cannot; the accelerometer and the gyro bias
+            are calibrated all the same.
+        still_window_s: the still window the poses were found with, seconds.
     """
 
     stills: list[StillSegment]
@@ -126,14 +132,27 @@ class StreamCalibration:
     gravity: FloatArray
     bias_dps: FloatArray
     moves: list[Move]
-    gyro: GyroMatrixFit
+    gyro: GyroMatrixFit | None
     uncertainty: Uncertainty
+    gyro_not_determined: str | None = None
+    still_window_s: float | None = None
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro``."""
+        """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro`` (K's keys null and
+        ``not_determined`` the reason, when the moves cannot determine K)."""
         payload = self.accel.to_dict()
         payload["poses"] = len(self.stills)
-        payload["gyro"] = self.gyro.to_dict()
+        payload["still_window_s"] = self.still_window_s
+        if self.gyro is not None:
+            payload["gyro"] = self.gyro.to_dict() | {"not_determined": None}
+        else:
+            payload["gyro"] = {
+                "bias_dps": self.bias_dps.tolist(),
+                "scale_matrix": None,
+                "scale_matrix_standard_errors": None,
+                "moves": len(self.moves),
+                "not_determined": self.gyro_not_determined,
+            }
         payload["uncertainty"] = self.uncertainty.to_dict()
         return payload
 
@@ -199,6 +218,52 @@ def adapted_thresholds(stream: RecordedStream, limits: StillnessThresholds) -> S
     )
 
 
+#: The still window the rests are first looked for with, seconds (and never under the
+#: judge's 16 samples).
+PROBE_WINDOW_S: Final = 0.25
+#: The shortest still window chosen, seconds: a hand's rest of a second holds one; a
+#: shorter one lets a rate that swings slowly through zero pass for a rest.
+MIN_WINDOW_S: Final = 0.5
+#: The chosen window is this fraction of the rest it must still fit in: a window starts
+#: every 1/16 of itself, so one of half a rest's length always lies wholly inside it.
+REST_FRACTION: Final = 0.5
+
+
+def chosen_window(stream: RecordedStream, model: Model) -> StillnessThresholds:
+    """The still window fitted to the recording's own rests and noise.
+
+    The rests are first found with a short probe window (:data:`PROBE_WINDOW_S`) under
+    limits fitted to the recording's noise and gyro bias (:func:`adapted_thresholds`).
+    The window is then :data:`REST_FRACTION` of the k-th longest rest, k the poses K
+    needs (``MIN_MOVES + 1``, at least the model's poses; the model's poses when fewer
+    rests are found), between :data:`MIN_WINDOW_S` and :data:`STILL_WINDOW_S` (the
+    shortest when fewer rests than the model's poses are found): the k longest rests
+    keep a whole window each, shorter fragments of a rest that a knock split (what a short
+    window takes for many "poses") fall away, and a recording whose rests last twice the
+    default second or more is judged on the default window.
+    """
+    probe = stream_thresholds(stream.rate_hz, PROBE_WINDOW_S)
+    rests = still_segments(stream.block(), adapted_thresholds(stream, probe))
+    needed = MIN_POSES[model]
+    if len(rests) < needed:
+        return stream_thresholds(stream.rate_hz, MIN_WINDOW_S)
+    lengths = sorted((len(r) for r in rests), reverse=True)
+    kth = lengths[min(max(needed, MIN_MOVES + 1), len(lengths)) - 1]
+    seconds = REST_FRACTION * kth / stream.rate_hz
+    return stream_thresholds(stream.rate_hz, min(max(seconds, MIN_WINDOW_S), STILL_WINDOW_S))
+
+
+def _improves(gyro: GyroMatrixFit) -> bool:
+    """Whether the fitted K brings the moves closer than K = I does (RMS of the same moves).
+
+    Least squares over the moves alone can do no worse than K = I, which it may choose;
+    a K that does worse was pulled off by something else (declared turns the moves
+    contradict) or stopped in a false minimum, and is no calibration.
+    """
+    identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
+    return gyro.residual_rms_deg <= identity
+
+
 def _geometry(model: Model, poses: int) -> GeometryLimits:
     """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
 
@@ -221,8 +286,10 @@ def calibrate_stream(
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
 
-    ``min_moves`` and ``known_turn_deg`` (the angle of the recording's whole turns, when
-    it declares one) go to :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
+    ``thresholds``: the stillness limits and window; None: the window fitted to the
+    recording's rests (:func:`chosen_window`). ``min_moves`` and ``known_turn_deg`` (the
+    angle of the recording's whole turns, when it declares one) go to
+    :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
     ``check_moves(moves, bias_dps)``, when given, may refuse the moves before K is fitted
     (:func:`station.domain.gyro.motion.stream_units.check_turns`).
 
@@ -230,9 +297,8 @@ def calibrate_stream(
         StreamError: fewer still poses than ``model`` needs; a gyro bias beyond
             :data:`MAX_GYRO_BIAS_DPS`; what ``check_moves`` raises.
         station.domain.calibration.CalibrationError: the poses cannot calibrate the accelerometer.
-        GyroMatrixError: the moves cannot determine K.
     """
-    limits = adapted_thresholds(stream, thresholds or stream_thresholds(stream.rate_hz))
+    limits = adapted_thresholds(stream, thresholds or chosen_window(stream, model))
     trim = limits.window_samples // EDGE_TRIM
     stills = [
         StillSegment(s.start + trim, s.stop - trim) for s in still_segments(stream.block(), limits)
@@ -272,13 +338,26 @@ def calibrate_stream(
             f"{MAX_GYRO_BIAS_DPS:g} deg/s a MEMS gyro's bias reaches: an output's zero not "
             "taken off (32768 of a 16-bit one?), or the gyro units"
         )
-    gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
+    gyro: GyroMatrixFit | None = None
+    not_determined = None
+    try:
+        gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
+    except GyroMatrixError as exc:
+        not_determined = str(exc)
+    if gyro is not None and not _improves(gyro):
+        identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
+        not_determined = (
+            f"K fitted to the {len(gyro.used)} moves leaves them {gyro.residual_rms_deg:.3g}° "
+            f"RMS off, more than without it ({identity:.3g}° with K = I): the moves do not "
+            "determine it (poses split from one rest, or declared turns they contradict?)"
+        )
+        gyro = None
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
     gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
     budget = accelerometer_budget(accel, means, spreads, samples)
     uncertainty = Uncertainty.of_budget(budget).with_gyro(
         gyro_bias_uncertainty(gyro_means, gyro_spreads, samples),
-        gyro_matrix_uncertainty(gyro, budget),
+        None if gyro is None else gyro_matrix_uncertainty(gyro, budget),
     )
     return StreamCalibration(
         stills=stills,
@@ -288,4 +367,6 @@ def calibrate_stream(
         moves=moves,
         gyro=gyro,
         uncertainty=uncertainty,
+        gyro_not_determined=not_determined,
+        still_window_s=limits.window_samples / stream.rate_hz,
     )
