@@ -250,6 +250,11 @@ def _table(
         if pose_file.spread is not None
         else ("; the file gives no sx,sy,sz,n: each pose's noise taken as the sensor's")
     )
+    if pose_file.spread is None and units.accel != "counts":
+        from station.domain.calibration.uncertainty import DEFAULT_SAMPLE_NOISE_COUNTS
+
+        assumed = units.residual(DEFAULT_SAMPLE_NOISE_COUNTS)
+        noted += f" (the putter's, {assumed:.3g} {units.accel} a sample)"
     lines.append(
         f"U: expanded uncertainty, k = {uncertainty.k:g} (GUM budget, docs/calibration.md){noted}"
     )

@@ -223,3 +223,18 @@ def test_the_public_ferraris_session_answers_in_m_s2_and_holds_imucals_figures_w
     assert isinstance(u, dict)
     assert (np.abs(_xyz(data["offset"]) - imucal_bias) <= _xyz(u["offset"])).all()
     assert (np.abs(_xyz(data["sensitivity"]) - imucal_scale) <= _xyz(u["sensitivity"])).all()
+
+
+def test_a_pose_file_in_g_without_spreads_says_what_noise_it_assumed(
+    call_cli: CliRunner, tmp_path: Path
+) -> None:
+    path = tmp_path / "poses.csv"
+    means = 0.01 + spread_directions(8) * 1.02
+    np.savetxt(path, means, delimiter=",", header="ax,ay,az", comments="", fmt="%.12g")
+    result = call_cli("solve", str(path), "--accel-units", "g")
+    assert result.returncode == 0, result.stderr
+    assert "offset (g)" in result.stdout
+    assert "each pose's noise taken as the sensor's (the putter's, 0.00244 g a sample)" in (
+        result.stdout.replace("\n", " ")
+    )
+    assert "counts" not in result.stdout
