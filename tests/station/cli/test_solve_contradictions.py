@@ -5,6 +5,7 @@ real process with one line naming the likely cause, exit status 2
 (docs/calibration.md, "Declarations checked against the data").
 """
 
+import gzip
 import re
 from collections.abc import Callable
 from pathlib import Path
@@ -19,12 +20,13 @@ from station.simulator.recording import (
     recorded_stream,
     spread_directions,
 )
-from tests.conftest import CliRunner
+from tests.conftest import REPO_ROOT, CliRunner
 
 HEADER = "t,ax,ay,az,gx,gy,gz"
 PLAN = StreamPlan(rate_hz=200.0, still_s=1.5, move_s=1.0)
 ZERO, PER_G, G0 = 2048.0, 819.2, 9.80665
 NUMBER = r"[-+0-9.e]+"
+FERRARIS = REPO_ROOT / "tests" / "data" / "imucal" / "example_ferraris_session.csv.gz"
 
 
 @pytest.fixture(scope="module")
@@ -171,3 +173,32 @@ def test_the_same_recording_declared_right_is_calibrated(
         "solve", str(path), "--stream", "--model", "nine", "--accel-units", "m/s2", "--rate", "200"
     )
     assert result.returncode == 0, result.stderr
+
+
+def test_a_wrong_rate_over_a_column_of_sample_numbers_is_caught_by_the_moves(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    # imucal's public session numbers its samples (no time to check a rate against):
+    # declared at a tenth of its 102.4 samples/s, its moves sweep ten times too far.
+    with gzip.open(FERRARIS, "rt") as src:
+        header = src.readline().strip().split(",")
+        table = np.loadtxt(src, delimiter=",")
+    columns = ("n_samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+    path = tmp_path / "ferraris.csv"
+    np.savetxt(
+        path,
+        table[:, [header.index(c) for c in columns]],
+        delimiter=",",
+        header=HEADER,
+        comments="",
+        fmt="%.17g",
+    )
+    result = run_cli("solve", str(path), "--stream", "--accel-units", "m/s2", "--rate", "10.24")
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert re.fullmatch(
+        rf"calstation: error: {re.escape(str(path))}: stream: the gyros turn {NUMBER} times "
+        r"as far as gravity turns between the poses \(median of \d+ moves\): not deg/s \(raw "
+        r"counts\?\): convert them to deg/s or rad/s \(or --rate 10\.24 wrong\)",
+        result.stderr.strip(),
+    ), result.stderr

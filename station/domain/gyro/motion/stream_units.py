@@ -226,16 +226,17 @@ def check_turns(moves: list[Move], bias_dps: FloatArray, units: StreamUnits) -> 
     ratio = float(np.median(ratios))
     if MIN_TURN_RATIO <= ratio <= MAX_TURN_RATIO:
         return
+    rate = "" if units.rate_hz is None else f" (or --rate {units.rate_hz:g} wrong)"
     said = (
         f"stream: the gyros turn {ratio:.3g} times as far as gravity turns between the "
         f"poses (median of {len(ratios)} moves)"
     )
     if units.gyro == "rads":
         hint = "deg/s? use --gyro-units dps" if ratio > MAX_TURN_RATIO else "not rad/s?"
-        raise StreamError(f"{said}: --gyro-units rads, but {hint}")
+        raise StreamError(f"{said}: --gyro-units rads, but {hint}{rate}")
     hint = (
         "rad/s? use --gyro-units rads"
         if ratio < MIN_TURN_RATIO
         else "not deg/s (raw counts?): convert them to deg/s or rad/s"
     )
-    raise StreamError(f"{said}: {hint}")
+    raise StreamError(f"{said}: {hint}{rate}")
