@@ -14,7 +14,8 @@ COPY pyproject.toml README.md ./
 COPY station ./station
 COPY api ./api
 COPY db ./db
-RUN pip install --no-cache-dir --no-deps . && useradd --system --no-create-home calstation
+RUN pip install --no-cache-dir --no-deps . && useradd --system --no-create-home calstation \
+    && mkdir /backups && chown calstation /backups
 USER calstation
 EXPOSE 8000
 CMD ["calstation", "serve", "--host", "0.0.0.0", "--port", "8000", "--workers", "4"]
