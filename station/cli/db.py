@@ -3,7 +3,7 @@ backup|restore FILE``, ``calstation keys
 create|revoke --station ID|--lab ID|--quality ID`` and ``calstation review SERIAL``: the
 results database by hand."""
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 from __future__ import annotations
