@@ -1,6 +1,7 @@
 """docker-compose.yml: the shape the plant deploys, read as YAML (and checked by
 ``docker compose config`` where Docker Compose is installed)."""
 
+import json
 import os
 import re
 import shlex
@@ -252,7 +253,7 @@ def test_prometheus_answers_through_the_proxy_only_with_a_password(
     assert re.search(r"location = /metrics \{\s*return 404;", api)
 
 
-def test_the_api_refuses_a_body_too_large_itself_and_streams_events(
+def test_the_proxy_refuses_a_body_too_large_as_the_api_does_and_streams_events(
     services: dict[str, Any], proxy: tuple[dict[str, Any], str]
 ) -> None:
     _, conf = proxy
@@ -260,7 +261,13 @@ def test_the_api_refuses_a_body_too_large_itself_and_streams_events(
     size = re.search(r"client_max_body_size (\d+)m;", api)
     assert size is not None
     max_body = int(services["api"]["environment"]["CALSTATION_MAX_BODY_BYTES"])
-    assert int(size[1]) * 1024 * 1024 > max_body
+    assert int(size[1]) * 1024 * 1024 == max_body
+    assert "error_page 413 = @too_large;" in api
+    answer = re.search(r"location @too_large \{.*?return 413 '([^']*)';", api, re.S)
+    assert answer is not None
+    assert answer[1] == json.dumps(
+        {"detail": f"request body larger than {max_body} bytes"}, separators=(",", ":")
+    )
     events = re.search(r"location /api/v1/events \{(.*?)\}", api, re.S)
     assert events is not None
     assert "proxy_buffering off;" in events[1]
