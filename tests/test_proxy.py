@@ -20,7 +20,9 @@ import httpx
 import pytest
 
 from db import RunRepository, open_database
+from station.results.storage import HttpStore, StoreUnavailableError
 from tests.conftest import REPO_ROOT
+from tests.db.records import make_record
 from tests.servers import HUNG_SERVER_S, free_port, serving
 
 CONF = REPO_ROOT / "deploy" / "proxy" / "nginx.conf"
@@ -36,6 +38,7 @@ class Proxy:
     prometheus: str
     direct_api: str
     tls: ssl.SSLContext
+    certificate: Path
     key: str
 
 
@@ -134,7 +137,8 @@ def proxy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Proxy]:
             [nginx, "-p", str(root), "-e", str(root / "error.log"), "-c", str(root / "nginx.conf")],
             stderr=subprocess.DEVNULL,
         )
-        tls = ssl.create_default_context(cafile=root / "secrets" / "calstation.crt")
+        certificate = root / "secrets" / "calstation.crt"
+        tls = ssl.create_default_context(cafile=certificate)
         api = f"https://localhost:{api_door}"
         try:
             deadline = time.monotonic() + HUNG_SERVER_S
@@ -142,7 +146,9 @@ def proxy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Proxy]:
                 assert server.poll() is None, (root / "error.log").read_text()
                 assert time.monotonic() < deadline, "nginx never answered"
                 time.sleep(0.05)
-            yield Proxy(api, f"https://localhost:{prometheus_door}", direct_api, tls, key)
+            yield Proxy(
+                api, f"https://localhost:{prometheus_door}", direct_api, tls, certificate, key
+            )
         finally:
             server.terminate()
             server.wait(timeout=30)
@@ -202,3 +208,23 @@ def test_no_door_speaks_plain_http(proxy: Proxy) -> None:
     for door in (proxy.api, proxy.prometheus):
         plain = httpx.get(door.replace("https://", "http://") + "/healthz")
         assert plain.status_code == 400
+
+
+def test_a_station_that_trusts_the_certificate_stores_its_runs_through_the_proxy(
+    proxy: Proxy, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    record = make_record(serial="PT-000042")
+    # A station that does not know the plant's certificate refuses to talk to it.
+    monkeypatch.delenv("SSL_CERT_FILE", raising=False)
+    untrusting = HttpStore(proxy.api, proxy.key, station_id=record.station_id)
+    with pytest.raises(StoreUnavailableError, match="CERTIFICATE_VERIFY_FAILED"):
+        untrusting.submit(record)
+    untrusting.close()
+    # Told where it is (SSL_CERT_FILE in the station's environment), it stores the run.
+    monkeypatch.setenv("SSL_CERT_FILE", str(proxy.certificate))
+    store = HttpStore(proxy.api, proxy.key, station_id=record.station_id)
+    try:
+        assert store.submit(record).created
+        assert [run.run_id for run in store.history("PT-000042")] == [record.run_id]
+    finally:
+        store.close()
