@@ -4,13 +4,33 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-nightly lint format bench clean
+.PHONY: demo test test-nightly lint format bench lock lock-upgrade lock-check clean
 
-$(STAMP): pyproject.toml
+# The libraries come from requirements-dev.lock, each at its pinned version and checked
+# against its hashes (pip refuses any library the lock does not pin); calstation itself
+# is then installed on top of them, without dependencies of its own choosing.
+$(STAMP): pyproject.toml requirements-dev.lock
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
+	$(PY) -m pip install --quiet --require-hashes -r requirements-dev.lock
+	$(PY) -m pip install --quiet --no-deps -e .
 	touch $(STAMP)
+
+# The lock files: every library of every platform's install, pinned with its hashes, for
+# Python 3.11 and later (uv pip compile --universal). `make lock` keeps every pin that
+# still fits pyproject.toml; `make lock-upgrade` takes the newest that fit.
+LOCK := $(VENV)/bin/uv pip compile pyproject.toml --universal --python-version 3.11 \
+	--generate-hashes --custom-compile-command 'make lock' --quiet $(LOCK_FLAGS)
+
+lock: $(STAMP)  ## regenerate requirements.lock (the image) and requirements-dev.lock (.venv, CI)
+	$(LOCK) -o requirements.lock
+	$(LOCK) --extra dev -o requirements-dev.lock
+
+lock-upgrade:  ## regenerate the lock files with the newest versions pyproject.toml allows
+	$(MAKE) lock LOCK_FLAGS=--upgrade
+
+lock-check: $(STAMP)  ## the lock files pin what pyproject.toml asks for (CI runs it first)
+	$(PY) -m pytest -q -n 0 -p no:cacheprovider tests/test_lock.py
 
 demo: $(STAMP)  ## the main job on the embedded defaults
 	$(VENV)/bin/calstation demo

@@ -1,5 +1,5 @@
 """The accelerometer uncertainty budget's CPU per call, on units as the station sees them
-(issue 28).
+(a budget is due at the end of every unit).
 
     python benchmarks/bench_budget_cpu.py                       # 20 units × 25 calls
     python benchmarks/bench_budget_cpu.py --units 5 --repeats 100

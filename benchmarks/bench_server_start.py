@@ -10,7 +10,7 @@ the first 200 of ``GET /healthz``, then to the first 200 of ``GET /api/v1/report
 (the report of the runs stored, a hundred by default). The baseline is the bare
 ``python -c "import fastapi, sqlalchemy"`` (a server cannot start before its
 libraries load), timed the same way on the same machine, start by start, so the
-ratios hold on a busy machine too. Targets (issue 28): ``/healthz`` within 3× the
+ratios hold on a busy machine too. Targets: ``/healthz`` within 3× the
 baseline, and the first report, asked once ``/healthz`` answers, within 2× the baseline
 of its own. Prints a Markdown table.
 """

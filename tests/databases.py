@@ -56,13 +56,12 @@ def postgresql_url() -> Iterator[str]:
         admin.dispose()
 
 
-@pytest.fixture
-def postgres_database_url() -> Iterator[str]:
-    """A URL of a PostgreSQL database of its own, created empty and dropped after the
-    test: one whose connections a test may refuse (``ALLOW_CONNECTIONS false``) without
-    touching any other test's database."""
+@contextmanager
+def own_postgres_database(prefix: str = "calstation_own") -> Iterator[str]:
+    """The URL of a PostgreSQL database of its own, created empty and dropped (its
+    connections ended) when the block ends."""
     server_url = postgres_server_url()
-    name = f"calstation_own_{os.getpid()}_{secrets.token_hex(4)}"
+    name = f"{prefix}_{os.getpid()}_{secrets.token_hex(4)}"
     admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
     with admin.connect() as connection:
         connection.execute(text(f'CREATE DATABASE "{name}"'))
@@ -72,6 +71,15 @@ def postgres_database_url() -> Iterator[str]:
         with admin.connect() as connection:
             connection.execute(text(f'DROP DATABASE "{name}" WITH (FORCE)'))
         admin.dispose()
+
+
+@pytest.fixture
+def postgres_database_url() -> Iterator[str]:
+    """A URL of a PostgreSQL database of its own, created empty and dropped after the
+    test: one whose connections a test may refuse (``ALLOW_CONNECTIONS false``) without
+    touching any other test's database."""
+    with own_postgres_database() as url:
+        yield url
 
 
 @pytest.fixture(scope="session")

@@ -15,7 +15,7 @@ import sys
 
 from station.cli.main import main
 
-#: What a one-line answer must not wait for (issue 28): the numerics, the database and
+#: What a one-line answer must not wait for: the numerics, the database and
 #: web layers, the station's loop and the report renderer.
 HEAVY = ("numpy", "scipy", "matplotlib", "sqlalchemy", "fastapi", "station.loop", "station.report")
 

@@ -1,7 +1,7 @@
 """The line's figures recomputed from its raw runs: a second implementation, for tests.
 
 Written from the definitions of ``docs/report.md`` ("What the numbers mean"),
-``docs/api.md`` (a unit's answer) and issue 42, never from the server's report code:
+``docs/api.md`` (a unit's answer), never from the server's report code:
 
 - an **attempt** is a production run the operator did not abort; an abort is a run,
   never an attempt;

@@ -75,6 +75,8 @@ REFUSED = {
     "gyro simulate-centrifuge": ("--seed", "x"),
     "db upgrade": ("--no-such-option",),
     "db rebuild-report": ("--no-such-option",),
+    "db backup": (),
+    "db restore": ("line.backup", "--replace", "x"),
     "keys create": ("--station", "not a name"),
     "keys revoke": ("--lab", "not/a/name"),
     "outbox list": ("--no-such-option",),

@@ -1,8 +1,9 @@
-"""``calstation db upgrade``, ``calstation db rebuild-report``, ``calstation keys
+"""``calstation db upgrade``, ``calstation db rebuild-report``, ``calstation db
+backup|restore FILE``, ``calstation keys
 create|revoke --station ID|--lab ID|--quality ID`` and ``calstation review SERIAL``: the
 results database by hand."""
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ if TYPE_CHECKING:
     from db.repository import KeyScope
 
 db_app = typer.Typer(
-    help="The results database: schema migrations, the report's roll-ups.", no_args_is_help=True
+    help="The results database: schema migrations, the report's roll-ups, backups.",
+    no_args_is_help=True,
 )
 keys_app = typer.Typer(
     help="API keys of the stations (runs), labs (gyro fits) and quality engineers (reviews "
@@ -94,6 +96,46 @@ def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     url = database_url or DatabaseSettings.from_environment().url()
     revision = upgrade_database(url)
     out.print(f"database {_shown(url)} at schema revision {revision}")
+
+
+BackupFile = Annotated[
+    Path,
+    typer.Argument(
+        metavar="FILE",
+        help="The backup: a pg_dump archive (PostgreSQL) or a SQLite database file.",
+    ),
+]
+
+
+@db_app.command("backup")
+def db_backup(file: BackupFile, database_url: DatabaseUrlOption = None) -> None:
+    """Back up the database to FILE while it serves: pg_dump's custom format on
+    PostgreSQL, SQLite's online backup on SQLite. FILE must not exist yet."""
+    from db import DatabaseSettings
+    from db.backup import backup_database
+
+    url = database_url or DatabaseSettings.from_environment().url()
+    backup_database(url, file)
+    out.print(f"database {_shown(url)} backed up to {file} ({file.stat().st_size} bytes)")
+
+
+@db_app.command("restore")
+def db_restore(
+    file: BackupFile,
+    replace: Annotated[
+        bool,
+        typer.Option("--replace", help="Replace what the database holds (default: refuse)."),
+    ] = False,
+    database_url: DatabaseUrlOption = None,
+) -> None:
+    """Restore the backup FILE into an empty database (``calstation db backup``); then
+    ``calstation db upgrade`` brings a backup of an older schema up to date."""
+    from db import DatabaseSettings
+    from db.backup import restore_database
+
+    url = database_url or DatabaseSettings.from_environment().url()
+    restore_database(url, file, replace=replace)
+    out.print(f"database {_shown(url)} restored from {file}")
 
 
 def _station_id(value: str) -> str:

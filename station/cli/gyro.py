@@ -4,7 +4,7 @@ matplotlib is imported inside ``fit --plot`` only, so that ``fit`` without a plo
 not pay for it either.
 """
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 from __future__ import annotations

@@ -73,7 +73,7 @@ COMMANDS: dict[str, Command] = {
     "db": Command(
         "station.cli.db",
         "db_app",
-        "The results database: schema migrations, the report's roll-ups.",
+        "The results database: schema migrations, the report's roll-ups, backups.",
     ),
     "keys": Command(
         "station.cli.db",

@@ -1,6 +1,6 @@
 """``calstation outbox``: what waits to be stored, what was set aside and why; resend it."""
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 from __future__ import annotations

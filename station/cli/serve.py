@@ -1,6 +1,6 @@
 """``calstation serve``: the results server (REST API) under uvicorn."""
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 import copy

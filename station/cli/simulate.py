@@ -5,7 +5,7 @@ input (see :mod:`station.simulator.control`) and answers each with one line. Whe
 standard input ends it keeps serving until interrupted or terminated.
 """
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 import signal

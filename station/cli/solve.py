@@ -1,6 +1,6 @@
 """``calstation solve FILE``: calibrate from a file of still-pose means."""
 
-# Light to import (issue 28): --help and refused arguments read only the signatures below;
+# Light to import: --help and refused arguments read only the signatures below;
 # each command imports its work (numpy, SQLAlchemy, the loop, ...) when it runs.
 
 from __future__ import annotations

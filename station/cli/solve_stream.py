@@ -5,7 +5,7 @@ Still poses, accelerometer, gyro bias and gyro matrix K ([Tedaldi2014]_) by
 :mod:`station.domain.gyro.motion.stream_file`.
 """
 
-# Light to import (issue 28), as the command modules are: its work is imported when it runs.
+# Light to import, as the command modules are: its work is imported when it runs.
 
 from __future__ import annotations
 

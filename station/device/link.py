@@ -8,7 +8,7 @@ samples' sequence numbers into the two sample buffers and queues every other fra
 as a reply for the command waiting on it. When the thread ends,
 :meth:`connection_lost` records why, so that nobody waits for a dead link.
 
-**One wake for the station's pass and the port** (issue 28). At the putter's own rate
+**One wake for the station's pass and the port.** At the putter's own rate
 the reader rests after each chunk, and the station's loop reads what waits at the port
 itself when it drains the samples (:meth:`PutterLink.read_now`, from
 :meth:`station.device.driver.PutterDriver.drain`): the pass that looks at the samples

@@ -5,7 +5,7 @@ noise of standard deviation σ (ADC counts), so the window's mean over ``n`` sam
 the standard error ``σ/√n``. The calibration turns the pose means' errors into offset and
 sensitivity errors; for the station's six poses spread evenly over the sphere, the
 Cramér–Rao bound (unknown gravity directions as nuisance parameters), which the paper's
-eq. 10 attains ([Song2006]_; ``docs/benchmarks.md``, *calibration* (a): √CRB 0.0897
+eq. 10 attains ([Song2006]_; ``docs/benchmarks.md``, *calibration*: √CRB 0.0897
 counts of offset and 0.1653 counts/g of sensitivity at σ = 0.1 counts per pose mean), is
 
     σ_offset = 0.897 · σ_mean        σ_sensitivity = 1.653 · σ_mean
@@ -36,7 +36,7 @@ from station.domain.arrays import FloatArray
 from station.domain.limits import Bounds, LimitsProfile
 
 #: √CRB per unit of pose-mean standard error, six poses spread over the sphere
-#: (``docs/benchmarks.md``, calibration (a): 0.0897 and 0.1653 at σ = 0.1 counts).
+#: (``docs/benchmarks.md``, calibration: 0.0897 and 0.1653 at σ = 0.1 counts).
 CRB_OFFSET_PER_SIGMA: Final = 0.897
 CRB_SENSITIVITY_PER_SIGMA: Final = 1.653
 

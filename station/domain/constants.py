@@ -3,7 +3,7 @@
 Each belongs to a module of a heavier package or layer (named beside it), which imports
 it from here: one definition. They live here, at the bottom of the layers and beside
 nothing that imports numpy or scipy, so that ``calstation CMD --help`` and a refused
-argument answer without loading them (issue 28, ``tests/test_cli_entry.py``).
+argument answer without loading them (``tests/test_cli_entry.py``).
 """
 
 from typing import Annotated, Final, Literal, get_args

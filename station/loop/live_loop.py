@@ -33,8 +33,8 @@ from station.results.storage import RunStore
 #: four redraws a second of rich's own ``Live`` default, within the live view's window
 #: (:data:`station.run.capture.LIVE_SAMPLES`, 0.256 s at 500 samples/s), so that a pass
 #: on time judges one window. A key ends the wait at once (:meth:`KeySource.wait`), so
-#: typing is echoed without delay. Every pass more burns the station's CPU for nothing
-#: (issue 28): each wake costs about half a millisecond whatever it carries, and the pass
+#: typing is echoed without delay. Every pass more burns the station's CPU for nothing:
+#: each wake costs about half a millisecond whatever it carries, and the pass
 #: reads the putter's port itself (:meth:`station.device.link.PutterLink.read_now`). A
 #: capture's window is judged on its samples' sequence numbers, so its device time does
 #: not depend on when a pass comes.

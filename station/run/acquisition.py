@@ -112,7 +112,7 @@ class StillnessDetector:
             start = max(self._start, end - ceiling)
             if end + hop <= self.samples_seen:  # a later window is judged in this feed too
                 # Only the latest verdict is kept (:attr:`last`): a window the judge would
-                # certainly refuse for its spread need not be judged (issue 28: a quarter
+                # certainly refuse for its spread need not be judged (a quarter
                 # second's feed holds four windows, each a thousand samples judged whole).
                 screen = screen or SpreadScreen(
                     self._held.accel, self.limits.accel_std_max_counts, self.limits.sensor.adc_max

@@ -1,7 +1,7 @@
 """Every page over runs a station stored through its own database at the ends of the
 calendar (the years 1 and 9999) and on an ordinary day, on a real server in the plant
-zones at the extremes and with shift plans (issue 42: 500s from day + 1, plant_date and
-the shifts): the report in each format, its trend links to the first and last days and
+zones at the extremes and with shift plans (none of them a 500 from day + 1,
+plant_date or the shifts): the report in each format, its trend links to the first and last days and
 shifts, the split, dashboard, alerts, station, unit and certificate pages. A submitted
 moment beyond the calendar is a 422 naming its field."""
 

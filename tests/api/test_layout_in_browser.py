@@ -1,4 +1,4 @@
-"""The pages keep to the window (issue 27): wide tables and charts scroll in their own
+"""The pages keep to the window: wide tables and charts scroll in their own
 box, in headless Chromium: a unit page at 1,400 px, the dashboard at 420 px."""
 
 from datetime import UTC, datetime, timedelta

@@ -211,7 +211,7 @@ def test_the_server_verifies_a_run_in_its_own_products_counts(
 def test_a_d16_station_stores_its_runs_through_the_server(
     run_cli: CliRunner, tmp_path: Path, live_url: str, station_key: str, client: httpx.Client
 ) -> None:
-    """issue 42's reproduction: ``demo --config`` of a station storing through the server,
+    """``demo --config`` of a station storing through the server,
     two DIXX-D16 putters: both runs stored, none set aside as refused."""
     config = tmp_path / "station.toml"
     config.write_text(f'server_url = "{live_url}"\napi_key = "{station_key}"\n')

@@ -1,4 +1,4 @@
-"""Holds get closed on the pages (issue 27): a held unit's page lists its reviews and
+"""Holds get closed on the pages: a held unit's page lists its reviews and
 has a form to review it with a quality key; a refused review answers a page in one line;
 the failure report lists the reviews; the report counts the open holds."""
 

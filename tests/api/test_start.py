@@ -2,7 +2,7 @@
 
 Each library below is imported where it is first used (the pages, the alert loop's
 posts, a migration, a redundant fit, a gyro plot): importing one with the server again
-would add its load to every start (docs/benchmarks.md, "Server start (issue 28)").
+would add its load to every start (docs/benchmarks.md, "Server start").
 ``calstation serve`` holds the garbage collector off while the server loads; the
 application's start-up turns it back on.
 """

@@ -1,4 +1,4 @@
-"""The quality engineer's pages agree with themselves (issue 27): one time zone per page,
+"""The quality engineer's pages agree with themselves: one time zone per page,
 a filtered report that counts the units it lists, failure reasons as stored, forms that
 answer pages, definitions that hold across pages; on a server in the plant's zone
 (Europe/Berlin), on both backends."""

@@ -652,7 +652,7 @@ def test_a_first_run_aborted_and_retests_elsewhere_count_where_each_attempt_ran(
     line: tuple[int, ...],
     stations: dict[str, tuple[int, ...]],
 ) -> None:
-    """Issue 42: U1's aborted first run is no attempt, so its pass at st2 is its first
+    """U1's aborted first run is no attempt, so its pass at st2 is its first
     (first-pass, no retest); each retest is its own station's, never another's cohort;
     U4, aborted only, is no unit; a window holding only later attempts counts retests."""
     repository = RunRepository(session)

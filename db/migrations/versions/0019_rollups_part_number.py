@@ -2,8 +2,8 @@
 
 The end-of-line report has a row per product beside the station rows. With the part
 number in ``report_counts``, ``report_failures`` and ``report_parameters`` those rows add
-up roll-ups as the station rows do, instead of scanning every run in range (issue 26,
-docs/benchmarks.md "The pages at 1,000,000 runs"). A primary key cannot change in place
+up roll-ups as the station rows do, instead of scanning every run in range
+(docs/benchmarks.md "The pages at 1,000,000 runs"). A primary key cannot change in place
 on SQLite, and the roll-ups are derived data: the three tables are created anew, empty,
 and ``run_facts`` is emptied, so that once the database reaches the head the facts and
 roll-ups of the runs already stored are written from ``runs`` by the code of that day

@@ -2,7 +2,7 @@
 
 A unit's first and latest run are now its first and latest *attempt* (a run the operator
 did not abort), and each attempt that is not its unit's first is a retest at its own
-station (issue 42: retests per station were a station's runs less the cohort's units).
+station (not a station's runs less the cohort's units, which counted other stations' units).
 ``run_facts`` gains ``attempt`` and loses ``station_first`` and ``station_final_pass``
 (counts per station of a unit's first run there, which no figure read); ``report_counts``
 gains ``retests`` and ``aborts`` and loses ``listed``, ``units``, ``first_pass`` and

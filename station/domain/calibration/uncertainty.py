@@ -540,7 +540,7 @@ def _temperature_term(gain: FloatArray, bound: FloatArray) -> FloatArray:
 @cache
 def _tempco_draws() -> FloatArray:
     """The temperature term's :data:`TEMPCO_DRAWS` seeded draws (K, 6), rectangular in ±1;
-    drawn once and kept read-only: a budget is due at the end of every unit (issue 28)."""
+    drawn once and kept read-only: a budget is due at the end of every unit."""
     draws = np.random.default_rng(20080903).uniform(-1.0, 1.0, (TEMPCO_DRAWS, 6))
     draws.flags.writeable = False
     return draws
@@ -617,7 +617,7 @@ def _refit(theta: FloatArray, poses: FloatArray) -> FloatArray:
     """Six-parameter Gauss–Newton fits (K, 6) of K pose sets (K, N, 3), from θ.
 
     Each step solves the normal equations JᵀJ·δ = Jᵀr. A budget is due at the end of
-    every unit (issue 28), so a set whose JᵀJ is provably well conditioned
+    every unit, so a set whose JᵀJ is provably well conditioned
     (:func:`_well_conditioned`) is solved by LU (``np.linalg.solve``): the same step as
     the pseudo-inverse's to rounding, for a tenth of its CPU; any other set keeps the
     pseudo-inverse's least-norm step, which a singular set needs.
@@ -661,7 +661,7 @@ def _well_conditioned(
 def _couplings(bound: float) -> FloatArray:
     """:data:`MODEL_DRAWS` couplings I + M (K, 3, 3), M's off-diagonal rectangular ±bound;
     the same draws every time (a budget is a function of its inputs). Drawn once per
-    bound and kept read-only: a budget is due at the end of every unit (issue 28)."""
+    bound and kept read-only: a budget is due at the end of every unit."""
     rng = np.random.default_rng(20080901)
     m = rng.uniform(-bound, bound, (MODEL_DRAWS, 3, 3))
     m[:, np.arange(3), np.arange(3)] = 0.0

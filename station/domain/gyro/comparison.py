@@ -116,7 +116,7 @@ def _f_test(full: NestedModel, reduced: NestedModel, n: int) -> FTest:
     f = ((reduced.rss - full.rss) / q) / (max(full.rss, _TINY) / df_den)
     f = float(min(max(f, 0.0), _F_MAX))
     # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
-    # imports this module with the run record, rarely needs it (issue 28's start-up).
+    # imports this module with the run record, rarely needs it (the server's start-up).
     from scipy import special
 
     return FTest(

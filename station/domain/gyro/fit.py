@@ -99,7 +99,7 @@ def _sense_axis(
     differ from zero on their own, or else the one with the largest |N_ij|/σ.
     """
     # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
-    # imports this module with the run record, rarely needs it (issue 28's start-up).
+    # imports this module with the run record, rarely needs it (the server's start-up).
     from scipy import special
 
     if all(v is None for v in values):

@@ -100,7 +100,7 @@ def summarize_still_poses(
     With ``bias_limit_dps`` each gyro's |bias| is checked against it.
     """
     # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
-    # imports this module with the run record, rarely needs it (issue 28's start-up).
+    # imports this module with the run record, rarely needs it (the server's start-up).
     from scipy import special
 
     if bias_limit_dps is not None and not bias_limit_dps > 0:

@@ -97,7 +97,7 @@ def test_resend_with_bad_input_is_one_line_and_exit_2(
 def test_a_renamed_stations_queued_run_is_set_aside_and_sent_with_its_own_key(
     call_cli: CliRunner, tmp_path: Path, live_url: str, database: Database, station_key: str
 ) -> None:
-    """Issue 24 #3: a run queued under the station's former name used to get 403 (read as
+    """A run queued under the station's former name used to get 403 (read as
     a bad key, "fix api_key") and stop every run behind it, forever."""
     outbox = Outbox(tmp_path / "data" / "outbox")
     former = make_record(serial="PT000010", station_id="line0-old")

@@ -1,6 +1,6 @@
 """``calstation report`` over runs a station stored through its own database at the ends
 of the calendar (the years 1 and 9999): every format, in any plant zone and shift plan,
-on both backends (issue 42: tracebacks from day + 1, plant_date and the shifts)."""
+on both backends, without a traceback from day + 1, plant_date or the shifts."""
 
 import json
 import os

@@ -1,5 +1,5 @@
 """The spread screen: a window it refuses the judge refuses for its spread, and a window
-clearly spread too far it refuses (issue 28: the live detector's cheap screen)."""
+clearly spread too far it refuses (the live detector's cheap screen)."""
 
 import numpy as np
 from hypothesis import given, settings

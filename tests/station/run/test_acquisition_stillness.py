@@ -187,7 +187,7 @@ def test_big_feeds_accept_the_very_window_hop_sized_feeds_accept(
     seed: int, start: str, target: str, duration: float, chunk: int
 ) -> None:
     """A feed holding several windows judges only its latest whole and screens the earlier
-    ones (issue 28): the pose accepted, where and on which samples, is the one a feed per
+    ones: the pose accepted, where and on which samples, is the one a feed per
     hop, which judges every window, accepts; and so is the latest verdict at every feed."""
     unit = VirtualPutter(seed=seed, start_pose=start)
     unit.move_to(target, duration, at_s=0.5)

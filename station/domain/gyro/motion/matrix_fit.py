@@ -268,7 +268,7 @@ def fit_gyro_matrix(
             "or declare the angle the turns sweep"
         )
     # Imported here: scipy.optimize is a sixth of the station's imports (0.16 s), and
-    # only the whole unit's profile fits K (issue 28).
+    # only the whole unit's profile fits K.
     from scipy.optimize import least_squares
 
     result = least_squares(data.residual, np.eye(3).ravel(), method="lm", x_scale=1.0)

@@ -64,7 +64,7 @@ def test_noisy_stream_gives_k_within_its_standard_errors(seed: int) -> None:
 
 
 def test_six_parameter_accelerometer_skews_k_on_cross_axis_units() -> None:
-    """2 % cross-axis: the six-parameter gravity directions leave K far off (issue #17)."""
+    """2 % cross-axis: the six-parameter gravity directions leave K far off."""
     imu, stream = _unit_and_stream(5, PLAN)
     six = calibrate_stream(stream, "six")  # type: ignore[arg-type]
     nine = calibrate_stream(stream, "nine")  # type: ignore[arg-type]
