@@ -119,6 +119,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     add_redoc(app)
     app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
+    app.state.laboratory = settings.laboratory()
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)
     app.state.export_page_size = settings.export_page_size
     app.state.alert_loop = None

@@ -77,6 +77,7 @@ REFUSED = {
     "db rebuild-report": ("--no-such-option",),
     "keys create": ("--station", "not a name"),
     "keys revoke": ("--lab", "not/a/name"),
+    "certificate issue": ("--no-such-option",),
     "outbox list": ("--no-such-option",),
     "outbox show": (),
     "outbox resend": ("--all", "--no-such-option"),
