@@ -8,9 +8,11 @@ from datetime import time
 
 from db.limits_profiles import stored_profiles
 from db.repository import RunRepository
+from db.signatures import signature_of
 from station.domain.limits import LimitsProfile
 from station.domain.quality.shifts import shift_start
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.signature import Signature
 from station.domain.unit_state import counts
 
 
@@ -18,7 +20,8 @@ from station.domain.unit_state import counts
 class CertificateInputs:
     """The unit's latest run that counts, the unit's runs before it, the run's limits
     profile as stored (None: never sent), the unit's latest gyro fit, that shift's
-    golden-unit check at the run's station, and the unit's reviews (a failed run's)."""
+    golden-unit check at the run's station, the unit's reviews (a failed run's) and the
+    certificate's signature."""
 
     run: StoredRun
     earlier: Sequence[RunSummary]
@@ -26,6 +29,8 @@ class CertificateInputs:
     gyro_fit: GyroFitRecord | None
     golden: RunSummary | None
     reviews: Sequence[HoldReview]
+    #: The signatory's signature of the certificate; None: not signed.
+    signature: Signature | None
 
 
 def certificate_run(
@@ -61,4 +66,5 @@ def certificate_inputs(
         gyro_fit=repository.latest_gyro_fit(serial),
         golden=repository.latest_golden(run.station_id, since, run.started_at),
         reviews=repository.reviews(serial) if run.verdict == "fail" else [],
+        signature=signature_of(repository.session, run.run_id),
     )

@@ -254,6 +254,33 @@ class StationKey(Base):
     revoked_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
 
 
+class Signatory(Base):
+    """An authorised signatory of certificates and the public half of their Ed25519 key
+    (hex; the private half stays in the file they keep, :mod:`station.domain.signature`)."""
+
+    __tablename__ = "signatories"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    name: Mapped[str] = mapped_column(String(NAME), unique=True)
+    public_key: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[datetime] = mapped_column(UtcDateTime())
+
+
+class CertificateSignature(Base):
+    """A signatory's signature of a run's certificate
+    (:class:`station.domain.signature.Signature`): one per run."""
+
+    __tablename__ = "certificate_signatures"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid(), unique=True)
+    certificate: Mapped[str] = mapped_column(String(NAME))
+    record_sha256: Mapped[str] = mapped_column(String(64))
+    signatory: Mapped[str] = mapped_column(String(NAME))
+    signed_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    signature: Mapped[str] = mapped_column(String(128))
+
+
 class RunFacts(Base):
     """What the report derives from one run and the runs around it (:mod:`db.rollups`).
 

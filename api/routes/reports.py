@@ -546,6 +546,7 @@ async def get_certificate(
         found.reviews,
         language,
         laboratory,
+        found.signature,
     )
     return HTMLResponse(page)
 

@@ -84,7 +84,7 @@ COMMANDS: dict[str, Command] = {
     "certificate": Command(
         "station.cli.certificate",
         "certificate_app",
-        "Calibration certificates: issue a unit's from the results database.",
+        "Calibration certificates: issue, sign and verify; authorised signatories' keys.",
     ),
     "outbox": Command(
         "station.cli.outbox",

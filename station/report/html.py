@@ -44,6 +44,7 @@ from station.domain.quality.station_health import (
     StationHealth,
 )
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.signature import Signature
 from station.domain.unit_state import UnitCalibration, deciding_review
 from station.report import formatting, svg
 from station.report.certificate import (
@@ -571,6 +572,7 @@ def certificate_page(
     reviews: Sequence[HoldReview] = (),
     language: Language = "en",
     laboratory: Laboratory | None = None,
+    signature: Signature | None = None,
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -589,7 +591,9 @@ def certificate_page(
     (ISO/IEC 17025 7.8; the identity block, :func:`station.report.certificate.identity`).
     ``laboratory``: who issues it, where, for whom, and the reference's traceability
     (configured; none: "not configured"). The coefficients as found and as left
-    (:func:`station.report.certificate.as_found`) follow the results.
+    (:func:`station.report.certificate.as_found`) follow the results. ``signature``:
+    the authorised signatory's (:mod:`station.domain.signature`), named with the links
+    that verify it; None: the page says it is not signed.
     """
     plot = None
     if gyro_fit is not None and gyro_fit.dwells is not None and not gyro_fit.report.unestimable:
@@ -625,4 +629,5 @@ def certificate_page(
         left=as_left(run),
         gyro_found=gyro_as_found(run),
         gyro_left=gyro_as_left(run),
+        signature=signature,
     )

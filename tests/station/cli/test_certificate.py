@@ -1,6 +1,7 @@
 """``calstation certificate``: the station's own certificate of a unit it calibrated,
 end to end: a demo station reads each virtual putter's coefficients before it writes its
-own, and the certificate states them as found beside what it left."""
+own, and the certificate states them as found beside what it left; an authorised
+signatory's key, signature and its verification, as real processes."""
 
 import json
 import os
@@ -9,8 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from db import RunRepository, open_database
+from station.domain.records import RunRecord
+from station.report.certificate import document_number
 from station.report.formatting import number
 from tests.conftest import CliRunner
+from tests.db.records import make_record
 
 STATION = """station_id = "line2-st9"
 operator_id = "qa-ann"
@@ -81,3 +86,80 @@ def test_a_certificate_that_cannot_be_issued_is_one_line_and_exit_2(
     assert result.returncode == 2
     assert line in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def _database_with(tmp_path: Path, *records: RunRecord) -> str:
+    """A SQLite results database holding ``records``; its URL."""
+    url = f"sqlite:///{tmp_path / 'results.sqlite3'}"
+    database = open_database(url)
+    try:
+        with database.session() as session:
+            for record in records:
+                RunRepository(session).submit(record)
+            session.commit()
+    finally:
+        database.dispose()
+    return url
+
+
+def test_a_signatory_signs_and_a_changed_digit_or_another_key_is_refused(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    record = make_record(serial="PT000042")
+    url = _database_with(tmp_path, record, make_record(serial="PT000043", verdict="fail"))
+    db = ("--database-url", url)
+    env = _env(tmp_path)
+    for name in ("ann", "bob"):
+        key = tmp_path / f"{name}.pem"
+        made = run_cli("certificate", "signatory", name, "--key-file", str(key), *db, env=env)
+        assert made.returncode == 0, made.stderr
+        assert key.stat().st_mode & 0o077 == 0  # the signatory's alone
+    again = run_cli(
+        "certificate", "signatory", "ann", "--key-file", str(tmp_path / "x.pem"), *db, env=env
+    )
+    assert again.returncode == 2
+    assert again.stderr.strip() == "calstation: error: signatory 'ann' is registered already"
+
+    signed = tmp_path / "signed.json"
+    sign = ("certificate", "sign", "PT000042", "--by", "ann", *db)
+    impostor = run_cli(*sign, "--key-file", str(tmp_path / "bob.pem"), env=env)
+    assert impostor.returncode == 2
+    assert "bob.pem is not ann's registered key" in impostor.stderr
+    result = run_cli(*sign, "--key-file", str(tmp_path / "ann.pem"), "--out", str(signed), env=env)
+    assert result.returncode == 0, result.stderr
+    number = document_number(record)
+    verified = run_cli("certificate", "verify", str(signed), *db, env=env)
+    assert verified.returncode == 0, verified.stderr
+    assert verified.stdout.startswith(f"{number}: valid, signed by ann at ")
+
+    # One digit of one coefficient changed: the record is not the one signed.
+    text = signed.read_text()
+    assert '"x": 2081.9' in text
+    changed = tmp_path / "changed.json"
+    changed.write_text(text.replace('"x": 2081.9', '"x": 2081.8', 1))
+    refused = run_cli("certificate", "verify", str(changed), *db, env=env)
+    assert refused.returncode == 2
+    assert "the record was changed after it was signed" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+    # The signature claimed for another signatory: it is not bob's.
+    document = json.loads(text)
+    document["signature"]["signatory"] = "bob"
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps(document))
+    refused = run_cli("certificate", "verify", str(other), *db, env=env)
+    assert refused.returncode == 2
+    assert f"{number}: the signature is not bob's" in refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+
+    # Signed once; a unit on hold has nothing to certify.
+    twice = run_cli(*sign, "--key-file", str(tmp_path / "ann.pem"), env=env)
+    assert twice.returncode == 2
+    assert f"{number} is signed already, by ann" in twice.stderr
+    held = ("certificate", "sign", "PT000043", "--by", "ann", "--key-file")
+    on_hold = run_cli(*held, str(tmp_path / "ann.pem"), *db, env=env)
+    assert on_hold.returncode == 2
+    assert "PT000043 is on hold" in on_hold.stderr
+    # The station's own certificate names the signatory and links the verification.
+    page = run_cli("certificate", "issue", "PT000042", *db, env=env).stdout
+    assert '<td id="authorised-by">ann, authorised signatory; signed ' in page
+    assert f'href="/api/v1/runs/{record.run_id}/signature"' in page
