@@ -508,12 +508,21 @@ def _csv_row(row: Sequence[object]) -> list[object]:
     response_class=Response,  # 200 is HTML, the errors JSON: each says its own media type
     responses={
         200: {
-            "content": {"text/html": {"schema": {"type": "string"}}},
+            "content": {
+                "text/html": {"schema": {"type": "string"}},
+                "application/pdf": {"schema": {"type": "string", "format": "binary"}},
+            },
             "description": "the calibration certificate; a unit whose latest run failed gets "
             "its failure report instead (what failed, the values and their limits), its "
-            "title and failures in the reader's language (`lang`, else Accept-Language)",
+            "title and failures in the reader's language (`lang`, else Accept-Language); "
+            "`format=pdf`: the same as a PDF, in English",
         },
-        **problems(404, 422, _404="no run of this serial number", _422="an unknown language"),
+        **problems(
+            404,
+            422,
+            _404="no run of this serial number",
+            _422="an unknown language or format",
+        ),
     },
 )
 async def get_certificate(
@@ -523,16 +532,33 @@ async def get_certificate(
     shifts: PlantShiftsDep,
     language: LanguageDep,
     laboratory: LaboratoryDep,
-) -> HTMLResponse:
+    format: Annotated[
+        Literal["html", "pdf"], Query(description="html (default), or pdf (in English)")
+    ] = "html",
+) -> Response:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile, its reference (the latest golden-unit check
     of its station in the plant's shift, before it) and the unit's earlier runs; a failure
     report for a unit whose latest run failed. ``lang`` (en, ko, zh; else the
     Accept-Language header's first shipped language, else en): the language of its title
-    and its failures (codes and values as stored)."""
+    and its failures (codes and values as stored). ``format=pdf``: the same statements
+    as a PDF (English: its font writes no Hangul or Han)."""
     found = await repository.run(lambda r: certificate_inputs(r, serial, zone, shifts))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
+    if format == "pdf":
+        from station.report.pdf import certificate_pdf
+
+        document = certificate_pdf(
+            found.run,
+            found.profile,
+            datetime.now(UTC),
+            zone,
+            found.golden,
+            laboratory,
+            found.signature,
+        )
+        return Response(document, media_type="application/pdf")
     from station.report import html
 
     page = html.certificate_page(

@@ -55,13 +55,16 @@ def issue(
             "reference.",
         ),
     ] = "",
+    format: Annotated[
+        str, typer.Option("--format", help="html, or pdf (in English; needs --out).")
+    ] = "html",
     output: Annotated[
         Path | None,
         typer.Option("--out", help="Write to this file instead of standard output."),
     ] = None,
     database_url: DatabaseUrlOption = None,
 ) -> None:
-    """The unit's calibration certificate (or failure report), HTML."""
+    """The unit's calibration certificate (or failure report), HTML or PDF."""
     from datetime import UTC, datetime
 
     from db import repository_transaction
@@ -70,10 +73,17 @@ def issue(
     from station.domain.laboratory import Laboratory, load_laboratory
     from station.domain.quality.shifts import parse_shifts
     from station.report.html import certificate_page
+    from station.report.pdf import PDF_LANGUAGES, certificate_pdf
     from station.report.period import plant_zone
 
     if language not in LANGUAGES:
         raise InputError(f"--language {language!r} is not one of {', '.join(LANGUAGES)}")
+    if format not in ("html", "pdf"):
+        raise InputError(f"--format {format!r} is not one of html, pdf")
+    if format == "pdf" and language not in PDF_LANGUAGES:
+        raise InputError(f"--format pdf is in English only (its font writes no {language})")
+    if format == "pdf" and output is None:
+        raise InputError("--format pdf needs --out FILE")
     reader: Language = language  # type: ignore[assignment]  # checked against LANGUAGES
     zone = plant_zone(timezone)
     starts = parse_shifts(shifts)
@@ -82,6 +92,19 @@ def issue(
         found = certificate_inputs(repository, serial, zone, starts)
     if found is None:
         raise InputError(f"no calibration run of serial {serial!r}")
+    if format == "pdf":
+        assert output is not None
+        document = certificate_pdf(
+            found.run,
+            found.profile,
+            datetime.now(UTC),
+            zone,
+            found.golden,
+            laboratory,
+            found.signature,
+        )
+        _write(output, document)
+        return
     page = certificate_page(
         found.run,
         found.profile,
@@ -99,8 +122,12 @@ def issue(
         out.file.write(page)
         out.file.flush()
         return
+    _write(output, page.encode())
+
+
+def _write(output: Path, document: bytes) -> None:
     try:
-        output.write_text(page, encoding="utf-8")
+        output.write_bytes(document)
     except OSError as exc:
         raise CalstationError(f"{output}: cannot write the certificate: {exc.strerror}") from None
     err.print(f"certificate written to {output}", markup=False)

@@ -1,8 +1,10 @@
 """The server verifies a certificate's signature: the stored one (the page's verify
-link), and a signed file sent to it; a changed digit or another key is a 422 in one line."""
+link), and a signed file sent to it; a changed digit or another key is a 422 in one line.
+The signed certificate as a PDF names its signatory on its last page."""
 
 import json
 from datetime import UTC, datetime
+from pathlib import Path
 
 import httpx
 
@@ -11,13 +13,14 @@ from db.signatures import add_signature, register_signatory
 from station.domain.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import make_record
+from tests.pdf_pages import page_text, rendered_pages
 
 ANN_PEM, ANN = new_key()
 BOB_PEM, BOB = new_key()
 
 
 def test_the_server_verifies_a_signed_certificate_and_refuses_a_changed_one(
-    database: Database, client: httpx.Client
+    database: Database, client: httpx.Client, tmp_path: Path
 ) -> None:
     record, unsigned = make_record(serial="U8"), make_record(serial="U9")
     number = document_number(record)
@@ -42,6 +45,15 @@ def test_the_server_verifies_a_signed_certificate_and_refuses_a_changed_one(
     assert check["problem"] is None
     assert client.get(f"/api/v1/runs/{unsigned.run_id}/signature").status_code == 404
     assert "not signed" in client.get("/api/v1/units/U9/certificate").text
+
+    pdf = client.get("/api/v1/units/U8/certificate", params={"format": "pdf"})
+    assert pdf.headers["content-type"] == "application/pdf"
+    path = tmp_path / "U8.pdf"
+    path.write_bytes(pdf.content)
+    pages = rendered_pages(path)
+    last = " ".join(page_text(path, len(pages)).split())
+    assert "ann, authorised signatory; signed" in last
+    assert f"page {len(pages)} / {len(pages)}" in last
 
     signed = client.get(f"/api/v1/runs/{record.run_id}/certificate.json").json()
     answer = client.post("/api/v1/certificates/verify", json=signed)

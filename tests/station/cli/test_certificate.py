@@ -16,6 +16,7 @@ from station.report.certificate import document_number
 from station.report.formatting import number
 from tests.conftest import CliRunner
 from tests.db.records import make_record
+from tests.pdf_pages import page_text, rendered_pages
 
 STATION = """station_id = "line2-st9"
 operator_id = "qa-ann"
@@ -77,6 +78,9 @@ def test_the_station_s_own_certificate_states_its_lab_and_the_unit_as_found_and_
         (("PT999999",), "no calibration run of serial 'PT999999'"),
         (("PT000001", "--language", "fr"), "--language 'fr' is not one of en, ko, zh"),
         (("PT000001", "--config", "/nonexistent.toml"), "cannot read the laboratory"),
+        (("PT000001", "--format", "pdf"), "--format pdf needs --out FILE"),
+        (("PT000001", "--format", "pdf", "--language", "ko"), "--format pdf is in English only"),
+        (("PT000001", "--format", "doc"), "--format 'doc' is not one of html, pdf"),
     ],
 )
 def test_a_certificate_that_cannot_be_issued_is_one_line_and_exit_2(
@@ -163,3 +167,10 @@ def test_a_signatory_signs_and_a_changed_digit_or_another_key_is_refused(
     page = run_cli("certificate", "issue", "PT000042", *db, env=env).stdout
     assert '<td id="authorised-by">ann, authorised signatory; signed ' in page
     assert f'href="/api/v1/runs/{record.run_id}/signature"' in page
+    pdf = tmp_path / "PT000042.pdf"
+    args = ("certificate", "issue", "PT000042", "--format", "pdf", "--out", str(pdf), *db)
+    made = run_cli(*args, env=env)
+    assert made.returncode == 0, made.stderr
+    pages = rendered_pages(pdf)
+    assert f"{number}" in page_text(pdf, 1)
+    assert "ann, authorised signatory; signed" in " ".join(page_text(pdf, len(pages)).split())
