@@ -19,7 +19,18 @@ from api.metrics import install_metrics
 from api.redoc import add_redoc
 from api.report_pool import ReportPool
 from api.responses import json_problems, problems
-from api.routes import alerts, events, gyro, health, reports, reviews, runs, unit_pages, units
+from api.routes import (
+    alerts,
+    certificates,
+    events,
+    gyro,
+    health,
+    reports,
+    reviews,
+    runs,
+    unit_pages,
+    units,
+)
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
 from db.units import UnitLookups
@@ -119,6 +130,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     add_redoc(app)
     app.state.event_listeners = events.Listeners(settings.event_listeners)
     app.state.plant_timezone = settings.plant_timezone
+    app.state.laboratory = settings.laboratory()
     app.state.plant_shifts = parse_shifts(settings.plant_shifts)
     app.state.export_page_size = settings.export_page_size
     app.state.alert_loop = None
@@ -135,6 +147,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
     v1.include_router(reviews.router, dependencies=reads, responses=keyed)
     v1.include_router(reviews.submissions)
     v1.include_router(reports.router, dependencies=reads, responses=keyed)
+    v1.include_router(certificates.router, dependencies=reads, responses=keyed)
     # The event stream's own answer is not JSON: its errors name their media type.
     keyed_stream = json_problems(401) if settings.read_requires_key else None
     v1.include_router(events.router, dependencies=reads, responses=keyed_stream)

@@ -8,6 +8,7 @@ from pydantic import AfterValidator, Field
 from db.run_export import PAGE
 from db.settings import DatabaseSettings
 from station.domain.errors import InputError
+from station.domain.laboratory import Laboratory, load_laboratory
 from station.domain.quality.alerts import AlertRules, parse_alert_rules
 from station.domain.quality.shifts import parse_shifts, shift_name
 from station.report.period import plant_zone
@@ -28,6 +29,16 @@ def _alert_rules(path: Path | None) -> Path | None:
         except OSError as exc:
             raise ValueError(f"{path}: {exc.strerror}") from None
         except (InputError, UnicodeDecodeError) as exc:
+            raise ValueError(str(exc)) from None
+    return path
+
+
+def _laboratory_file(path: Path | None) -> Path | None:
+    """The laboratory's file, if it can be read and holds a ``[laboratory]`` table."""
+    if path is not None:
+        try:
+            load_laboratory(path)
+        except InputError as exc:
             raise ValueError(str(exc)) from None
     return path
 
@@ -65,7 +76,10 @@ class ApiSettings(DatabaseSettings):
     export (``GET /api/v1/reports/eol/runs.csv``), each page one statement under
     ``read_timeout_s`` and held in memory while it is written: a slow or distant
     database wants smaller pages (each read well inside the time-out, the answer's
-    first page sooner), a fast one larger (fewer round trips).
+    first page sooner), a fast one larger (fewer round trips). ``laboratory_file``
+    (``CALSTATION_LABORATORY_FILE``): a TOML file whose ``[laboratory]`` table names the
+    laboratory, its address, where it calibrates, the customer and the traceability of
+    its reference, as its certificates state them (:mod:`station.domain.laboratory`).
     """
 
     read_requires_key: bool = False
@@ -82,6 +96,13 @@ class ApiSettings(DatabaseSettings):
     alert_interval_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     export_page_size: Annotated[int, Field(ge=1)] = PAGE
+    laboratory_file: Annotated[Path | None, AfterValidator(_laboratory_file)] = None
+
+    def laboratory(self) -> Laboratory:
+        """The laboratory its certificates name (``laboratory_file``; none: unnamed)."""
+        if self.laboratory_file is None:
+            return Laboratory()
+        return load_laboratory(self.laboratory_file)
 
     def alert_rules(self) -> AlertRules | None:
         """The plant's alert rules (``alerts_file``), if it has any."""

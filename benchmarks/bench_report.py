@@ -39,9 +39,10 @@ from sqlalchemy import insert, make_url, text
 
 from api.report_bodies import dashboard_body, split_body
 from api.routes.alerts import LISTED_ALERTS
-from api.routes.reports import PAGE_UNITS, certificate_run
+from api.routes.reports import PAGE_UNITS
 from db import RunRepository, make_engine, open_database
 from db.alerts import evaluate, recent_alerts
+from db.certificates import certificate_run
 from db.chart_queries import first_moving_ranges, latest_chart_points
 from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile

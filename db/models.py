@@ -104,6 +104,9 @@ class Run(Base):
     uncertainty: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The decision rule that judged the run; None on older runs (simple acceptance).
     decision_rule: Mapped[str | None] = mapped_column(String(8))
+    #: The coefficients the unit held before the run wrote its own, as
+    #: :class:`station.domain.records.AsFound`'s JSON; None on older runs (0022).
+    as_found: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
 
@@ -249,6 +252,33 @@ class StationKey(Base):
     key_sha256: Mapped[str] = mapped_column(String(64), unique=True)
     created_at: Mapped[datetime] = mapped_column(UtcDateTime())
     revoked_at: Mapped[datetime | None] = mapped_column(UtcDateTime())
+
+
+class Signatory(Base):
+    """An authorised signatory of certificates and the public half of their Ed25519 key
+    (hex; the private half stays in the file they keep, :mod:`station.domain.signature`)."""
+
+    __tablename__ = "signatories"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    name: Mapped[str] = mapped_column(String(NAME), unique=True)
+    public_key: Mapped[str] = mapped_column(String(64))
+    created_at: Mapped[datetime] = mapped_column(UtcDateTime())
+
+
+class CertificateSignature(Base):
+    """A signatory's signature of a run's certificate
+    (:class:`station.domain.signature.Signature`): one per run."""
+
+    __tablename__ = "certificate_signatures"
+
+    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid(), unique=True)
+    certificate: Mapped[str] = mapped_column(String(NAME))
+    record_sha256: Mapped[str] = mapped_column(String(64))
+    signatory: Mapped[str] = mapped_column(String(NAME))
+    signed_at: Mapped[datetime] = mapped_column(UtcDateTime())
+    signature: Mapped[str] = mapped_column(String(128))
 
 
 class RunFacts(Base):

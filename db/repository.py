@@ -123,13 +123,22 @@ def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
     A record without a lot, a disposition, a purpose, a gyro matrix, uncertainties, a
-    decision rule, its limits profile or excluded poses, or of the default product, is
+    decision rule, its as-found values, its limits profile or excluded poses, or of the
+    default product, is
     hashed without the field, as before the field existed, so a retry from an older
     station matches the run it stored.
     """
     unset: dict[str, Any] = {
         name: True
-        for name in ("lot", "disposition", "purpose", "gyro_matrix", "uncertainty", "decision_rule")
+        for name in (
+            "lot",
+            "disposition",
+            "purpose",
+            "gyro_matrix",
+            "uncertainty",
+            "decision_rule",
+            "as_found",
+        )
         if getattr(record, name) is None
     }
     if record.part_number == DEFAULT_PART_NUMBER:  # every run before products existed

@@ -50,18 +50,17 @@ from api.report_bodies import (
 from api.report_pool import ReportPool
 from api.responses import problems
 from api.schemas import Problem
-from db import RunRepository
+from db.certificates import certificate_inputs
 from db.limits_profiles import keep_profile, stored_profiles
 from db.reports import CHART_POINTS
 from db.run_export import HEADER, run_page
 from db.split import SPLIT_PARAMETERS, SPLIT_RUNS
 from station.domain.errors import InputError
+from station.domain.laboratory import Laboratory
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
-from station.domain.quality.shifts import shift_start
 from station.domain.quality.split import SplitBy, SplitReport
-from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN, RunSummary, StoredRun
-from station.domain.unit_state import counts
+from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment
 from station.report.render import MEDIA_TYPES
 
@@ -111,6 +110,16 @@ async def get_plant_shifts(request: Request) -> tuple[time, ...]:
 
 
 PlantShiftsDep = Annotated[tuple[time, ...], Depends(get_plant_shifts)]
+
+
+async def get_laboratory(request: Request) -> Laboratory:
+    """The laboratory its certificates name (``CALSTATION_LABORATORY_FILE``'s
+    ``[laboratory]``; none: every field "not configured")."""
+    laboratory: Laboratory = request.app.state.laboratory
+    return laboratory
+
+
+LaboratoryDep = Annotated[Laboratory, Depends(get_laboratory)]
 
 
 async def get_export_page_size(request: Request) -> int:
@@ -494,31 +503,26 @@ def _csv_row(row: Sequence[object]) -> list[object]:
     return [v.isoformat() if isinstance(v, datetime) else v for v in row]
 
 
-def certificate_run(
-    repository: RunRepository, serial: str
-) -> tuple[StoredRun, list[RunSummary]] | None:
-    """The unit's latest run that counts (an operator's abort does not), as the report's,
-    and the unit's runs before it."""
-    runs = repository.history(serial)
-    counted = [run for run in runs if counts(run)] or runs
-    if not counted:
-        return None
-    run = repository.get(counted[-1].run_id)
-    assert run is not None
-    return run, runs[: runs.index(counted[-1])]
-
-
 @router.get(
     "/units/{serial}/certificate",
     response_class=Response,  # 200 is HTML, the errors JSON: each says its own media type
     responses={
         200: {
-            "content": {"text/html": {"schema": {"type": "string"}}},
+            "content": {
+                "text/html": {"schema": {"type": "string"}},
+                "application/pdf": {"schema": {"type": "string", "format": "binary"}},
+            },
             "description": "the calibration certificate; a unit whose latest run failed gets "
             "its failure report instead (what failed, the values and their limits), its "
-            "title and failures in the reader's language (`lang`, else Accept-Language)",
+            "title and failures in the reader's language (`lang`, else Accept-Language); "
+            "`format=pdf`: the same as a PDF, in English",
         },
-        **problems(404, 422, _404="no run of this serial number", _422="an unknown language"),
+        **problems(
+            404,
+            422,
+            _404="no run of this serial number",
+            _422="an unknown language or format",
+        ),
     },
 )
 async def get_certificate(
@@ -527,27 +531,48 @@ async def get_certificate(
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
     language: LanguageDep,
-) -> HTMLResponse:
+    laboratory: LaboratoryDep,
+    format: Annotated[
+        Literal["html", "pdf"], Query(description="html (default), or pdf (in English)")
+    ] = "html",
+) -> Response:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
     the limits stored with the run's profile, its reference (the latest golden-unit check
     of its station in the plant's shift, before it) and the unit's earlier runs; a failure
     report for a unit whose latest run failed. ``lang`` (en, ko, zh; else the
     Accept-Language header's first shipped language, else en): the language of its title
-    and its failures (codes and values as stored)."""
-    found = await repository.run(lambda r: certificate_run(r, serial))
+    and its failures (codes and values as stored). ``format=pdf``: the same statements
+    as a PDF (English: its font writes no Hangul or Han)."""
+    found = await repository.run(lambda r: certificate_inputs(r, serial, zone, shifts))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
-    run, earlier = found
-    stored = await repository.run(lambda r: stored_profiles(r.session, [run.limits.sha256]))
-    gyro_fit = await repository.run(lambda r: r.latest_gyro_fit(serial))
-    profile = stored.get(run.limits.sha256)
-    since = shift_start(run.started_at, zone, shifts)
-    golden = await repository.run(lambda r: r.latest_golden(run.station_id, since, run.started_at))
-    reviews = await repository.run(lambda r: r.reviews(serial)) if run.verdict == "fail" else []
+    if format == "pdf":
+        from station.report.pdf import certificate_pdf
+
+        document = certificate_pdf(
+            found.run,
+            found.profile,
+            datetime.now(UTC),
+            zone,
+            found.golden,
+            laboratory,
+            found.signature,
+        )
+        return Response(document, media_type="application/pdf")
     from station.report import html
 
     page = html.certificate_page(
-        run, profile, datetime.now(UTC), gyro_fit, earlier, zone, golden, reviews, language
+        found.run,
+        found.profile,
+        datetime.now(UTC),
+        found.gyro_fit,
+        found.earlier,
+        zone,
+        found.golden,
+        found.reviews,
+        language,
+        laboratory,
+        found.signature,
     )
     return HTMLResponse(page)
 

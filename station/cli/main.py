@@ -81,6 +81,11 @@ COMMANDS: dict[str, Command] = {
         "API keys of the stations (runs), labs (gyro fits) and quality engineers (reviews of "
         "units on hold) that submit over HTTP.",
     ),
+    "certificate": Command(
+        "station.cli.certificate",
+        "certificate_app",
+        "Calibration certificates: issue, sign and verify; authorised signatories' keys.",
+    ),
     "outbox": Command(
         "station.cli.outbox",
         "outbox_app",

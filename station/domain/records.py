@@ -68,6 +68,7 @@ from station.domain.sensor import ADC_MIN, Axis
 __all__ = [
     "IDENTIFIER_PATTERN",
     "SERIAL_PATTERN",
+    "AsFound",
     "Axis",
     "Coefficients",
     "Counts3",
@@ -90,6 +91,7 @@ __all__ = [
     "ReviewDecision",
     "RunRecord",
     "RunSummary",
+    "StoredCoefficients",
     "StoredRun",
     "UtcDatetime",
     "Vector3",
@@ -293,6 +295,31 @@ class Coefficients(_Record):
     matrix: Matrix3
 
 
+_Stored3 = tuple[float, float, float]
+
+
+class StoredCoefficients(_Record):
+    """One set of coefficients as the unit stored it (``docs/protocol.md``, READ_CAL and
+    READ_GYRO_CAL): ``written`` False while the unit holds its factory defaults; ``offset``
+    and ``matrix`` as read (float32 values, whatever the unit held: no bounds but being
+    finite). The accelerometer's read ``g = matrix @ (raw − offset)`` (counts, g/count),
+    the gyros' ``rate = matrix @ (measured − offset)`` (deg/s, K⁻¹)."""
+
+    written: bool
+    offset: _Stored3
+    matrix: tuple[_Stored3, _Stored3, _Stored3]
+
+
+class AsFound(_Record):
+    """What the unit held when the station received it (ISO/IEC 17025:2017 7.8.4.1, the
+    results before adjustment): its coefficients read before the run wrote any, at
+    ``read_at`` (the unit's receipt at the station); ``gyro`` on whole-unit runs."""
+
+    read_at: UtcDatetime
+    accelerometer: StoredCoefficients
+    gyro: StoredCoefficients | None = None
+
+
 class QualityMetrics(_Record):
     """How well the calibration explains the poses.
 
@@ -485,6 +512,9 @@ class _RunHeader(_Record):
     #: The decision rule that judged the run (ILAC-G8): ``simple`` acceptance or
     #: ``guarded`` (guard band w = U); None on records from before (they were simple).
     decision_rule: DecisionRule | None = None
+    #: The coefficients the unit held before the run wrote its own (as-found); None on
+    #: records from before the station read them.
+    as_found: AsFound | None = None
 
     @model_validator(mode="after")
     def _consistent_outcome(self) -> Self:

@@ -15,6 +15,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 from station.domain.constants import DEFAULT_PART_NUMBER, MAX_SLOTS, PART_NUMBER_PATTERN
 from station.domain.errors import InputError, validation_problem
 from station.domain.i18n import Language
+from station.domain.laboratory import Laboratory
 from station.domain.limits import load_profile
 from station.domain.patterns import compile_pattern
 from station.domain.products import LabelFormat, Product, Products, load_products
@@ -58,6 +59,9 @@ class StationConfig(BaseSettings):
     run: RunSettings = RunSettings()
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
+    #: The laboratory its certificates name (``[laboratory]``: name, address,
+    #: location, customer, gravity_m_s2, traceability; :mod:`station.domain.laboratory`).
+    laboratory: Laboratory = Laboratory()
     #: The operator's language (``CALSTATION_LANGUAGE``, ``--language``): the station's
     #: lines from the catalogues of ``station/domain/locale`` (``station.domain.i18n``).
     language: Language = "en"

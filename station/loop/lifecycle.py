@@ -38,7 +38,7 @@ from station.device import DeviceError, SerialNumberMismatchError
 from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile
 from station.domain.products import Label
-from station.domain.records import RunRecord
+from station.domain.records import AsFound, RunRecord
 from station.loop.config import StationConfig
 from station.loop.results_link import ResultsLink, UnitLookup
 from station.loop.shift_checks import ShiftChecks
@@ -57,6 +57,7 @@ from station.run.operator_text import (
 from station.run.record import ALGORITHM
 from station.run.unit_run import UnitRun, open_unit
 from station.run.verdict import Purpose
+from station.run.writeback import read_as_found
 
 
 @dataclass(frozen=True)
@@ -132,9 +133,12 @@ def verdict_line(record: RunRecord) -> str:
     return f"{record.serial}: {verdict}" + (f" ({failed})" if failed else "") + then
 
 
-def _new_journal(config: StationConfig, label: Label, part_number: str, slot: int) -> RunJournal:
+def _new_journal(
+    config: StationConfig, label: Label, part_number: str, slot: int, as_found: AsFound
+) -> RunJournal:
     """The journal of a new run of the unit ``label`` names (its lot, else the
-    station's) on the station ``config`` describes, in its fixture's ``slot``."""
+    station's) on the station ``config`` describes, in its fixture's ``slot``; the unit
+    held ``as_found`` when it came."""
     return RunJournal(
         run_id=uuid.uuid4(),
         serial=label.serial,
@@ -145,6 +149,7 @@ def _new_journal(config: StationConfig, label: Label, part_number: str, slot: in
         fixture_slot=slot,
         started_at=datetime.now(UTC),
         poses=(*config.run.poses, config.run.verification_pose),
+        as_found=as_found,
     )
 
 
@@ -289,8 +294,15 @@ class UnitLifecycle:
         except DeviceError as exc:
             return Unreachable(port_problem(exc))
         if journal is None:
+            try:
+                as_found = read_as_found(driver, gyro=self.config.run.gyro)
+            except DeviceError as exc:
+                driver.close()
+                return Unreachable(port_problem(exc))
             label = self._labels.pop(serial, None) or Label(serial=serial)
-            journal = _new_journal(self.config, label, self.product.part_number, slot.number)
+            journal = _new_journal(
+                self.config, label, self.product.part_number, slot.number, as_found
+            )
             # A disk that refuses does not stop the unit: the journal owes the write and
             # DiskWatch says so until it goes through (docs/station.md, fault matrix).
             slot.journal_file.save(journal)

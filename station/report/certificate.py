@@ -10,10 +10,14 @@ The page (``templates/certificate.html`` and its ``identity.html``) lays it out.
 
 import math
 from dataclasses import dataclass
+from datetime import datetime
+
+import numpy as np
 
 from station.domain.i18n import Say, speaker
+from station.domain.laboratory import Laboratory
 from station.domain.limits import CHECKS, Bounds, LimitsProfile
-from station.domain.records import RunRecord, RunSummary
+from station.domain.records import RunRecord, RunSummary, StoredCoefficients
 from station.report.explanations import check_name, unit_words
 
 #: The document's number prefix by the run's verdict: a certificate, or a failure report.
@@ -43,6 +47,102 @@ def mean_temperature(run: RunRecord) -> float | None:
     conditions); None when no pose recorded one."""
     values = [p.temperature_c for p in run.poses if p.temperature_c is not None]
     return math.fsum(values) / len(values) if values else None
+
+
+def temperature_range(run: RunRecord) -> tuple[float, float] | None:
+    """The lowest and highest pose temperature of the run, °C: the range the results
+    hold in (ISO/IEC 17025 7.8.4.1 a: the conditions that influence the results; the
+    coefficients drift with temperature, ``docs/calibration.md``); None when no pose
+    recorded one."""
+    values = [p.temperature_c for p in run.poses if p.temperature_c is not None]
+    return (min(values), max(values)) if values else None
+
+
+@dataclass(frozen=True)
+class CoefficientState:
+    """One set of coefficients of the unit, as found or as left (ISO/IEC 17025:2017
+    7.8.4.1: the results before and after adjustment): offset (counts) and the
+    counts-to-g matrix (g/count), ``g = matrix @ (raw − offset)``; ``sensitivity`` per
+    axis, 1 / the matrix's diagonal (counts/g); ``error_mg``: the largest ||g| − 1| these
+    coefficients make of the run's fit poses, mg (the unit's own output on them);
+    ``written``: False while the unit held its factory defaults."""
+
+    written: bool
+    offset: tuple[float, float, float]
+    matrix: tuple[tuple[float, ...], ...]
+    sensitivity: tuple[float, float, float]
+    error_mg: float
+
+
+@dataclass(frozen=True)
+class GyroState:
+    """The gyro coefficients as found or as left: bias (deg/s) and K⁻¹, ``rate = K⁻¹ ·
+    (measured − bias)`` (``docs/protocol.md``)."""
+
+    written: bool
+    bias_dps: tuple[float, float, float]
+    inverse: tuple[tuple[float, ...], ...]
+
+
+def _state(
+    run: RunRecord, offset: tuple[float, ...], matrix: tuple[tuple[float, ...], ...], written: bool
+) -> CoefficientState:
+    """The coefficients ``offset``, ``matrix`` judged on ``run``'s fit poses."""
+    m, o = np.array(matrix, dtype=float), np.array(offset, dtype=float)
+    raw = np.array([p.mean.as_tuple() for p in run.poses if p.role == "fit"], dtype=float)
+    with np.errstate(all="ignore"):
+        error = np.abs(np.linalg.norm((raw - o) @ m.T, axis=1) - 1.0) * 1000.0
+        diagonal = [1.0 / v if v else math.inf for v in np.diag(m).tolist()]
+    return CoefficientState(
+        written=written,
+        offset=(o[0].item(), o[1].item(), o[2].item()),
+        matrix=matrix,
+        sensitivity=(diagonal[0], diagonal[1], diagonal[2]),
+        error_mg=float(np.max(error)) if error.size else math.nan,
+    )
+
+
+def as_found(run: RunRecord) -> CoefficientState | None:
+    """The accelerometer coefficients the unit held when it came; None when the run's
+    record does not hold them (runs from before the station read them)."""
+    found = run.as_found
+    if found is None:
+        return None
+    held = found.accelerometer
+    return _state(run, held.offset, held.matrix, held.written)
+
+
+def as_left(run: RunRecord) -> CoefficientState | None:
+    """The accelerometer coefficients a passing run wrote and read back (its write-back
+    verified within the ``writeback`` limit); None for a run that did not pass (whether
+    its coefficients reached the unit is not stated)."""
+    cal = run.coefficients
+    if cal is None or run.verdict != "pass":
+        return None
+    return _state(run, cal.offset.as_tuple(), cal.matrix, True)
+
+
+def _gyro_state(held: StoredCoefficients) -> GyroState:
+    return GyroState(written=held.written, bias_dps=held.offset, inverse=held.matrix)
+
+
+def gyro_as_found(run: RunRecord) -> GyroState | None:
+    """The gyro coefficients the unit held when it came (whole-unit runs), else None."""
+    found = run.as_found
+    return None if found is None or found.gyro is None else _gyro_state(found.gyro)
+
+
+def gyro_as_left(run: RunRecord) -> GyroState | None:
+    """The gyro coefficients a passing run wrote: the bias and K⁻¹ of its gyro matrix."""
+    k = run.gyro_matrix
+    if k is None or run.verdict != "pass":
+        return None
+    inverse = np.linalg.inv(np.array(k.matrix, dtype=float))
+    return GyroState(
+        written=True,
+        bias_dps=k.bias_dps.as_tuple(),
+        inverse=tuple(tuple(row) for row in inverse.tolist()),
+    )
 
 
 def method(run: RunRecord, tr: Say = ENGLISH) -> list[tuple[str, str]]:
@@ -176,24 +276,59 @@ def check_rows(run: RunRecord, profile: LimitsProfile, tr: Say = ENGLISH) -> lis
 
 @dataclass(frozen=True)
 class Identity:
-    """The identity block a certificate and a failure report share."""
+    """The identity block a certificate and a failure report share: the document's
+    number, the laboratory (configured), the item, its receipt and condition, the
+    conditions, the method, the reference and its traceability, the dates."""
 
     number: str
+    laboratory: Laboratory
     temperature_c: float | None
+    #: The poses' lowest and highest temperature, °C; None: not recorded.
+    temperature_range: tuple[float, float] | None
     method: list[tuple[str, str]]
     #: That shift's golden-unit check at the run's station (the reference); None: none.
     golden: RunSummary | None
+    #: When the station received the unit and read what it held; None: not recorded.
+    received_at: datetime | None
+    #: The item's condition on receipt, in the reader's language; None: not recorded.
+    condition: str | None
+    issued_at: datetime
 
 
-def identity(run: RunRecord, golden: RunSummary | None, tr: Say = ENGLISH) -> Identity:
+def condition(run: RunRecord, tr: Say = ENGLISH) -> str | None:
+    """The item's condition when the station received it (ISO/IEC 17025:2017 7.8.2.1 g,
+    7.8.4.1): it answered with its serial number and held its factory defaults or
+    coefficients written before; None when the record does not hold what it held."""
+    found = run.as_found
+    if found is None:
+        return None
+    if found.accelerometer.written:
+        return tr("answered as its serial; held coefficients written before (as found, below)")
+    return tr("answered as its serial; held its factory defaults (never calibrated)")
+
+
+def identity(
+    run: RunRecord,
+    golden: RunSummary | None,
+    tr: Say = ENGLISH,
+    *,
+    laboratory: Laboratory | None = None,
+    issued_at: datetime,
+) -> Identity:
     """The identity block of ``run``'s document; ``golden``: the latest golden-unit run
-    of its station in its shift before it (``db.RunRepository.latest_golden``); its
-    method in the reader's language (``tr``)."""
+    of its station in its shift before it (``db.RunRepository.latest_golden``); the
+    configured ``laboratory`` (none: every field "not configured"); its method and the
+    item's condition in the reader's language (``tr``); ``issued_at``: the date of issue."""
     return Identity(
         number=document_number(run),
+        laboratory=laboratory or Laboratory(),
         temperature_c=mean_temperature(run),
+        temperature_range=temperature_range(run),
         method=method(run, tr),
         golden=golden,
+        received_at=run.as_found.read_at if run.as_found is not None else None,
+        condition=condition(run, tr),
+        issued_at=issued_at,
     )
 
 

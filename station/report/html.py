@@ -22,6 +22,7 @@ from markupsafe import Markup
 
 from station import __version__
 from station.domain.i18n import Language, speaker
+from station.domain.laboratory import Laboratory
 from station.domain.limits import LimitsProfile
 from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
@@ -43,9 +44,20 @@ from station.domain.quality.station_health import (
     StationHealth,
 )
 from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.signature import Signature
 from station.domain.unit_state import UnitCalibration, deciding_review
 from station.report import formatting, svg
-from station.report.certificate import ENGLISH, check_rows, code_words, failure_words, identity
+from station.report.certificate import (
+    ENGLISH,
+    as_found,
+    as_left,
+    check_rows,
+    code_words,
+    failure_words,
+    gyro_as_found,
+    gyro_as_left,
+    identity,
+)
 from station.report.explanations import explanation
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
@@ -559,6 +571,8 @@ def certificate_page(
     golden: RunSummary | None = None,
     reviews: Sequence[HoldReview] = (),
     language: Language = "en",
+    laboratory: Laboratory | None = None,
+    signature: Signature | None = None,
 ) -> str:
     """The calibration certificate of the unit whose latest run is ``run``, or its failure
     report when that run failed (what failed, the values and their limits): a unit on hold
@@ -575,6 +589,11 @@ def certificate_page(
     dwells were kept, the scale-factor error plot before and after compensation.
     ``golden``: that shift's golden-unit check at the run's station, its reference
     (ISO/IEC 17025 7.8; the identity block, :func:`station.report.certificate.identity`).
+    ``laboratory``: who issues it, where, for whom, and the reference's traceability
+    (configured; none: "not configured"). The coefficients as found and as left
+    (:func:`station.report.certificate.as_found`) follow the results. ``signature``:
+    the authorised signatory's (:mod:`station.domain.signature`), named with the links
+    that verify it; None: the page says it is not signed.
     """
     plot = None
     if gyro_fit is not None and gyro_fit.dwells is not None and not gyro_fit.report.unestimable:
@@ -604,6 +623,11 @@ def certificate_page(
             formatting.reason(failure) if language == "en" else explanation(failure, language)
         ),
         gyro_plot=Markup(plot) if plot is not None else None,
-        identity=identity(run, golden, tr),
+        identity=identity(run, golden, tr, laboratory=laboratory, issued_at=issued_at),
         checks=None if profile is None else check_rows(run, profile, tr),
+        found=as_found(run),
+        left=as_left(run),
+        gyro_found=gyro_as_found(run),
+        gyro_left=gyro_as_left(run),
+        signature=signature,
     )

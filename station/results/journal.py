@@ -23,7 +23,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import InputError, validation_problem
 from station.domain.poses import POSES
-from station.domain.records import PoseRecord, ReplacedCapture, Vector3
+from station.domain.records import AsFound, PoseRecord, ReplacedCapture, Vector3
 from station.results.files import disk_problem, write_atomic
 
 log = logging.getLogger(__name__)
@@ -62,6 +62,9 @@ class RunJournal(BaseModel):
     poses: tuple[str, ...]
     captures: dict[int, Capture] = {}
     replaced: dict[int, list[ReplacedCapture]] = {}
+    #: The coefficients the unit held when the run started (journals from before the
+    #: station read them: None).
+    as_found: AsFound | None = None
 
     @field_validator("poses")
     @classmethod

@@ -264,5 +264,6 @@ def run_record(
         gyro_matrix=gyro_matrix,
         uncertainty=uncertainty,
         decision_rule=profile.rule,
+        as_found=journal.as_found,
         poses=poses,
     )

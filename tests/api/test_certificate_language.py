@@ -12,12 +12,15 @@ from hypothesis import strategies as st
 
 from api.language import preferred
 from db import Database, RunRepository
+from db.signatures import add_signature, register_signatory
 from station.domain.gyro import fit_log, paper_truth, simulate_log
 from station.domain.i18n import LANGUAGES
 from station.domain.limits import Bounds, check, load_profile
 from station.domain.records import GyroFitRecord, HoldReview
+from station.domain.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import T0, make_record
+from tests.station.report.test_certificate import FACTORY
 from tests.station.report.test_certificate import GYRO_MATRIX as WHOLE_UNIT_GYRO_MATRIX
 
 SERIAL = "PT-000777"
@@ -27,6 +30,8 @@ EXPECTED = {
     "zh": ("姿态噪声 x （姿态 3） 8.59057 计数：超出 ≤ 8", "不合格报告", "不合格项"),
 }
 KEPT = {"mg", "ADC"}
+#: The key of the signatory who signs the certificate.
+SIGNER_PEM, SIGNER = new_key()
 
 
 def _store(database: Database) -> str:
@@ -142,7 +147,7 @@ def test_a_guard_band_refusal_keeps_its_u_through_the_database(
 #: Tokens in Latin letters a page in Korean or Chinese keeps: units, the names of
 #: standards and sources it cites, symbols, the program's and the record's formats.
 ALLOWED = {
-    *("mg", "ppm", "deg", "sha", "UTC", "ADC", "JSON", "calstation", "RMS"),
+    *("mg", "ppm", "deg", "sha", "SHA", "UTC", "ADC", "JSON", "calstation", "RMS"),
     *("ISO", "IEC", "JCGM", "GUM", "ILAC", "Song", "Tedaldi", "Monte", "Carlo"),
     *("u_c", "K_ii", "K_ij"),
 }
@@ -187,6 +192,10 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
         gyro_matrix=GYRO_MATRIX,
         uncertainty=UNCERTAINTY,
         decision_rule="guarded",
+        as_found={"read_at": T0.isoformat(), "accelerometer": FACTORY},
+    )
+    signature = sign(
+        passed, document_number(passed), "qa-lee", load_private_key(SIGNER_PEM, "k"), T0
     )
     earlier = make_record(serial=SERIAL, verdict="fail", started_at=T0 - timedelta(hours=1))
     failed = make_record(serial=SERIAL, verdict="fail")
@@ -213,6 +222,8 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
                 decision="retest",
             )
         )
+        register_signatory(session, "qa-lee", SIGNER)
+        add_signature(session, passed.run_id, signature)
         session.commit()
     stored = {
         value
@@ -235,6 +246,10 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
         )
         if value
     } | {"qe-3", "PCB-7", "R-12", "centrifuge.csv"}  # a reviewer's words, a lab's file
+    # The signatory's name, the signature's and the record's hex digits, the algorithm's
+    # name and the command that verifies it, as they are.
+    stored |= {"qa-lee", signature.signature[:16], signature.record_sha256, "Ed25519"}
+    stored |= {"calstation certificate verify FILE"}
     for run in (passed, failed):
         url = f"/api/v1/units/{run.serial}/certificate"
         english = client.get(url).text
@@ -247,4 +262,5 @@ def test_the_whole_certificate_and_failure_report_in_korean_and_chinese(
             assert str(run.run_id) in page
             assert ("centrifuge.csv" in page) == (run is passed)  # the lab's gyro fit's
             assert "GU-001" in page  # that shift's golden-unit check, the reference
+            assert ("qa-lee" in page) == (run is passed)  # its authorised signatory
             assert "{" not in _shown(page)  # placeholders filled

@@ -223,7 +223,7 @@ def test_a_certificate_states_what_iso_17025_asks_of_it(
     assert ", pass (" in reference
     for other in ("GU-002", "GU-003", "GU-004"):
         assert other not in page
-    assert "temperature 24.5 °C (mean of the run's poses)" in block
+    assert "temperature 24.5 … 24.5 °C (the run's poses; mean 24.5 °C)" in block
     method = block.split('<table class="method">')[1]
     for source in ("[Song2006]", "JCGM 100:2008", "ILAC-G8:09/2019"):
         assert source in method

@@ -29,13 +29,22 @@ from db import (
 )
 from db.base import Base
 from db.database import upgrade
-from db.mapping import failure_rows, run_row
+from db.mapping import failure_rows, pose_row, run_row
 from db.migrate import HEAD_REVISION, alembic_config, current_revision
-from db.models import ReportCounts, Run, RunFacts, RunFailure, StoredLimitsProfile, Unit
+from db.models import (
+    ReportCounts,
+    Run,
+    RunFacts,
+    RunFailure,
+    RunPose,
+    StoredLimitsProfile,
+    Unit,
+)
 from db.reports import eol_report
-from db.repository import KeyHolder, key_sha256
+from db.repository import KeyHolder, key_sha256, record_sha256
 from db.units import answer_json
 from station.domain.quality.figures import ReportFilter
+from station.report.html import certificate_page
 from tests.db.records import LIMITS, T0, make_record
 from tests.db.test_rollups import rollup_rows
 
@@ -129,6 +138,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
             del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
             del row["part_number"]  # a column of revision 0014
             del row["fixture_slot"]  # a column of revision 0015
+            del row["as_found"]  # a column of revision 0022
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
@@ -273,6 +283,7 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
             del row["part_number"]  # a column of revision 0014
             del row["fixture_slot"]  # a column of revision 0015
+            del row["as_found"]  # a column of revision 0022
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
         upgrade(engine)
@@ -282,6 +293,29 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             assert stored.fixture_slot is None  # never guessed (revision 0015)
             assert stored.failures == record.failures
             assert session.scalar(select(func.count()).select_from(RunFailure)) == 1
+    finally:
+        engine.dispose()
+
+
+def test_runs_from_before_as_found_say_not_recorded(empty_url: str) -> None:
+    """Revision 0022 adds ``runs.as_found``; a run stored before it has none: its
+    record reads back without it and its certificate says "not recorded"."""
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine, "0021")
+        record = make_record()
+        with engine.begin() as connection:
+            row = run_row(record, received_at=T0, record_sha256=record_sha256(record))
+            del row["as_found"]
+            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
+            connection.execute(insert(RunPose), [pose_row(pk, p) for p in record.poses])
+        upgrade(engine)
+        with Session(engine) as session:
+            stored = RunRepository(session).get(record.run_id)
+        assert stored is not None
+        assert stored.as_found is None
+        page = certificate_page(stored, None, T0)
+        assert '<p class="as-found">as found: not recorded</p>' in page
     finally:
         engine.dispose()
 
@@ -361,6 +395,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
                 del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
                 del row["part_number"]  # a column of revision 0014
                 del row["fixture_slot"]  # a column of revision 0015
+                del row["as_found"]  # a column of revision 0022
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

@@ -183,6 +183,7 @@ def test_a_record_without_a_lot_disposition_or_purpose_hashes_as_before_those_ex
     del document["gyro_matrix"]  # nor a gyro matrix (whole-unit runs)
     del document["uncertainty"], document["decision_rule"]  # nor these (revision 0013)
     del document["part_number"]  # nor a product (every run was DIXX-A12's)
+    del document["as_found"]  # nor what the unit held (revision 0022)
     before = json.dumps(document, separators=(",", ":"), ensure_ascii=False)
     assert record_sha256(record) == hashlib.sha256(before.encode()).hexdigest()
     assert record_sha256(make_record(lot="L1")) != record_sha256(record)
@@ -193,3 +194,8 @@ def test_a_record_without_a_lot_disposition_or_purpose_hashes_as_before_those_ex
         record_sha256(record)
     )
     assert record_sha256(make_record()) != record_sha256(record)  # with its profile
+    held = {"written": False, "offset": [2048.0] * 3, "matrix": [[0.0] * 3] * 3}
+    found = {"read_at": "2026-11-02T08:00:00+00:00", "accelerometer": held}
+    assert record_sha256(make_record(limits=reference_only, as_found=found)) != (
+        record_sha256(record)
+    )

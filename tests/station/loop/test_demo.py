@@ -118,6 +118,14 @@ def test_the_demo_calibrates_the_whole_unit_with_its_profile(
     assert np.abs(np.diag(k) - 1).max() < 0.02
     assert not np.allclose(k, np.eye(3), atol=1e-3)
     assert "verification move: turn the putter face up" in result.stderr
+    # Before it wrote them, the station read the gyro coefficients the unit held too:
+    # a virtual putter's, never written, are zero bias and the identity.
+    with sqlite3.connect(tmp_path / "data" / "calstation.sqlite3") as db:
+        [(stored,)] = db.execute("select as_found from runs").fetchall()
+    gyro = json.loads(stored)["gyro"]
+    assert gyro["written"] is False
+    assert gyro["offset"] == [0.0, 0.0, 0.0]
+    assert gyro["matrix"] == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
 def test_a_demo_of_a_product_records_its_part_number(run_cli: CliRunner, tmp_path: Path) -> None:

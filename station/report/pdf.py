@@ -1,0 +1,341 @@
+"""The calibration certificate (or failure report) as a PDF: the same statements as the
+HTML page (:mod:`station.report.certificate`), laid out by fpdf2 on A4 pages, each headed
+by the document's title and number and footed by "page x / y" (ISO/IEC 17025:2017
+7.8.2.1 a), and ended by its end mark.
+
+Text is set in DejaVu Sans, the TrueType font matplotlib ships (its ``fonts/ttf``), so
+the certificate's symbols (±, °, …, −, ⁻¹, ²) print without a system font. DejaVu Sans
+holds no Hangul or Han, so the PDF is in English (:data:`PDF_LANGUAGES`).
+"""
+
+from collections.abc import Sequence
+from datetime import datetime
+from pathlib import Path
+from typing import Final
+
+from station.domain.laboratory import Laboratory
+from station.domain.limits import LimitsProfile
+from station.domain.records import RunSummary, StoredRun
+from station.domain.signature import Signature
+from station.report import formatting
+from station.report.certificate import (
+    ENGLISH,
+    CoefficientState,
+    Identity,
+    as_found,
+    as_left,
+    check_rows,
+    code_words,
+    failure_words,
+    identity,
+)
+
+#: The languages a PDF certificate is set in: those its font writes.
+PDF_LANGUAGES: Final = ("en",)
+
+_MARGIN_MM = 15
+_LINE_MM = 5
+
+
+def _font_path(name: str) -> Path:
+    """A DejaVu font as matplotlib ships it (``DejaVuSans``, ``DejaVuSans-Bold``)."""
+    import matplotlib
+
+    return Path(matplotlib.get_data_path()) / "fonts" / "ttf" / f"{name}.ttf"
+
+
+def _n(value: float | None, digits: int = 6) -> str:
+    return formatting.number(value, digits)
+
+
+def certificate_pdf(
+    run: StoredRun,
+    profile: LimitsProfile | None,
+    issued_at: datetime,
+    zone: str = "UTC",
+    golden: RunSummary | None = None,
+    laboratory: Laboratory | None = None,
+    signature: Signature | None = None,
+) -> bytes:
+    """The PDF of ``run``'s certificate (its failure report when it failed), as
+    :func:`station.report.html.certificate_page` states it: identity, method, results
+    with U and k, as found and as left, the limits, the statements, the signatory."""
+    from fpdf import FPDF
+    from fpdf.enums import XPos, YPos
+
+    tr = ENGLISH
+    words, said = failure_words(tr), code_words(tr)
+    ident = identity(run, golden, tr, laboratory=laboratory, issued_at=issued_at)
+    title = words[run.verdict]
+
+    class Document(FPDF):
+        def header(self) -> None:
+            self.set_font("dejavu", size=8)
+            self.cell(0, _LINE_MM, f"{title} {ident.number}", new_x=XPos.LMARGIN, new_y=YPos.NEXT)
+            self.ln(2)
+
+        def footer(self) -> None:
+            self.set_y(-_MARGIN_MM)
+            self.set_font("dejavu", size=8)
+            page = f"{tr('page')} {self.page_no()} / {{nb}}"
+            self.cell(0, _LINE_MM, page, align="R")
+
+    pdf = Document(format="A4")
+    pdf.set_margins(_MARGIN_MM, _MARGIN_MM, _MARGIN_MM)
+    pdf.set_auto_page_break(True, margin=_MARGIN_MM + _LINE_MM)
+    pdf.add_font("dejavu", fname=str(_font_path("DejaVuSans")))
+    pdf.add_font("dejavu", style="B", fname=str(_font_path("DejaVuSans-Bold")))
+    pdf.set_title(f"{title} {ident.number}")
+    pdf.add_page()
+
+    def heading(text: str, size: int = 12) -> None:
+        pdf.ln(2)
+        pdf.set_font("dejavu", size=size)
+        pdf.multi_cell(0, _LINE_MM + 1, text, new_x=XPos.LMARGIN, new_y=YPos.NEXT)
+        pdf.set_font("dejavu", size=8)
+
+    def paragraph(text: str) -> None:
+        pdf.multi_cell(0, _LINE_MM - 1, text, new_x=XPos.LMARGIN, new_y=YPos.NEXT)
+        pdf.ln(1)
+
+    def table(
+        rows: Sequence[Sequence[str]], widths: Sequence[int] | None = None, headed: bool = True
+    ) -> None:
+        """``rows`` as a table: the first its heading unless not ``headed``."""
+        with pdf.table(
+            col_widths=widths,
+            text_align="LEFT",
+            line_height=_LINE_MM - 1,
+            first_row_as_headings=headed,
+        ) as grid:
+            for row in rows:
+                cells = grid.row()
+                for value in row:
+                    cells.cell(value)
+        pdf.ln(1)
+
+    heading(title, 16)
+    paragraph(tr("times in {zone} · issued {moment}", zone=zone, moment=_moment(issued_at, zone)))
+    if run.verdict == "fail":
+        paragraph(words["on_hold"])
+    table(_identity_rows(run, ident, zone, said), widths=(1, 3), headed=False)
+
+    heading(tr("Method"))
+    table(ident.method, widths=(1, 3), headed=False)
+
+    if run.failures:
+        heading(words["what_failed"])
+        header = [words[k] for k in ("code", "explanation", "measured", "lower", "upper")]
+        rows = [[f.code, f.message, _n(f.measured), _n(f.lower), _n(f.upper)] for f in run.failures]
+        table([header, *rows], widths=(4, 6, 2, 2, 2))
+
+    heading(tr("Coefficients"))
+    cal, u = run.coefficients, run.uncertainty
+    if cal is None:
+        paragraph(tr("No coefficients: the run failed before a calibration was solved."))
+    else:
+        rows = [[tr("axis"), tr("offset (counts)"), tr("sensitivity (counts/g)")]]
+        for i, axis in enumerate("xyz"):
+            offset = _n(cal.offset.as_tuple()[i], 8)
+            sensitivity = _n(cal.sensitivity.as_tuple()[i], 8)
+            if u is not None and u.offset is not None:
+                offset += f" ± {_n(u.offset.as_tuple()[i], 3)}"
+            if u is not None and u.sensitivity is not None:
+                sensitivity += f" ± {_n(u.sensitivity.as_tuple()[i], 3)}"
+            rows.append([axis, offset, sensitivity])
+        table(rows)
+        paragraph(
+            tr(
+                "± is the expanded uncertainty U with coverage factor k = {k} (about 95 % "
+                "coverage for a normal distribution), evaluated per JCGM 100:2008 (GUM): pose "
+                "noise, ADC quantisation, the model's unmodelled cross-axis and the fit's "
+                "evidence.",
+                k=_n(u.k, 2),
+            )
+            if u is not None
+            else tr("No uncertainty recorded for this run.")
+        )
+    if run.gyro is not None:
+        heading(tr("Gyro"))
+        bias = [_n(v) for v in run.gyro.bias.as_tuple()]
+        if u is not None and u.gyro_bias_dps is not None:
+            bias = [f"{b} ± {_n(v, 4)}" for b, v in zip(bias, u.gyro_bias_dps, strict=True)]
+        table([["", "x", "y", "z"], [tr("bias (deg/s)"), *bias]])
+    if run.gyro_matrix is not None:
+        heading(tr("Gyro matrix K"))
+        k = run.gyro_matrix
+        spread = u.gyro_matrix if u is not None and u.gyro_matrix is not None else None
+        rows = [[tr("gyro"), "K x", "K y", "K z"]]
+        for i, row in enumerate(k.matrix):
+            cells = [_n(v) for v in row]
+            if spread is not None:
+                cells = [f"{c} ± {_n(s, 2)}" for c, s in zip(cells, spread[i], strict=True)]
+            rows.append(["xyz"[i], *cells])
+        table(rows)
+        if spread is not None:
+            paragraph(
+                tr(
+                    "± of K: the expanded uncertainty U of each element with coverage factor "
+                    "k = {k}: the fit's standard errors and the moves' geometry (the "
+                    "accelerometer calibration's uncertainty carried into the gravity "
+                    "directions), JCGM 100:2008.",
+                    k=_n(u.k if u is not None else None, 2),
+                )
+            )
+
+    heading(tr("As found and as left"))
+    for name, state, missing in (
+        (tr("as found"), as_found(run), tr("not recorded")),
+        (
+            tr("as left"),
+            as_left(run),
+            tr("not stated: the run did not end in a verified write-back"),
+        ),
+    ):
+        if state is None:
+            paragraph(f"{name}: {missing}")
+        else:
+            table(_state_rows(name, state))
+
+    heading(tr("Limits"))
+    if profile is None:
+        paragraph(
+            tr(
+                "its bounds are not stored on this server (the run's station did not send "
+                "its profile)"
+            )
+        )
+    else:
+        header = [tr("check"), tr("unit of measure"), words["lower"], words["upper"]]
+        rows = [[*header, words["measured"], tr("result")]]
+        for c in check_rows(run, profile, tr):
+            lower = _n(c.lower) if c.lower is not None else words["none"]
+            upper = _n(c.upper) if c.upper is not None else words["none"]
+            rows.append([c.name, c.unit, lower, upper, c.measured or "—", said[c.result]])
+        table(rows, widths=(3, 2, 2, 2, 4, 2))
+
+    heading(tr("Statements"))
+    paragraph(
+        tr(
+            "The results relate only to the item calibrated. This document shall not be "
+            "reproduced except in full without the laboratory's written approval."
+        )
+    )
+    rows = [[tr("authorised by"), _authorised(signature, zone)]]
+    if signature is not None:
+        over = tr("over the record's SHA-256 {sha256}", sha256=signature.record_sha256)
+        rows.append([tr("signature"), f"Ed25519 {signature.signature} {over}"])
+        rows.append([tr("signature check"), f"/api/v1/runs/{run.run_id}/signature"])
+    table(rows, widths=(1, 3), headed=False)
+    pdf.ln(4)
+    pdf.set_font("dejavu", size=10)
+    end = tr("— end of certificate —") if run.verdict == "pass" else tr("— end of report —")
+    pdf.cell(0, _LINE_MM, end, align="C")
+    return bytes(pdf.output())
+
+
+def _moment(value: datetime | None, zone: str) -> str:
+    return formatting.moment(value, zone)
+
+
+def _authorised(signature: Signature | None, zone: str) -> str:
+    tr = ENGLISH
+    if signature is None:
+        return tr("not signed by an authorised signatory")
+    signed = tr("authorised signatory; signed {moment}", moment=_moment(signature.signed_at, zone))
+    return f"{signature.signatory}, {signed}"
+
+
+def _state_rows(name: str, state: CoefficientState) -> list[list[str]]:
+    """One set of coefficients (as found or as left) as table rows."""
+    say = ENGLISH
+    rows = [
+        [name, say("offset (counts)"), say("sensitivity (counts/g)"), say("matrix (g per count)")]
+    ]
+    for i, axis in enumerate("xyz"):
+        matrix = ", ".join(_n(v) for v in state.matrix[i])
+        rows.append([axis, _n(state.offset[i], 8), _n(state.sensitivity[i], 8), matrix])
+    error = f"{state.error_mg:.3f} mg"
+    if not state.written:
+        error += f" ({say('factory defaults')})"
+    rows.append([say("|g| error"), error, "", ""])
+    return rows
+
+
+def _identity_rows(
+    run: StoredRun, ident: Identity, zone: str, said: dict[str, str]
+) -> list[tuple[str, str]]:
+    """The identity block's rows, as ``templates/identity.html`` lays them out."""
+    say = ENGLISH
+    lab = ident.laboratory
+    unset = say("not configured")
+    golden = ident.golden
+    reference = (
+        f"{say('golden-unit check')} {golden.serial} "
+        + say(
+            "at {moment}, {verdict}",
+            moment=_moment(golden.started_at, zone),
+            verdict=said.get(golden.verdict, golden.verdict),
+        )
+        if golden is not None
+        else say("no golden-unit check on record for this station that shift")
+    )
+    gravity = _n(lab.gravity_m_s2, 7) if lab.gravity_m_s2 else unset
+    traceability = (
+        say(
+            "each axis is measured against the local acceleration of gravity g = {g} m/s²",
+            g=gravity,
+        )
+        + "; "
+        + (lab.traceability or say("its traceability is not configured"))
+    )
+    if ident.temperature_range is not None:
+        low, high = ident.temperature_range
+        conditions = say(
+            "temperature {low} … {high} °C (the run's poses; mean {mean} °C): the results hold "
+            "in this range",
+            low=_n(low, 4),
+            high=_n(high, 4),
+            mean=_n(ident.temperature_c, 4),
+        )
+    else:
+        conditions = say("temperature not recorded")
+    rule = said.get(run.decision_rule or "simple", run.decision_rule or "simple")
+    number_name = say("certificate number") if run.verdict == "pass" else say("report number")
+    return [
+        (number_name, ident.number),
+        (say("laboratory"), lab.name or unset),
+        (say("address"), lab.address or unset),
+        (
+            say("performed at"),
+            f"{lab.location or lab.address or unset}, "
+            + say("station {station}", station=run.station_id),
+        ),
+        (say("customer"), lab.customer or unset),
+        (say("item"), say("smart putter's inertial measurement unit (accelerometer and gyros)")),
+        (say("serial"), run.serial),
+        (say("part number"), run.part_number),
+        (say("verdict"), said.get(run.verdict, run.verdict)),
+        (say("run"), str(run.run_id)),
+        (
+            say("received"),
+            _moment(ident.received_at, zone) if ident.received_at else say("not recorded"),
+        ),
+        (say("condition on receipt"), ident.condition or say("not recorded")),
+        (say("calibrated"), f"{_moment(run.started_at, zone)} – {_moment(run.finished_at, zone)}"),
+        (say("issued"), _moment(ident.issued_at, zone)),
+        (say("station / operator"), f"{run.station_id} / {run.operator_id}"),
+        (say("lot"), run.lot or "—"),
+        (
+            say("software / algorithm / model"),
+            f"{run.software_version} / {run.algorithm} / {run.model}",
+        ),
+        (
+            say("limits"),
+            f"{run.limits.name} v{run.limits.version}, sha256 {run.limits.sha256}",
+        ),
+        (say("decision rule"), rule),
+        (say("reference"), reference),
+        (say("traceability"), traceability),
+        (say("conditions"), conditions),
+    ]
