@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from station.cli.output import err, out, print_json
+from station.cli.output import err, out, print_json, screen_console
 from station.domain.constants import MAX_SLOTS
 from station.domain.errors import CalstationError
 
@@ -151,7 +151,7 @@ def run_command(
     if not config.slots:
         check_port(config.port)
     with TerminalKeys() as keys:
-        app = _station(config, limits_profile, keys, out, units)
+        app = _station(config, limits_profile, keys, screen_console(), units)
         app.serve()
     _stopped(app)
 
@@ -249,7 +249,7 @@ def demo_command(
             slots=slots,
             ports=f"{demo_dir}/putter-slotN",
         )
-    console = err if as_json or not out.is_terminal else out
+    console = screen_console(stderr=as_json or not out.is_terminal)
     limits = load_profile(config.limits_file, config.limits_profile)
     app = _station(config, limits, operator_script, console, units, probe_port=False, speed=speed)
     operator_script.station = app
@@ -268,6 +268,7 @@ def demo_command(
         ),
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     try:
         records = app.serve()

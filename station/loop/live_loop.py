@@ -211,7 +211,7 @@ class FrontEnd(ABC):
     def _say_line(self, text: str) -> None:
         """A line for a console that is not a terminal (logs, the demo's stderr)."""
         if not self.console.is_terminal:
-            self.console.print(text, markup=False, highlight=False)
+            self.console.print(text, markup=False, highlight=False, soft_wrap=True)
 
     def _title(self) -> str:
         """What follows the versions in the first line said."""

@@ -6,6 +6,7 @@ terminal, the demo's scripted operator and the tests.
 
 from rich.align import Align
 from rich.cells import cell_len
+from rich.columns import Columns
 from rich.console import Group, RenderableType
 from rich.panel import Panel
 from rich.table import Table
@@ -137,6 +138,17 @@ def pad(text: str, cells: int) -> str:
     return text + " " * max(0, cells - cell_len(text))
 
 
+def pose_strip(view: RunView) -> RenderableType:
+    """Every pose of the run, ✓ taken, ▶ asked, · to come: as many to a line as the
+    terminal holds, a pose never split over two lines."""
+    items = []
+    for i, p in enumerate(view.poses):
+        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
+        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
+        items.append(Text(f"{mark}{i + 1} {pose_words(p.name)}", style=style))
+    return Columns(items, padding=(0, 1))
+
+
 def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
     """The screen while a unit is calibrated, drawn from the run's view model."""
     total = len(view.poses)
@@ -204,12 +216,7 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
         )
         if live.refused is not None:
             parts.append(Text(live.refused, style="bold yellow"))
-    poses = Text()
-    for i, p in enumerate(view.poses):
-        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
-        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
-        poses.append(f" {mark}{i + 1} {pose_words(p.name)}", style=style)
-    parts.append(poses)
+    parts.append(pose_strip(view))
     for message in view.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
         parts.append(Text(message.text, style=style))
