@@ -45,7 +45,7 @@ from station.loop.slot import Slot
 from station.loop.unit_history import ScanAction
 from station.results.journal import JournalFile, RunJournal
 from station.results.storage import RunStore
-from station.run.operator_text import port_problem
+from station.run.operator_text import port_problem, said_of
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun
 
@@ -146,7 +146,7 @@ class StationApp(FrontEnd):
         if run is not None:
             run.step()
             for message in self.slot.unsaid():
-                self._say_line(f"{run.journal.serial}: {message.text}")
+                self._say_line(said_of(run.journal.serial, message.text))
             if run.phase is Phase.DONE:
                 self._finish_unit()
         if self.prompt.state is not State.UNIT:
@@ -285,9 +285,7 @@ class StationApp(FrontEnd):
             )
             return
         if isinstance(started, WrongUnit):
-            self._tell(
-                tr("{problem}: set the unit aside; nothing was recorded", problem=started.sentence)
-            )
+            self._tell(started.sentence)
             return
         if isinstance(started, Unreachable):
             self._tell(

@@ -19,6 +19,7 @@ from station.report.explanations import explanation
 from station.run.operator_text import (
     pose_instruction,
     pose_words,
+    said_of,
     verdict_word,
     wrong_unit,
 )
@@ -252,7 +253,7 @@ def verdict_screen(record: RunRecord) -> RenderableType:
             )
         lines.append(Align.center(table))
     for failure in record.failures:
-        lines.append(Text(f"✗ {failure.code}: {explanation(failure)}", style="red"))
+        lines.append(Text("✗ " + said_of(failure.code, explanation(failure)), style="red"))
     if record.disposition is not None:
         step, colour = next_step(record.disposition)
         lines.append(Text(tr("next: {step}", step=step), style=f"bold {colour}", justify="center"))
@@ -264,11 +265,8 @@ def serial_prompt(typed: str, note: str | None, queued: str | None = None) -> Re
     """The prompt for the next unit's serial number (``queued``: scanned during the last
     unit, taken by Enter)."""
     take = tr(" (Enter: {serial}, scanned during the last unit)", serial=queued) if queued else ""
-    parts: list[RenderableType] = [
-        Text.assemble(
-            (tr("Scan the next unit's serial number"), "bold"), f"{take}: ", typed, ("█", "blink")
-        )
-    ]
+    asked = said_of(tr("Scan the next unit's serial number") + take, "")
+    parts: list[RenderableType] = [Text.assemble((asked, "bold"), typed, ("█", "blink"))]
     if note:
         parts.append(Text(note, style="yellow"))
     return Group(*parts)

@@ -39,7 +39,13 @@ from station.results.journal import JournalFile
 from station.run.acquisition import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message
-from station.run.operator_text import MAX_UNKNOWN, port_problem, pose_words
+from station.run.operator_text import (
+    MAX_UNKNOWN,
+    port_problem,
+    pose_words,
+    said_of,
+    serial_mismatch,
+)
 from station.run.phases import Phase
 from station.run.view import RunView
 from tests.db.records import make_record
@@ -243,7 +249,7 @@ def test_the_failure_screen_explains_each_failure_in_the_operators_language(
     lines = _drawn(verdict_screen(record))
     assert max(map(cell_len, lines)) <= 80
     text = "\n".join(lines)
-    assert f"✗ pose_noise: {EXPLAINED[language]}" in text
+    assert "✗ " + said_of("pose_noise", EXPLAINED[language]) in text
     assert "PT000009" in text
     assert failure.message not in text  # the record's English sentence, kept as said
     set_language("en")
@@ -289,7 +295,7 @@ def _every_screen(tmp_path: Path) -> tuple[list[RenderableType], list[str]]:
     record = make_record(serial="PT000001", verdict="pass", disposition="ship")
     failed = make_record(serial="PT002007", verdict="fail", disposition="rework")
     sentences = [
-        tr("{problem}: set the unit aside; nothing was recorded", problem=str(mismatch)),
+        serial_mismatch(mismatch.expected, mismatch.reported),
         UnitHistory("PT002007", runs=(failed,)).at_scan(3, failed.part_number).text or "",
         keys_help(),
         *_catalogue_lines(),
