@@ -5,7 +5,8 @@ gettext format, extracted from the sources with ``pybabel extract``, see
 ``docs/station.md``); English is the sources' own text. :func:`set_language` chooses the
 process's language once, at start (``language`` in the station's configuration,
 ``CALSTATION_LANGUAGE``, ``--language``); :func:`tr` translates a message and fills its
-``{placeholders}`` afterwards, so a translation may put them in its own order. A server
+``{placeholders}`` afterwards, so a translation may put them in its own order; :func:`trn`
+translates one whose words follow a count ("1 run", "3 runs"). A server
 that answers each request in its reader's language (``?lang=``, ``Accept-Language``)
 takes :func:`speaker` of that language instead. Babel is imported only when a language
 other than English is chosen.
@@ -80,6 +81,14 @@ def language() -> Language:
 def tr(message: str, **values: object) -> str:
     """``message`` in the operator's language, its ``{placeholders}`` filled."""
     return _filled(_language, _translations.gettext(message), values)
+
+
+def trn(singular: str, plural: str, count: int, **values: object) -> str:
+    """``singular`` or ``plural`` as ``count`` and the operator's language want it (gettext's
+    plural forms: Korean and Chinese have one), its ``{placeholders}`` and ``{count}``
+    filled."""
+    chosen = _translations.ngettext(singular, plural, count)
+    return _filled(_language, chosen, {"count": count, **values})
 
 
 def speaker(language: str) -> Say:

@@ -19,7 +19,7 @@ from rich.text import Text
 
 from station.cli.output import screen_console
 from station.device import SerialNumberMismatchError
-from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr
+from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr, trn
 from station.domain.limits import Bounds, check, load_profile
 from station.domain.orientation import Sensed
 from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
@@ -281,10 +281,16 @@ def _on_live(width: int, *screens: RenderableType) -> list[str]:
 
 def _catalogue_lines() -> list[str]:
     """Every line the catalogues hold, in the operator's language, its values filled."""
-    messages = read_po(io.StringIO(catalogue_text("ko")))  # the ids; tr translates them
-    return [
-        tr(m.id, **{name: FILLER for name in PLACEHOLDER.findall(m.id)}) for m in messages if m.id
-    ]
+    lines = []
+    for message in read_po(io.StringIO(catalogue_text("ko"))):  # the ids; tr translates them
+        if isinstance(message.id, str) and message.id:
+            lines.append(tr(message.id, **dict.fromkeys(PLACEHOLDER.findall(message.id), FILLER)))
+        elif message.id:  # words after a count: both forms
+            singular, plural = message.id
+            values = dict.fromkeys(PLACEHOLDER.findall(plural), FILLER)
+            values.pop("count", None)
+            lines += [trn(singular, plural, n, **values) for n in (1, 12)]
+    return lines
 
 
 def _every_screen(tmp_path: Path) -> tuple[list[RenderableType], list[str]]:
@@ -350,3 +356,19 @@ def test_a_screen_on_a_soft_wrapping_console_would_lose_the_ends_of_its_lines() 
     )
     console.print(LiveRender(Text(sentence)))
     assert _cut_words(console.export_text().splitlines(), [sentence], 80) != []
+
+
+@pytest.mark.parametrize(
+    ("language", "said"),
+    [
+        ("ko", "시리얼 번호 불일치: 라벨은 'PT002007', 유닛은 'PT002006'을 보고합니다"),
+        ("zh", "序列号不符：标签为 'PT002007'，产品报告 'PT002006'"),
+    ],
+)
+def test_the_serial_number_mismatch_is_said_whole_in_the_operators_language(
+    language: str, said: str
+) -> None:
+    set_language(language)
+    sentence = serial_mismatch("PT002007", "PT002006")
+    assert sentence.startswith(said)
+    assert re.findall(r"[A-Za-z]{2,}", re.sub(r"'PT\d+'", "", sentence)) == []
