@@ -6,6 +6,8 @@ derived data of an older definition is rewritten in the same transaction as the 
 (:func:`db.derived.rewrite_if_stale`).
 """
 
+from dataclasses import dataclass
+
 from sqlalchemy import Engine
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
@@ -73,12 +75,28 @@ def open_database(url: str | None = None, *, auto_migrate: bool | None = None) -
     return database
 
 
-def upgrade_database(url: str | None = None) -> str:
-    """Migrate the database at ``url`` to the packaged head; return the revision reached."""
+@dataclass(frozen=True)
+class Upgrade:
+    """What :func:`upgrade_database` found and left: the schema revision before (None: an
+    empty database) and after."""
+
+    before: str | None
+    after: str
+
+
+def upgrade_database(url: str | None = None) -> Upgrade:
+    """Migrate the database at ``url`` to the packaged head."""
+    engine = make_engine(url or DatabaseSettings.from_environment().url())
+    try:
+        before = current_revision(engine)
+    except OperationalError as exc:
+        raise DatabaseUnavailableError.of(engine.url, exc) from None
+    finally:
+        engine.dispose()
     database = open_database(url, auto_migrate=True)
     try:
-        revision = current_revision(database.engine)
+        after = current_revision(database.engine)
     finally:
         database.dispose()
-    assert revision is not None
-    return revision
+    assert after is not None
+    return Upgrade(before, after)

@@ -94,8 +94,14 @@ def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     from db import DatabaseSettings, upgrade_database
 
     url = database_url or DatabaseSettings.from_environment().url()
-    revision = upgrade_database(url)
-    out.print(f"database {_shown(url)} at schema revision {revision}")
+    upgrade = upgrade_database(url)
+    if upgrade.before == upgrade.after:
+        said = f"already at schema revision {upgrade.after}: nothing to migrate"
+    elif upgrade.before is None:
+        said = f"created at schema revision {upgrade.after}"
+    else:
+        said = f"migrated from schema revision {upgrade.before} to {upgrade.after}"
+    out.print(f"database {_shown(url)} {said}", markup=False)
 
 
 BackupFile = Annotated[
@@ -138,17 +144,16 @@ def db_restore(
     out.print(f"database {_shown(url)} restored from {file}")
 
 
-def _station_id(value: str) -> str:
+def _name(value: str) -> str:
+    """A station's, lab's, quality engineer's or reviewer's name, refused in words."""
     try:
         return TypeAdapter(Identifier).validate_python(value)
-    except ValidationError:
-        raise typer.BadParameter(
-            "letters, digits and . _ : @ - only, at most 64 characters"
-        ) from None
+    except ValidationError as exc:
+        raise typer.BadParameter(validation_problem(exc)) from None
 
 
 def _optional_id(value: str | None) -> str | None:
-    return None if value is None else _station_id(value)
+    return None if value is None else _name(value)
 
 
 StationOption = Annotated[
@@ -224,7 +229,11 @@ def keys_revoke(
     holder, scope = _holder(station, lab, quality)
     with repository_transaction(database_url) as repository:
         revoked = repository.revoke_keys(holder, scope)
-    out.print(f"revoked {revoked} API key(s) of {scope} {holder}")
+    out.print(
+        f"revoked {revoked} API key of {scope} {holder}"
+        if revoked == 1
+        else f"revoked {revoked} API keys of {scope} {holder}"
+    )
 
 
 def review_command(
@@ -235,7 +244,9 @@ def review_command(
     ],
     root_cause: Annotated[str, typer.Option("--root-cause", help="Why its latest run failed.")],
     repair: Annotated[str, typer.Option("--repair", help="What was repaired (or why not).")],
-    by: Annotated[str, typer.Option("--by", help="Who reviewed it (a name, no spaces).")],
+    by: Annotated[
+        str, typer.Option("--by", help="Who reviewed it (a name, no spaces).", callback=_name)
+    ],
     database_url: DatabaseUrlOption = None,
 ) -> None:
     """Review a unit on hold: release it for a retest, or scrap it (recorded, append-only).

@@ -5,14 +5,14 @@ imported (the modules pull in scipy, SQLAlchemy, FastAPI and more): ``calstation
 solve`` starts without loading the web server, and ``calstation --help``, ``version``
 or a mistyped command load none of them: the list of commands is drawn from their
 one-line summaries here (a test holds each equal to its command's own help).
-Errors meant for a person (:class:`station.domain.errors.CalstationError`) end as one line on
-standard error and exit status 2; nothing else is caught, so a genuine bug still shows
-its traceback.
+Errors meant for a person (:class:`station.domain.errors.CalstationError`) and a command
+line the option parser refuses (click's usage errors) end as one line on standard error
+and exit status 2; nothing else is caught, so a genuine bug still shows its traceback.
 """
 
 import importlib
 import sys
-from typing import NamedTuple
+from typing import Any, NamedTuple, NoReturn
 
 import typer
 
@@ -21,6 +21,8 @@ from station.cli.output import fail, out
 from station.domain.errors import CalstationError
 
 EXIT_USER_ERROR = 2
+#: The exit status of a command stopped by Ctrl-C (the shell's 128 + SIGINT).
+EXIT_INTERRUPTED = 130
 
 
 class Command(NamedTuple):
@@ -115,6 +117,8 @@ def build_app(command: str | None = None) -> typer.Typer:
         no_args_is_help=True,
         add_completion=False,
         pretty_exceptions_enable=False,
+        # click's plain help: each flag as it is typed (rich's panels label it <bool>).
+        rich_markup_mode=None,
     )
     app.callback()(_root)
     for name, (module, attribute, summary) in COMMANDS.items():
@@ -134,7 +138,26 @@ def main() -> None:
     """Run the command line, turning user errors into one line and exit status 2."""
     command = sys.argv[1] if len(sys.argv) > 1 else None
     try:
-        build_app(command)(prog_name="calstation")
+        status = build_app(command)(prog_name="calstation", standalone_mode=False)
     except CalstationError as exc:
         fail(str(exc))
         raise SystemExit(EXIT_USER_ERROR) from None
+    except typer.TyperException as exc:  # the option parser's refusals (click's, in typer)
+        refused(exc)
+    except typer.Abort:  # Ctrl-C outside a station's loop
+        raise SystemExit(EXIT_INTERRUPTED) from None
+    raise SystemExit(status if isinstance(status, int) else 0)
+
+
+def refused(exc: typer.TyperException) -> NoReturn:
+    """A command line the option parser refused, in one line on standard error: the
+    command, what is wrong, where its help is; a group given no command shows its help."""
+    context: Any = getattr(exc, "ctx", None)
+    where = context.command_path if context is not None else "calstation"
+    code = getattr(exc, "exit_code", EXIT_USER_ERROR)
+    if context is not None and exc.format_message() == context.get_help():
+        out.print(exc.format_message(), markup=False, highlight=False)
+        raise SystemExit(code)
+    problem = " ".join(exc.format_message().replace("Value error, ", "").split())
+    fail(f"{where}: {problem} (see {where} --help)")
+    raise SystemExit(code)

@@ -1,7 +1,9 @@
 """The CLI's output layer: the only place that writes to the terminal.
 
-``out`` is standard output (results, JSON); ``err`` is standard error (screens,
-progress and error lines), so ``--json`` output stays machine-readable.
+``out`` is standard output (results, JSON); ``err`` is standard error (progress and
+error lines), so ``--json`` output stays machine-readable. Both leave a long line whole
+(soft wrap: the terminal wraps it, a log keeps it on one line). The operator's screens are
+drawn on a :func:`screen_console` instead.
 """
 
 import json
@@ -11,6 +13,14 @@ from rich.console import Console
 
 out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+def screen_console(**options: Any) -> Console:
+    """A console for the operator's screens (``options``: rich's, e.g. ``stderr``): each
+    line wrapped between words at the terminal's width, counted in cells (a Hangul or Han
+    character takes two), never cut. rich's ``Live`` display crops every line at the edge,
+    so a screen drawn on a soft-wrapping console loses the end of each long line."""
+    return Console(highlight=False, soft_wrap=False, **options)
 
 
 def print_json(payload: Any) -> None:

@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from station.cli.output import err, out, print_json
+from station.cli.main import EXIT_INTERRUPTED
+from station.cli.output import err, out, print_json, screen_console
 from station.domain.constants import MAX_SLOTS
 from station.domain.errors import CalstationError
 
@@ -150,10 +151,18 @@ def run_command(
     prepare_data_dir(config.data_dir)
     if not config.slots:
         check_port(config.port)
+    stopped = None
     with TerminalKeys() as keys:
-        app = _station(config, limits_profile, keys, out, units)
-        app.serve()
+        app = _station(config, limits_profile, keys, screen_console(), units)
+        try:
+            app.serve()
+        except KeyboardInterrupt:  # Ctrl-C: the journals stay for the next start
+            stopped = app.stopped_line()
+    if stopped is not None:
+        err.print(stopped, markup=False, highlight=False, soft_wrap=True)
     _stopped(app)
+    if stopped is not None:
+        raise SystemExit(EXIT_INTERRUPTED)
 
 
 def demo_command(
@@ -194,7 +203,7 @@ def demo_command(
     language: LanguageOption = None,
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
-    from station.domain.i18n import tr
+    from station.domain.i18n import tr, trn
     from station.domain.limits import load_profile
     from station.loop.demo import CablePuller, ScriptedOperator
     from station.loop.fixture.demo import FixtureOperator
@@ -249,25 +258,21 @@ def demo_command(
             slots=slots,
             ports=f"{demo_dir}/putter-slotN",
         )
-    console = err if as_json or not out.is_terminal else out
+    console = screen_console(stderr=as_json or not out.is_terminal)
     limits = load_profile(config.limits_file, config.limits_profile)
     app = _station(config, limits, operator_script, console, units, probe_port=False, speed=speed)
     operator_script.station = app
     console.print(
-        tr(
-            "demo: {units} virtual putters, {where} by a scripted operator, at {speed}× real time",
-            units=units,
-            where=where,
-            speed=f"{speed:g}",
-        )
-        if units > 1
-        else tr(
-            "demo: 1 virtual putter, {where} by a scripted operator, at {speed}× real time",
+        trn(
+            "demo: {count} virtual putter, {where} by a scripted operator, at {speed}× real time",
+            "demo: {count} virtual putters, {where} by a scripted operator, at {speed}× real time",
+            units,
             where=where,
             speed=f"{speed:g}",
         ),
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     try:
         records = app.serve()
@@ -281,9 +286,10 @@ def demo_command(
     if not as_json:
         backlog = app.results.outbox.count()
         out.print(
-            tr(
+            trn(
+                "{count} unit calibrated; outbox {backlog}; database {database}",
                 "{count} units calibrated; outbox {backlog}; database {database}",
-                count=len(records),
+                len(records),
                 backlog=backlog,
                 database=config.database_url or config.data_dir,
             )

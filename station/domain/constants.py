@@ -35,6 +35,14 @@ PART_NUMBER_PATTERN = r"^[A-Z0-9][A-Z0-9._\-]{0,31}$"
 PartNumber = Annotated[str, StringConstraints(pattern=PART_NUMBER_PATTERN)]
 """A product's part number (``DIXX-A12``)."""
 
+#: What a value of each pattern above is, in the words a person refused one reads.
+PATTERN_WORDS: Final = {
+    IDENTIFIER_PATTERN: "a name is 1 to 64 letters, digits and . _ : @ -, no spaces, "
+    "starting with a letter or digit (e.g. qa.kim)",
+    PART_NUMBER_PATTERN: "a part number is 1 to 32 capital letters, digits and . _ -, "
+    "starting with a letter or digit (e.g. DIXX-A12)",
+}
+
 #: The product of every run from before products existed (migration 0014), and of a
 #: station configured with none: the putter with the KXM52 behind a 12-bit ADC.
 DEFAULT_PART_NUMBER: Final = "DIXX-A12"

@@ -27,6 +27,8 @@ a bug in the run's state machine).
 
 from pydantic import ValidationError
 
+from station.domain.constants import PATTERN_WORDS
+
 
 class CalstationError(Exception):
     """Base of every error whose message is shown to the operator as it is."""
@@ -39,11 +41,16 @@ class InputError(CalstationError):
 def validation_problem(exc: ValidationError, *, env_prefix: str | None = None) -> str:
     """The first problem pydantic found, as ``field.sub: message`` (a person reads it).
 
-    A validator's own sentence is given as it is, without pydantic's "Value error, ".
+    A validator's own sentence is given as it is, without pydantic's "Value error, "; a
+    value refused by a pattern is said with what such a value is (``PATTERN_WORDS``), not
+    the regular expression.
     With ``env_prefix`` the field is named as its environment variable
     (``CALSTATION_DATABASE_URL``), for settings read from the environment.
     """
     first = exc.errors(include_url=False)[0]
+    pattern = first.get("ctx", {}).get("pattern")
+    if first["type"] == "string_pattern_mismatch" and pattern in PATTERN_WORDS:
+        first["msg"] = f"{first['input']!r} is refused: {PATTERN_WORDS[pattern]}"
     parts = [str(part) for part in first["loc"]]
     if env_prefix is not None and parts:
         parts[0] = env_prefix + parts[0].upper()

@@ -5,7 +5,7 @@ or the demo's scripted operator) and acts on what they answer (:mod:`station.loo
 hands each unit to the unit lifecycle (:class:`station.loop.lifecycle.UnitLifecycle`:
 scan, start, finish), steps the unit in progress, and draws the screens
 (:mod:`station.loop.screens`). A journal left by a crash is offered for resumption at
-start.
+start, and the next unit's label scanned during a unit is kept on disk until taken.
 """
 
 import logging
@@ -43,9 +43,9 @@ from station.loop.prompt import (
 from station.loop.results_link import UnitLookup
 from station.loop.slot import Slot
 from station.loop.unit_history import ScanAction
-from station.results.journal import JournalFile, RunJournal
+from station.results.journal import JournalFile, QueuedLabelFile, RunJournal
 from station.results.storage import RunStore
-from station.run.operator_text import port_problem
+from station.run.operator_text import port_problem, said_of
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun
 
@@ -68,6 +68,9 @@ class StationApp(FrontEnd):
         probe_ports: bool = True,
     ) -> None:
         self.slot = Slot(1, config.port, JournalFile(config.journal_path))
+        #: The next unit's label, scanned during a unit, as kept on disk.
+        self.queued_file = QueuedLabelFile(config.queued_label_path)
+        self._kept_label: str | None = None
         super().__init__(
             config=config,
             profile=profile,
@@ -117,6 +120,7 @@ class StationApp(FrontEnd):
         return []
 
     def _begin(self) -> None:
+        self.prompt.next_serial = self._kept_label = self.queued_file.load()
         interrupted, discarded = self.lifecycle.interrupted()
         for _, unreadable in discarded:
             self._tell(unreadable.sentence)
@@ -139,6 +143,7 @@ class StationApp(FrontEnd):
             typed = ""
             self._stop()
         self._keys(typed)
+        self._keep_label()
         self.results.poll()
         self._stopping_tick()
         self._take_lookup()
@@ -146,7 +151,7 @@ class StationApp(FrontEnd):
         if run is not None:
             run.step()
             for message in self.slot.unsaid():
-                self._say_line(f"{run.journal.serial}: {message.text}")
+                self._say_line(said_of(run.journal.serial, message.text))
             if run.phase is Phase.DONE:
                 self._finish_unit()
         if self.prompt.state is not State.UNIT:
@@ -198,6 +203,12 @@ class StationApp(FrontEnd):
         run.messages.say(
             "info", tr("next unit {serial} scanned: Enter at the prompt takes it", serial=text)
         )
+
+    def _keep_label(self) -> None:
+        """Keep the next unit's label on disk whenever it changes (queued or taken)."""
+        if self.prompt.next_serial != self._kept_label:
+            self._kept_label = self.prompt.next_serial
+            self.queued_file.save(self._kept_label)
 
     def _key(self, key: str) -> None:
         answer = self.prompt.key(key, self.run)
@@ -285,9 +296,7 @@ class StationApp(FrontEnd):
             )
             return
         if isinstance(started, WrongUnit):
-            self._tell(
-                tr("{problem}: set the unit aside; nothing was recorded", problem=started.sentence)
-            )
+            self._tell(started.sentence)
             return
         if isinstance(started, Unreachable):
             self._tell(

@@ -35,6 +35,7 @@ from datetime import UTC, datetime
 
 from station import __version__
 from station.device import DeviceError, SerialNumberMismatchError
+from station.domain.calibration import Model
 from station.domain.i18n import tr
 from station.domain.limits import LimitsProfile
 from station.domain.products import Label
@@ -52,9 +53,11 @@ from station.run.operator_text import (
     not_a_serial,
     other_product,
     port_problem,
+    said_of,
+    serial_mismatch,
     verdict_word,
 )
-from station.run.record import ALGORITHM
+from station.run.record import ALGORITHMS
 from station.run.unit_run import UnitRun, open_unit
 from station.run.verdict import Purpose
 from station.run.writeback import read_as_found
@@ -106,7 +109,7 @@ class StoredAlready:
 @dataclass(frozen=True)
 class WrongUnit:
     """The unit on the slot's port reports another serial than its label
-    (``sentence``: the link's own words)."""
+    (``sentence``: what the operator is told)."""
 
     reported: str
     sentence: str
@@ -119,18 +122,21 @@ class Unreachable:
     problem: str
 
 
-def versions(profile: LimitsProfile) -> str:
-    """Software, algorithm and limits versions, as shown at the top of the screen."""
+def versions(profile: LimitsProfile, model: Model) -> str:
+    """Software, algorithm (the one the records of a ``model`` run name) and limits
+    versions, as shown at the top of the screen."""
     p = profile
-    return f"v{__version__} · {ALGORITHM} · limits {p.name} v{p.version} ({p.sha256[:12]})"
+    algorithm = ALGORITHMS[model]
+    return f"v{__version__} · {algorithm} · limits {p.name} v{p.version} ({p.sha256[:12]})"
 
 
 def verdict_line(record: RunRecord) -> str:
     """``PT000042: FAIL (offset): retest``: the verdict in the station's log."""
     failed = ", ".join(f.code for f in record.failures)
-    then = f": {disposition_word(record.disposition)}" if record.disposition else ""
-    verdict = verdict_word(record.verdict)
-    return f"{record.serial}: {verdict}" + (f" ({failed})" if failed else "") + then
+    verdict = verdict_word(record.verdict) + (f" ({failed})" if failed else "")
+    if record.disposition:
+        verdict = said_of(verdict, disposition_word(record.disposition))
+    return said_of(record.serial, verdict)
 
 
 def _new_journal(
@@ -187,7 +193,7 @@ class UnitLifecycle:
     @property
     def versions(self) -> str:
         """Software, algorithm and limits versions, as shown at the top."""
-        return versions(self.profile)
+        return versions(self.profile, self.config.run.model)
 
     def open_results(self) -> None:
         """Reach the store and send what waits in the outbox, beside the loop."""
@@ -290,7 +296,7 @@ class UnitLifecycle:
         try:
             driver = open_unit(port, serial, self.product.sensor.adc_max)
         except SerialNumberMismatchError as exc:
-            return WrongUnit(exc.reported, str(exc))
+            return WrongUnit(exc.reported, serial_mismatch(exc.expected, exc.reported))
         except DeviceError as exc:
             return Unreachable(port_problem(exc))
         if journal is None:

@@ -18,7 +18,7 @@ from rich.live import Live
 from rich.text import Text
 
 from station.domain.errors import InputError
-from station.domain.i18n import tr
+from station.domain.i18n import tr, trn
 from station.domain.limits import LimitsProfile
 from station.domain.records import RunRecord
 from station.loop.config import StationConfig
@@ -109,6 +109,27 @@ class FrontEnd(ABC):
             stop_metrics()
         return self.records
 
+    def stopped_line(self) -> str:
+        """What a station stopped by Ctrl-C says it left: the journal of each unit in
+        progress, kept on disk, which the station offers to resume when it starts again."""
+        kept = [slot.run.journal for slot in self.lifecycle.running if slot.run is not None]
+        if not kept:
+            return tr("stopped (Ctrl-C): no unit was in progress")
+        if len(kept) == 1:
+            journal = kept[0]
+            return tr(
+                "stopped (Ctrl-C): the journal of unit {serial} is kept at pose {number} of "
+                "{total}: the station offers to resume it when it starts again",
+                serial=journal.serial,
+                number=journal.next_pose + 1,
+                total=len(journal.poses),
+            )
+        return tr(
+            "stopped (Ctrl-C): the journals of units {serials} are kept: the station offers "
+            "to resume them when it starts again",
+            serials=", ".join(journal.serial for journal in kept),
+        )
+
     def _serve_metrics(self) -> Callable[[], None]:
         """Serve the station's metrics on its ``metrics_port``, if it has one; returns
         what stops them."""
@@ -153,16 +174,8 @@ class FrontEnd(ABC):
         held = tr(" and ").join(
             part
             for part in (
-                (tr("1 finished run") if runs == 1 else tr("{count} finished runs", count=runs))
-                if runs
-                else "",
-                (
-                    tr("1 unit journal")
-                    if journals == 1
-                    else tr("{count} unit journals", count=journals)
-                )
-                if journals
-                else "",
+                trn("{count} finished run", "{count} finished runs", runs) if runs else "",
+                trn("{count} unit journal", "{count} unit journals", journals) if journals else "",
             )
             if part
         )
@@ -211,7 +224,7 @@ class FrontEnd(ABC):
     def _say_line(self, text: str) -> None:
         """A line for a console that is not a terminal (logs, the demo's stderr)."""
         if not self.console.is_terminal:
-            self.console.print(text, markup=False, highlight=False)
+            self.console.print(text, markup=False, highlight=False, soft_wrap=True)
 
     def _title(self) -> str:
         """What follows the versions in the first line said."""

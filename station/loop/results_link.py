@@ -37,6 +37,7 @@ from station.results.journal import JournalFile
 from station.results.outbox import Outbox, SyncResult, waiting
 from station.results.rescue import Rescued, rescue
 from station.results.storage import RunStore, StoreError
+from station.run.operator_text import said_of
 
 #: Seconds between attempts to empty a non-empty outbox while idle.
 SYNC_EVERY_S = 5.0
@@ -288,7 +289,7 @@ class ResultsLink:
         self.backlog = self.outbox.count()
         self.set_aside = self.outbox.set_aside()
         if synced.result is None:
-            self._store_says(f"{waiting(self.backlog)}: {synced.error}")
+            self._store_says(said_of(waiting(self.backlog), synced.error or ""))
         else:
             self.backlog = synced.result.pending
             self._store_says(synced.result.note())

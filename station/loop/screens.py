@@ -6,6 +6,7 @@ terminal, the demo's scripted operator and the tests.
 
 from rich.align import Align
 from rich.cells import cell_len
+from rich.columns import Columns
 from rich.console import Group, RenderableType
 from rich.panel import Panel
 from rich.table import Table
@@ -18,6 +19,7 @@ from station.report.explanations import explanation
 from station.run.operator_text import (
     pose_instruction,
     pose_words,
+    said_of,
     verdict_word,
     wrong_unit,
 )
@@ -137,6 +139,17 @@ def pad(text: str, cells: int) -> str:
     return text + " " * max(0, cells - cell_len(text))
 
 
+def pose_strip(view: RunView) -> RenderableType:
+    """Every pose of the run, ✓ taken, ▶ asked, · to come: as many to a line as the
+    terminal holds, a pose never split over two lines."""
+    items = []
+    for i, p in enumerate(view.poses):
+        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
+        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
+        items.append(Text(f"{mark}{i + 1} {pose_words(p.name)}", style=style))
+    return Columns(items, padding=(0, 1))
+
+
 def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
     """The screen while a unit is calibrated, drawn from the run's view model."""
     total = len(view.poses)
@@ -204,12 +217,7 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
         )
         if live.refused is not None:
             parts.append(Text(live.refused, style="bold yellow"))
-    poses = Text()
-    for i, p in enumerate(view.poses):
-        mark = "✓" if i in view.taken else ("▶" if i == view.index else "·")
-        style = "green" if mark == "✓" else ("bold cyan" if mark == "▶" else "dim")
-        poses.append(f" {mark}{i + 1} {pose_words(p.name)}", style=style)
-    parts.append(poses)
+    parts.append(pose_strip(view))
     for message in view.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
         parts.append(Text(message.text, style=style))
@@ -245,7 +253,7 @@ def verdict_screen(record: RunRecord) -> RenderableType:
             )
         lines.append(Align.center(table))
     for failure in record.failures:
-        lines.append(Text(f"✗ {failure.code}: {explanation(failure)}", style="red"))
+        lines.append(Text("✗ " + said_of(failure.code, explanation(failure)), style="red"))
     if record.disposition is not None:
         step, colour = next_step(record.disposition)
         lines.append(Text(tr("next: {step}", step=step), style=f"bold {colour}", justify="center"))
@@ -257,11 +265,8 @@ def serial_prompt(typed: str, note: str | None, queued: str | None = None) -> Re
     """The prompt for the next unit's serial number (``queued``: scanned during the last
     unit, taken by Enter)."""
     take = tr(" (Enter: {serial}, scanned during the last unit)", serial=queued) if queued else ""
-    parts: list[RenderableType] = [
-        Text.assemble(
-            (tr("Scan the next unit's serial number"), "bold"), f"{take}: ", typed, ("█", "blink")
-        )
-    ]
+    asked = said_of(tr("Scan the next unit's serial number") + take, "")
+    parts: list[RenderableType] = [Text.assemble((asked, "bold"), typed, ("█", "blink"))]
     if note:
         parts.append(Text(note, style="yellow"))
     return Group(*parts)

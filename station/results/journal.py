@@ -163,3 +163,31 @@ class JournalFile:
         """The run ended (stored or aborted): nothing to resume."""
         self._owed = True
         self.retry()
+
+
+class QueuedLabelFile:
+    """The label scanned for the next unit while one was calibrated (Enter at the serial
+    prompt takes it), kept on disk so that a station stopped and started again still has
+    it."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+
+    def load(self) -> str | None:
+        """The label queued (None: none, or its file unreadable)."""
+        try:
+            text = self.path.read_text(encoding="utf-8").strip()
+        except (OSError, UnicodeDecodeError):
+            return None
+        return text or None
+
+    def save(self, label: str | None) -> None:
+        """Keep ``label`` as the next unit's (None: none queued); a disk that refuses is
+        logged, and the label stays in the station's memory."""
+        try:
+            if label is None:
+                self.path.unlink(missing_ok=True)
+            else:
+                write_atomic(self.path, f"{label}\n")
+        except OSError as exc:
+            log.error("cannot keep the next unit's label in %s: %s", self.path, exc)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-from station.domain.i18n import tr
+from station.domain.i18n import tr, trn
 from station.domain.outbox_report import OutboxReport
 from station.domain.records import RunRecord
 from station.results.backoff import RecordBackoff
@@ -291,15 +291,13 @@ class _Tally:
 
 
 def _runs(n: int) -> str:
-    return tr("{count} run", count=n) if n == 1 else tr("{count} runs", count=n)
+    return trn("{count} run", "{count} runs", n)
 
 
 def waiting(n: int) -> str:
     """ "1 run waits in the outbox", "3 runs wait in the outbox": a note's first words, in
     the operator's language."""
-    if n == 1:
-        return tr("{count} run waits in the outbox", count=n)
-    return tr("{count} runs wait in the outbox", count=n)
+    return trn("{count} run waits in the outbox", "{count} runs wait in the outbox", n)
 
 
 def _name(record: RunRecord) -> str:

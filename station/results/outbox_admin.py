@@ -17,6 +17,7 @@ from station.results.outbox_files import (
     read_record,
     reason_of,
     reason_path,
+    set_aside,
     summarise,
 )
 from station.results.storage import RunStore, StoreError, SubmitOutcome
@@ -38,8 +39,20 @@ class Entry:
 
 
 def entries(outbox: Outbox) -> list[Entry]:
-    """Every record file: the waiting ones (oldest first), then the unreadable, the refused."""
-    found = [Entry("waiting", p, summarise(p), None) for p in outbox.pending()]
+    """Every record file: the waiting ones (oldest first), then the unreadable, the refused.
+
+    A waiting file that is no record (torn by a crash or a full disk, not JSON) is set
+    aside with its reason first, as the station's next sync would set it aside; one the
+    disk will not move is listed unreadable where it lies."""
+    found: list[Entry] = []
+    for path in outbox.pending():
+        try:
+            read_record(path)
+        except UnreadableRecordError as exc:
+            if not set_aside(path, outbox.unreadable_dir, str(exc)):
+                found.append(Entry("unreadable", path, summarise(path), str(exc)))
+            continue
+        found.append(Entry("waiting", path, summarise(path), None))
     aside: tuple[tuple[State, Path], ...] = (
         ("unreadable", outbox.unreadable_dir),
         ("refused", outbox.refused_dir),

@@ -43,6 +43,9 @@ from station.run.operator_text import capture_refused, moved_early, pose_words
 
 #: Samples of the live view: about a quarter second at the default rate.
 LIVE_SAMPLES = 128
+#: The topic of what is said about where the unit lies (a wrong pose, tilted, too close
+#: to a pose taken): taken off the screen once it lies in the pose asked for.
+WRONG_PLACE = "place"
 
 
 @dataclass(frozen=True)
@@ -193,6 +196,9 @@ class PoseCapture:
         refused = self.live.refused if self._still_samples else None
         if matches and not verdict.motion:
             self._still_samples += new
+            if self._wrong_pose_said is not None:  # what was said of the place is past
+                self._wrong_pose_said = None
+                self._messages.unsay(WRONG_PLACE)
         else:
             if was_capturing and matches:
                 name = pose_words(target.name)
@@ -250,6 +256,7 @@ class PoseCapture:
                         number=index + 1,
                         pose=pose_words(target.name),
                     ),
+                    topic=WRONG_PLACE,
                 )
                 return
         if sensed.nearest.name == target.name:  # the right pose, too far tilted
@@ -262,6 +269,7 @@ class PoseCapture:
                     pose=pose_words(target.name),
                     allowed=f"{self.settings.pose_tolerance_deg:.0f}",
                 ),
+                topic=WRONG_PLACE,
             )
             return
         self._messages.say(
@@ -272,6 +280,7 @@ class PoseCapture:
                 number=index + 1,
                 pose=pose_words(target.name),
             ),
+            topic=WRONG_PLACE,
         )
 
     def _captured_means(self) -> list[tuple[int, Array]]:

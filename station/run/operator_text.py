@@ -53,6 +53,12 @@ def _pose_names() -> dict[str, str]:
     }
 
 
+def said_of(subject: str, said: str) -> str:
+    """``subject: said`` with the colon of the operator's language (full width in
+    Chinese)."""
+    return tr("{subject}: {said}", subject=subject, said=said)
+
+
 def pose_words(name: str) -> str:
     """A pose as the operator says it: ``toe_up`` → ``toe up`` (translated)."""
     return _pose_names().get(name) or name.replace("_", " ")
@@ -123,6 +129,17 @@ def wrong_unit(reported: str, expected: str) -> str:
         "{reported} plugged in, {expected} expected: plug {expected} back in, or abort",
         reported=reported,
         expected=expected,
+    )
+
+
+def serial_mismatch(label: str, reported: str) -> str:
+    """The unit on the cable reports another serial number than the label scanned: the
+    run stops before it starts."""
+    return tr(
+        "serial number mismatch: label says {label}, unit reports {reported}: "
+        "set the unit aside; nothing was recorded",
+        label=repr(label),
+        reported=repr(reported),
     )
 
 

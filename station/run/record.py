@@ -7,6 +7,8 @@ Pure functions of the run's journal, solution and verdict, so that
 import logging
 from collections.abc import Mapping
 from datetime import UTC, datetime
+from types import MappingProxyType
+from typing import Final
 
 import numpy as np
 from pydantic import ValidationError
@@ -14,6 +16,7 @@ from pydantic import ValidationError
 from station import __version__
 from station.domain.arrays import FloatArray as Array
 from station.domain.calibration import (
+    Model,
     Solution,
     Uncertainty,
     accelerometer_budget,
@@ -45,7 +48,11 @@ from station.domain.sensor_spec import SensorSpec
 from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 
-ALGORITHM = "autocal-eq10"
+#: The algorithm a run's record names, by the accelerometer model it fits: the
+#: six-parameter autocalibration ([Song2006] eq. 10) or the nine-parameter least squares.
+ALGORITHMS: Final[Mapping[Model, str]] = MappingProxyType(
+    {"six": "autocal-eq10", "nine": "autocal-ls9"}
+)
 
 log = logging.getLogger(__name__)
 
@@ -251,7 +258,7 @@ def run_record(
         # a run that ends before it began: it ends no earlier than it started.
         finished_at=max(now(), journal.started_at),
         software_version=__version__,
-        algorithm=ALGORITHM if settings.model == "six" else "autocal-ls9",
+        algorithm=ALGORITHMS[settings.model],
         model=settings.model,
         limits=profile.ref,
         verdict=verdict,

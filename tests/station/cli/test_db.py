@@ -8,13 +8,16 @@ from pathlib import Path
 import pytest
 from sqlalchemy import delete, func, select
 
-from db import Database, RunRepository
+from db import Database, RunRepository, make_engine
+from db.database import upgrade
 from db.migrate import HEAD_REVISION
 from db.models import ReportCounts, StationKey
 from db.repository import KeyHolder
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 
+#: A schema revision before the head.
+OLDER = f"{int(HEAD_REVISION) - 2:04d}"
 UNREACHABLE = "postgresql+psycopg://nobody@127.0.0.1:1/none?connect_timeout=2"
 
 
@@ -29,7 +32,7 @@ def test_db_upgrade_creates_the_embedded_database_in_the_data_dir(
     result = call_cli("db", "upgrade", env=_env(CALSTATION_DATA_DIR=str(tmp_path / "data")))
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "data" / "calstation.sqlite3").is_file()
-    assert f"at schema revision {HEAD_REVISION}" in result.stdout
+    assert f"created at schema revision {HEAD_REVISION}\n" in result.stdout
 
 
 def test_db_upgrade_is_idempotent_on_a_migrated_database(
@@ -37,7 +40,20 @@ def test_db_upgrade_is_idempotent_on_a_migrated_database(
 ) -> None:
     result = call_cli("db", "upgrade", "--database-url", database_url, env=_env())
     assert result.returncode == 0, result.stderr
-    assert f"at schema revision {HEAD_REVISION}" in result.stdout
+    assert f"already at schema revision {HEAD_REVISION}: nothing to migrate" in result.stdout
+
+
+def test_db_upgrade_says_from_which_revision_it_migrated(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    url = f"sqlite:///{tmp_path / 'old.sqlite3'}"
+    engine = make_engine(url)
+    upgrade(engine, OLDER)
+    engine.dispose()
+    result = run_cli("db", "upgrade", "--database-url", url, env=_env())
+    assert result.returncode == 0, result.stderr
+    said = f"database {url} migrated from schema revision {OLDER} to {HEAD_REVISION}\n"
+    assert result.stdout == said
 
 
 def test_an_unreachable_database_is_one_line_and_exit_2(call_cli: CliRunner) -> None:
@@ -89,7 +105,7 @@ def test_keys_create_lab_makes_a_key_for_gyro_fits(
     revoked = call_cli(
         "keys", "revoke", "--lab", "gyro-lab", "--database-url", database_url, env=_env()
     )
-    assert "revoked 1 API key(s) of lab gyro-lab" in revoked.stdout
+    assert "revoked 1 API key of lab gyro-lab" in revoked.stdout
 
 
 @pytest.mark.parametrize(
@@ -116,7 +132,7 @@ def test_keys_revoke_stops_every_key_of_the_station(
         "keys", "revoke", "--station", "line3-st2", "--database-url", database_url, env=_env()
     )
     assert result.returncode == 0, result.stderr
-    assert "revoked 2 API key(s)" in result.stdout
+    assert "revoked 2 API keys" in result.stdout
     with database.session() as session:
         repository = RunRepository(session)
         assert [repository.key_holder(key) for key in keys] == [None, None]

@@ -2,27 +2,50 @@
 80 terminal cells (a Hangul or Han character takes two), and the operator reads their
 own language."""
 
+import io
+import re
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from babel.messages.pofile import read_po
 from rich.cells import cell_len
 from rich.console import Console, Group, RenderableType
+from rich.live_render import LiveRender
+from rich.text import Text
 
-from station.domain.i18n import set_language
+from station.cli.output import screen_console
+from station.device import SerialNumberMismatchError
+from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr, trn
 from station.domain.limits import Bounds, check, load_profile
 from station.domain.orientation import Sensed
 from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.domain.poses import POSES as NAMED_POSES
 from station.loop.fixture.screen import FixtureView, fixture_screen
-from station.loop.screens import header, pad, serial_prompt, unit_screen, verdict_screen
+from station.loop.screens import (
+    header,
+    keys_help,
+    pad,
+    serial_prompt,
+    unit_screen,
+    verdict_screen,
+)
 from station.loop.slot import Slot, SlotState
+from station.loop.unit_history import UnitHistory
 from station.results.journal import JournalFile
 from station.run.acquisition import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message
-from station.run.operator_text import MAX_UNKNOWN, port_problem
+from station.run.operator_text import (
+    MAX_UNKNOWN,
+    port_problem,
+    pose_words,
+    said_of,
+    serial_mismatch,
+)
 from station.run.phases import Phase
 from station.run.view import RunView
 from tests.db.records import make_record
@@ -226,8 +249,126 @@ def test_the_failure_screen_explains_each_failure_in_the_operators_language(
     lines = _drawn(verdict_screen(record))
     assert max(map(cell_len, lines)) <= 80
     text = "\n".join(lines)
-    assert f"✗ pose_noise: {EXPLAINED[language]}" in text
+    assert "✗ " + said_of("pose_noise", EXPLAINED[language]) in text
     assert "PT000009" in text
     assert failure.message not in text  # the record's English sentence, kept as said
     set_language("en")
     assert f"✗ pose_noise: {failure.message}" in "\n".join(_drawn(verdict_screen(record)))
+
+
+# -- every line fits, at any width, in every language -------------------------------------
+
+#: The whole-unit plan's poses: the six, the six corners, the verification pose.
+CORNERS = tuple(n for n in NAMED_POSES if n not in (*CALIBRATION_POSES, VERIFICATION_POSE))
+WHOLE_UNIT = tuple(pose(n) for n in (*CALIBRATION_POSES, *CORNERS, VERIFICATION_POSE))
+#: A value for every ``{placeholder}`` of a message drawn on its own.
+FILLER = "PT002007"
+PLACEHOLDER = re.compile(r"\{(\w+)\}")
+
+
+def _on_live(width: int, *screens: RenderableType) -> list[str]:
+    """``screens`` drawn as the station draws them: each as rich's ``Live`` display draws
+    it (its ``LiveRender``), on the console the station uses (:func:`screen_console`), in
+    a terminal ``width`` columns wide (and tall enough for the tallest screen)."""
+    console = screen_console(
+        width=width, height=500, record=True, color_system=None, file=io.StringIO()
+    )
+    for screen in screens:
+        console.print(LiveRender(screen))
+        console.line()
+    return console.export_text().splitlines()
+
+
+def _catalogue_lines() -> list[str]:
+    """Every line the catalogues hold, in the operator's language, its values filled."""
+    lines = []
+    for message in read_po(io.StringIO(catalogue_text("ko"))):  # the ids; tr translates them
+        if isinstance(message.id, str) and message.id:
+            lines.append(tr(message.id, **dict.fromkeys(PLACEHOLDER.findall(message.id), FILLER)))
+        elif message.id:  # words after a count: both forms
+            singular, plural = message.id
+            values = dict.fromkeys(PLACEHOLDER.findall(plural), FILLER)
+            values.pop("count", None)
+            lines += [trn(singular, plural, n, **values) for n in (1, 12)]
+    return lines
+
+
+def _every_screen(tmp_path: Path) -> tuple[list[RenderableType], list[str]]:
+    """Every screen the station draws, and the sentences they hold (whose words must stay
+    whole): the header, the unit at a pose (seven poses, and the whole unit's thirteen),
+    its help, the verdict, the serial prompt under each refusal, the fixture."""
+    mismatch = SerialNumberMismatchError("PT002007", "PT002006")
+    record = make_record(serial="PT000001", verdict="pass", disposition="ship")
+    failed = make_record(serial="PT002007", verdict="fail", disposition="rework")
+    sentences = [
+        serial_mismatch(mismatch.expected, mismatch.reported),
+        UnitHistory("PT002007", runs=(failed,)).at_scan(3, failed.part_number).text or "",
+        keys_help(),
+        *_catalogue_lines(),
+    ]
+    whole = replace(_run_view(), poses=WHOLE_UNIT, index=9, taken=frozenset(range(9)))
+    screens: list[RenderableType] = [
+        Group(
+            header("line1-st1", "op-7", "v0.1.0 · autocal-ls9 · limits whole-unit", 3, (1, 2)),
+            unit_screen(_run_view(said=(Message("warn", sentences[0]),))),
+        ),
+        unit_screen(whole),
+        unit_screen(_run_view(), show_help=True),
+        verdict_screen(record),
+        *(serial_prompt("PT0000", sentence, queued="PT000002") for sentence in sentences),
+        fixture_screen(_fixture_view(tmp_path)),
+    ]
+    return screens, sentences
+
+
+def _cut_words(lines: list[str], sentences: list[str], width: int) -> list[str]:
+    """The words of ``sentences`` that no line shows whole (a word wider than the screen
+    is folded, as it must be)."""
+    return sorted(
+        {
+            word
+            for sentence in sentences
+            for word in sentence.split()
+            if cell_len(word) < width - 8 and not any(word in line for line in lines)
+        }
+    )
+
+
+@pytest.mark.parametrize("width", [80, 120])
+@pytest.mark.parametrize("language", LANGUAGES)
+def test_every_line_fits_the_terminal_and_no_word_is_cut(
+    language: str, width: int, tmp_path: Path
+) -> None:
+    set_language(language)
+    screens, sentences = _every_screen(tmp_path)
+    lines = _on_live(width, *screens)
+    assert [line for line in lines if cell_len(line) > width] == []
+    assert _cut_words(lines, sentences, width) == []
+    strip = [f"{i + 1} {pose_words(p.name)}" for i, p in enumerate(WHOLE_UNIT)]
+    assert [item for item in strip if not any(item in line for line in lines)] == []
+
+
+def test_a_screen_on_a_soft_wrapping_console_would_lose_the_ends_of_its_lines() -> None:
+    """The check above can fail: rich's ``Live`` on a soft-wrapping console crops."""
+    sentence = keys_help()
+    console = Console(
+        width=80, height=500, record=True, color_system=None, file=io.StringIO(), soft_wrap=True
+    )
+    console.print(LiveRender(Text(sentence)))
+    assert _cut_words(console.export_text().splitlines(), [sentence], 80) != []
+
+
+@pytest.mark.parametrize(
+    ("language", "said"),
+    [
+        ("ko", "시리얼 번호 불일치: 라벨은 'PT002007', 유닛은 'PT002006'을 보고합니다"),
+        ("zh", "序列号不符：标签为 'PT002007'，产品报告 'PT002006'"),
+    ],
+)
+def test_the_serial_number_mismatch_is_said_whole_in_the_operators_language(
+    language: str, said: str
+) -> None:
+    set_language(language)
+    sentence = serial_mismatch("PT002007", "PT002006")
+    assert sentence.startswith(said)
+    assert re.findall(r"[A-Za-z]{2,}", re.sub(r"'PT\d+'", "", sentence)) == []

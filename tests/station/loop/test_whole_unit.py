@@ -22,6 +22,7 @@ from station.device import DeviceCalibration
 from station.domain.limits import load_profile
 from station.domain.records import RunRecord
 from station.loop.config import load_config
+from station.loop.lifecycle import versions
 from station.results.journal import JournalFile, RunJournal
 from station.results.storage import HttpStore
 from station.run.phases import Phase
@@ -175,3 +176,14 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
     page = local_get(f"{live_url}/api/v1/units/{SERIAL}/certificate")
     assert page.status_code == 200
     assert "Gyro matrix K" in page.text
+
+
+@pytest.mark.timeout(180)
+def test_the_header_names_the_algorithm_the_record_names(
+    whole_unit: tuple[WholeUnit, RunRecord],
+) -> None:
+    bench, record = whole_unit
+    shown = versions(bench.profile, bench.settings.model)
+    assert f" · {record.algorithm} · " in shown
+    assert record.algorithm == "autocal-ls9"
+    assert " · autocal-eq10 · " in versions(load_profile(), "six")

@@ -384,8 +384,9 @@ def _not_a_file(kind: str, path: Path, elsewhere: Path) -> None:
 def test_a_path_that_is_no_file_is_set_aside_unopened_and_the_runs_behind_it_are_stored(
     tmp_path: Path, database: Database, run_cli: CliRunner, kind: str, reason: str
 ) -> None:
-    """A FIFO named like a record would block a reader with no writer forever: the
-    sender and ``outbox list`` go by it without opening it, and it is set aside."""
+    """A FIFO named like a record would block a reader with no writer forever: ``outbox
+    list`` goes by it without opening it and sets it aside, with its reason, as the
+    sender would."""
     outbox = Outbox(tmp_path / "data" / "outbox")
     odd = outbox.directory / f"{uuid4()}.json"
     _not_a_file(kind, odd, tmp_path / "elsewhere.json")
@@ -394,9 +395,11 @@ def test_a_path_that_is_no_file_is_set_aside_unopened_and_the_runs_behind_it_are
     env["CALSTATION_DATA_DIR"] = str(tmp_path / "data")
     listed = run_cli("outbox", "list", env=env, timeout=30)
     assert listed.returncode == 0, listed.stderr
-    assert odd.stem[:8] in listed.stdout
+    line = next(line for line in listed.stdout.splitlines() if odd.stem[:8] in line)
+    assert line.startswith("unreadable  ")
+    assert line.endswith(f"not a record file: {reason}")
     result = outbox.sync(DatabaseStore(database=database))
-    assert (result.stored, result.unreadable, result.pending) == (1, 1, 0)
+    assert (result.stored, result.unreadable, result.pending) == (1, 0, 0)
     kept = outbox.unreadable_dir / odd.name
     assert os.path.lexists(kept)  # nothing removed: set aside as it was
     assert reason_of(kept) == f"not a record file: {reason}"

@@ -81,6 +81,9 @@ class Bench:
             reopen=self.open,
         )
         self.moved_to: str | None = None
+        #: Everything the run said, in order (its log keeps only the latest, and takes
+        #: off the screen what is no longer true).
+        self.said: list[str] = []
 
     def open(self) -> PutterDriver:
         return open_unit(str(self.port), SERIAL, self.adc_max)
@@ -94,7 +97,9 @@ class Bench:
             if target is not None and target.name != self.moved_to and self.run.phase is Phase.POSE:
                 self.moved_to = target.name
                 self.putter.move_to(target.name, 1.0)
+            seen = self.run.messages.said
             self.run.step()
+            self.said += [m.text for m in self.run.messages.since(seen)]
             time.sleep(0.01)
 
     def close(self) -> None:
@@ -177,8 +182,27 @@ def test_a_unit_at_the_datasheets_offset_bounds_is_taken_in_every_pose(tmp_path:
         b.drive(done)
         assert b.run.record is not None
         assert b.run.record.verdict == "pass", b.run.record.failures
-        refusals = [m.text for m in b.run.messages if m.text.startswith(("wrong pose", "tilted"))]
+        refusals = [text for text in b.said if text.startswith(("wrong pose", "tilted"))]
         assert not refusals
+    finally:
+        b.close()
+
+
+def test_a_wrong_pose_leaves_the_screen_once_the_unit_lies_in_the_pose_asked(
+    tmp_path: Path,
+) -> None:
+    b = Bench(tmp_path)
+    try:
+        asked = b.run.requested
+        assert asked is not None
+        b.moved_to = asked.name  # the operator puts it elsewhere first
+        b.putter.move_to("toe_up", 1.0)
+        b.drive(lambda run: any(m.text.startswith("wrong pose") for m in run.messages))
+        assert "wrong pose: the putter lies toe up, pose 1 is face up" in b.said
+        b.putter.move_to(asked.name, 1.0)
+        b.drive(lambda run: run.view().live.matches and run.view().live.progress > 0)
+        assert b.run.requested == asked
+        assert [m.text for m in b.run.messages if m.text.startswith("wrong pose")] == []
     finally:
         b.close()
 
