@@ -1,6 +1,7 @@
 """The commands the documents show do what the documents say: each ``$ calstation ...``
 of a code block in ``README.md`` and ``docs/`` that runs offline is run as a real process,
-in the order shown, against a fresh data directory (its embedded database), and must end
+in the order shown, in a fresh directory with a fresh data directory (its embedded
+database), and must end
 as shown: exit status 2 where the document shows ``calstation: error:``, else 0, and
 each line the document shows after it begins as a line the command printed."""
 
@@ -85,9 +86,10 @@ def _begins(shown: str, said: set[str]) -> bool:
     return any(word.startswith(shown) for word in said)
 
 
-def _on_hold(data_dir: Path, serial: str) -> None:
-    """A unit sent to rework, in the station's embedded database: what a review needs."""
-    record = make_record(serial=serial, verdict="fail", disposition="rework")
+def _stored(data_dir: Path, serial: str, **outcome: str) -> None:
+    """A run of ``serial`` in the station's embedded database: a unit sent to rework is
+    what a review needs, a calibrated one what a certificate's signing needs."""
+    record = make_record(serial=serial, **outcome)
     with DatabaseStore(f"sqlite:///{data_dir / 'calstation.sqlite3'}") as store:
         store.submit(record)
 
@@ -112,8 +114,10 @@ def test_each_command_a_document_shows_ends_as_it_says(
         if shown.argv[0] in SERVING:
             continue
         if shown.argv[0] == "review":
-            _on_hold(data_dir, shown.argv[1])
-        result = run_cli(*shown.argv, env=env, timeout=600)
+            _stored(data_dir, shown.argv[1], verdict="fail", disposition="rework")
+        if shown.argv[:2] == ("certificate", "sign"):
+            _stored(data_dir, shown.argv[2])
+        result = run_cli(*shown.argv, env=env, timeout=600, cwd=tmp_path)
         said = [line.strip() for line in (result.stdout + result.stderr).splitlines()]
         assert result.returncode == (2 if shown.refused else 0), (shown.argv, result.stderr)
         starts = {line.split()[0] for line in said if line.split()}
