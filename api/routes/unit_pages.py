@@ -17,6 +17,7 @@ from pydantic import BeforeValidator
 
 from api.deps import ReaderDep, ReportPoolDep, RepositoryDep, SessionsDep, require_quality
 from api.errors import answers_pages
+from api.language import LanguageDep
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from api.routes.reviews import store_review
@@ -42,7 +43,7 @@ _HTML = {"text/html": {"schema": {"type": "string"}}}
     },
 )
 async def get_unit_page(
-    serial: SerialPath, repository: ReaderDep, zone: PlantZoneDep
+    serial: SerialPath, repository: ReaderDep, zone: PlantZoneDep, language: LanguageDep
 ) -> HTMLResponse:
     """The unit's page: its state, every run, links to each record and to its certificate."""
     from station.report import html
@@ -50,11 +51,11 @@ async def get_unit_page(
     runs = await repository.run(lambda r: r.history(serial))
     if not runs:
         return HTMLResponse(
-            html.not_found_page(f"No calibration run of serial {serial} is stored."),
+            html.unknown_unit_page(serial, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     reviews = await repository.run(lambda r: r.reviews(serial))
-    return HTMLResponse(html.unit_page(runs, datetime.now(UTC), zone, reviews))
+    return HTMLResponse(html.unit_page(runs, datetime.now(UTC), zone, reviews, language))
 
 
 StationPath = Annotated[
@@ -80,6 +81,7 @@ async def get_station_page(
     station_id: StationPath,
     repository: ReportPoolDep,
     zone: PlantZoneDep,
+    language: LanguageDep,
     format: Literal["json", "html"] = "html",
 ) -> Response:
     """A station's health page: its latest golden-unit checks over time against their
@@ -90,12 +92,12 @@ async def get_station_page(
     health = await repository.run(station_health_of, station_id)
     if health is None:
         return HTMLResponse(
-            html.not_found_page(f"No calibration run of station {station_id} is stored."),
+            html.unknown_station_page(station_id, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     if format == "json":
         return Response(health.model_dump_json(indent=2), media_type="application/json")
-    return HTMLResponse(html.station_page(health, zone, CYCLE_RUNS))
+    return HTMLResponse(html.station_page(health, zone, CYCLE_RUNS, language))
 
 
 def station_health_of(repository: RunRepository, station_id: str) -> StationHealth | None:
@@ -188,7 +190,9 @@ SearchQuery = Annotated[
     },
 )
 @answers_pages(SEARCH_TITLE, "html", form=False)
-async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
+async def search_units(
+    serial: SearchQuery, repository: ReaderDep, language: LanguageDep
+) -> Response:
     """The search box of every page: the unit of this serial number (its page), or the
     units whose serial begins so."""
     from station.report import html
@@ -199,7 +203,8 @@ async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
         return RedirectResponse(f"/units/{exact}", status_code=status.HTTP_303_SEE_OTHER)
     if not found:
         return HTMLResponse(
-            html.problem_page(SEARCH_TITLE, f"No unit's serial number begins with {serial}."),
+            html.no_serial_page(SEARCH_TITLE, serial, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
-    return HTMLResponse(html.found_page(serial, found[:FOUND_SERIALS], len(found) > FOUND_SERIALS))
+    more = len(found) > FOUND_SERIALS
+    return HTMLResponse(html.found_page(serial, found[:FOUND_SERIALS], more, language))

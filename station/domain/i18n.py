@@ -7,7 +7,9 @@ process's language once, at start (``language`` in the station's configuration,
 ``CALSTATION_LANGUAGE``, ``--language``); :func:`tr` translates a message and fills its
 ``{placeholders}`` afterwards, so a translation may put them in its own order. A server
 that answers each request in its reader's language (``?lang=``, ``Accept-Language``)
-takes :func:`speaker` of that language instead. Babel is imported only when a language
+takes :func:`speaker` of that language instead, and :func:`counter` for a line that
+names a count (gettext's plural forms: one form in Korean and Chinese, two in English).
+Babel is imported only when a language
 other than English is chosen.
 """
 
@@ -26,6 +28,9 @@ DOMAIN: Final = "calstation"
 
 #: A translation function: a message in one language, its ``{placeholders}`` filled.
 Say = Callable[..., str]
+#: A translation function of a line that names a count: ``(singular, plural, count,
+#: **values)``, the form of ``count`` in one language, ``{count}`` and the values filled.
+Count = Callable[..., str]
 
 _translations: gettext.NullTranslations = gettext.NullTranslations()
 _language: Language = "en"
@@ -83,3 +88,18 @@ def speaker(language: str) -> Say:
         return translations.gettext(message).format(**values)
 
     return say
+
+
+#: :func:`speaker` of English: the sources' own text.
+ENGLISH: Final[Say] = speaker("en")
+
+
+def counter(language: str) -> Count:
+    """The lines of ``language`` (one of :data:`LANGUAGES`) that name a count, each in
+    the plural form the language gives that count (gettext ``ngettext``)."""
+    translations = _translations_of(language)
+
+    def count(singular: str, plural: str, number: int, **values: object) -> str:
+        return translations.ngettext(singular, plural, number).format(count=number, **values)
+
+    return count

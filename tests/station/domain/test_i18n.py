@@ -42,7 +42,7 @@ def test_the_template_holds_every_line_the_sources_translate() -> None:
             ROOT / folder,
             method_map=METHODS,
             options_map=OPTIONS,
-            keywords={"tr": None},
+            keywords={"tr": None, "trn": (1, 2)},
             comment_tags=(),
         )
     }
@@ -56,9 +56,15 @@ def test_every_message_has_a_translation_with_the_same_placeholders(language: st
     translated = {m.id: m.string for m in catalogue if m.id}
     assert set(translated) == _template_ids()
     for msgid, text in translated.items():
-        assert text, f"{language}: no translation of {msgid!r}"
-        assert text != msgid, f"{language}: {msgid!r} left in English"
-        assert sorted(PLACEHOLDER.findall(text)) == sorted(PLACEHOLDER.findall(msgid)), msgid
+        # A line that names a count (ngettext): each of the language's forms has the
+        # placeholders of the English plural.
+        english = msgid[-1] if isinstance(msgid, tuple) else msgid
+        for form in text if isinstance(text, tuple) else (text,):
+            assert form, f"{language}: no translation of {msgid!r}"
+            assert form not in (msgid if isinstance(msgid, tuple) else (msgid,)), (
+                f"{language}: {msgid!r} left in English"
+            )
+            assert sorted(PLACEHOLDER.findall(form)) == sorted(PLACEHOLDER.findall(english)), msgid
     assert not any(m.fuzzy for m in catalogue if m.id)
 
 
@@ -71,6 +77,23 @@ def test_a_line_in_korean_and_chinese_keeps_its_values() -> None:
     assert tr(line, number=3, pose="toe up") == "姿态 3（toe up）已采集"
     set_language("en")
     assert tr(line, number=3, pose="toe up") == "pose 3 (toe up) captured"
+
+
+@pytest.mark.parametrize(
+    ("language", "one", "two"),
+    [
+        ("en", "1 file set aside", "2 files set aside"),
+        ("ko", "파일 1개 보류됨", "파일 2개 보류됨"),
+        ("zh", "1 个文件已搁置", "2 个文件已搁置"),
+    ],
+)
+def test_a_line_that_names_a_count_takes_the_form_of_its_count(
+    language: str, one: str, two: str
+) -> None:
+    count = i18n.counter(language)
+    line = ("{count} file set aside", "{count} files set aside")
+    assert count(*line, 1) == one
+    assert count(*line, 2) == two
 
 
 def test_an_unknown_language_is_refused() -> None:
