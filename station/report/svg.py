@@ -32,6 +32,19 @@ def _svg(title: str, body: Sequence[str], height: float = HEIGHT, width: float =
     )
 
 
+#: How wide a character of a label is drawn, at most (px, 9 px type): a time axis label
+#: near an edge is anchored at it, so the chart does not cut it.
+CHAR_WIDTH = 5.5
+
+
+def _tick_label(x: float, y: float, label: str, width: float) -> str:
+    """A time axis' label under its tick at ``x``, centred unless that would cut it at
+    the chart's left or right edge (``width``): then it ends, or starts, at its tick."""
+    half = CHAR_WIDTH * len(label) / 2
+    anchor = "end" if x + half > width - 1 else "start" if x - half < 1 else "middle"
+    return _text(x, y, label, anchor)
+
+
 def _text(x: float, y: float, label: str, anchor: str = "start", colour: str = "#333") -> str:
     return (
         f'<text x="{x:.1f}" y="{y:.1f}" font-size="9" fill="{colour}" '
@@ -189,7 +202,7 @@ def _time_axis(
     for i in ticks:
         x = x_of(i)
         body.append(f'<g class="tick">{_line(x, y, x, y + 3, AXIS_COLOUR)}</g>')
-        body.append(_text(x, y + 12, clock(points[i].started_at, zone), "middle"))
+        body.append(_tick_label(x, y + 12, clock(points[i].started_at, zone), CHART_WIDTH))
     return body
 
 
@@ -373,7 +386,11 @@ def trend_chart(
     def y_of(value: float) -> float:
         return bottom - (bottom - top) * (value - low) / (high - low)
 
-    label = percent if percent_axis else number
+    def label(value: float) -> str:
+        """A value axis' label; a bound within rounding of zero (a deviation's -1e-13) is 0."""
+        value = 0.0 if abs(value) < (high - low) * 1e-9 else value
+        return percent(value) if percent_axis else number(value)
+
     body = [
         _text(left, 12, title),
         _line(left, top, left, bottom, AXIS_COLOUR),
@@ -396,7 +413,7 @@ def trend_chart(
         body.append(
             f'<g class="tick">{_line(x_of(i), bottom, x_of(i), bottom + 3, AXIS_COLOUR)}</g>'
         )
-        body.append(_text(x_of(i), bottom + 13, periods[i][0], "middle"))
+        body.append(_tick_label(x_of(i), bottom + 13, periods[i][0], CHART_WIDTH))
     if bars is not None:
         bar_w = max((right - left) / max(len(periods), 1) - 2, 1)
         for i, count in enumerate(bars):
