@@ -25,6 +25,7 @@ from api.routes.units import SerialPath
 from api.schemas import ReviewForm
 from db import ReviewRefusedError, RunRepository
 from db.station_health import CYCLE_RUNS, station_health
+from station.domain.i18n import Language
 from station.domain.quality.station_health import StationHealth
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
 
@@ -129,6 +130,7 @@ async def post_unit_review(
     form: Annotated[ReviewForm, Form()],
     sessions: SessionsDep,
     repository: RepositoryDep,
+    language: LanguageDep,
 ) -> Response:
     """The review form of a held unit's page: the review of ``POST
     /api/v1/units/{serial}/reviews``, with the quality key typed into the form checked as
@@ -144,16 +146,17 @@ async def post_unit_review(
         reviewer = await require_quality(credentials, sessions)
         await store_review(serial, form, reviewer, repository)
     except HTTPException as exc:
-        return _refused(exc.status_code, str(exc.detail))
+        return _refused(exc.status_code, str(exc.detail), language)
     except ReviewRefusedError as exc:
-        return _refused(status.HTTP_409_CONFLICT, str(exc))
+        return _refused(status.HTTP_409_CONFLICT, str(exc), language)
     return RedirectResponse(f"/units/{serial}#reviews", status_code=status.HTTP_303_SEE_OTHER)
 
 
-def _refused(status_code: int, message: str) -> HTMLResponse:
+def _refused(status_code: int, message: str, language: Language) -> HTMLResponse:
     from station.report import html
 
-    return HTMLResponse(html.problem_page(REVIEW_TITLE, message), status_code=status_code)
+    page = html.problem_page(REVIEW_TITLE, message, language=language)
+    return HTMLResponse(page, status_code=status_code)
 
 
 #: The most serials a search lists (type more of the serial for fewer).

@@ -635,7 +635,18 @@ def problem_page(
     title: str, message: str, form: dict[str, str] | None = None, language: Language = "en"
 ) -> str:
     """The page of a request a page could not answer: ``message``, one line, says why;
-    ``form``: the report's filter fields as they were sent, to correct them."""
+    ``form``: the report's filter fields as they were sent, to correct them. The page's
+    ``title`` (a route's, in English) and its words in ``language``; ``message`` as
+    the check that refused it says it."""
+    tr = speaker(language)
+    titles = {
+        "End-of-line report": tr("End-of-line report"),
+        "Analysis by split": tr("Analysis by split"),
+        "Failing runs": tr("Failing runs"),
+        "Review of a unit on hold": tr("Review of a unit on hold"),
+        "Find a unit": tr("Find a unit"),
+    }
+    title = titles.get(title, title)
     return _render("problem.html", language, title=title, message=message, form=form)
 
 

@@ -21,6 +21,7 @@ PAGES = {
     "alerts": "/alerts",
     "split": "/api/v1/reports/split?parameter=offset_x&by=station",
     "failures": "/api/v1/reports/eol/failures?code=pose_noise",
+    "search": "/search?serial=PT-00",
 }
 
 

@@ -128,3 +128,20 @@ def test_every_page_refuses_a_language_it_does_not_ship_in_one_way(
         refused = plant.get(f"{path}{joiner}lang={value}")
         assert refused.status_code == 422, (name, value)
         assert "lang" in refused.text, name
+
+
+@pytest.mark.parametrize(
+    ("language", "title"), [("en", "End-of-line report"), ("ko", "라인 최종 검사 보고서")]
+)
+def test_a_refused_page_is_in_the_readers_language_too(
+    plant: httpx.Client, language: str, title: str
+) -> None:
+    refused = plant.get(
+        "/api/v1/reports/eol",
+        params={"format": "html", "from": "14.13.2026"},
+        headers={"Accept-Language": language},
+    )
+    assert refused.status_code == 422
+    assert f'<html lang="{language}">' in refused.text
+    assert f"<h1>{title}</h1>" in refused.text
+    assert 'id="problem"' in refused.text
