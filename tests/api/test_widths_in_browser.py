@@ -66,3 +66,32 @@ def test_every_page_in_every_language_keeps_to_the_window(
                 deviceScaleFactor=1,
                 mobile=False,
             )
+
+
+def test_a_language_chosen_by_lang_is_kept_by_every_link_and_form(
+    browser: Browser, live_url: str, database: Database
+) -> None:
+    store_plant(database)
+    assert browser.load(f"{live_url}{PAGES['report']}&lang=zh").errors == []
+    links = browser.evaluate(
+        "Array.from(document.querySelectorAll('a[href]'),"
+        " (a) => new URL(a.getAttribute('href'), location.href))"
+        ".filter((url) => url.origin === location.origin)"
+        ".map((url) => url.searchParams.get('lang'))"
+    )
+    assert links
+    assert set(links) == {"zh"}
+    forms = browser.evaluate(
+        "Array.from(document.forms, (f) => f.method === 'get'"
+        " ? f.elements.lang.value : new URL(f.action).searchParams.get('lang'))"
+    )
+    assert forms
+    assert set(forms) == {"zh"}
+    browser.follow("document.querySelector('a.serial').click()")
+    assert browser.evaluate("document.documentElement.lang") == "zh"
+    browser.follow(
+        "document.querySelector('form.search input').value = 'PT-00';"
+        "document.querySelector('form.search').submit()"
+    )
+    assert browser.evaluate("document.documentElement.lang") == "zh"
+    assert "lang=zh" in browser.evaluate("location.search")
