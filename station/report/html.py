@@ -52,6 +52,7 @@ from station.report.tables import (
     Statistics,
     capability_cells,
     capability_header,
+    capability_words,
     listed,
     near_limits_line,
     parameter_cells,
@@ -112,6 +113,7 @@ _env.globals.update(
     risk_cells=risk_cells,
     split_name=split_name,
     source_words=source_words,
+    capability_words=capability_words,
 )
 # The macros of the base template, for every template and every template it includes
 # (Jinja's template modules expose their macros as attributes it does not declare).

@@ -300,3 +300,20 @@ def source_words(source: str, tr: Say = ENGLISH) -> str:
         if found := pattern.fullmatch(source):
             return words(tr, {k: v for k, v in found.groupdict().items() if v is not None})
     return source
+
+
+def capability_words(
+    out_of_limits: int, count: int, ppm: float | None, cpk: float | None, tr: Say = ENGLISH
+) -> str:
+    """Why a normal-theory Cpk should not be trusted (a parameter's or a group's
+    ``warning``, :func:`station.domain.quality.capability.capability_warning`) in the
+    reader's language (``tr``), from its figures."""
+    return tr(
+        "{out} of {count} values out of limits ({ppm} ppm observed) although Cpk {cpk} says "
+        "capable: the values are not one normal population (two populations, a shift or "
+        "outliers); read the observed ppm, not Cpk",
+        out=out_of_limits,
+        count=count,
+        ppm=f"{ppm or 0.0:.0f}",
+        cpk=f"{cpk or 0.0:.2f}",
+    )
