@@ -293,9 +293,18 @@ def _missing(tr: Say, missing: str) -> str:
     )
 
 
+#: What :func:`db.reports.report_bounds`' wording gets when the statistics are the runs'.
+NOT_ROLLED_UP = "; statistics from the runs, not the roll-ups' other bounds"
+
+
 def source_words(source: str, tr: Say = ENGLISH) -> str:
     """Where a report's limits come from (its ``bounds_source``) in the reader's language
     (``tr``); a wording not known here as it is."""
+    source, rolled, _ = source.partition(NOT_ROLLED_UP)
+    if rolled:
+        return source_words(source, tr) + tr(
+            "; statistics from the runs, not the roll-ups' other bounds"
+        )
     for pattern, words in _SOURCES:
         if found := pattern.fullmatch(source):
             return words(tr, {k: v for k, v in found.groupdict().items() if v is not None})
