@@ -274,11 +274,15 @@ _SOURCES: tuple[tuple[re.Pattern[str], Callable[[Say, dict[str, str]], str]], ..
         ),
     ),
     (
+        re.compile(r"each product against its own limits profile \((?P<count>\d+) products\)"),
+        lambda tr, v: tr("each product against its own limits profile ({count} products)", **v),
+    ),
+    (
         re.compile(
-            r"each product against its own limits profile \((?P<count>\d+) products( in range)?\)"
+            r"each product against its own limits profile \((?P<count>\d+) products in range\)"
         ),
         lambda tr, v: tr(
-            "each product against its own limits profile ({count} products)", count=v["count"]
+            "each product against its own limits profile ({count} products in range)", **v
         ),
     ),
     (re.compile(r"no limits"), lambda tr, v: tr("no limits")),
