@@ -102,14 +102,18 @@ async def _validation_error(request: Request, exc: Exception) -> Response:
     assert isinstance(exc, RequestValidationError)
     page = _page(request)
     if page is not None:
+        from api.language import request_language
         from station.report import html
 
         title, with_form = page
         form = {name: request.query_params.get(name, "") for name in FORM_FIELDS}
-        return HTMLResponse(
-            html.problem_page(title, one_line(exc.errors()), form if with_form else None),
-            status_code=status.HTTP_422_UNPROCESSABLE_CONTENT,
+        problem = html.problem_page(
+            title,
+            one_line(exc.errors()),
+            form if with_form else None,
+            request_language(request),
         )
+        return HTMLResponse(problem, status_code=status.HTTP_422_UNPROCESSABLE_CONTENT)
     return _validation_answer(exc.errors())
 
 

@@ -9,7 +9,7 @@ no error: English.
 
 from typing import Annotated, cast
 
-from fastapi import Depends, Header, Query
+from fastapi import Depends, Header, Query, Request
 
 from station.domain.i18n import LANGUAGES, Language
 
@@ -45,3 +45,12 @@ def page_language(
 
 
 LanguageDep = Annotated[Language, Depends(page_language)]
+
+
+def request_language(request: Request) -> Language:
+    """The language of a page answering ``request`` outside a route (a refusal's page):
+    its ``?lang=`` when shipped, else its ``Accept-Language``, else en."""
+    lang = request.query_params.get("lang")
+    if lang in LANGUAGES:
+        return cast(Language, lang)
+    return preferred(request.headers.get("accept-language"))

@@ -14,6 +14,7 @@ from db import RunRepository
 from db.holds import held_units
 from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.split import SPLIT_PARAMETERS, split_report
+from station.domain.i18n import Language
 from station.domain.limits import LimitsProfile
 from station.domain.quality.days import day_end, midnight, plant_date
 from station.domain.quality.figures import ReportFilter
@@ -57,9 +58,10 @@ def eol_body(
     plant: Plant,
     candidate: LimitsProfile | None,
     candidate_kept: bool = False,
+    language: Language = "en",
 ) -> str:
-    """The end-of-line report rendered as ``format``; ``candidate_kept``: the what-if's
-    candidate is stored (a link to it answers it again)."""
+    """The end-of-line report rendered as ``format`` (a page in ``language``);
+    ``candidate_kept``: the what-if's candidate is stored (a link to it answers it again)."""
     report = eol_report(
         repository.session,
         filter,
@@ -72,7 +74,7 @@ def eol_body(
         zone=plant.zone,
         shifts=plant.shifts,
     )
-    return render(report, format)
+    return render(report, format, language)
 
 
 def split_body(
@@ -82,28 +84,37 @@ def split_body(
     by: SplitBy,
     format: str,
     zone: str,
+    language: Language = "en",
 ) -> str:
-    """A parameter's split by ``by``, as JSON or its page."""
+    """A parameter's split by ``by``, as JSON or its page (in ``language``)."""
     report = split_report(repository.session, filter, parameter, by)
     if format == "json":
         return report.model_dump_json(indent=2) + "\n"
     from station.report import html
 
-    return html.split_page(report, zone, SPLIT_PARAMETERS)
+    return html.split_page(report, zone, SPLIT_PARAMETERS, language)
 
 
-def failing_runs_body(repository: RunRepository, filter: ReportFilter, code: str, zone: str) -> str:
-    """The page of a Pareto bar's runs."""
+def failing_runs_body(
+    repository: RunRepository,
+    filter: ReportFilter,
+    code: str,
+    zone: str,
+    language: Language = "en",
+) -> str:
+    """The page of a Pareto bar's runs, in ``language``."""
     from station.report import html
 
     runs = ReportQueries(repository.session, filter).failing_runs(code, FAILING_RUNS)
-    return html.failing_runs_page(filter, zone, code, runs, FAILING_RUNS)
+    return html.failing_runs_page(filter, zone, code, runs, FAILING_RUNS, language)
 
 
-def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") -> str:
-    """The dashboard page at ``now``: the runs of the plant's day (its time ``zone``),
-    from its midnight to the next (a run a station's clock dated later is no run of
-    today)."""
+def dashboard_body(
+    repository: RunRepository, now: datetime, zone: str = "UTC", language: Language = "en"
+) -> str:
+    """The dashboard page at ``now``, in ``language``: the runs of the plant's day (its
+    time ``zone``), from its midnight to the next (a run a station's clock dated later is
+    no run of today)."""
     today = plant_date(now, zone)
     report = eol_report(
         repository.session,
@@ -117,4 +128,6 @@ def dashboard_body(repository: RunRepository, now: datetime, zone: str = "UTC") 
     from station.report import html
 
     held = held_units(repository.session, DASHBOARD_HELD)
-    return html.dashboard_page(report, held.units, held.total, events=EVENTS_PATH)
+    return html.dashboard_page(
+        report, held.units, held.total, events=EVENTS_PATH, language=language
+    )

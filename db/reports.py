@@ -483,6 +483,9 @@ class ReportQueries:
                 RunFailure.measured,
                 RunFailure.lower,
                 RunFailure.upper,
+                RunFailure.axis,
+                RunFailure.pose,
+                RunFailure.uncertainty,
             )
             .join(RunFailure, and_(RunFailure.run_pk == Run.id, RunFailure.position == 0))
             .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions())

@@ -152,12 +152,12 @@ class Browser:
             if e.get("method") == "Network.requestWillBeSent"
         ]
 
-    def screenshot(self, name: str) -> Path:
-        """A full-page PNG of the current page under ``artifacts/``."""
+    def screenshot(self, name: str, width: int = WIDTH) -> Path:
+        """A full-page PNG of the current page under ``artifacts/``, ``width`` px wide."""
         height = int(self.evaluate("document.documentElement.scrollHeight"))
         self.call(
             "Emulation.setDeviceMetricsOverride",
-            width=WIDTH,
+            width=width,
             height=min(height, 8000),
             deviceScaleFactor=1,
             mobile=False,

@@ -9,6 +9,7 @@ from fastapi.responses import HTMLResponse, Response
 from pydantic import BaseModel, Field
 
 from api.deps import ReaderDep
+from api.language import LanguageDep
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from db.alerts import recent_alerts
@@ -47,6 +48,7 @@ async def get_alerts(
     request: Request,
     reader: ReaderDep,
     zone: PlantZoneDep,
+    language: LanguageDep,
     format: Annotated[Literal["html", "json"], Query(description="the answer's format")] = "html",
 ) -> Response:
     """The latest alerts, the newest first."""
@@ -58,4 +60,4 @@ async def get_alerts(
         return Response(answer.model_dump_json(), media_type="application/json")
     from station.report import html
 
-    return HTMLResponse(html.alerts_page(alerts, zone, rounds))
+    return HTMLResponse(html.alerts_page(alerts, zone, rounds, language))

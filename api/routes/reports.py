@@ -56,6 +56,7 @@ from db.reports import CHART_POINTS
 from db.run_export import HEADER, run_page
 from db.split import SPLIT_PARAMETERS, SPLIT_RUNS
 from station.domain.errors import InputError
+from station.domain.i18n import Language
 from station.domain.laboratory import Laboratory
 from station.domain.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
@@ -237,6 +238,7 @@ async def get_eol_report(
     period: PeriodDep,
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
+    language: LanguageDep,
     format: Format = "json",
     listed: Listed = "held",
     units: PageSize = PAGE_UNITS,
@@ -260,7 +262,7 @@ async def get_eol_report(
             )
         candidate = stored[what_if]
     body = await _report(
-        repository, report_filter, pages, format, plant, candidate, candidate is not None
+        repository, report_filter, pages, format, plant, candidate, candidate is not None, language
     )
     return Response(body, media_type=MEDIA_TYPES[format])
 
@@ -273,12 +275,13 @@ async def _report(
     plant: Plant,
     candidate: LimitsProfile | None,
     candidate_kept: bool,
+    language: Language = "en",
 ) -> str:
     """The report's body; a 422 when a ``candidate`` is asked of runs of several products
     (a profile is one product's). ``candidate_kept``: the candidate is stored."""
     try:
         return await repository.run(
-            eol_body, filter, pages, format, plant, candidate, candidate_kept
+            eol_body, filter, pages, format, plant, candidate, candidate_kept, language
         )
     except InputError as exc:
         raise invalid(("query", "part_number"), str(exc)) from None
@@ -318,6 +321,7 @@ async def post_eol_what_if(
     zone: PlantZoneDep,
     shifts: PlantShiftsDep,
     credentials: CredentialsDep,
+    language: LanguageDep,
     limits: Annotated[
         UploadFile, File(description="the candidate limits file (TOML, as the station's)")
     ],
@@ -357,7 +361,9 @@ async def post_eol_what_if(
         await require_quality(credentials, sessions)
     pages = Pages(held=listed == "held", size=units, offset=(page - 1) * units)
     plant = Plant(zone, shifts)
-    body = await _report(repository, period.filter(zone), pages, format, plant, candidate, kept)
+    body = await _report(
+        repository, period.filter(zone), pages, format, plant, candidate, kept, language
+    )
     if kept:  # after the report: a refused what-if stores nothing
         async with sessions() as session, session.begin():
             await session.run_sync(keep_profile, candidate)
@@ -402,6 +408,7 @@ async def get_split(
     repository: ReportPoolDep,
     period: PeriodDep,
     zone: PlantZoneDep,
+    language: LanguageDep,
     parameter: SplitParameter,
     by: Annotated[SplitBy, Query(description="the run's column the runs are split by")],
     format: Literal["json", "html"] = "html",
@@ -409,7 +416,9 @@ async def get_split(
     """A parameter's distribution and capability split by station, lot, operator, fixture
     slot, product or software version: n, mean, sd, quartiles, Tukey whiskers and outliers,
     Cpk and observed ppm per group (the latest runs of the period, bounded)."""
-    body = await repository.run(split_body, period.filter(zone), parameter, by, format, zone)
+    body = await repository.run(
+        split_body, period.filter(zone), parameter, by, format, zone, language
+    )
     return Response(body, media_type=MEDIA_TYPES[format])
 
 
@@ -431,10 +440,11 @@ async def get_failing_runs(
     period: PeriodDep,
     zone: PlantZoneDep,
     code: Annotated[str, Query(pattern=IDENTIFIER_PATTERN, description="first failure reason")],
+    language: LanguageDep,
 ) -> HTMLResponse:
     """The runs behind a Pareto bar: failing runs of the period (and station, operator,
     lot, product) whose first failure reason is ``code``, the latest first."""
-    body = await repository.run(failing_runs_body, period.filter(zone), code, zone)
+    body = await repository.run(failing_runs_body, period.filter(zone), code, zone, language)
     return HTMLResponse(body)
 
 
@@ -578,7 +588,9 @@ async def get_certificate(
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)
-async def get_dashboard(repository: ReportPoolDep, zone: PlantZoneDep) -> HTMLResponse:
+async def get_dashboard(
+    repository: ReportPoolDep, zone: PlantZoneDep, language: LanguageDep
+) -> HTMLResponse:
     """The line dashboard: the plant's today: counts and yields, latest units, units on
     hold, Pareto, charts; it follows the line's stored runs without a reload."""
-    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC), zone))
+    return HTMLResponse(await repository.run(dashboard_body, datetime.now(UTC), zone, language))

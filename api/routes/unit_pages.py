@@ -17,6 +17,7 @@ from pydantic import BeforeValidator
 
 from api.deps import ReaderDep, ReportPoolDep, RepositoryDep, SessionsDep, require_quality
 from api.errors import answers_pages
+from api.language import LanguageDep
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
 from api.routes.reviews import store_review
@@ -24,6 +25,7 @@ from api.routes.units import SerialPath
 from api.schemas import ReviewForm
 from db import ReviewRefusedError, RunRepository
 from db.station_health import CYCLE_RUNS, station_health
+from station.domain.i18n import Language
 from station.domain.quality.station_health import StationHealth
 from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
 
@@ -42,7 +44,7 @@ _HTML = {"text/html": {"schema": {"type": "string"}}}
     },
 )
 async def get_unit_page(
-    serial: SerialPath, repository: ReaderDep, zone: PlantZoneDep
+    serial: SerialPath, repository: ReaderDep, zone: PlantZoneDep, language: LanguageDep
 ) -> HTMLResponse:
     """The unit's page: its state, every run, links to each record and to its certificate."""
     from station.report import html
@@ -50,11 +52,11 @@ async def get_unit_page(
     runs = await repository.run(lambda r: r.history(serial))
     if not runs:
         return HTMLResponse(
-            html.not_found_page(f"No calibration run of serial {serial} is stored."),
+            html.unknown_unit_page(serial, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     reviews = await repository.run(lambda r: r.reviews(serial))
-    return HTMLResponse(html.unit_page(runs, datetime.now(UTC), zone, reviews))
+    return HTMLResponse(html.unit_page(runs, datetime.now(UTC), zone, reviews, language))
 
 
 StationPath = Annotated[
@@ -80,6 +82,7 @@ async def get_station_page(
     station_id: StationPath,
     repository: ReportPoolDep,
     zone: PlantZoneDep,
+    language: LanguageDep,
     format: Literal["json", "html"] = "html",
 ) -> Response:
     """A station's health page: its latest golden-unit checks over time against their
@@ -90,12 +93,12 @@ async def get_station_page(
     health = await repository.run(station_health_of, station_id)
     if health is None:
         return HTMLResponse(
-            html.not_found_page(f"No calibration run of station {station_id} is stored."),
+            html.unknown_station_page(station_id, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
     if format == "json":
         return Response(health.model_dump_json(indent=2), media_type="application/json")
-    return HTMLResponse(html.station_page(health, zone, CYCLE_RUNS))
+    return HTMLResponse(html.station_page(health, zone, CYCLE_RUNS, language))
 
 
 def station_health_of(repository: RunRepository, station_id: str) -> StationHealth | None:
@@ -127,6 +130,7 @@ async def post_unit_review(
     form: Annotated[ReviewForm, Form()],
     sessions: SessionsDep,
     repository: RepositoryDep,
+    language: LanguageDep,
 ) -> Response:
     """The review form of a held unit's page: the review of ``POST
     /api/v1/units/{serial}/reviews``, with the quality key typed into the form checked as
@@ -142,16 +146,17 @@ async def post_unit_review(
         reviewer = await require_quality(credentials, sessions)
         await store_review(serial, form, reviewer, repository)
     except HTTPException as exc:
-        return _refused(exc.status_code, str(exc.detail))
+        return _refused(exc.status_code, str(exc.detail), language)
     except ReviewRefusedError as exc:
-        return _refused(status.HTTP_409_CONFLICT, str(exc))
+        return _refused(status.HTTP_409_CONFLICT, str(exc), language)
     return RedirectResponse(f"/units/{serial}#reviews", status_code=status.HTTP_303_SEE_OTHER)
 
 
-def _refused(status_code: int, message: str) -> HTMLResponse:
+def _refused(status_code: int, message: str, language: Language) -> HTMLResponse:
     from station.report import html
 
-    return HTMLResponse(html.problem_page(REVIEW_TITLE, message), status_code=status_code)
+    page = html.problem_page(REVIEW_TITLE, message, language=language)
+    return HTMLResponse(page, status_code=status_code)
 
 
 #: The most serials a search lists (type more of the serial for fewer).
@@ -188,7 +193,9 @@ SearchQuery = Annotated[
     },
 )
 @answers_pages(SEARCH_TITLE, "html", form=False)
-async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
+async def search_units(
+    serial: SearchQuery, repository: ReaderDep, language: LanguageDep
+) -> Response:
     """The search box of every page: the unit of this serial number (its page), or the
     units whose serial begins so."""
     from station.report import html
@@ -199,7 +206,8 @@ async def search_units(serial: SearchQuery, repository: ReaderDep) -> Response:
         return RedirectResponse(f"/units/{exact}", status_code=status.HTTP_303_SEE_OTHER)
     if not found:
         return HTMLResponse(
-            html.problem_page(SEARCH_TITLE, f"No unit's serial number begins with {serial}."),
+            html.no_serial_page(SEARCH_TITLE, serial, language),
             status_code=status.HTTP_404_NOT_FOUND,
         )
-    return HTMLResponse(html.found_page(serial, found[:FOUND_SERIALS], len(found) > FOUND_SERIALS))
+    more = len(found) > FOUND_SERIALS
+    return HTMLResponse(html.found_page(serial, found[:FOUND_SERIALS], more, language))

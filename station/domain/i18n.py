@@ -8,7 +8,9 @@ process's language once, at start (``language`` in the station's configuration,
 ``{placeholders}`` afterwards, so a translation may put them in its own order; :func:`trn`
 translates one whose words follow a count ("1 run", "3 runs"). A server
 that answers each request in its reader's language (``?lang=``, ``Accept-Language``)
-takes :func:`speaker` of that language instead. Babel is imported only when a language
+takes :func:`speaker` of that language instead, and :func:`counter` for a line that
+names a count (gettext's plural forms: one form in Korean and Chinese, two in English).
+Babel is imported only when a language
 other than English is chosen.
 
 Korean particles depend on the sound the word before them ends in, which a placeholder
@@ -34,6 +36,9 @@ DOMAIN: Final = "calstation"
 
 #: A translation function: a message in one language, its ``{placeholders}`` filled.
 Say = Callable[..., str]
+#: A translation function of a line that names a count: ``(singular, plural, count,
+#: **values)``, the form of ``count`` in one language, ``{count}`` and the values filled.
+Count = Callable[..., str]
 
 _translations: gettext.NullTranslations = gettext.NullTranslations()
 _language: Language = "en"
@@ -153,3 +158,19 @@ def korean_particles(text: str) -> str:
         return match.group(1) if sound != "v" else match.group(2)
 
     return _PARTICLE.sub(chosen, text)
+
+
+#: :func:`speaker` of English: the sources' own text.
+ENGLISH: Final[Say] = speaker("en")
+
+
+def counter(language: str) -> Count:
+    """The lines of ``language`` (one of :data:`LANGUAGES`) that name a count, each in
+    the plural form the language gives that count (gettext ``ngettext``)."""
+    translations = _translations_of(language)
+
+    def count(singular: str, plural: str, number: int, **values: object) -> str:
+        chosen = translations.ngettext(singular, plural, number)
+        return _filled(language, chosen, {"count": number, **values})
+
+    return count

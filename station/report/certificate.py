@@ -14,7 +14,7 @@ from datetime import datetime
 
 import numpy as np
 
-from station.domain.i18n import Say, speaker
+from station.domain.i18n import ENGLISH, Say
 from station.domain.laboratory import Laboratory
 from station.domain.limits import CHECKS, Bounds, LimitsProfile
 from station.domain.records import RunRecord, RunSummary, StoredCoefficients
@@ -27,9 +27,6 @@ NUMBER_PREFIXES = {"pass": "CAL", "fail": "FR"}
 #: so that a line's runs of a year share a number with odds below 1 in 500 at a million
 #: runs (n²/2⁴⁹); 8 digits (32 bits) would collide about once in 100,000 runs.
 NUMBER_DIGITS = 12
-
-#: The page's words in English, the sources' own (a document's default reader).
-ENGLISH = speaker("en")
 
 
 def document_number(run: RunRecord | RunSummary) -> str:

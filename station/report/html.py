@@ -21,7 +21,7 @@ from jinja2 import Environment, PackageLoader, select_autoescape
 from markupsafe import Markup
 
 from station import __version__
-from station.domain.i18n import Language, speaker
+from station.domain.i18n import ENGLISH, Language, Say, counter, speaker
 from station.domain.laboratory import Laboratory
 from station.domain.limits import LimitsProfile
 from station.domain.quality.alerts import Alert
@@ -43,12 +43,11 @@ from station.domain.quality.station_health import (
     SENSITIVITY_TOLERANCE,
     StationHealth,
 )
-from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.records import FailureReason, GyroFitRecord, HoldReview, RunSummary, StoredRun
 from station.domain.signature import Signature
 from station.domain.unit_state import UnitCalibration, deciding_review
 from station.report import formatting, svg
 from station.report.certificate import (
-    ENGLISH,
     as_found,
     as_left,
     check_rows,
@@ -61,24 +60,24 @@ from station.report.certificate import (
 from station.report.explanations import explanation
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
 from station.report.tables import (
-    CAPABILITY_HEADER,
-    PARAMETER_HEADER,
-    RISK_HEADER,
-    SUMMARY_HEADER,
-    WHAT_IF_HEADER,
     Statistics,
     capability_cells,
+    capability_header,
+    capability_words,
     listed,
     near_limits_line,
     parameter_cells,
+    parameter_header,
     risk_cells,
+    risk_header,
+    source_words,
+    split_name,
     statistics_of,
     summary_cells,
+    summary_header,
     what_if_cells,
+    what_if_header,
 )
-
-#: The capability a trend of Cpk is read against (AIAG: 1.33 for a process in production).
-CPK_TARGET = ("target", CAPABLE_CPK)
 
 _env = Environment(
     loader=PackageLoader("station.report", "templates"),
@@ -100,34 +99,80 @@ _env.filters.update(
 )
 _env.globals.update(
     # The page's words: English unless a page is rendered for a reader of another
-    # language (:func:`certificate_page`); ``pybabel extract`` reads the templates' calls.
+    # language (:func:`_render`); ``pybabel extract`` reads the templates' calls.
     tr=ENGLISH,
     said=lambda code: code,
     version=__version__,
-    histogram=lambda stats: Markup(svg.histogram(stats)),
-    pareto=lambda entries, link=None: Markup(svg.pareto(entries, link)),
-    control_chart=lambda chart, zone="UTC": Markup(svg.control_chart(chart, zone)),
-    box_plots=lambda report: Markup(svg.box_plots(report)),
+    histogram=lambda stats, tr=ENGLISH: Markup(svg.histogram(stats, tr)),
+    pareto=lambda entries, link=None, tr=ENGLISH: Markup(svg.pareto(entries, link, tr)),
+    control_chart=lambda chart, zone="UTC", tr=ENGLISH: Markup(svg.control_chart(chart, zone, tr)),
+    box_plots=lambda report, tr=ENGLISH: Markup(svg.box_plots(report, tr)),
 )
 
 
 _env.globals.update(
-    summary_header=SUMMARY_HEADER,
+    summary_header=summary_header,
     summary_cells=summary_cells,
-    parameter_header=PARAMETER_HEADER,
+    parameter_header=parameter_header,
     listed=listed,
-    what_if_header=WHAT_IF_HEADER,
+    what_if_header=what_if_header,
     what_if_cells=what_if_cells,
-    capability_header=CAPABILITY_HEADER,
+    capability_header=capability_header,
     capability_cells=capability_cells,
     near_limits_line=near_limits_line,
-    risk_header=RISK_HEADER,
+    risk_header=risk_header,
     risk_cells=risk_cells,
+    split_name=split_name,
+    source_words=source_words,
+    capability_words=capability_words,
 )
 # The macros of the base template, for every template and every template it includes
 # (Jinja's template modules expose their macros as attributes it does not declare).
 _base = _env.get_template("base.html").module
 _env.globals.update(serial_link=_base.serial_link)  # type: ignore[attr-defined]
+
+
+def page_words(tr: Say) -> dict[str, str]:
+    """The stored codes a page shows as words, in the reader's language: the documents'
+    (:func:`station.report.certificate.code_words`) and a unit's disposition and next step."""
+    return {
+        **code_words(tr),
+        "ship": tr("ship"),
+        "hold": tr("hold"),
+        "scrapped": tr("scrapped"),
+        "held": tr("held"),
+        "all": tr("all"),
+        "open": tr("open"),
+        # The ages of open holds (station.domain.quality.figures.HOLD_AGES).
+        "< 1 day": tr("< 1 day"),
+        "1–7 days": tr("1–7 days"),
+        "> 7 days": tr("> 7 days"),
+    }
+
+
+def _render(template: str, language: Language, **context: object) -> str:
+    """``template`` rendered for a reader of ``language``: its words (``tr``, ``trn`` for
+    a line that names a count), the stored codes it shows (``said``) and failures
+    (``failure_text``: rendered from their code and parameters outside English,
+    :mod:`station.report.explanations`) in that language; values as the plant formats them."""
+    tr = speaker(language)
+    words = page_words(tr)
+
+    def failure_text(failure: Any) -> str:
+        if language == "en":
+            return formatting.reason(failure)
+        if not isinstance(failure, FailureReason):  # a row of a query: its fields by name
+            failure = FailureReason.model_validate(failure, from_attributes=True)
+        return explanation(failure, language)
+
+    return _env.get_template(template).render(
+        page_language=language,
+        tr=tr,
+        trn=counter(language),
+        said=lambda code: words.get(code, code),
+        failure_text=failure_text,
+        **context,
+    )
 
 
 def trend_charts(
@@ -137,24 +182,28 @@ def trend_charts(
     per: str,
     *,
     counts: bool = True,
+    tr: Say = ENGLISH,
 ) -> list[str]:
     """A trend as charts (``per`` "day" or "shift", ``periods`` its axis labels and
     names): (``counts``) units, first-pass and final yield, and the Cpk of each of
-    ``parameters`` that has one."""
+    ``parameters`` that has one; titles in the reader's language (``tr``)."""
+    daily = per == "day"
     charts = (
         [
             svg.trend_chart(
-                f"units per {per} (first attempt on the line)",
+                tr("units per day (first attempt on the line)")
+                if daily
+                else tr("units per shift (first attempt on the line)"),
                 periods,
                 [],
                 bars=[d.units for d in trend],
             ),
             svg.trend_chart(
-                f"yield per {per}",
+                tr("yield per day") if daily else tr("yield per shift"),
                 periods,
                 [
-                    ("first-pass", [d.first_pass_yield for d in trend]),
-                    ("final", [d.final_yield for d in trend]),
+                    (tr("first-pass"), [d.first_pass_yield for d in trend]),
+                    (tr("final"), [d.final_yield for d in trend]),
                 ],
                 percent_axis=True,
             ),
@@ -167,20 +216,26 @@ def trend_charts(
         if any(v is not None for v in values):
             charts.append(
                 svg.trend_chart(
-                    f"Cpk of {p.name} per {per}", periods, [("Cpk", values)], reference=CPK_TARGET
+                    tr("Cpk of {name} per day", name=p.name)
+                    if daily
+                    else tr("Cpk of {name} per shift", name=p.name),
+                    periods,
+                    [("Cpk", values)],
+                    reference=(tr("target"), CAPABLE_CPK),
                 )
             )
     return charts
 
 
-def day_charts(stats: Statistics, *, counts: bool = True) -> list[str]:
+def day_charts(stats: Statistics, *, counts: bool = True, tr: Say = ENGLISH) -> list[str]:
     """The trend per plant day as charts: the line's, or (not ``counts``) a product
-    section's Cpk."""
+    section's Cpk. The capability a trend of Cpk is read against: AIAG's 1.33 for a
+    process in production."""
     days = [(d.day.strftime("%m-%d"), d.day.isoformat()) for d in stats.trend]
-    return trend_charts(stats.parameters, stats.trend, days, "day", counts=counts)
+    return trend_charts(stats.parameters, stats.trend, days, "day", counts=counts, tr=tr)
 
 
-def shift_charts(report: EolReport) -> list[str]:
+def shift_charts(report: EolReport, tr: Say = ENGLISH) -> list[str]:
     """The trend per shift as charts (shifts named by their day and start time): units
     and yields; the Cpk per shift is in the JSON and CSV (sixteen charts of up to 93
     shifts would outweigh the rest of the page)."""
@@ -188,7 +243,7 @@ def shift_charts(report: EolReport) -> list[str]:
         (f"{s.day.strftime('%m-%d')} {s.shift}", f"{s.day.isoformat()} {s.shift}")
         for s in report.shift_trend
     ]
-    return trend_charts([], report.shift_trend, shifts, "shift")
+    return trend_charts([], report.shift_trend, shifts, "shift", tr=tr)
 
 
 #: The report (``GET``), and where a what-if is answered again by its profile's SHA-256.
@@ -245,11 +300,18 @@ def runs_link(filter: ReportFilter, zone: str) -> Callable[[str], str]:
 
 
 def failing_runs_page(
-    filter: ReportFilter, zone: str, code: str, runs: Sequence[Any], limit: int
+    filter: ReportFilter,
+    zone: str,
+    code: str,
+    runs: Sequence[Any],
+    limit: int,
+    language: Language = "en",
 ) -> str:
     """The failing runs whose first failure reason is ``code`` (a Pareto bar's runs),
-    the latest ``limit`` of them, times in the plant's ``zone``."""
-    return _env.get_template("failing_runs.html").render(
+    the latest ``limit`` of them, times in the plant's ``zone``, in ``language``."""
+    return _render(
+        "failing_runs.html",
+        language,
         filter=filter,
         zone=zone,
         code=code,
@@ -350,9 +412,9 @@ class StatisticsBlock:
     control_runs: Markup
 
 
-def statistics_blocks(report: EolReport) -> list[StatisticsBlock]:
+def statistics_blocks(report: EolReport, tr: Say = ENGLISH) -> list[StatisticsBlock]:
     """The report's statistics as the page shows them: one block over its runs, or one
-    per product when they are of several."""
+    per product when they are of several; chart titles in the reader's language (``tr``)."""
     return [
         StatisticsBlock(
             part_number=getattr(stats, "part_number", None),
@@ -360,7 +422,7 @@ def statistics_blocks(report: EolReport) -> list[StatisticsBlock]:
             filter=stats.filter,
             parameter_rows=parameter_cells(stats),
             cpk_charts=(
-                [Markup(c) for c in day_charts(stats, counts=False)]
+                [Markup(c) for c in day_charts(stats, counts=False, tr=tr)]
                 if report.product_sections
                 else []
             ),
@@ -371,10 +433,13 @@ def statistics_blocks(report: EolReport) -> list[StatisticsBlock]:
     ]
 
 
-def report_page(report: EolReport) -> str:
-    """The end-of-line report as one self-contained HTML page."""
+def report_page(report: EolReport, language: Language = "en") -> str:
+    """The end-of-line report as one self-contained HTML page in ``language``."""
     f, zone = report.filter, report.timezone
-    return _env.get_template("report.html").render(
+    tr = speaker(language)
+    return _render(
+        "report.html",
+        language,
         what_if_link=what_if_link(report),
         report=report,
         form={**filter_fields(f, zone), "list": report.units_listed},
@@ -387,30 +452,39 @@ def report_page(report: EolReport) -> str:
             units=report.units_limit,
             page=offset // (report.units_limit or 1) + 1,
         ),
-        trend_charts=[Markup(chart) for chart in day_charts(report)] if report.trend else [],
+        trend_charts=(
+            [Markup(chart) for chart in day_charts(report, tr=tr)] if report.trend else []
+        ),
         shift_charts=(
-            [Markup(chart) for chart in shift_charts(report)] if report.shift_trend else []
+            [Markup(chart) for chart in shift_charts(report, tr)] if report.shift_trend else []
         ),
         day_runs=day_runs(f, zone, report.trend),
         shift_runs=trend_runs(f, zone, [(s.start, s.end) for s in report.shift_trend]),
-        blocks=statistics_blocks(report),
+        blocks=statistics_blocks(report, tr),
     )
 
 
 def dashboard_page(
-    report: EolReport, held: Sequence[UnitCalibration], held_total: int, *, events: str
+    report: EolReport,
+    held: Sequence[UnitCalibration],
+    held_total: int,
+    *,
+    events: str,
+    language: Language = "en",
 ) -> str:
     """The line dashboard over ``report`` (today's runs) and the latest ``held`` units on
     hold (of ``held_total``); it follows the server-sent events at ``events`` and brings
     itself up to date after each stored run, without a reload. Its control charts are a
-    product's: one set per product when today's runs are of several."""
-    return _env.get_template("dashboard.html").render(
+    product's: one set per product when today's runs are of several. In ``language``."""
+    return _render(
+        "dashboard.html",
+        language,
         report=report,
         held=held,
         held_total=held_total,
         events=events,
         runs_link=runs_link(report.filter, report.timezone),
-        blocks=statistics_blocks(report),
+        blocks=statistics_blocks(report, speaker(language)),
     )
 
 
@@ -419,23 +493,27 @@ def unit_page(
     generated_at: datetime,
     zone: str = "UTC",
     reviews: Sequence[HoldReview] = (),
+    language: Language = "en",
 ) -> str:
-    """A unit's page: its state and every one of its ``runs`` (oldest first, at least one),
-    its quality ``reviews`` (oldest first) and, when it is on hold and no review has
-    decided since its latest run, the form to review it; times in the plant's ``zone``.
+    """A unit's page, in ``language``: its state and every one of its ``runs`` (oldest
+    first, at least one), its quality ``reviews`` (oldest first) and, when it is on hold
+    and no review has decided since its latest run, the form to review it; times in the
+    plant's ``zone``.
 
     A review after the latest run decides where the unit goes: released for a retest
     (disposition ``retest``, next ``retest``) or scrapped (disposition ``scrapped``,
     nothing next, no form: a scrapped unit is never calibrated again)."""
     unit = UnitCalibration.of_history(runs)
-    return _env.get_template("unit.html").render(
+    return _render(
+        "unit.html",
+        language,
         unit=unit,
         decided=deciding_review(runs, reviews),
         runs=runs,
         reviews=reviews,
         generated_at=generated_at,
         zone=zone,
-        document_title=failure_words(speaker("en"))[unit.verdict],
+        document_title=failure_words(speaker(language))[unit.verdict],
     )
 
 
@@ -452,11 +530,18 @@ def alert_runs_link(alert: Alert, zone: str) -> str:
     return f"{REPORT_PATH}?{urlencode(query)}"
 
 
-def alerts_page(alerts: Sequence[Alert], zone: str, rounds: int | None) -> str:
+def alerts_page(
+    alerts: Sequence[Alert], zone: str, rounds: int | None, language: Language = "en"
+) -> str:
     """The latest ``alerts``, times in the plant's ``zone``; ``rounds``: the alert loop's
-    rounds in this server process (None: no rules configured)."""
-    return _env.get_template("alerts.html").render(
-        alerts=alerts, zone=zone, rounds=rounds, runs_link=lambda a: alert_runs_link(a, zone)
+    rounds in this server process (None: no rules configured); in ``language``."""
+    return _render(
+        "alerts.html",
+        language,
+        alerts=alerts,
+        zone=zone,
+        rounds=rounds,
+        runs_link=lambda a: alert_runs_link(a, zone),
     )
 
 
@@ -469,10 +554,12 @@ REPORT_NARROWED_BY: Final[dict[str, str]] = {
 }
 
 
-def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str:
+def split_page(
+    report: SplitReport, zone: str, parameters: Sequence[str], language: Language = "en"
+) -> str:
     """A parameter split by a run's column (:mod:`station.domain.quality.split`): box
     plots and each group's figures (a block per product when the runs are of several),
-    a form to choose another ``parameters`` or split."""
+    a form to choose another ``parameters`` or split; in ``language``."""
     narrowing = REPORT_NARROWED_BY.get(report.by)
 
     def group_link(section: SplitReport, group: str) -> str | None:
@@ -483,7 +570,9 @@ def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str
             return None
         return href(section.filter, zone, format="html", list="all", **{narrowing: group})
 
-    return _env.get_template("split.html").render(
+    return _render(
+        "split.html",
+        language,
         report=report,
         sections=report.sections or [report],
         zone=zone,
@@ -499,9 +588,13 @@ def split_page(report: SplitReport, zone: str, parameters: Sequence[str]) -> str
     )
 
 
-def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
+def station_page(
+    health: StationHealth, zone: str, cycle_limit: int, language: Language = "en"
+) -> str:
     """A station's health page: golden-unit checks against their baseline (charts and
-    table), drift warnings, cycle times (box plot, figures), versions in use."""
+    table), drift warnings, cycle times (box plot, figures), versions in use; in
+    ``language``."""
+    tr = speaker(language)
     checks = [c for c in health.golden if c.offset_deviation and c.sensitivity_deviation]
     periods = [
         (formatting.moment(c.started_at, zone)[5:16], formatting.moment(c.started_at, zone))
@@ -509,18 +602,22 @@ def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
     ]
     golden_charts = []
     for name, tolerance, attribute in (
-        ("offset Δ from baseline (counts)", OFFSET_TOLERANCE, "offset_deviation"),
-        ("sensitivity Δ from baseline (counts/g)", SENSITIVITY_TOLERANCE, "sensitivity_deviation"),
+        (tr("offset Δ from baseline (counts)"), OFFSET_TOLERANCE, "offset_deviation"),
+        (
+            tr("sensitivity Δ from baseline (counts/g)"),
+            SENSITIVITY_TOLERANCE,
+            "sensitivity_deviation",
+        ),
     ):
         series = [
             (axis, [getattr(c, attribute)[i] for c in checks]) for i, axis in enumerate("xyz")
         ]
-        chart = svg.trend_chart(name, periods, series, reference=("tolerance", tolerance))
+        chart = svg.trend_chart(name, periods, series, reference=(tr("tolerance"), tolerance))
         golden_charts.append(Markup(chart))
     cycle_chart = None
     if health.cycle_seconds is not None:
         cycle = SplitReport(
-            parameter="cycle time",
+            parameter=tr("cycle time"),
             unit="s",
             by="station",
             filter=ReportFilter(station_id=health.station_id),
@@ -532,8 +629,10 @@ def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
             groups=[health.cycle_seconds.model_copy(update={"group": health.station_id})],
             groups_total=1,
         )
-        cycle_chart = Markup(svg.box_plots(cycle))
-    return _env.get_template("station.html").render(
+        cycle_chart = Markup(svg.box_plots(cycle, tr))
+    return _render(
+        "station.html",
+        language,
         health=health,
         zone=zone,
         golden_charts=golden_charts if checks else [],
@@ -545,20 +644,54 @@ def station_page(health: StationHealth, zone: str, cycle_limit: int) -> str:
     )
 
 
-def problem_page(title: str, message: str, form: dict[str, str] | None = None) -> str:
+def problem_page(
+    title: str, message: str, form: dict[str, str] | None = None, language: Language = "en"
+) -> str:
     """The page of a request a page could not answer: ``message``, one line, says why;
-    ``form``: the report's filter fields as they were sent, to correct them."""
-    return _env.get_template("problem.html").render(title=title, message=message, form=form)
+    ``form``: the report's filter fields as they were sent, to correct them. The page's
+    ``title`` (a route's, in English) and its words in ``language``; ``message`` as
+    the check that refused it says it."""
+    tr = speaker(language)
+    titles = {
+        "End-of-line report": tr("End-of-line report"),
+        "Analysis by split": tr("Analysis by split"),
+        "Failing runs": tr("Failing runs"),
+        "Review of a unit on hold": tr("Review of a unit on hold"),
+        "Find a unit": tr("Find a unit"),
+    }
+    title = titles.get(title, title)
+    return _render("problem.html", language, title=title, message=message, form=form)
 
 
-def found_page(prefix: str, serials: Sequence[str], more: bool) -> str:
+def found_page(prefix: str, serials: Sequence[str], more: bool, language: Language = "en") -> str:
     """The units whose serial begins with ``prefix`` (``more``: the list is cut)."""
-    return _env.get_template("found.html").render(prefix=prefix, serials=serials, more=more)
+    return _render("found.html", language, prefix=prefix, serials=serials, more=more)
 
 
-def not_found_page(message: str) -> str:
+def not_found_page(message: str, language: Language = "en") -> str:
     """The page of a name nothing is stored under: ``message`` says which."""
-    return _env.get_template("not_found.html").render(message=message)
+    return _render("not_found.html", language, message=message)
+
+
+def unknown_unit_page(serial: str, language: Language = "en") -> str:
+    """The page of a serial number no run is stored under."""
+    tr = speaker(language)
+    message = tr("No calibration run of serial {serial} is stored.", serial=serial)
+    return not_found_page(message, language)
+
+
+def unknown_station_page(station_id: str, language: Language = "en") -> str:
+    """The page of a station no run is stored of."""
+    tr = speaker(language)
+    message = tr("No calibration run of station {station} is stored.", station=station_id)
+    return not_found_page(message, language)
+
+
+def no_serial_page(title: str, prefix: str, language: Language = "en") -> str:
+    """The search's page when no unit's serial number begins with ``prefix``."""
+    tr = speaker(language)
+    message = tr("No unit's serial number begins with {prefix}.", prefix=prefix)
+    return problem_page(title, message, language=language)
 
 
 def certificate_page(

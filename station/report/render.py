@@ -6,30 +6,32 @@ the JSON holds. Text and HTML format numbers through :mod:`station.report.format
 """
 
 import csv
+import functools
 import io
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+from station.domain.i18n import Language
 from station.domain.quality.figures import EolReport, TrendFigures
 from station.report.formatting import moment, number, percent
 from station.report.tables import (
-    CAPABILITY_HEADER,
-    FLIP_HEADER,
-    PARAMETER_HEADER,
-    RISK_HEADER,
-    SUMMARY_HEADER,
-    WHAT_IF_HEADER,
     Statistics,
     capability_cells,
+    capability_header,
     flip_cells,
+    flip_header,
     listed,
     near_limits_line,
     parameter_cells,
+    parameter_header,
     risk_cells,
+    risk_header,
     statistics_of,
     summary_cells,
+    summary_header,
     what_if_cells,
+    what_if_header,
 )
 
 MEDIA_TYPES: dict[str, str] = {
@@ -224,7 +226,7 @@ def as_text(report: EolReport) -> str:
         f"generated {moment(report.generated_at, report.timezone)}",
         "",
         *_table(
-            SUMMARY_HEADER,
+            summary_header(),
             [
                 summary_cells("all", report.summary),
                 *(summary_cells(s.station_id, s.summary) for s in report.stations),
@@ -233,7 +235,7 @@ def as_text(report: EolReport) -> str:
         "",
         "Per product (part number)",
         *_table(
-            ["part number", *SUMMARY_HEADER[1:]],
+            ["part number", *summary_header()[1:]],
             [summary_cells(p.part_number, p.summary) for p in report.products],
         ),
         "",
@@ -299,10 +301,10 @@ def _statistics_text(stats: Statistics) -> list[str]:
     of = f" of product {part}" if part else ""
     return [
         f"Parameters{of} against {stats.bounds_source}",
-        *_table(PARAMETER_HEADER, parameter_cells(stats)),
+        *_table(parameter_header(), parameter_cells(stats)),
         *([near_limits_line(stats)] if stats.near_limits is not None else []),
         *(
-            _table(RISK_HEADER, risk_cells(stats))
+            _table(risk_header(), risk_cells(stats))
             if stats.near_limits is not None and stats.near_limits.risks
             else []
         ),
@@ -336,7 +338,7 @@ def _what_if_text(report: EolReport) -> list[str]:
     return [
         f"What-if: the runs re-judged against {ref.name} v{ref.version} ({ref.sha256[:12]}); "
         "nothing stored changed",
-        *_table(WHAT_IF_HEADER, what_if_cells(report)),
+        *_table(what_if_header(), what_if_cells(report)),
         "",
         *_table(
             ["reason (what-if)", "runs", "share", "cumulative"],
@@ -346,28 +348,30 @@ def _what_if_text(report: EolReport) -> list[str]:
             ],
         ),
         "",
-        *_table(CAPABILITY_HEADER, capability_cells(report)),
+        *_table(capability_header(), capability_cells(report)),
         "",
         f"Units whose verdict would flip: {w.flips_total}",
-        *_table(FLIP_HEADER, flip_cells(report)),
+        *_table(flip_header(), flip_cells(report)),
         "",
     ]
 
 
-def as_html(report: EolReport) -> str:
-    """The report as a page (:mod:`station.report.html`, imported for it only)."""
+def as_html(report: EolReport, language: Language = "en") -> str:
+    """The report as a page in ``language`` (:mod:`station.report.html`, imported for it
+    only)."""
     from station.report import html
 
-    return html.report_page(report)
+    return html.report_page(report, language)
 
 
-def render(report: EolReport, format: str) -> str:
-    """The report in ``format`` (one of :data:`station.domain.constants.FORMATS`)."""
+def render(report: EolReport, format: str, language: Language = "en") -> str:
+    """The report in ``format`` (one of :data:`station.domain.constants.FORMATS`); a page
+    in ``language`` (the other formats are the plant's records, in English)."""
     renderers: dict[str, Any] = {
         "text": as_text,
         "csv": as_csv,
         "json": as_json,
-        "html": as_html,
+        "html": functools.partial(as_html, language=language),
     }
     text: str = renderers[format](report)
     return text

@@ -6,9 +6,11 @@ import math
 from collections.abc import Callable, Sequence
 from xml.sax.saxutils import escape
 
+from station.domain.i18n import ENGLISH, Say
 from station.domain.quality.figures import ChartPoint, ControlChart, ParameterStats, ParetoEntry
 from station.domain.quality.split import SplitReport
 from station.report.formatting import clock, number, percent
+from station.report.tables import split_name
 
 WIDTH, HEIGHT, PAD = 360, 150, 28
 LIMIT_COLOUR, CENTRE_COLOUR, BAR_COLOUR, ALARM_COLOUR = "#c0392b", "#2c7a2c", "#3b6ea5", "#c0392b"
@@ -30,6 +32,19 @@ def _svg(title: str, body: Sequence[str], height: float = HEIGHT, width: float =
     )
 
 
+#: How wide a character of a label is drawn, at most (px, 9 px type): a time axis label
+#: near an edge is anchored at it, so the chart does not cut it.
+CHAR_WIDTH = 5.5
+
+
+def _tick_label(x: float, y: float, label: str, width: float) -> str:
+    """A time axis' label under its tick at ``x``, centred unless that would cut it at
+    the chart's left or right edge (``width``): then it ends, or starts, at its tick."""
+    half = CHAR_WIDTH * len(label) / 2
+    anchor = "end" if x + half > width - 1 else "start" if x - half < 1 else "middle"
+    return _text(x, y, label, anchor)
+
+
 def _text(x: float, y: float, label: str, anchor: str = "start", colour: str = "#333") -> str:
     return (
         f'<text x="{x:.1f}" y="{y:.1f}" font-size="9" fill="{colour}" '
@@ -45,15 +60,18 @@ def _line(x1: float, y1: float, x2: float, y2: float, colour: str, dash: bool = 
     )
 
 
-def histogram(stats: ParameterStats) -> str:
+def histogram(stats: ParameterStats, tr: Say = ENGLISH) -> str:
     """The parameter's values (the latest runs', :attr:`ParameterStats.distribution`) in
     bins from the data, on a count axis, with the mean and the limits: the limits join
     the value axis unless they would squeeze the values into less than a third of it,
-    else an arrow at the edge names them."""
+    else an arrow at the edge names them. Words in the reader's language (``tr``)."""
     d = stats.distribution
-    title = f"histogram of {stats.name}"
+    title = tr("histogram of {name}", name=stats.name)
     if d is None or not d.counts:
-        return _svg(title, [_text(WIDTH / 2, HEIGHT / 2, f"{stats.name}: no values", "middle")])
+        return _svg(
+            title,
+            [_text(WIDTH / 2, HEIGHT / 2, tr("{name}: no values", name=stats.name), "middle")],
+        )
     low, high = d.edges[0], d.edges[-1]
     for limit in (stats.lower, stats.upper):
         if limit is not None:
@@ -76,7 +94,7 @@ def histogram(stats: ParameterStats) -> str:
         _line(left, top, left, bottom, AXIS_COLOUR),
         _text(left - 3, top + 3, str(most), "end"),
         _text(left - 3, bottom + 3, "0", "end"),
-        _text(left - 3, (top + bottom) / 2 + 3, "count", "end"),
+        _text(left - 3, (top + bottom) / 2 + 3, tr("count"), "end"),
     ]
     # Size (the report page's 300 kB target, docs/benchmarks.md): the bars are one path
     # of whole-pixel boxes, not an element each.
@@ -107,21 +125,29 @@ def histogram(stats: ParameterStats) -> str:
             anchor = "start" if arrow else "end"
             body.append(_text(edge, top - 14, text, anchor, LIMIT_COLOUR))
     for apart, x, anchor, words in (
-        (d.below, left + 2, "start", f"← {d.below} below"),
-        (d.above, right - 2, "end", f"{d.above} above →"),
+        (d.below, left + 2, "start", "← " + tr("{count} below", count=d.below)),
+        (d.above, right - 2, "end", tr("{count} above", count=d.above) + " →"),
     ):
         if apart:  # far-out values, counted apart (Tukey's fences)
             body.append(_text(x, (top + bottom) / 2, words, anchor, ALARM_COLOUR))
     body.append(_text(left, HEIGHT - 8, number(low)))
     body.append(_text(right, HEIGHT - 8, number(high), "end"))
-    sample = f", latest {d.values} of {stats.count}" if d.values < stats.count else ""
+    sample = (
+        tr(", latest {values} of {count}", values=d.values, count=stats.count)
+        if d.values < stats.count
+        else ""
+    )
     body.append(
         _text((left + right) / 2, HEIGHT - 8, f"{stats.name} ({stats.unit}){sample}", "middle")
     )
     return _svg(title, body)
 
 
-def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = None) -> str:
+def pareto(
+    entries: Sequence[ParetoEntry],
+    link: Callable[[str], str] | None = None,
+    tr: Say = ENGLISH,
+) -> str:
     """Failing runs per first failure reason, largest first: each bar labelled with its
     count and its own share; the cumulative share a line against the top axis (0–100 %).
     ``link``: the address of a reason's runs, each bar and its label a link there."""
@@ -136,7 +162,7 @@ def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = N
         x = label_w + plot_w * share
         body.append(_line(x, top_h - 3, x, top_h, AXIS_COLOUR))
         body.append(_text(x, top_h - 6, percent(share), anchor, CENTRE_COLOUR))
-    body.append(_text(label_w - 6, top_h - 6, "cumulative share", "end", CENTRE_COLOUR))
+    body.append(_text(label_w - 6, top_h - 6, tr("cumulative share"), "end", CENTRE_COLOUR))
     cumulative = []
     for i, entry in enumerate(rows):
         y = top_h + 4 + i * row_h
@@ -163,8 +189,8 @@ def pareto(entries: Sequence[ParetoEntry], link: Callable[[str], str] | None = N
             for x, y in cumulative
         ]
     else:
-        body.append(_text(width / 2, top_h + 16, "no failures", "middle"))
-    return _svg("failure Pareto: runs per first failure reason", body, height, width)
+        body.append(_text(width / 2, top_h + 16, tr("no failures"), "middle"))
+    return _svg(tr("failure Pareto: runs per first failure reason"), body, height, width)
 
 
 def _time_axis(
@@ -176,7 +202,7 @@ def _time_axis(
     for i in ticks:
         x = x_of(i)
         body.append(f'<g class="tick">{_line(x, y, x, y + 3, AXIS_COLOUR)}</g>')
-        body.append(_text(x, y + 12, clock(points[i].started_at, zone), "middle"))
+        body.append(_tick_label(x, y + 12, clock(points[i].started_at, zone), CHART_WIDTH))
     return body
 
 
@@ -187,10 +213,12 @@ def _panel(
     top: float,
     x_of: Callable[[int], float],
     what: str,
+    tr: Say = ENGLISH,
 ) -> list[str]:
     """One panel of an I-MR chart: the y axis, the centre and limit lines labelled with
     their values, the points joined in run order, points completing a Western Electric
-    rule in red with the rules' numbers and a tooltip of value and rules; ``what`` is the
+    rule in red with the rules' numbers and a tooltip of value and rules (in the reader's
+    language, ``tr``); ``what`` is the
     points' CSS class."""
     shown = [v for v in values if v is not None]
     levels = [v for _, v, _ in lines if v is not None]
@@ -226,7 +254,7 @@ def _panel(
     body.append(f'<g class="{what}" fill="{BAR_COLOUR}">{"".join(quiet)}</g>')
     for i, v in drawn:
         if rules := signals[i]:
-            flag = f"rule {', '.join(map(str, rules))}"
+            flag = tr("rule {rules}", rules=", ".join(map(str, rules)))
             body.append(
                 f'<circle class="{what} signal" cx="{x_of(i):.1f}" cy="{y_of(v):.1f}" r="3" '
                 f'fill="{ALARM_COLOUR}"><title>{number(v)} {flag}</title></circle>'
@@ -253,7 +281,7 @@ def trend_x(i: int, count: int) -> float:
     return TREND_LEFT + (TREND_RIGHT - TREND_LEFT) * (i + 0.5) / max(count, 1)
 
 
-def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
+def control_chart(chart: ControlChart, zone: str = "UTC", tr: Say = ENGLISH) -> str:
     """Individuals (top) and moving ranges (bottom) of the latest runs with their limits,
     a time axis under each (the runs in order, ticks at their start in ``zone``)."""
     points = chart.points
@@ -262,8 +290,17 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
     def x_of(i: int) -> float:
         return control_x(i, len(points))
 
-    latest = "latest " if len(points) < chart.count else ""
-    plotted = f"{latest}{len(points)} of {chart.count} runs in range plotted"
+    plotted = (
+        tr(
+            "latest {plotted} of {count} runs in range plotted",
+            plotted=len(points),
+            count=chart.count,
+        )
+        if len(points) < chart.count
+        else tr(
+            "{plotted} of {count} runs in range plotted", plotted=len(points), count=chart.count
+        )
+    )
     body = [_text(CHART_LEFT, 12, f"{chart.name} ({chart.unit}): {plotted}")]
     body += _panel(
         [p.value for p in points],
@@ -272,9 +309,10 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
         18 + 8,
         x_of,
         "point",
+        tr,
     )
     body += _time_axis(points, x_of, 18 + PANEL - 22, zone)
-    body.append(_text(CHART_LEFT, 18 + PANEL + 4, "moving range"))
+    body.append(_text(CHART_LEFT, 18 + PANEL + 4, tr("moving range")))
     body += _panel(
         [p.moving_range for p in points],
         [p.mr_signals for p in points],
@@ -282,10 +320,16 @@ def control_chart(chart: ControlChart, zone: str = "UTC") -> str:
         18 + PANEL + 8,
         x_of,
         "mr-point",
+        tr,
     )
     body += _time_axis(points, x_of, 18 + 2 * PANEL - 22, zone)
     return _svg(
-        f"I-MR chart of {chart.name}, {len(points)} of {chart.count} runs plotted",
+        tr(
+            "I-MR chart of {name}, {plotted} of {count} runs plotted",
+            name=chart.name,
+            plotted=len(points),
+            count=chart.count,
+        ),
         body,
         height,
         CHART_WIDTH,
@@ -342,7 +386,11 @@ def trend_chart(
     def y_of(value: float) -> float:
         return bottom - (bottom - top) * (value - low) / (high - low)
 
-    label = percent if percent_axis else number
+    def label(value: float) -> str:
+        """A value axis' label; a bound within rounding of zero (a deviation's -1e-13) is 0."""
+        value = 0.0 if abs(value) < (high - low) * 1e-9 else value
+        return percent(value) if percent_axis else number(value)
+
     body = [
         _text(left, 12, title),
         _line(left, top, left, bottom, AXIS_COLOUR),
@@ -365,7 +413,7 @@ def trend_chart(
         body.append(
             f'<g class="tick">{_line(x_of(i), bottom, x_of(i), bottom + 3, AXIS_COLOUR)}</g>'
         )
-        body.append(_text(x_of(i), bottom + 13, periods[i][0], "middle"))
+        body.append(_tick_label(x_of(i), bottom + 13, periods[i][0], CHART_WIDTH))
     if bars is not None:
         bar_w = max((right - left) / max(len(periods), 1) - 2, 1)
         for i, count in enumerate(bars):
@@ -402,14 +450,19 @@ def trend_chart(
 BOX_WIDTH, BOX_LEFT, BOX_RIGHT, BOX_ROW, BOX_TOP = 640, 130, 20, 22, 24
 
 
-def box_plots(report: SplitReport) -> str:
+def box_plots(report: SplitReport, tr: Say = ENGLISH) -> str:
     """One horizontal Tukey box plot per group of ``report`` (box Q1–Q3, median, whiskers
     within the fences, the outliers' count at the right), the limits as red lines."""
     groups = report.groups
     height = BOX_TOP + BOX_ROW * max(len(groups), 1) + 20
-    title = f"{report.parameter} by {report.by.replace('_', ' ')} ({report.unit})"
+    title = tr(
+        "{parameter} by {by} ({unit})",
+        parameter=report.parameter,
+        by=split_name(report.by, tr),
+        unit=report.unit,
+    )
     if not groups:
-        return _svg(title, [_text(BOX_LEFT, BOX_TOP, "no values")], height, BOX_WIDTH)
+        return _svg(title, [_text(BOX_LEFT, BOX_TOP, tr("no values"))], height, BOX_WIDTH)
     ends = [g.minimum for g in groups] + [g.maximum for g in groups]
     ends += [v for v in (report.lower, report.upper) if v is not None]
     low, high = min(ends), max(ends)

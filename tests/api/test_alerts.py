@@ -341,7 +341,7 @@ def test_a_station_outbox_backlog_fires_once_and_clears_when_it_drains(
         assert evidence["oldest_s"] >= 2 * 3600
         page = local_get(f"{base}/alerts").text
         assert '<span class="outbox">3 runs queued, the oldest waiting 2' in page
-        assert "1 files set aside (reported " in page
+        assert "1 file set aside (reported " in page
         # The operator dealt with the refused file; the runs' retry comes: all stored.
         refused.unlink()
         clock[0] += 3600

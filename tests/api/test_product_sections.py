@@ -25,6 +25,7 @@ from sqlalchemy import text
 
 from db import Database, RunRepository
 from station.domain.limits import load_profile
+from tests.api.test_page_language import english_phrases
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 
@@ -447,3 +448,29 @@ def test_the_dashboard_charts_each_product_apart(
             runs = block.split('data-runs="', 1)[1].split('"', 1)[0].split()
             prefix = block.split('data-prefix="', 1)[1].split('"', 1)[0]
             assert {prefix + r for r in runs} == serials
+
+
+@pytest.mark.parametrize("language", ["ko", "zh"])
+def test_the_sections_and_a_what_if_in_the_readers_language(
+    client: httpx.Client, database: Database, language: str
+) -> None:
+    _store(database)
+    sections = client.get(
+        "/api/v1/reports/eol", params={**RANGE, "format": "html", "list": "all", "lang": language}
+    )
+    assert sections.text.count('<section class="product"') == 2
+    split = client.get(
+        "/api/v1/reports/split",
+        params={**RANGE, "parameter": "offset_x", "by": "station", "lang": language},
+    )
+    what_if = client.post(
+        "/api/v1/reports/eol",
+        params={**RANGE, "part_number": A12, "lang": language},
+        files={"limits": ("candidate.toml", _candidate(2080.0))},
+        data={"profile": "kxm52-production"},
+    )
+    assert 'class="flips"' in what_if.text
+    for page in (sections, split, what_if):
+        assert page.status_code == 200
+        left = sorted(set(english_phrases(page.text)))
+        assert left == [], (page.url, left)

@@ -319,7 +319,11 @@ def test_histograms_bin_the_data_and_capability_shows_observed_ppm(
     assert d["mean"] == pytest.approx(float(np.mean(biases)))
     page = plant.get("/api/v1/reports/eol", params={**period, "format": "html"}).text
     warning = page.split('class="problem capability-warning">')[1].split("</p>")[0]
-    assert warning.startswith("gyro_bias_z:")
+    assert html.unescape(warning) == f"gyro_bias_z: {z['warning']}"
+    korean = plant.get("/api/v1/reports/eol", params={**period, "format": "html", "lang": "ko"})
+    warned = korean.text.split('class="problem capability-warning">')[1].split("</p>")[0]
+    assert warned.startswith("gyro_bias_z: 값 203개 중 3개가 한계 밖")
+    assert "not one normal population" not in warned
     chart = _chart(page, "histogram of gyro_bias_z")
     bars = re.search(r'<path class="bars" [^>]*d="([^"]+)"', chart)
     assert bars is not None

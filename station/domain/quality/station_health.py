@@ -13,6 +13,7 @@ sensitivity), or a latest check the station failed.
 
 from collections.abc import Sequence
 from datetime import datetime
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -60,6 +61,12 @@ class DriftWarning(_Part):
     serial: str = Field(description="the golden unit")
     checked_at: datetime = Field(description="its latest check's start")
     problem: str = Field(description="what is wrong, in words (no time)")
+    quantity: Literal["offset", "sensitivity"] | None = Field(
+        default=None, description="the coefficient beyond tolerance (none: the check failed)"
+    )
+    axis: str | None = Field(default=None, description="its axis")
+    deviation: float | None = Field(default=None, description="its deviation from the baseline")
+    tolerance: float | None = Field(default=None, description="the tolerance it is beyond")
 
 
 class StationHealth(_Part):
@@ -118,10 +125,11 @@ def golden_checks(
                     problem="its latest check failed at the station",
                 )
             )
-        for name, deviation, tolerance, unit in (
+        coefficients: list[tuple[Literal["offset", "sensitivity"], Triple | None, float, str]] = [
             ("offset", check.offset_deviation, OFFSET_TOLERANCE, "counts"),
             ("sensitivity", check.sensitivity_deviation, SENSITIVITY_TOLERANCE, "counts/g"),
-        ):
+        ]
+        for name, deviation, tolerance, unit in coefficients:
             for axis, value in zip(AXES, deviation or (), strict=False):
                 if abs(value) > tolerance:
                     drift.append(
@@ -130,6 +138,10 @@ def golden_checks(
                             checked_at=check.started_at,
                             problem=f"{name} {axis} {value:+.2f} {unit} from its baseline at "
                             f"the latest check, beyond ± {tolerance:g}",
+                            quantity=name,
+                            axis=axis,
+                            deviation=value,
+                            tolerance=tolerance,
                         )
                     )
     return checks, drift

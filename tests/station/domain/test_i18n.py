@@ -83,6 +83,23 @@ def test_a_line_in_korean_and_chinese_keeps_its_values() -> None:
     assert tr(line, number=3, pose="toe up") == "pose 3 (toe up) captured"
 
 
+@pytest.mark.parametrize(
+    ("language", "one", "two"),
+    [
+        ("en", "1 file set aside", "2 files set aside"),
+        ("ko", "파일 1개 보류됨", "파일 2개 보류됨"),
+        ("zh", "1 个文件已搁置", "2 个文件已搁置"),
+    ],
+)
+def test_a_line_that_names_a_count_takes_the_form_of_its_count(
+    language: str, one: str, two: str
+) -> None:
+    count = i18n.counter(language)
+    line = ("{count} file set aside", "{count} files set aside")
+    assert count(*line, 1) == one
+    assert count(*line, 2) == two
+
+
 def test_an_unknown_language_is_refused() -> None:
     with pytest.raises(ValueError, match="unknown language 'fr'; shipped: en, ko, zh"):
         set_language("fr")

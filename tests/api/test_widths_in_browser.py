@@ -1,0 +1,97 @@
+"""Every page usable at 420 px and whole at 1,400 px, in each language, in headless
+Chromium: no sideways scrolling of the page, no table wider than its box (wide tables
+reflow to cards under 600 px), no chart wider than the window and no chart text cut at
+its edges (charts scale to their width); each page's screenshot in ``artifacts/``."""
+
+import pytest
+
+from db import Database
+from station.domain.i18n import LANGUAGES
+from tests.api.every_page import PAGES, store_plant
+from tests.browser import Browser
+
+#: The widths of a phone held upright and of a desktop window (px).
+WIDTHS = (420, 1400)
+#: How far the page reaches past the window's right edge (px; 0 when it fits).
+OVERFLOW = "document.scrollingElement.scrollWidth - window.innerWidth"
+#: What of the page is cut: a table wider than its box, a chart reaching past the
+#: window, a chart's text outside its chart (an SVG clips it), each named.
+CUT = """(() => {
+  const cut = [], width = window.innerWidth;
+  for (const table of document.querySelectorAll("table")) {
+    const box = table.parentElement;
+    if (table.scrollWidth > box.clientWidth + 1) cut.push(`table.${table.className}`);
+  }
+  for (const chart of document.querySelectorAll("svg.chart")) {
+    const frame = chart.getBoundingClientRect();
+    if (frame.left < -1 || frame.right > width + 1) cut.push(`chart ${frame.right}`);
+    for (const text of chart.querySelectorAll("text")) {
+      const r = text.getBoundingClientRect();
+      if (r.width && (r.left < frame.left - 1 || r.right > frame.right + 1))
+        cut.push(`"${text.textContent}" of ${chart.querySelector("title").textContent}`);
+    }
+  }
+  return cut;
+})()"""
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_every_page_in_every_language_keeps_to_the_window(
+    browser: Browser, live_url: str, database: Database, width: int
+) -> None:
+    store_plant(database)
+    browser.call(
+        "Emulation.setDeviceMetricsOverride",
+        width=width,
+        height=900,
+        deviceScaleFactor=1,
+        mobile=False,
+    )
+    for name, path in PAGES.items():
+        for language in LANGUAGES:
+            joiner = "&" if "?" in path else "?"
+            assert browser.load(f"{live_url}{path}{joiner}lang={language}").errors == []
+            assert browser.evaluate("window.innerWidth") == width
+            where = (name, language, width)
+            assert browser.evaluate(OVERFLOW) <= 0, where
+            assert browser.evaluate(CUT) == [], where
+            assert browser.evaluate("document.querySelectorAll('svg.chart').length") > 0 or (
+                name in ("unit", "held unit", "alerts", "failures", "search")
+            )
+            browser.screenshot(f"width-{width}-{name.replace(' ', '-')}-{language}", width)
+            browser.call(  # the screenshot sized the window to the page
+                "Emulation.setDeviceMetricsOverride",
+                width=width,
+                height=900,
+                deviceScaleFactor=1,
+                mobile=False,
+            )
+
+
+def test_a_language_chosen_by_lang_is_kept_by_every_link_and_form(
+    browser: Browser, live_url: str, database: Database
+) -> None:
+    store_plant(database)
+    assert browser.load(f"{live_url}{PAGES['report']}&lang=zh").errors == []
+    links = browser.evaluate(
+        "Array.from(document.querySelectorAll('a[href]'),"
+        " (a) => new URL(a.getAttribute('href'), location.href))"
+        ".filter((url) => url.origin === location.origin)"
+        ".map((url) => url.searchParams.get('lang'))"
+    )
+    assert links
+    assert set(links) == {"zh"}
+    forms = browser.evaluate(
+        "Array.from(document.forms, (f) => f.method === 'get'"
+        " ? f.elements.lang.value : new URL(f.action).searchParams.get('lang'))"
+    )
+    assert forms
+    assert set(forms) == {"zh"}
+    browser.follow("document.querySelector('a.serial').click()")
+    assert browser.evaluate("document.documentElement.lang") == "zh"
+    browser.follow(
+        "document.querySelector('form.search input').value = 'PT-00';"
+        "document.querySelector('form.search').submit()"
+    )
+    assert browser.evaluate("document.documentElement.lang") == "zh"
+    assert "lang=zh" in browser.evaluate("location.search")
