@@ -58,9 +58,10 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             isolation_level="AUTOCOMMIT",
             pool_reset_on_return=None,
         )
-        # The report and the dashboard: processes and connections of their own.
+        # The report and the dashboard: processes and connections of their own, on the
+        # streaming replica when one is configured.
         app.state.report_pool = report_pool = ReportPool(
-            url,
+            settings.report_url(),
             processes=settings.report_pool_size,
             wait_s=settings.report_wait_s,
             timeout_s=settings.read_timeout_s,

@@ -4,9 +4,10 @@ from pathlib import Path
 from typing import Annotated
 
 from pydantic import AfterValidator, Field
+from sqlalchemy import make_url
 
 from db.run_export import PAGE
-from db.settings import DatabaseSettings
+from db.settings import DatabaseSettings, DatabaseUrl
 from station.domain.errors import InputError
 from station.domain.quality.alerts import AlertRules, parse_alert_rules
 from station.domain.quality.shifts import parse_shifts, shift_name
@@ -66,6 +67,13 @@ class ApiSettings(DatabaseSettings):
     ``read_timeout_s`` and held in memory while it is written: a slow or distant
     database wants smaller pages (each read well inside the time-out, the answer's
     first page sooner), a fast one larger (fewer round trips).
+    ``report_database_url`` (``CALSTATION_REPORT_DATABASE_URL``): a streaming replica of
+    the database (PostgreSQL hot standby) that the report processes read: the end-of-line
+    report, the dashboard, the split, the failing runs and the station pages
+    (:mod:`api.report_pool`). Submissions, reviews, keys, what-if profiles, alerts' state,
+    the unit's own pages and the CSV export stay on the primary. A replica holds the
+    primary's roles, so ``database_password`` is its password too. Unset: the report reads
+    the primary (docs/api.md, "Scaling out").
     """
 
     read_requires_key: bool = False
@@ -82,6 +90,18 @@ class ApiSettings(DatabaseSettings):
     alert_interval_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     export_page_size: Annotated[int, Field(ge=1)] = PAGE
+    report_database_url: DatabaseUrl | None = None
+
+    def report_url(self) -> str:
+        """The URL the report processes connect to: the replica's, else :meth:`url`."""
+        if self.report_database_url is None:
+            return self.url()
+        if self.database_password is None:
+            return self.report_database_url
+        url = make_url(self.report_database_url)
+        return url.set(password=self.database_password.get_secret_value()).render_as_string(
+            hide_password=False
+        )
 
     def alert_rules(self) -> AlertRules | None:
         """The plant's alert rules (``alerts_file``), if it has any."""
