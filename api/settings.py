@@ -1,7 +1,7 @@
 """Settings of the results server, read from ``CALSTATION_*`` environment variables."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import AfterValidator, Field
 from sqlalchemy import make_url
@@ -74,6 +74,11 @@ class ApiSettings(DatabaseSettings):
     the unit's own pages and the CSV export stay on the primary. A replica holds the
     primary's roles, so ``database_password`` is its password too. Unset: the report reads
     the primary (docs/api.md, "Scaling out").
+    ``prepared_statements`` (``CALSTATION_PREPARED_STATEMENTS``): psycopg prepares a
+    statement on a connection once it ran five times there. Behind a pooler in
+    transaction mode that does not carry prepared statements across its server
+    connections (pgbouncer before 1.21), the next transaction finds it missing
+    (``prepared statement "_pg3_0" does not exist``): ``false`` turns preparing off.
     """
 
     read_requires_key: bool = False
@@ -91,6 +96,14 @@ class ApiSettings(DatabaseSettings):
     alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     export_page_size: Annotated[int, Field(ge=1)] = PAGE
     report_database_url: DatabaseUrl | None = None
+    prepared_statements: bool = True
+
+    def engine_options(self) -> dict[str, Any]:
+        """Keywords of every engine of the server: no prepared statements when they are
+        off (PostgreSQL's driver; SQLite prepares nothing across transactions)."""
+        if self.prepared_statements or make_url(self.url()).get_backend_name() != "postgresql":
+            return {}
+        return {"connect_args": {"prepare_threshold": None}}
 
     def report_url(self) -> str:
         """The URL the report processes connect to: the replica's, else :meth:`url`."""
