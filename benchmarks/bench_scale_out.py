@@ -224,7 +224,7 @@ def stored_check(url: str, load: Load, before: set[str]) -> tuple[int, int, int]
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=20_000)
+    parser.add_argument("--runs", type=int, default=2_000)
     parser.add_argument("--stations", type=int, default=32)
     parser.add_argument("--readers", type=int, default=60)
     parser.add_argument("--servers", type=int, default=3)
