@@ -2,6 +2,7 @@
 
     python benchmarks/bench_scale_out.py                 # 60 s a phase, about 4 minutes
     python benchmarks/bench_scale_out.py --seconds 20    # quicker
+    python benchmarks/bench_scale_out.py --replica       # the report from a streaming replica
 
 Needs the distribution's ``haproxy`` and ``pgbouncer`` (``apt-get install haproxy
 pgbouncer``) and a PostgreSQL server (``--postgres-url``, default
@@ -27,6 +28,13 @@ soon as the last answer is in.
     watches an alert rule that fires on the seeded runs (``[[cpk]]`` with an unreachable
     target) and posts to a webhook receiver of the benchmark.
 
+With ``--replica`` the benchmark runs a PostgreSQL primary and a streaming replica of its
+own instead (``initdb`` and ``pg_basebackup -R`` in a temporary directory, each
+``postgres`` on a free port, run as the ``postgres`` user): the servers of (b) read the
+report from the replica (``CALSTATION_REPORT_DATABASE_URL``, directly, not through
+pgbouncer), and after (b) the replica's lag is measured (WAL bytes behind, the time to
+replay them) and its runs compared with the primary's.
+
 Checks after (b): every run a station saw stored is in the database exactly once and
 no other run of the load is there; the alert was posted exactly once; the 5xx answers
 readers saw, inside and outside the kill's window (from the kill until HAProxy's next
@@ -37,11 +45,13 @@ latency of each phase and the checks' figures; exits 1 if a check fails.
 import argparse
 import asyncio
 import collections
+import contextlib
 import json
 import os
 import random
 import shutil
 import signal
+import subprocess
 import sys
 import tempfile
 import threading
@@ -91,6 +101,82 @@ def own_database(server_url: str) -> Iterator[str]:
         with admin.connect() as connection:
             connection.execute(text(f'DROP DATABASE "{name}" WITH (FORCE)'))
         admin.dispose()
+
+
+#: Run as the ``postgres`` user when started by root (PostgreSQL refuses root).
+AS_POSTGRES = {"user": "postgres"} if os.geteuid() == 0 else {}
+
+
+def _accepting(url: str) -> bool:
+    try:
+        engine = make_engine(url)
+        with engine.connect() as connection:
+            connection.execute(text("SELECT 1"))
+        engine.dispose()
+        return True
+    except Exception:
+        return False
+
+
+@contextmanager
+def own_cluster() -> Iterator[tuple[str, str]]:
+    """A PostgreSQL primary and its streaming replica, each a ``postgres`` of its own on a
+    free port in a temporary directory: the primary made by ``initdb`` (whose
+    ``pg_hba.conf`` lets 127.0.0.1 replicate), the replica by ``pg_basebackup -R`` (a hot
+    standby streaming from it). Yields the URLs of their ``postgres`` databases."""
+    binaries = sorted(Path("/usr/lib/postgresql").glob("*/bin"))[-1]
+    root = Path(tempfile.mkdtemp(prefix="calstation-cluster-"))
+    root.chmod(0o755)
+    if os.geteuid() == 0:
+        shutil.chown(root, "postgres")
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, **AS_POSTGRES}
+    initdb = [str(binaries / "initdb"), "-D", str(root / "primary"), "-U", "postgres"]
+    subprocess.run([*initdb, "--auth=trust", "-E", "UTF8"], check=True, **quiet)
+    processes = []
+    urls: list[str] = []
+    try:
+        for name in ("primary", "replica"):
+            port = free_port()
+            if name == "replica":
+                source = ["-h", "127.0.0.1", "-p", str(make_url(urls[0]).port), "-U", "postgres"]
+                copy = [str(binaries / "pg_basebackup"), *source, "-D", str(root / name)]
+                subprocess.run([*copy, "-R", "-X", "stream"], check=True, **quiet)
+            command = [str(binaries / "postgres"), "-D", str(root / name), "-p", str(port)]
+            command += ["-k", str(root), "-c", "listen_addresses=127.0.0.1"]
+            with (root / f"{name}.log").open("ab") as log:
+                processes.append(subprocess.Popen(command, stdout=log, stderr=log, **AS_POSTGRES))
+            urls.append(f"postgresql+psycopg://postgres@127.0.0.1:{port}/postgres")
+            deadline = time.monotonic() + 120
+            while not _accepting(urls[-1]):
+                if time.monotonic() > deadline or processes[-1].poll() is not None:
+                    raise SystemExit(f"the {name} PostgreSQL did not start ({root / name}.log)")
+                time.sleep(0.2)
+        yield urls[0], urls[1]
+    finally:
+        for process in reversed(processes):
+            process.send_signal(signal.SIGINT)  # PostgreSQL's fast shutdown
+            process.wait(timeout=60)
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def replica_lag(primary: str, replica: str) -> tuple[float, float]:
+    """(seconds, bytes) the replica is behind: wait for it to replay what the primary has
+    written now, and return the time that took and the WAL bytes it was behind."""
+    with make_engine(primary).connect() as connection:
+        written = connection.execute(text("SELECT pg_current_wal_lsn()::text")).scalar_one()
+    engine = make_engine(replica)
+    started = time.monotonic()
+    with engine.connect() as connection:
+        behind = connection.execute(
+            text("SELECT pg_wal_lsn_diff(:lsn, pg_last_wal_replay_lsn())"), {"lsn": written}
+        ).scalar_one()
+        while connection.execute(
+            text("SELECT pg_wal_lsn_diff(:lsn, pg_last_wal_replay_lsn()) > 0"), {"lsn": written}
+        ).scalar_one():
+            connection.rollback()
+            time.sleep(0.01)
+    engine.dispose()
+    return time.monotonic() - started, float(behind)
 
 
 async def station(
@@ -231,6 +317,12 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--report-wait-s", type=float, default=120.0)
     parser.add_argument(
+        "--replica",
+        action="store_true",
+        help="a primary and a streaming replica of the benchmark's own (initdb, "
+        "pg_basebackup) instead of --postgres-url; the servers read the report from the replica",
+    )
+    parser.add_argument(
         "--postgres-url", default=os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
     )
     args = parser.parse_args()
@@ -239,8 +331,18 @@ def main() -> None:
             raise SystemExit(f"{tool} is not installed (apt-get install haproxy pgbouncer)")
     load_before = os.getloadavg()
     failures = []
-    with own_database(args.postgres_url) as url, tempfile.TemporaryDirectory() as tmp:
-        directory = Path(tmp)
+    with contextlib.ExitStack() as stack:
+        replica_server = None
+        server_url = args.postgres_url
+        if args.replica:
+            server_url, replica_server = stack.enter_context(own_cluster())
+        url = stack.enter_context(own_database(server_url))
+        directory = Path(stack.enter_context(tempfile.TemporaryDirectory()))
+        report_url = (
+            make_url(replica_server).set(database=make_url(url).database).render_as_string()
+            if replica_server
+            else None
+        )
         names = [f"line{1 + i // 8}-st{1 + i % 8}" for i in range(args.stations)]
         keys = seed(url, names, args.runs)
 
@@ -267,6 +369,8 @@ def main() -> None:
             "alert_interval_s": "1",
             "alert_retry_s": "1",
         }
+        if report_url is not None:  # the report from the replica, streamed to directly
+            settings["report_database_url"] = report_url
         before = set(stored_run_ids(url))
         with pgbouncer(url) as pooled:
             ports = [free_port() for _ in range(args.servers)]
@@ -298,6 +402,12 @@ def main() -> None:
             f"outside it {len(outside)} {sorted(set(outside))}; station errors (retried) "
             f"{len(scaled.station_errors)} {sorted({s for _, s in scaled.station_errors})}"
         )
+        if report_url is not None:
+            seconds, behind = replica_lag(url, report_url)
+            print(f"replica: {behind:,.0f} bytes of WAL behind, replayed in {seconds:.2f} s")
+            replicated = set(stored_run_ids(report_url))
+            if replicated != set(stored_run_ids(url)):
+                failures.append("the replica does not hold the primary's runs")
         posted = webhook.posted
         print(f"alerts posted {len(posted)}: {json.dumps(posted)[:300]}")
         webhook.close()
