@@ -93,6 +93,22 @@ def test_the_report_reads_the_replica_and_everything_else_the_primary(
         assert split["sampled_runs"] == len(REPLICA_SERIALS)
 
 
+@pytest.mark.postgres
+def test_an_unreachable_replica_is_a_503_of_the_report_and_nothing_else(
+    primary_and_replica: tuple[Database, Database],
+) -> None:
+    primary, _ = primary_and_replica
+    primary_url = primary.engine.url.render_as_string(hide_password=False)
+    missing = primary.engine.url.set(database="calstation_no_such_replica")
+    replica_url = missing.render_as_string(hide_password=False)
+    with serving(primary_url, report_database_url=replica_url) as base, local_client(base) as c:
+        report = c.get("/api/v1/reports/eol", params={"format": "json"})
+        assert report.status_code == 503
+        assert report.json()["detail"] == "results database unavailable"
+        assert c.get("/api/v1/units/PT-NONE").status_code == 404  # the primary answers
+        assert c.get("/healthz").status_code == 200
+
+
 def test_the_replica_takes_the_primarys_password_and_unset_is_the_primary() -> None:
     settings = ApiSettings(
         database_url="postgresql+psycopg://calstation@primary/calstation",
