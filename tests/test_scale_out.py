@@ -133,3 +133,27 @@ def test_runs_are_stored_once_and_the_alert_posted_once_through_a_kill(
     assert sorted(stored) == expected
     assert alerts == 1
     assert [post["rule"] for post in webhook.posted] == ["cpk"]
+
+
+def test_reads_through_transaction_pooling_never_fail_without_prepared_statements(
+    database_url: str, tmp_path: Path
+) -> None:
+    # psycopg prepares a statement once it ran five times on a connection; pgbouncer
+    # hands the next transaction whichever PostgreSQL connection is free, so concurrent
+    # reads (16 at a time, 400 in all) would run a prepared statement where it is not
+    # (with CALSTATION_PREPARED_STATEMENTS left true they are answered 500: "prepared
+    # statement "_pg3_1" does not exist", or "already exists").
+    with pgbouncer(database_url) as pooled:
+        port = free_port()
+        server = start_server(pooled, port, tmp_path, prepared_statements="false")
+        try:
+            with local_client(f"http://127.0.0.1:{port}") as client, ThreadPoolExecutor(16) as pool:
+                answers = set(
+                    pool.map(
+                        lambda _: client.get("/api/v1/units/PT-NONE/runs").status_code,
+                        range(400),
+                    )
+                )
+        finally:
+            stop(server)
+    assert answers == {404}  # no such unit, every time: never a 500
