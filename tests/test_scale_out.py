@@ -6,6 +6,8 @@ is skipped and says so). Stations submit their runs through HAProxy, each retryi
 until it is stored; after the first third of the runs is stored, one server is killed
 (SIGKILL) and started again. Every run must then be stored exactly once, and the alert
 that the runs fire posted to the webhook once, though every server checks the rules.
+And reads through pgbouncer's transaction pooling never fail with the server's prepared
+statements off (``CALSTATION_PREPARED_STATEMENTS=false``).
 """
 
 import shutil
