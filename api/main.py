@@ -56,7 +56,10 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # Fixed pools, no overflow: under load an overflow connection is opened for one
         # request and closed after it, a new server process each time on PostgreSQL.
         # Requests beyond the pool wait for a connection instead.
-        writer = make_async_engine(url, pool_size=settings.write_pool_size, max_overflow=0)
+        options = settings.engine_options()
+        writer = make_async_engine(
+            url, pool_size=settings.write_pool_size, max_overflow=0, **options
+        )
         # Reads need no transaction: runs are append-only, so each statement stands
         # alone. A pool of autocommit connections saves the BEGIN and ROLLBACK round
         # trips and the isolation switch on every checkout.
@@ -68,14 +71,17 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
             max_overflow=0,
             isolation_level="AUTOCOMMIT",
             pool_reset_on_return=None,
+            **options,
         )
-        # The report and the dashboard: processes and connections of their own.
+        # The report and the dashboard: processes and connections of their own, on the
+        # streaming replica when one is configured.
         app.state.report_pool = report_pool = ReportPool(
-            url,
+            settings.report_url(),
             processes=settings.report_pool_size,
             wait_s=settings.report_wait_s,
             timeout_s=settings.read_timeout_s,
             metrics=server_metrics,
+            engine_options=options,
         )
         app.state.sessions = async_sessionmaker(writer, expire_on_commit=False)
         app.state.readers = async_sessionmaker(reader, expire_on_commit=False)

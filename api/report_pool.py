@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from functools import partial
-from typing import TYPE_CHECKING, Concatenate, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Any, Concatenate, ParamSpec, TypeVar
 
 from sqlalchemy import Engine
 from sqlalchemy.exc import OperationalError
@@ -56,10 +56,12 @@ _engine: Engine | None = None
 PARENT_CHECK_S = 1.0
 
 
-def _start(url: str, timeout_s: float) -> None:
+def _start(url: str, timeout_s: float, engine_options: dict[str, Any] | None = None) -> None:
     global _engine
     os.nice(REPORT_NICENESS)
-    _engine = make_engine(url, statement_timeout_s=timeout_s, pool_size=1, max_overflow=0)
+    _engine = make_engine(
+        url, statement_timeout_s=timeout_s, pool_size=1, max_overflow=0, **(engine_options or {})
+    )
     threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
 
 
@@ -88,8 +90,9 @@ def _in_transaction(
 
 
 class ReportPool:
-    """``processes`` report processes on the database at ``url``; ``metrics`` shows how
-    busy they are (processes, busy, waiting, refused)."""
+    """``processes`` report processes on the database at ``url`` (their engines made with
+    ``engine_options`` too); ``metrics`` shows how busy they are (processes, busy,
+    waiting, refused)."""
 
     def __init__(
         self,
@@ -99,6 +102,7 @@ class ReportPool:
         wait_s: float,
         timeout_s: float,
         metrics: "ServerMetrics",
+        engine_options: dict[str, Any] | None = None,
     ) -> None:
         self.wait_s = wait_s
         self._metrics = metrics
@@ -108,7 +112,7 @@ class ReportPool:
             processes,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_start,
-            initargs=(url, timeout_s),
+            initargs=(url, timeout_s, engine_options),
         )
 
     async def run(

@@ -1,12 +1,13 @@
 """Settings of the results server, read from ``CALSTATION_*`` environment variables."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import AfterValidator, Field
+from sqlalchemy import make_url
 
 from db.run_export import PAGE
-from db.settings import DatabaseSettings
+from db.settings import DatabaseSettings, DatabaseUrl
 from station.domain.errors import InputError
 from station.domain.laboratory import Laboratory, load_laboratory
 from station.domain.quality.alerts import AlertRules, parse_alert_rules
@@ -80,6 +81,18 @@ class ApiSettings(DatabaseSettings):
     (``CALSTATION_LABORATORY_FILE``): a TOML file whose ``[laboratory]`` table names the
     laboratory, its address, where it calibrates, the customer and the traceability of
     its reference, as its certificates state them (:mod:`station.domain.laboratory`).
+    ``report_database_url`` (``CALSTATION_REPORT_DATABASE_URL``): a streaming replica of
+    the database (PostgreSQL hot standby) that the report processes read: the end-of-line
+    report, the dashboard, the split, the failing runs and the station pages
+    (:mod:`api.report_pool`). Submissions, reviews, keys, what-if profiles, alerts' state,
+    the unit's own pages and the CSV export stay on the primary. A replica holds the
+    primary's roles, so ``database_password`` is its password too. Unset: the report reads
+    the primary (docs/api.md, "Scaling out").
+    ``prepared_statements`` (``CALSTATION_PREPARED_STATEMENTS``): psycopg prepares a
+    statement on a connection once it ran five times there. Behind a pooler in
+    transaction mode that does not carry prepared statements across its server
+    connections (pgbouncer before 1.21), the next transaction finds it missing
+    (``prepared statement "_pg3_0" does not exist``): ``false`` turns preparing off.
     """
 
     read_requires_key: bool = False
@@ -97,12 +110,32 @@ class ApiSettings(DatabaseSettings):
     alert_retry_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     export_page_size: Annotated[int, Field(ge=1)] = PAGE
     laboratory_file: Annotated[Path | None, AfterValidator(_laboratory_file)] = None
+    report_database_url: DatabaseUrl | None = None
+    prepared_statements: bool = True
 
     def laboratory(self) -> Laboratory:
         """The laboratory its certificates name (``laboratory_file``; none: unnamed)."""
         if self.laboratory_file is None:
             return Laboratory()
         return load_laboratory(self.laboratory_file)
+
+    def engine_options(self) -> dict[str, Any]:
+        """Keywords of every engine of the server: no prepared statements when they are
+        off (PostgreSQL's driver; SQLite prepares nothing across transactions)."""
+        if self.prepared_statements or make_url(self.url()).get_backend_name() != "postgresql":
+            return {}
+        return {"connect_args": {"prepare_threshold": None}}
+
+    def report_url(self) -> str:
+        """The URL the report processes connect to: the replica's, else :meth:`url`."""
+        if self.report_database_url is None:
+            return self.url()
+        if self.database_password is None:
+            return self.report_database_url
+        url = make_url(self.report_database_url)
+        return url.set(password=self.database_password.get_secret_value()).render_as_string(
+            hide_password=False
+        )
 
     def alert_rules(self) -> AlertRules | None:
         """The plant's alert rules (``alerts_file``), if it has any."""
