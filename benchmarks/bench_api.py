@@ -70,7 +70,7 @@ INSERT INTO runs (run_id, serial, station_id, operator_id, started_at, finished_
     received_at, software_version, algorithm, model, limits_name, limits_version,
     limits_sha256, verdict, offset_x, offset_y, offset_z, sensitivity_x, sensitivity_y,
     sensitivity_z, matrix, residual_rms_mg, residual_max_mg, condition_number,
-    verification_error_mg, gyro, record_sha256)
+    verification_error_mg, gyro, record_sha256, part_number)
 SELECT gen_random_uuid(),
        'PT-' || lpad((g % :units)::text, 7, '0'),
        'line' || (g % :stations / 4 + 1) || '-st' || (g % :stations % 4 + 1),
@@ -87,7 +87,8 @@ SELECT gen_random_uuid(),
        0.4, 0.9, 3.2, 0.7,
        '{"bias": {"x": 0.01, "y": -0.02, "z": 0.005},
          "noise": {"x": 0.05, "y": 0.05, "z": 0.06}}'::jsonb,
-       md5(g::text) || md5((g + 1)::text)
+       md5(g::text) || md5((g + 1)::text),
+       'DIXX-A12'
 FROM (SELECT g, abs(hashint4(g)) AS hashint FROM generate_series(1, :runs) AS g) AS s
 """
 
