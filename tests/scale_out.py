@@ -163,7 +163,9 @@ def start_server(
     return process
 
 
-#: An alert rule that fires on any runs: no coefficient reaches a Cpk of 10.
+#: An alert rule that holds over any window of the runs it is given (their offsets spread
+#: so that no ten of them reach a Cpk of 10, the highest target a rule takes), so it fires
+#: once and never clears.
 ALERT_RULES = """webhook = "http://127.0.0.1:{port}/hook"
 
 [[cpk]]
