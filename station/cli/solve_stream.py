@@ -119,20 +119,22 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
         table.caption = "\n".join(
             [
                 f"gyro K not determined: {result.gyro_not_determined}",
-                f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md)",
+                f"± in the table: U (k={u.k:g}), expanded uncertainty (docs/calibration.md)",
                 accel_line,
             ]
         )
         return table
-    se = gyro.standard_errors
+    # The JSON's U of K (the fit, the moves' geometry and the model's coupling), not
+    # the fit's standard errors: one U on every screen. A fitted K always has one.
+    u_k = u.gyro_matrix
+    assert u_k is not None
     lines = [
         f"gyro K {axis}: "
-        + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
+        + "  ".join(f"{v:+.5f} ±{u_k[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
         for i, axis in enumerate(AXES)
     ]
     lines.append(
-        f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md); "
-        f"± of K: 1-σ standard errors (U = {u.k:g}σ)"
+        f"± in the table and of K: U (k={u.k:g}), expanded uncertainty (docs/calibration.md)"
     )
     lines += [
         accel_line,

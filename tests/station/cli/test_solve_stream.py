@@ -99,6 +99,33 @@ def test_text_output_names_k_and_the_residuals(
     assert "gyro K z:" in result.stdout
 
 
+def test_the_screen_shows_k_with_the_jsons_expanded_uncertainty(
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    # One U for K: the screen's ± is the JSON's U (fit, geometry, coupling; k = 2),
+    # not the fit's 1-σ standard errors.
+    _, rows = recorded
+    path = _write(tmp_path / "log.csv", rows)
+    for model in ("six", "nine"):
+        screen = call_cli("solve", str(path), "--stream", "--model", model)
+        data = json.loads(
+            call_cli("solve", str(path), "--stream", "--model", model, "--json").stdout
+        )
+        shown = np.array(
+            [
+                [float(v) for v in re.findall(r"±([0-9.]+)", line)]
+                for line in screen.stdout.splitlines()
+                if line.strip().startswith("gyro K ")
+            ]
+        )
+        u = np.array(data["uncertainty"]["gyro_matrix"])
+        se = np.array(data["gyro"]["scale_matrix_standard_errors"])
+        assert shown.shape == (3, 3)
+        assert np.allclose(shown, u, atol=0.6e-5)
+        assert not np.allclose(shown, se, atol=0.6e-5)
+        assert "U (k=2)" in screen.stdout
+
+
 def _refused(call_cli: CliRunner, path: Path, *extra: str) -> str:
     result = call_cli("solve", str(path), "--stream", *extra)
     assert result.returncode == 2, result.stdout
