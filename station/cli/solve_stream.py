@@ -100,8 +100,13 @@ def solve_stream(
         )
     else:
         table = _table(result, file, stream.rate_hz, accel)
+        notes = [
+            f"DISTURBED still pose {pose + 1}: its spread is {ratio:.3g}× the stills' noise: "
+            "its excess counted in U undivided by its sample count"
+            for pose, ratio in result.disturbed.items()
+        ]
         table.caption = "\n".join(
-            [str(table.caption), *influence_lines(temperature, result.excluded_influences)]
+            [*notes, str(table.caption), *influence_lines(temperature, result.excluded_influences)]
         )
         out.print(table)
 

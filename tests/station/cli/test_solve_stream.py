@@ -55,6 +55,7 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert np.allclose(gyro["bias_dps"], imu.gyro_bias_dps, atol=0.01)
     assert len(gyro["residual_deg"]) == 11
     assert gyro["unusable_moves"] == []
+    assert data["disturbed_poses"] == []  # every still as quiet as the others
     # One shape for the uncertainties, every coefficient measured: the gyro's too.
     u = data["uncertainty"]
     assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}

@@ -22,7 +22,7 @@ window's link loss as it does live.
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import pairwise
 from typing import Final
 
@@ -139,6 +139,9 @@ class StreamCalibration:
             recording has none).
         excluded_influences: the influences not in U, by name
             (:data:`~station.domain.calibration.uncertainty.EXCLUDED_WHY`).
+        disturbed: the stills (from 0) whose spread is well above the noise, de-weighted
+            in U, each with its spread over the noise
+            (:attr:`~station.domain.calibration.uncertainty.AccelerometerBudget.disturbed`).
     """
 
     stills: list[StillSegment]
@@ -152,6 +155,7 @@ class StreamCalibration:
     still_window_s: float | None = None
     temperatures: FloatArray | None = None
     excluded_influences: tuple[str, ...] = ()
+    disturbed: dict[int, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro`` (K's keys null and
@@ -170,6 +174,9 @@ class StreamCalibration:
                 "not_determined": self.gyro_not_determined,
             }
         payload["uncertainty"] = self.uncertainty.to_dict()
+        payload["disturbed_poses"] = [
+            {"pose": pose + 1, "spread_over_noise": ratio} for pose, ratio in self.disturbed.items()
+        ]
         return payload
 
 
@@ -411,4 +418,5 @@ def calibrate_stream(
         temperatures=temperatures,
         excluded_influences=budget.excluded_influences
         + (() if gyro_bias_repeatability_dps is not None else ("gyro_bias_repeatability",)),
+        disturbed=budget.disturbed,
     )
