@@ -190,8 +190,14 @@ def uncertainty_record(
             repeatability_dps=sensor.gyro_bias_repeatability_dps or 0.0,
         )
     matrix = None if gyro_fit is None else gyro_matrix_uncertainty(gyro_fit, budget)
+    excluded = budget.excluded_influences
+    if bias is not None and sensor.gyro_bias_repeatability_dps is None:
+        excluded += ("gyro_bias_repeatability",)
+    document = uncertainty.with_gyro(bias, matrix).to_dict()
+    if excluded:
+        document["excluded_influences"] = list(excluded)
     try:
-        return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+        return UncertaintyRecord.model_validate(document)
     except ValidationError as exc:
         # An uncertainty beyond what a record holds (a non-finite one, or more than the
         # ADC's span) says the coefficients mean nothing, which the verdict's checks say
