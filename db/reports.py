@@ -112,7 +112,7 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
-from station.domain.quality.risk import decision_risks
+from station.domain.quality.risk import decision_risks, normality
 from station.domain.quality.shifts import plant_shifts, shift_name
 from station.domain.records import LimitsRef
 from station.domain.unit_state import ABORTED
@@ -189,7 +189,10 @@ class ReportQueries:
     # -- helpers -----------------------------------------------------------------------
 
     def near_limits(
-        self, bounds: FamilyBounds, parameters: Sequence[ParameterStats] | None = None
+        self,
+        bounds: FamilyBounds,
+        parameters: Sequence[ParameterStats] | None = None,
+        values: Mapping[str, Sequence[float]] | None = None,
     ) -> NearLimits:
         """The passing runs in range whose offset or sensitivity lies within its expanded
         uncertainty U (``runs.uncertainty``) of a bound of ``bounds``: accepted by the
@@ -224,7 +227,7 @@ class ReportQueries:
             runs_passed=int(row[0]),
             within_u=int(row[1]),
             units=int(row[2]),
-            risks=[] if parameters is None else _risks(parameters, means),
+            risks=[] if parameters is None else _risks(parameters, means, values or {}),
         )
 
     def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
@@ -496,10 +499,13 @@ class ReportQueries:
 
 
 def _risks(
-    parameters: Sequence[ParameterStats], u_means: Mapping[str, float | None]
+    parameters: Sequence[ParameterStats],
+    u_means: Mapping[str, float | None],
+    values: Mapping[str, Sequence[float]],
 ) -> list[CoefficientRisk]:
     """Each coefficient's global decision risks under both rules (:mod:`station.domain.
-    quality.risk`), from its spread in range and the runs' mean standard uncertainty."""
+    quality.risk`), from its spread in range and the runs' mean standard uncertainty,
+    with the normality check of its latest ``values`` the risks' model assumes."""
     risks = []
     for stats in parameters:
         u = u_means.get(stats.name)
@@ -510,6 +516,7 @@ def _risks(
         guarded = decision_risks(
             stats.mean, stats.std, u, stats.lower, stats.upper, guard=COVERAGE_FACTOR * u
         )
+        check = normality(values.get(stats.name, ()))
         risks.append(
             CoefficientRisk(
                 name=stats.name,
@@ -518,6 +525,10 @@ def _risks(
                 simple_false_reject=simple.false_reject,
                 guarded_false_accept=guarded.false_accept,
                 guarded_false_reject=guarded.false_reject,
+                normality_statistic=None if check is None else check.statistic,
+                normality_p_value=None if check is None else check.p_value,
+                normality_values=0 if check is None else check.values,
+                normal=None if check is None else check.normal,
             )
         )
     return risks
@@ -997,6 +1008,7 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
         parameters, rolled = _capability(queries, bounds)
         if not rolled:
             source += "; statistics from the runs, not the roll-ups' other bounds"
+    values: dict[str, list[float]] = {}
     if parameters:
         values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
         parameters = [
@@ -1010,7 +1022,7 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
         source=source,
         parameters=parameters,
         charts=_charts(limits, charted),
-        near_limits=None if bounds is None else queries.near_limits(bounds, parameters),
+        near_limits=None if bounds is None else queries.near_limits(bounds, parameters, values),
     )
 
 

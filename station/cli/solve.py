@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -18,6 +19,7 @@ from station.domain.errors import InputError
 from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
+    from station.domain.arrays import FloatArray
     from station.domain.calibration import Solution, Uncertainty
     from station.domain.calibration.units import DeclaredUnits
     from station.domain.posefile import PoseFile
@@ -119,6 +121,48 @@ def solve_command(
             help="With --stream: the sample rate, samples/s (the time column is then ignored)."
         ),
     ] = None,
+    offset_tempco: Annotated[
+        float | None,
+        typer.Option(
+            "--offset-tempco",
+            help="The sensor's largest temperature coefficient of its zero g, ± mg/°C "
+            "(datasheet; default the putter's KXM52, 2.33): with a temp_c column, the "
+            "drift across the poses in U.",
+            min=0.0,
+            max=100.0,
+        ),
+    ] = None,
+    sensitivity_tempco: Annotated[
+        float | None,
+        typer.Option(
+            "--sensitivity-tempco",
+            help="The sensor's largest temperature coefficient of its sensitivity, ± %/°C "
+            "(datasheet; default the putter's KXM52, 0.046).",
+            min=0.0,
+            max=1.0,
+        ),
+    ] = None,
+    cross_axis: Annotated[
+        float | None,
+        typer.Option(
+            "--cross-axis",
+            help="The accelerometer's cross-axis sensitivity, ± % (datasheet; default the "
+            "putter's KXM52, 2): the six-parameter model's unmodelled coupling in U.",
+            min=0.0,
+            max=20.0,
+        ),
+    ] = None,
+    gyro_bias_repeatability: Annotated[
+        float | None,
+        typer.Option(
+            "--gyro-bias-repeatability",
+            help="With --stream: the gyros' turn-on to turn-on bias repeatability, deg/s "
+            "(1 σ, datasheet or measured across sessions), added to the gyro bias's U; "
+            "without it U holds this session's mean only, and says so.",
+            min=0.0,
+            max=100.0,
+        ),
+    ] = None,
     known_turn_deg: Annotated[
         float | None,
         typer.Option(
@@ -135,6 +179,7 @@ def solve_command(
         or time_units is not TimeUnitsChoice.s
         or rate is not None
         or known_turn_deg is not None
+        or gyro_bias_repeatability is not None
     )
     if stream:
         from station.cli.solve_stream import solve_stream
@@ -152,12 +197,17 @@ def solve_command(
             still_window_s=still_window,
             units=stream_units,
             known_turn_deg=known_turn_deg,
+            tempco=declared_tempco(
+                offset_tempco, sensitivity_tempco, stream_units.accelerometer.counts_per_g
+            ),
+            cross_axis_bound=declared_cross_axis(cross_axis),
+            gyro_bias_repeatability_dps=gyro_bias_repeatability,
         )
         return
     if declared:
         raise InputError(
-            "--gyro-units, --time-units, --rate and --known-turn-deg describe a raw stream: "
-            "use them with --stream"
+            "--gyro-units, --time-units, --rate, --known-turn-deg and "
+            "--gyro-bias-repeatability describe a raw stream: use them with --stream"
         )
     from station.domain.calibration import (
         CalibrationError,
@@ -183,12 +233,101 @@ def solve_command(
         solution = solve(poses, model.value, max_residual_counts=max_residual)
     except CalibrationError as exc:
         raise InputError(f"{pose_file.where(exc.pose)}: {exc}") from None
-    budget = accelerometer_budget(solution, poses, spread, pose_file.samples)
+    tempco = declared_tempco(offset_tempco, sensitivity_tempco, units.counts_per_g)
+    budget = accelerometer_budget(
+        solution,
+        poses,
+        spread,
+        pose_file.samples,
+        temperatures=pose_file.temperatures,
+        tempco=tempco,
+        cross_axis_bound=declared_cross_axis(cross_axis),
+    )
     uncertainty = Uncertainty.of_budget(budget)
+    disturbed = [
+        {"pose": pose + 1, "spread_over_noise": ratio} for pose, ratio in budget.disturbed.items()
+    ]
+    temperature = temperature_summary(pose_file.temperatures)
     if as_json:
-        print_json(units.restate(solution.to_dict() | {"uncertainty": uncertainty.to_dict()}))
+        print_json(
+            units.restate(
+                solution.to_dict()
+                | {
+                    "uncertainty": uncertainty.to_dict(),
+                    "disturbed_poses": disturbed,
+                    "temperature_c": temperature,
+                    "excluded_influences": excluded(budget.excluded_influences),
+                }
+            )
+        )
     else:
-        out.print(_table(solution, pose_file, uncertainty, units))
+        table = _table(solution, pose_file, uncertainty, units)
+        notes = [
+            f"DISTURBED pose {pose + 1} ({pose_file.where(pose)}): its spread is {ratio:.3g}× "
+            "the poses' noise (moved while taken?): its excess counted in U undivided by its "
+            "sample count"
+            for pose, ratio in budget.disturbed.items()
+        ]
+        table.caption = "\n".join(
+            [*notes, str(table.caption), *influence_lines(temperature, budget.excluded_influences)]
+        )
+        out.print(table)
+
+
+def declared_tempco(
+    offset_mg_per_c: float | None, sensitivity_percent_per_c: float | None, counts_per_g: float
+) -> tuple[float, float]:
+    """The temperature coefficients' half-widths the budget takes (counts/°C, /°C): those
+    declared (mg/°C, %/°C), else the putter's KXM52's."""
+    from station.domain.calibration.uncertainty import (
+        OFFSET_TEMPCO_BOUND,
+        SENSITIVITY_TEMPCO_BOUND,
+    )
+
+    return (
+        OFFSET_TEMPCO_BOUND if offset_mg_per_c is None else offset_mg_per_c / 1000 * counts_per_g,
+        SENSITIVITY_TEMPCO_BOUND
+        if sensitivity_percent_per_c is None
+        else sensitivity_percent_per_c / 100,
+    )
+
+
+def declared_cross_axis(percent: float | None) -> float:
+    """The budget's unmodelled coupling (a fraction): declared in %, else the KXM52's."""
+    from station.domain.calibration.uncertainty import CROSS_AXIS_BOUND
+
+    return CROSS_AXIS_BOUND if percent is None else percent / 100
+
+
+def temperature_summary(temperatures: FloatArray | None) -> dict[str, float] | None:
+    """The JSON's ``temperature_c``: the poses' mean temperature (the results hold there)
+    and their span (the drift U holds), °C; None without temperatures."""
+    if temperatures is None:
+        return None
+    return {
+        "mean": float(temperatures.mean()),
+        "span": float(temperatures.max() - temperatures.min()),
+    }
+
+
+def excluded(names: Sequence[str]) -> list[dict[str, str]]:
+    """The JSON's ``excluded_influences``: each influence left out of U and why."""
+    from station.domain.calibration.uncertainty import EXCLUDED_WHY
+
+    return [{"influence": name, "why": EXCLUDED_WHY[name]} for name in names]
+
+
+def influence_lines(temperature: dict[str, float] | None, names: Sequence[str]) -> list[str]:
+    """The screen's lines on the temperature and on what U leaves out."""
+    lines = (
+        []
+        if temperature is None
+        else [
+            f"temperature: poses at {temperature['mean']:.2f} °C mean (the results hold there), "
+            f"span {temperature['span']:.2f} °C, its drift in U"
+        ]
+    )
+    return lines + [f"NOT IN U: {e['influence']}: {e['why']}" for e in excluded(names)]
 
 
 def unit_headers(units: DeclaredUnits) -> tuple[str, str]:

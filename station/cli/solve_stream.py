@@ -33,11 +33,22 @@ def solve_stream(
     still_window_s: float | None,
     units: StreamUnits | None = None,
     known_turn_deg: float | None = None,
+    tempco: tuple[float, float] | None = None,
+    cross_axis_bound: float | None = None,
+    gyro_bias_repeatability_dps: float | None = None,
 ) -> None:
     """Calibrate the unit recorded in ``file`` (its columns in ``units``: the station's
-    own by default; its whole turns of ``known_turn_deg``, if it declares them) and print
-    the result."""
+    own by default; its whole turns of ``known_turn_deg``, if it declares them; its
+    sensor's temperature coefficients ``tempco``, counts/°C and /°C, and cross-axis
+    sensitivity ``cross_axis_bound``, the putter's by default; its gyros' declared bias
+    repeatability, if any) and print the result."""
+    from station.cli.solve import excluded, influence_lines, temperature_summary
     from station.domain.calibration import CalibrationError
+    from station.domain.calibration.uncertainty import (
+        CROSS_AXIS_BOUND,
+        OFFSET_TEMPCO_BOUND,
+        SENSITIVITY_TEMPCO_BOUND,
+    )
     from station.domain.gyro.motion import (
         GyroMatrixError,
         StreamError,
@@ -67,6 +78,9 @@ def solve_stream(
             else stream_thresholds(stream.rate_hz, still_window_s),
             known_turn_deg=known_turn_deg,
             check_moves=lambda moves, bias: check_turns(moves, bias, declared),
+            tempco=tempco or (OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND),
+            cross_axis_bound=CROSS_AXIS_BOUND if cross_axis_bound is None else cross_axis_bound,
+            gyro_bias_repeatability_dps=gyro_bias_repeatability_dps,
         )
     except CalibrationError as exc:
         where = "" if exc.pose is None else f" (still pose {exc.pose} from 0)"
@@ -74,10 +88,27 @@ def solve_stream(
     except (StreamError, GyroMatrixError) as exc:
         raise InputError(f"{file}: {exc}") from None
     accel = declared.accelerometer
+    temperature = temperature_summary(result.temperatures)
     if as_json:
-        print_json(accel.restate(result.to_dict()) | {"units": _units(declared)})
+        print_json(
+            accel.restate(result.to_dict())
+            | {
+                "units": _units(declared),
+                "temperature_c": temperature,
+                "excluded_influences": excluded(result.excluded_influences),
+            }
+        )
     else:
-        out.print(_table(result, file, stream.rate_hz, accel))
+        table = _table(result, file, stream.rate_hz, accel)
+        notes = [
+            f"DISTURBED still pose {pose + 1}: its spread is {ratio:.3g}× the stills' noise: "
+            "its excess counted in U undivided by its sample count"
+            for pose, ratio in result.disturbed.items()
+        ]
+        table.caption = "\n".join(
+            [*notes, str(table.caption), *influence_lines(temperature, result.excluded_influences)]
+        )
+        out.print(table)
 
 
 def _units(declared: StreamUnits) -> dict[str, str]:
@@ -119,20 +150,22 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
         table.caption = "\n".join(
             [
                 f"gyro K not determined: {result.gyro_not_determined}",
-                f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md)",
+                f"± in the table: U (k={u.k:g}), expanded uncertainty (docs/calibration.md)",
                 accel_line,
             ]
         )
         return table
-    se = gyro.standard_errors
+    # The JSON's U of K (the fit, the moves' geometry and the model's coupling), not
+    # the fit's standard errors: one U on every screen. A fitted K always has one.
+    u_k = u.gyro_matrix
+    assert u_k is not None
     lines = [
         f"gyro K {axis}: "
-        + "  ".join(f"{v:+.5f} ±{se[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
+        + "  ".join(f"{v:+.5f} ±{u_k[i, j]:.5f}" for j, v in enumerate(gyro.scale_matrix[i]))
         for i, axis in enumerate(AXES)
     ]
     lines.append(
-        f"± in the table: expanded uncertainty U, k = {u.k:g} (docs/calibration.md); "
-        f"± of K: 1-σ standard errors (U = {u.k:g}σ)"
+        f"± in the table and of K: U (k={u.k:g}), expanded uncertainty (docs/calibration.md)"
     )
     lines += [
         accel_line,

@@ -2,7 +2,9 @@
 
 Optional columns ``sx,sy,sz`` (each pose's sample standard deviation, counts) and ``n``
 (its sample count) feed the uncertainty budget's pose noise; without them the budget
-assumes the sensor's (:mod:`station.domain.calibration.uncertainty`). Other columns are
+assumes the sensor's (:mod:`station.domain.calibration.uncertainty`). An optional column
+``temp_c`` (the sensor's temperature while the pose was taken, °C) feeds its temperature
+term; without it the drift across the poses is named as not in U. Other columns are
 ignored; blank lines are skipped. Every problem is reported as an
 :class:`station.domain.errors.InputError` naming the file and, where one applies, the line.
 """
@@ -19,18 +21,22 @@ from station.domain.errors import InputError
 COLUMNS = ("ax", "ay", "az")
 #: Optional: each pose's sample standard deviation per axis (counts) and sample count.
 SPREAD_COLUMNS = ("sx", "sy", "sz", "n")
+#: Optional: the sensor's temperature at each pose, °C.
+TEMPERATURE_COLUMN = "temp_c"
 
 
 @dataclass(frozen=True, eq=False)
 class PoseFile:
     """Pose means (N, 3) counts and the file line each came from; with the optional
-    columns, each pose's sample spread (N, 3) counts and sample count (N,)."""
+    columns, each pose's sample spread (N, 3) counts and sample count (N,), and its
+    temperature (N,) °C."""
 
     path: Path
     poses: FloatArray
     lines: tuple[int, ...]
     spread: FloatArray | None = None
     samples: FloatArray | None = None
+    temperatures: FloatArray | None = None
 
     def where(self, pose: int | None) -> str:
         """``FILE:LINE`` of a pose (0-based index), or ``FILE`` for the whole set."""
@@ -69,7 +75,8 @@ def read_pose_file(path: Path) -> PoseFile:
             f"{path}:{reader.line_num}: header has {','.join(present)} but lacks {lacking}: "
             "a pose's spread needs sx,sy,sz and its sample count n"
         )
-    columns = COLUMNS + (SPREAD_COLUMNS if present else ())
+    warm = (TEMPERATURE_COLUMN,) if TEMPERATURE_COLUMN in names else ()
+    columns = COLUMNS + (SPREAD_COLUMNS if present else ()) + warm
     index = [names.index(c) for c in columns]
 
     rows: list[list[float]] = []
@@ -92,6 +99,11 @@ def read_pose_file(path: Path) -> PoseFile:
                     f"{path}:{reader.line_num}: column {column}: {cell} is not a spread "
                     "or count (a finite number ≥ 0)"
                 )
+            if column == TEMPERATURE_COLUMN and not (-273.15 < value < float("inf")):
+                raise InputError(
+                    f"{path}:{reader.line_num}: column {column}: {cell} is not a temperature "
+                    "(a finite number of °C above absolute zero)"
+                )
             if column == "n" and (value < 1 or value != int(value)):
                 raise InputError(
                     f"{path}:{reader.line_num}: column n: {cell} is not a sample count "
@@ -103,6 +115,7 @@ def read_pose_file(path: Path) -> PoseFile:
     if not rows:
         raise InputError(f"{path}: no pose rows after the header")
     table = np.array(rows, dtype=np.float64)
+    temperatures = table[:, -1] if warm else None
     if not present:
-        return PoseFile(path, table, tuple(lines))
-    return PoseFile(path, table[:, :3], tuple(lines), table[:, 3:6], table[:, 6])
+        return PoseFile(path, table[:, :3], tuple(lines), temperatures=temperatures)
+    return PoseFile(path, table[:, :3], tuple(lines), table[:, 3:6], table[:, 6], temperatures)

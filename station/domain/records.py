@@ -419,6 +419,14 @@ class UncertaintyRecord(_Record):
         tuple[_SpreadRow, _SpreadRow, _SpreadRow] | None,
         Field(description="U of each element of the gyro matrix K"),
     ] = None
+    excluded_influences: Annotated[
+        tuple[Literal["temperature", "gyro_bias_repeatability"], ...] | None,
+        Field(
+            description="influences U leaves out, named (docs/calibration.md): temperature "
+            "(no temperature at the poses), gyro_bias_repeatability (none declared for the "
+            "product's gyros)"
+        ),
+    ] = None
 
     @model_serializer(mode="wrap")
     def _measured_only(self, handler: SerializerFunctionWrapHandler) -> dict[str, object]:

@@ -20,6 +20,7 @@ from station.domain.constants import MAX_RATE_HZ
 from station.domain.record_bounds import WIRE_COUNTS_MAX
 from station.domain.sensor import (
     ADC_BITS,
+    CROSS_AXIS_TYPICAL,
     GYRO_DPS_PER_LSB,
     NOMINAL_OFFSET_COUNTS,
     NOMINAL_SENSITIVITY_COUNTS_PER_G,
@@ -60,6 +61,12 @@ class SensorSpec(BaseModel):
         OFFSET_TEMPCO_COUNTS_PER_C / NOMINAL_SENSITIVITY_COUNTS_PER_G
     )
     sensitivity_tempco_per_c: Annotated[float, Field(ge=0, le=0.01)] = SENSITIVITY_TEMPCO_PER_C
+    #: The datasheet's cross-axis sensitivity (± fraction): the six-parameter model's
+    #: unmodelled coupling in the uncertainty budget's ``model`` term.
+    cross_axis: Annotated[float, Field(ge=0, le=0.2)] = CROSS_AXIS_TYPICAL
+    #: The datasheet's (or a measured) turn-on to turn-on repeatability of the gyro bias,
+    #: deg/s, a standard deviation; None: not declared (named as left out of U).
+    gyro_bias_repeatability_dps: Annotated[float, Field(ge=0, le=100)] | None = None
 
     @property
     def adc_max(self) -> int:

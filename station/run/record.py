@@ -184,6 +184,7 @@ def uncertainty_record(
         temperatures=_temperatures([c.record for c in fit]),
         verification_temperature=None if verify is None else verify.record.temperature_c,
         tempco=(sensor.offset_tempco_counts_per_c, sensor.sensitivity_tempco_per_c),
+        cross_axis_bound=sensor.cross_axis,
     )
     uncertainty = Uncertainty.of_budget(budget)
     gyro_means = [c.record.gyro_mean for c in fit]
@@ -193,10 +194,17 @@ def uncertainty_record(
             np.array([m.as_tuple() for m in gyro_means if m is not None]),
             np.array([c.gyro_std.as_tuple() for c in fit]),
             np.array([c.record.sample_count for c in fit]),
+            repeatability_dps=sensor.gyro_bias_repeatability_dps or 0.0,
         )
     matrix = None if gyro_fit is None else gyro_matrix_uncertainty(gyro_fit, budget)
+    excluded = budget.excluded_influences
+    if bias is not None and sensor.gyro_bias_repeatability_dps is None:
+        excluded += ("gyro_bias_repeatability",)
+    document = uncertainty.with_gyro(bias, matrix).to_dict()
+    if excluded:
+        document["excluded_influences"] = list(excluded)
     try:
-        return UncertaintyRecord.model_validate(uncertainty.with_gyro(bias, matrix).to_dict())
+        return UncertaintyRecord.model_validate(document)
     except ValidationError as exc:
         # An uncertainty beyond what a record holds (a non-finite one, or more than the
         # ADC's span) says the coefficients mean nothing, which the verdict's checks say

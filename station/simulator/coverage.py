@@ -32,7 +32,12 @@ from scipy.spatial.transform import Rotation
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration import CalibrationError, Model, solve
-from station.domain.calibration.uncertainty import accelerometer_budget, gyro_bias_uncertainty
+from station.domain.calibration.uncertainty import (
+    CROSS_AXIS_BOUND,
+    accelerometer_budget,
+    gyro_bias_uncertainty,
+)
+from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.gyro.motion import calibrate_stream
 from station.domain.poses import POSES
 from station.domain.run_settings import RunSettings, shipped_plan
@@ -104,6 +109,11 @@ def simulate_coverage(
     rng: np.random.Generator,
     tilt_deg: float = 0.0,
     pose_interval_s: float | None = None,
+    knock_g: float = 0.0,
+    knock_s: float = 1.0,
+    cross_axis: float | None = None,
+    gyro_turn_on_dps: float = 0.0,
+    declare_turn_on: bool = True,
 ) -> Coverage:
     """Run ``units`` simulated units under ``profile``; count the truths within ±U.
 
@@ -113,7 +123,19 @@ def simulate_coverage(
     coefficients are drawn uniformly within the datasheet's bounds (those the budget
     assumes, :data:`~station.domain.sensor.OFFSET_TEMPCO_COUNTS_PER_C`,
     :data:`~station.domain.sensor.SENSITIVITY_TEMPCO_PER_C`); the truth is then the unit
-    at the fitted poses' mean temperature, where the calibration holds."""
+    at the fitted poses' mean temperature, where the calibration holds.
+
+    ``knock_g``: when not 0, one fitted pose of each unit, drawn at random, is knocked
+    while it is taken: for ``knock_s`` seconds (at :data:`DEFAULT_RATE_HZ`, from a random
+    sample) the sensor reads ``knock_g`` more along a random direction.
+
+    ``cross_axis``: each unit's coupling drawn uniformly within ±cross_axis (not the
+    KXM52's 2 %), and declared so to the budget.
+
+    ``gyro_turn_on_dps``: the gyro bias moves from one power-on to the next by this
+    (a standard deviation): each unit's session reads its bias plus a normal draw of it,
+    and its truth is the bias over power-ons; ``declare_turn_on``: the budget is told
+    (``repeatability_dps``)."""
     settings = settings_of(profile)
     names = (*settings.poses, settings.verification_pose)
     nominal = np.array([POSES[name].gravity_body for name in names])
@@ -131,6 +153,9 @@ def simulate_coverage(
     )
     for _ in range(units):
         truth = SensorTruth.draw(rng)
+        if cross_axis is not None:
+            coupling = rng.uniform(-cross_axis, cross_axis, (3, 3)) * (1 - np.eye(3))
+            truth = replace(truth, cross_axis=np.eye(3) + coupling)
         if pose_interval_s is not None:
             truth = replace(
                 truth,
@@ -146,11 +171,19 @@ def simulate_coverage(
         )  # (P, 3)
         truth = truth.at(float(np.mean(temperatures[:fit])))
         raw = clean[:, None, :] + rng.normal(0.0, truth.noise_counts, (len(names), samples, 3))
+        if knock_g:
+            length = min(samples, round(knock_s * DEFAULT_RATE_HZ))
+            start = int(rng.integers(0, samples - length + 1))
+            direction = rng.standard_normal(3)
+            raw[int(rng.integers(0, fit)), start : start + length] += (
+                knock_g * direction / np.linalg.norm(direction) * truth.sensitivity_counts_per_g
+            )
         counts = np.clip(np.rint(raw), ADC_MIN, ADC_MAX)
         means, spread = counts.mean(axis=1), counts.std(axis=1, ddof=1)
-        rates = truth.gyro_bias_dps + rng.normal(
-            0.0, truth.gyro_noise_dps, (len(names), samples, 3)
-        )
+        session_bias = truth.gyro_bias_dps
+        if gyro_turn_on_dps:
+            session_bias = session_bias + rng.normal(0.0, gyro_turn_on_dps, 3)
+        rates = session_bias + rng.normal(0.0, truth.gyro_noise_dps, (len(names), samples, 3))
         rates = np.rint(rates / GYRO_DPS_PER_LSB) * GYRO_DPS_PER_LSB
         try:
             solution = solve(means[:fit], model)
@@ -167,9 +200,13 @@ def simulate_coverage(
             verification_samples=samples,
             temperatures=None if pose_interval_s is None else temperatures[:fit],
             verification_temperature=None if pose_interval_s is None else temperatures[fit],
+            cross_axis_bound=CROSS_AXIS_BOUND if cross_axis is None else cross_axis,
         )
         gyro_u = gyro_bias_uncertainty(
-            rates.mean(axis=1), rates.std(axis=1, ddof=1), np.full(len(names), samples)
+            rates.mean(axis=1),
+            rates.std(axis=1, ddof=1),
+            np.full(len(names), samples),
+            repeatability_dps=gyro_turn_on_dps if declare_turn_on else 0.0,
         )
         cal = solution.calibration
         for group, estimate, true, u in (

@@ -119,8 +119,8 @@ class Screen:
     ``pose`` and ``other`` locate the finding: the pose index and, for AT_RAIL the
     axis, for DUPLICATE the other pose of the closest pair (−1 where not applicable).
     ``closest`` holds the closest pair (K, 2), ``near`` how many poses lie closer than
-    the minimum angle to another pose: reported, and refused only where the caller
-    refuses duplicates (the paper's exactly determined eq. 10).
+    :data:`MIN_POSE_ANGLE_DEG` to another pose: reported, and refused only where the
+    caller refuses duplicates (the paper's exactly determined eq. 10).
     """
 
     finding: NDArray[np.int64]
@@ -207,7 +207,10 @@ def screen(
     pair = np.stack([closest, neighbour[units, closest]], axis=1)
     pair.sort(axis=1)
     min_angle = chord_to_angle_deg(nearest[units, closest], sensor.counts_per_g)
-    near = (chord_to_angle_deg(nearest, sensor.counts_per_g) < limits.min_angle_deg).sum(axis=1)
+    # Counted against the documented near-duplicate angle whatever the caller refuses
+    # (least squares refuses none, min_angle_deg 0): the count the JSON and the screen
+    # report beside min_angle_deg means the same in every solve.
+    near = (chord_to_angle_deg(nearest, sensor.counts_per_g) < MIN_POSE_ANGLE_DEG).sum(axis=1)
     if refuse_duplicates:
         mark(Finding.DUPLICATE, min_angle < limits.min_angle_deg, pair[:, 1], pair[:, 0])
 

@@ -25,16 +25,27 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     σ²_ij/N_i, less the quantisation's 1/12 LSB² that the spread already holds when the
     noise dithers the ADC (σ ≥ ½ LSB). Without the spread (a file of means only) the
     sensor's :data:`DEFAULT_SAMPLE_NOISE_COUNTS` over :data:`SAMPLES_PER_POSE` samples.
+    A pose whose spread on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
+    sensor's noise there (the median spread of the fitted poses, at least ½ LSB) was
+    disturbed while it was taken (a knock, a hand on the jig): its samples are not one
+    rest with white noise, and the excess moves the mean by up to its own size
+    whatever the sample count (a step of height h over a fraction f of the samples adds
+    f(1 − f)·h² to the variance and f·h to the mean, ≤ the excess's √ for f ≤ ½). That
+    pose is de-weighted: its excess variance σ² − σ_noise² enters its mean's variance
+    undivided by N_i, and it is named (:attr:`AccelerometerBudget.disturbed`).
 ``quantisation``
     Type B: the ADC's rounding, rectangular of width 1 LSB, LSB/√12 per sample; it
     averages down as 1/√N when the noise dithers it, not at all when σ < ½ LSB (then the
     mean is rounded as much as one sample).
 ``model``
-    Type B: what the six-parameter model cannot represent. The KXM52-1050's cross-axis
-    sensitivity, :data:`CROSS_AXIS_BOUND` (2 %, datasheet, [Song2006]_ Table 1), as a
-    coupling matrix with each off-diagonal term rectangular in ±2 %; propagated by Monte
-    Carlo ([JCGM101]_) over :data:`MODEL_DRAWS` seeded draws, each pose moved to
-    ``o + diag(s)(I + M)·u_i`` and refitted (the coupling enters |g| in second order on
+    Type B: what the six-parameter model cannot represent. The sensor's cross-axis
+    sensitivity, declared per sensor (``cross_axis_bound``: the product's
+    :attr:`~station.domain.sensor_spec.SensorSpec.cross_axis`, ``calstation solve
+    --cross-axis``; by default the KXM52-1050's :data:`CROSS_AXIS_BOUND`, 2 %,
+    datasheet, [Song2006]_ Table 1), as a coupling matrix with each off-diagonal term
+    rectangular within it; propagated by Monte Carlo ([JCGM101]_) over
+    :data:`MODEL_DRAWS` seeded draws, each pose moved to ``o + diag(s)(I + M)·u_i`` and
+    refitted (the coupling enters |g| in second order on
     the axis poses, so a first-order propagation would call it zero, and one-sided: it
     only ever raises the sensitivities there). The symmetric 95 % interval of the
     refitted coefficients' change, bias included ([JCGM101]_ 7.7), over k is the term.
@@ -62,7 +73,9 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     the coefficients' change over :data:`TEMPCO_DRAWS` seeded draws of κ, over k
     ([JCGM101]_ 7.7: the change is near rectangular when one κ dominates, which k·σ would
     cover wholly); in θ's covariance each κ counts with its variance bound²/3
-    ([JCGM100]_ 4.3.7). Zero when the poses' temperatures are not known or all equal.
+    ([JCGM100]_ 4.3.7). Zero when the poses' temperatures are all equal; when they are
+    not known the drift is *excluded* and named so
+    (:attr:`AccelerometerBudget.excluded_influences`, :data:`EXCLUDED_WHY`).
 ``tilt``
     Zero by construction, listed because a metrologist asks: the autocalibration uses
     only |g| = 1 at each pose, so the fixture's tilt does not enter ([Song2006]_); it
@@ -78,9 +91,11 @@ Gyro bias (:func:`gyro_bias_uncertainty`): the mean over the still poses; Type A
 within-pose noise σ/√(Σ N_i), or the poses' scatter s/√P where it exceeds that beyond
 the χ² 95 % point (the scatter would also carry a g-dependent bias, which [Park2014]_
 says a still unit has none of, or drift), plus the report's quantisation, 0.02 deg/s/√12
-per sample. Gyro matrix K (:func:`gyro_matrix_uncertainty`): Type A the fit's own
-standard errors ([Tedaldi2014]_: the moves' residuals, so the noise of each gravity
-direction and of the integrated rates, and the integration's own error, as far as they
+per sample, plus the sensor's declared turn-on to turn-on repeatability (Type B; when
+none is declared it is named as excluded, :data:`EXCLUDED_WHY`). Gyro matrix K
+(:func:`gyro_matrix_uncertainty`): Type A the fit's own standard errors
+([Tedaldi2014]_: the moves' residuals, so the noise of each gravity direction and of the
+integrated rates, and the integration's own error, as far as they
 differ from move to move), and the moves' geometry: the accelerometer calibration the
 gravity directions are computed with is uncertain too (the covariance of θ from the
 pose noise, quantisation and the fit's evidence, :attr:`AccelerometerBudget.covariance`),
@@ -136,6 +151,11 @@ SENSITIVITY_TEMPCO_BOUND: Final = SENSITIVITY_TEMPCO_PER_C
 #: A pose's sample noise when the file gives means only: the KXM52 at the stream's
 #: bandwidth, ~2 counts RMS (``limits.toml``, pose_noise_counts).
 DEFAULT_SAMPLE_NOISE_COUNTS: Final = 2.0
+#: A pose's sample spread above this many times the sensor's noise on an axis (the median
+#: spread of the fitted poses, at least ½ LSB) marks it disturbed: well beyond what the
+#: spread of Gaussian noise does by chance (its relative standard deviation is
+#: 1/√(2(N − 1)), 13 % at 30 samples, 2 % at 1024).
+DISTURBED_SPREAD_RATIO: Final = 2.0
 #: Seeded draws of the coupling matrix that propagate the model term (JCGM 101).
 MODEL_DRAWS: Final = 256
 #: Seeded draws of the temperature coefficients that propagate the temperature term.
@@ -146,6 +166,14 @@ _REFITS: Final = 6
 #: its step is then the pseudo-inverse's to within ~cond·ε (1e-8) of the step, far from
 #: where the pseudo-inverse cuts (1e15), and the next step corrects what differs.
 _SOLVE_CONDITION: Final = 1e8
+#: Why an influence is left out of U when it is (``excluded_influences`` of a solve's
+#: JSON): each named, never silently zero.
+EXCLUDED_WHY: Final = {
+    "temperature": "no temperature recorded at the poses (a temp_c column): the sensor's "
+    "drift across them is not in U",
+    "gyro_bias_repeatability": "no turn-on to turn-on repeatability of the gyro bias declared "
+    "(--gyro-bias-repeatability): U holds this session's mean only",
+}
 #: The budget's terms, in the order they are listed.
 TERMS: Final = ("pose_noise", "quantisation", "model", "fit", "temperature", "tilt")
 _CHI2_QUANTILE: Final = 0.95
@@ -180,6 +208,10 @@ class AccelerometerBudget:
         model_draws: the six-parameter model's unmodelled coupling, draw by draw: the
             couplings I + M (K, 3, 3) and the θ (K, 6) the fit gives under each
             (:func:`_model_term`); ``None`` for the nine-parameter model.
+        disturbed: the fitted poses (indices into the poses given, from 0) whose spread
+            exceeds :data:`DISTURBED_SPREAD_RATIO` times the noise (module docstring,
+            ``pose_noise``), de-weighted, each with its largest spread over the noise.
+        excluded_influences: the influences not in U, by name (:data:`EXCLUDED_WHY`).
     """
 
     terms: dict[str, FloatArray]
@@ -189,6 +221,8 @@ class AccelerometerBudget:
     model: Model = "six"
     covariance: FloatArray | None = None
     model_draws: tuple[FloatArray, FloatArray] | None = None
+    disturbed: dict[int, float] = field(default_factory=dict)
+    excluded_influences: tuple[str, ...] = ()
 
     @property
     def combined(self) -> FloatArray:
@@ -294,6 +328,15 @@ def accelerometer_budget(
     a = a_all[keep]
     var_noise, var_quant = _pose_variances(spread, samples, n_all)
     var_noise, var_quant = var_noise[keep], var_quant[keep]
+    disturbed: dict[int, float] = {}
+    if spread is not None:
+        excess, over_noise = _excess_variance(
+            np.asarray(spread, dtype=np.float64).reshape(n_all, 3)[keep]
+        )
+        var_noise = var_noise + excess
+        disturbed = {
+            int(keep[i]): float(over_noise[i]) for i in np.flatnonzero(np.any(excess > 0, axis=1))
+        }
 
     cal = solution.calibration
     model = cal.model
@@ -391,6 +434,8 @@ def accelerometer_budget(
         model=model,
         covariance=covariance,
         model_draws=model_draws,
+        disturbed=disturbed,
+        excluded_influences=() if temperatures is not None else ("temperature",),
     )
 
 
@@ -399,8 +444,13 @@ def gyro_bias_uncertainty(
     spread_dps: ArrayLike | None = None,
     samples: ArrayLike | None = None,
     k: float = COVERAGE_FACTOR,
+    repeatability_dps: float = 0.0,
 ) -> FloatArray:
     """Expanded uncertainty (3,) of the gyro bias, the mean of the still poses' means (P, 3).
+
+    ``repeatability_dps``: the sensor's declared turn-on to turn-on repeatability of its
+    bias (a standard deviation, deg/s; Type B, [JCGM100]_ 4.3): one session's mean does
+    not show how the bias moves at the next power-on, so it is added in quadrature.
 
     Type A: the pooled within-pose noise σ/√ΣN_i (``spread_dps`` (P, 3) and ``samples``
     (P,) when known), or the poses' scatter s/√P where it exceeds that beyond the χ²
@@ -434,7 +484,7 @@ def gyro_bias_uncertainty(
     if p > 1:
         beyond = scatter**2 > within**2 * chi2_quantile(p - 1) / (p - 1)
         type_a = np.where(beyond, scatter, within)
-    u = np.sqrt(type_a**2 + quant**2)
+    u = np.sqrt(type_a**2 + quant**2 + repeatability_dps**2)
     return np.asarray(k * u, dtype=np.float64)
 
 
@@ -565,6 +615,18 @@ def _pose_variances(
     noise = np.where(dithered, np.clip(sd**2 - lsb2, 0.0, None), sd**2) / counts[:, None]
     quant = np.where(dithered, lsb2 / counts[:, None], lsb2)
     return np.asarray(noise, dtype=np.float64), np.asarray(quant, dtype=np.float64)
+
+
+def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per fitted pose and axis (N, 3), the variance a disturbed pose's mean carries beyond
+    its noise's (module docstring, ``pose_noise``): σ² − σ_noise² where σ exceeds
+    :data:`DISTURBED_SPREAD_RATIO`·σ_noise, σ_noise the median spread of the poses (at
+    least ½ LSB), else 0; and each pose's largest σ/σ_noise (N,)."""
+    noise = np.maximum(np.median(spread, axis=0), ADC_LSB_COUNTS / 2)
+    disturbed = spread > DISTURBED_SPREAD_RATIO * noise
+    excess = np.where(disturbed, spread**2 - noise**2, 0.0)
+    ratio = np.max(spread / noise, axis=1)
+    return np.asarray(excess, dtype=np.float64), np.asarray(ratio, dtype=np.float64)
 
 
 def _pack(offset: FloatArray, matrix: FloatArray, model: Model) -> FloatArray:

@@ -292,7 +292,9 @@ class WhatIf(_FigurePart):
 
 class CoefficientRisk(_FigurePart):
     """Global decision risks of one coefficient (JCGM 106:2012 9.5), as fractions of all
-    units, from the process's spread and the mean standard uncertainty of measurement."""
+    units, from the process's spread and the mean standard uncertainty of measurement.
+    They assume a normal population (:mod:`station.domain.quality.risk`); the measured
+    values' Anderson–Darling check says whether it is one."""
 
     name: str
     u: float = Field(description="mean standard uncertainty U/k of the runs that carry one")
@@ -300,6 +302,24 @@ class CoefficientRisk(_FigurePart):
     simple_false_reject: float
     guarded_false_accept: float = Field(description="with a guard band w = U")
     guarded_false_reject: float
+    assumes: Literal["normal population"] = Field(
+        "normal population",
+        description="the risks' model: a normal process population and measurement error",
+    )
+    normality_statistic: float | None = Field(
+        None,
+        description="Anderson–Darling A² of the latest runs' values against a normal "
+        "population (None: fewer than 8 values)",
+    )
+    normality_p_value: float | None = Field(
+        None, description="its p-value, interpolated in Stephens' table (0.01…0.15)"
+    )
+    normality_values: int = Field(0, description="the values the check judged")
+    normal: bool | None = Field(
+        None,
+        description="the values are not rejected as normal at the 5 % level (False: the "
+        "risks' model does not describe this population)",
+    )
 
 
 class NearLimits(_FigurePart):

@@ -65,6 +65,42 @@ def test_json_carries_the_expanded_uncertainty_of_each_coefficient(
             assert low[key][a] <= paper[key][a] < high[key][a]
 
 
+def test_a_pose_whose_spread_is_well_above_the_noise_is_named_and_de_weighted(
+    call_cli: CliRunner, tmp_path: Path
+) -> None:
+    lines = PAPER_CSV.read_text().splitlines()
+    spreads = ["1.1,0.9,1.0,1024"] * 6
+    quiet = tmp_path / "quiet.csv"
+    quiet.write_text(
+        "\n".join(
+            [lines[0] + ",sx,sy,sz,n"]
+            + [f"{r},{s}" for r, s in zip(lines[1:], spreads, strict=True)]
+        )
+    )
+    spreads[3] = "1.0,8.2,1.0,1024"  # a knock on y while the fourth pose was taken
+    knocked = tmp_path / "knocked.csv"
+    knocked.write_text(
+        "\n".join(
+            [lines[0] + ",sx,sy,sz,n"]
+            + [f"{r},{s}" for r, s in zip(lines[1:], spreads, strict=True)]
+        )
+    )
+    calm = json.loads(call_cli("solve", str(quiet), "--json").stdout)
+    data = json.loads(call_cli("solve", str(knocked), "--json").stdout)
+    assert calm["disturbed_poses"] == []
+    assert [d["pose"] for d in data["disturbed_poses"]] == [4]
+    # y's noise: the poses' median spread, 0.9
+    assert data["disturbed_poses"][0]["spread_over_noise"] == pytest.approx(8.2 / 0.9)
+    # Its excess spread (8.15 counts) enters U undivided by the 1024 samples: taken as
+    # white noise it would move the pose's mean by 0.26 counts, next to the
+    # 3-count model term of U, and leave U within a few per cent.
+    assert data["offset"] == calm["offset"]
+    assert data["uncertainty"]["offset"]["y"] > 2 * calm["uncertainty"]["offset"]["y"]
+    screen = call_cli("solve", str(knocked))
+    assert screen.returncode == 0
+    assert f"DISTURBED pose 4 ({knocked}:5)" in " ".join(screen.stdout.split())
+
+
 def test_readable_table(call_cli: CliRunner) -> None:
     result = call_cli("solve", str(PAPER_CSV))
     assert result.returncode == 0, result.stderr

@@ -55,6 +55,7 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert np.allclose(gyro["bias_dps"], imu.gyro_bias_dps, atol=0.01)
     assert len(gyro["residual_deg"]) == 11
     assert gyro["unusable_moves"] == []
+    assert data["disturbed_poses"] == []  # every still as quiet as the others
     # One shape for the uncertainties, every coefficient measured: the gyro's too.
     u = data["uncertainty"]
     assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}
@@ -68,6 +69,56 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert (error <= np.array(u["gyro_bias_dps"]) * 2.5).all()
     offset_error = np.abs([data["offset"][a] - imu.offset_counts[i] for i, a in enumerate("xyz")])
     assert (offset_error <= 2.5 * np.array([u["offset"][a] for a in "xyz"])).all()
+
+
+def test_a_temperature_column_puts_the_drift_in_u_and_its_absence_is_named(
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    _, rows = recorded
+    bare = _write(tmp_path / "log.csv", rows)
+    warming = np.linspace(25.0, 26.0, len(rows))  # a board warming by 1 °C over the run
+    warm = _write(tmp_path / "warm.csv", np.column_stack([rows, warming]), HEADER + ",temp_c")
+    without = json.loads(
+        call_cli("solve", str(bare), "--stream", "--model", "nine", "--json").stdout
+    )
+    with_t = json.loads(
+        call_cli("solve", str(warm), "--stream", "--model", "nine", "--json").stdout
+    )
+    assert [e["influence"] for e in without["excluded_influences"]] == [
+        "temperature",
+        "gyro_bias_repeatability",
+    ]
+    assert without["temperature_c"] is None
+    assert [e["influence"] for e in with_t["excluded_influences"]] == ["gyro_bias_repeatability"]
+    assert 25.0 < with_t["temperature_c"]["mean"] < 26.0
+    assert 0.8 < with_t["temperature_c"]["span"] < 1.0  # the stills' means, first to last
+    assert all(
+        with_t["uncertainty"]["offset"][a] > without["uncertainty"]["offset"][a] for a in "xyz"
+    )
+    screen = " ".join(call_cli("solve", str(bare), "--stream").stdout.split())
+    assert "NOT IN U: temperature: no temperature recorded at the poses" in screen
+
+
+def test_a_declared_gyro_bias_repeatability_is_in_the_gyro_bias_u(
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    _, rows = recorded
+    path = _write(tmp_path / "log.csv", rows)
+    session = json.loads(call_cli("solve", str(path), "--stream", "--json").stdout)
+    declared = json.loads(
+        call_cli(
+            "solve", str(path), "--stream", "--json", "--gyro-bias-repeatability", "0.05"
+        ).stdout
+    )
+    assert "gyro_bias_repeatability" in [e["influence"] for e in session["excluded_influences"]]
+    assert "gyro_bias_repeatability" not in [
+        e["influence"] for e in declared["excluded_influences"]
+    ]
+    own = np.array(session["uncertainty"]["gyro_bias_dps"]) / 2
+    # k·√(u_session² + 0.05²): the repeatability in quadrature with the session's own
+    np.testing.assert_allclose(
+        declared["uncertainty"]["gyro_bias_dps"], 2 * np.sqrt(own**2 + 0.05**2), rtol=1e-9
+    )
 
 
 def test_lost_samples_make_a_move_unusable_and_say_so(
@@ -97,6 +148,33 @@ def test_text_output_names_k_and_the_residuals(
     assert result.returncode == 0, result.stderr
     assert "12 still poses (still window 0.75 s) at 200 samples/s" in result.stdout
     assert "gyro K z:" in result.stdout
+
+
+def test_the_screen_shows_k_with_the_jsons_expanded_uncertainty(
+    call_cli: CliRunner, tmp_path: Path, recorded: tuple[SensorTruth, np.ndarray]
+) -> None:
+    # One U for K: the screen's ± is the JSON's U (fit, geometry, coupling; k = 2),
+    # not the fit's 1-σ standard errors.
+    _, rows = recorded
+    path = _write(tmp_path / "log.csv", rows)
+    for model in ("six", "nine"):
+        screen = call_cli("solve", str(path), "--stream", "--model", model)
+        data = json.loads(
+            call_cli("solve", str(path), "--stream", "--model", model, "--json").stdout
+        )
+        shown = np.array(
+            [
+                [float(v) for v in re.findall(r"±([0-9.]+)", line)]
+                for line in screen.stdout.splitlines()
+                if line.strip().startswith("gyro K ")
+            ]
+        )
+        u = np.array(data["uncertainty"]["gyro_matrix"])
+        se = np.array(data["gyro"]["scale_matrix_standard_errors"])
+        assert shown.shape == (3, 3)
+        assert np.allclose(shown, u, atol=0.6e-5)
+        assert not np.allclose(shown, se, atol=0.6e-5)
+        assert "U (k=2)" in screen.stdout
 
 
 def _refused(call_cli: CliRunner, path: Path, *extra: str) -> str:
@@ -226,8 +304,8 @@ def test_units_are_for_streams_and_a_rate_must_be_one(call_cli: CliRunner, tmp_p
         result = call_cli("solve", str(poses), option, value)
         assert result.returncode == 2
         assert result.stderr.strip().splitlines() == [
-            "calstation: error: --gyro-units, --time-units, --rate and --known-turn-deg "
-            "describe a raw stream: use them with --stream"
+            "calstation: error: --gyro-units, --time-units, --rate, --known-turn-deg and "
+            "--gyro-bias-repeatability describe a raw stream: use them with --stream"
         ]
     rate = _refused(call_cli, poses, "--rate", "0")
     assert "--rate" in rate

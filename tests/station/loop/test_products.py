@@ -35,6 +35,7 @@ def test_the_putters_product_is_the_sensor_the_calibration_assumes() -> None:
     assert a12.zero_g_spread_g * a12.counts_per_g == pytest.approx(sensor.OFFSET_SPREAD_COUNTS)
     assert a12.sensitivity_tolerance == sensor.SENSITIVITY_TOLERANCE
     assert a12.noise_g * a12.counts_per_g == pytest.approx(ACCEL_NOISE_COUNTS)
+    assert a12.cross_axis == sensor.CROSS_AXIS_TYPICAL  # the budget's model term
 
 
 def test_a_virtual_putter_follows_its_products_sensor() -> None:

@@ -127,7 +127,25 @@ def test_the_record_carries_the_budget_or_none_when_it_is_beyond_what_a_record_h
     solution = solve(poses)
     quiet = uncertainty_record(_captures(poses, 1.0, 1024), 6, solution, None, PUTTER_SENSOR)
     assert quiet is not None
-    assert set(quiet.to_json()) == {"k", "offset", "sensitivity", "gyro_bias_dps"}
+    assert set(quiet.to_json()) == {
+        "k",
+        "offset",
+        "sensitivity",
+        "gyro_bias_dps",
+        "excluded_influences",
+    }
+    # What U leaves out is named: these captures carry no temperature, and the putter's
+    # sensor declares no gyro-bias repeatability.
+    assert quiet.excluded_influences == ("temperature", "gyro_bias_repeatability")
+    declared = PUTTER_SENSOR.model_copy(update={"gyro_bias_repeatability_dps": 0.05})
+    told = uncertainty_record(_captures(poses, 1.0, 1024), 6, solution, None, declared)
+    assert told is not None
+    assert told.excluded_influences == ("temperature",)
+    assert quiet.gyro_bias_dps is not None
+    assert told.gyro_bias_dps is not None
+    assert all(
+        b > max(a, 2 * 0.05) for a, b in zip(quiet.gyro_bias_dps, told.gyro_bias_dps, strict=True)
+    )
     assert quiet.offset is not None
     assert max(quiet.offset.as_tuple()) < 0.2
     # A spread of nearly the widest ADC's span in one sample a pose: U beyond that span,

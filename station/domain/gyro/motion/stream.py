@@ -22,7 +22,7 @@ window's link loss as it does live.
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import pairwise
 from typing import Final
 
@@ -39,6 +39,11 @@ from station.domain.calibration import (
     gyro_bias_uncertainty,
     gyro_matrix_uncertainty,
     solve,
+)
+from station.domain.calibration.uncertainty import (
+    CROSS_AXIS_BOUND,
+    OFFSET_TEMPCO_BOUND,
+    SENSITIVITY_TEMPCO_BOUND,
 )
 from station.domain.constants import STILL_WINDOW_S
 from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
@@ -69,11 +74,13 @@ MIN_POSES: Final[dict[Model, int]] = {"six": 6, "nine": 9}
 
 @dataclass(frozen=True, eq=False)
 class RecordedStream:
-    """Raw samples of a unit: times (s), accelerometer (ADC counts), gyros (deg/s)."""
+    """Raw samples of a unit: times (s), accelerometer (ADC counts), gyros (deg/s); the
+    sensor's temperature (°C) when the recording has it."""
 
     t: FloatArray
     accel_counts: FloatArray
     gyro_dps: FloatArray
+    temperature_c: FloatArray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -81,10 +88,13 @@ class RecordedStream:
             raise StreamError(f"stream: t must be (n,) and accel (n, 3), got {self.t.shape}")
         if self.gyro_dps.shape != (n, 3):
             raise StreamError(f"stream: gyro must be ({n}, 3), got {self.gyro_dps.shape}")
+        if self.temperature_c is not None and self.temperature_c.shape != (n,):
+            raise StreamError(f"stream: temperature must be ({n},)")
         finite = (
             np.isfinite(self.t).all()
             and np.isfinite(self.accel_counts).all()
             and np.isfinite(self.gyro_dps).all()
+            and (self.temperature_c is None or np.isfinite(self.temperature_c).all())
         )
         if not finite:
             raise StreamError("stream: a value is not a finite number")
@@ -125,6 +135,13 @@ class StreamCalibration:
             about too few axes), when they cannot; the accelerometer and the gyro bias
             are calibrated all the same.
         still_window_s: the still window the poses were found with, seconds.
+        temperatures: shape (stills,), each still's mean temperature, °C (None when the
+            recording has none).
+        excluded_influences: the influences not in U, by name
+            (:data:`~station.domain.calibration.uncertainty.EXCLUDED_WHY`).
+        disturbed: the stills (from 0) whose spread is well above the noise, de-weighted
+            in U, each with its spread over the noise
+            (:attr:`~station.domain.calibration.uncertainty.AccelerometerBudget.disturbed`).
     """
 
     stills: list[StillSegment]
@@ -136,6 +153,9 @@ class StreamCalibration:
     uncertainty: Uncertainty
     gyro_not_determined: str | None = None
     still_window_s: float | None = None
+    temperatures: FloatArray | None = None
+    excluded_influences: tuple[str, ...] = ()
+    disturbed: dict[int, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: the accelerometer's keys, ``poses`` and ``gyro`` (K's keys null and
@@ -154,6 +174,9 @@ class StreamCalibration:
                 "not_determined": self.gyro_not_determined,
             }
         payload["uncertainty"] = self.uncertainty.to_dict()
+        payload["disturbed_poses"] = [
+            {"pose": pose + 1, "spread_over_noise": ratio} for pose, ratio in self.disturbed.items()
+        ]
         return payload
 
 
@@ -283,6 +306,9 @@ def calibrate_stream(
     min_moves: int = MIN_MOVES,
     known_turn_deg: float | None = None,
     check_moves: Callable[[list[Move], FloatArray], None] | None = None,
+    tempco: tuple[float, float] = (OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND),
+    cross_axis_bound: float = CROSS_AXIS_BOUND,
+    gyro_bias_repeatability_dps: float | None = None,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
 
@@ -291,7 +317,12 @@ def calibrate_stream(
     angle of the recording's whole turns, when it declares one) go to
     :func:`~station.domain.gyro.motion.matrix_fit.fit_gyro_matrix`.
     ``check_moves(moves, bias_dps)``, when given, may refuse the moves before K is fitted
-    (:func:`station.domain.gyro.motion.stream_units.check_turns`).
+    (:func:`station.domain.gyro.motion.stream_units.check_turns`). ``tempco``: the
+    sensor's temperature coefficients' half-widths (counts/°C, /°C) for the budget's
+    temperature term, when the stream has a temperature; ``cross_axis_bound``: its
+    cross-axis sensitivity, the six-parameter model's unmodelled coupling;
+    ``gyro_bias_repeatability_dps``: its gyros' turn-on to turn-on bias repeatability
+    (None: not declared, named as excluded from U).
 
     Raises:
         StreamError: fewer still poses than ``model`` needs; a gyro bias beyond
@@ -354,9 +385,24 @@ def calibrate_stream(
         gyro = None
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
     gyro_spreads = np.array([stream.gyro_dps[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
-    budget = accelerometer_budget(accel, means, spreads, samples)
+    temperatures = (
+        None
+        if stream.temperature_c is None
+        else np.array([stream.temperature_c[s.start : s.stop].mean() for s in stills])
+    )
+    budget = accelerometer_budget(
+        accel,
+        means,
+        spreads,
+        samples,
+        temperatures=temperatures,
+        tempco=tempco,
+        cross_axis_bound=cross_axis_bound,
+    )
     uncertainty = Uncertainty.of_budget(budget).with_gyro(
-        gyro_bias_uncertainty(gyro_means, gyro_spreads, samples),
+        gyro_bias_uncertainty(
+            gyro_means, gyro_spreads, samples, repeatability_dps=gyro_bias_repeatability_dps or 0.0
+        ),
         None if gyro is None else gyro_matrix_uncertainty(gyro, budget),
     )
     return StreamCalibration(
@@ -369,4 +415,8 @@ def calibrate_stream(
         uncertainty=uncertainty,
         gyro_not_determined=not_determined,
         still_window_s=limits.window_samples / stream.rate_hz,
+        temperatures=temperatures,
+        excluded_influences=budget.excluded_influences
+        + (() if gyro_bias_repeatability_dps is not None else ("gyro_bias_repeatability",)),
+        disturbed=budget.disturbed,
     )

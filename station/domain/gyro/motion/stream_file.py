@@ -1,7 +1,9 @@
 """Reading a recorded stream: CSV with the header ``t,ax,ay,az,gx,gy,gz``.
 
 ``t`` in seconds (any rate, increasing), ``ax, ay, az`` raw accelerometer ADC counts,
-``gx, gy, gz`` raw gyro rates in deg/s, one sample a row; other columns are ignored.
+``gx, gy, gz`` raw gyro rates in deg/s, one sample a row; an optional ``temp_c`` column,
+the sensor's temperature in °C (the uncertainty budget's temperature term); other
+columns are ignored.
 The numbers are parsed in one vectorised pass (memory linear in the rows); when that
 fails, the file is scanned again to name the first bad line.
 """
@@ -19,6 +21,8 @@ if TYPE_CHECKING:
     from _csv import Reader
 
 COLUMNS: Final = ("t", "ax", "ay", "az", "gx", "gy", "gz")
+#: Optional: the sensor's temperature, °C.
+TEMPERATURE_COLUMN: Final = "temp_c"
 
 
 def read_stream_file(path: Path) -> RecordedStream:
@@ -42,7 +46,8 @@ def read_stream_file(path: Path) -> RecordedStream:
             f"{path}:{header_line}: header lacks column(s) {','.join(missing)} "
             f"(found: {','.join(header)}); expected {','.join(COLUMNS)}"
         )
-    index = [header.index(c) for c in COLUMNS]
+    columns = COLUMNS + ((TEMPERATURE_COLUMN,) if TEMPERATURE_COLUMN in header else ())
+    index = [header.index(c) for c in columns]
     try:
         data = np.loadtxt(
             path,
@@ -54,13 +59,18 @@ def read_stream_file(path: Path) -> RecordedStream:
             dtype=np.float64,
         )
     except (ValueError, UnicodeDecodeError):
-        raise InputError(_first_bad_line(path, index, len(header))) from None
+        raise InputError(_first_bad_line(path, columns, index, len(header))) from None
     if not len(data):
         raise InputError(f"{path}: no samples after the header")
     if not np.isfinite(data).all():
         row = int(np.argmax(~np.isfinite(data).all(axis=1)))
         raise InputError(f"{path}: data row {row + 1}: a value is not a finite number")
-    return RecordedStream(t=data[:, 0], accel_counts=data[:, 1:4], gyro_dps=data[:, 4:7])
+    return RecordedStream(
+        t=data[:, 0],
+        accel_counts=data[:, 1:4],
+        gyro_dps=data[:, 4:7],
+        temperature_c=data[:, 7] if len(columns) > len(COLUMNS) else None,
+    )
 
 
 def _header(path: Path, reader: "Reader") -> tuple[list[str], int]:
@@ -70,7 +80,7 @@ def _header(path: Path, reader: "Reader") -> tuple[list[str], int]:
     raise InputError(f"{path}: the file is empty; expected a header {','.join(COLUMNS)}")
 
 
-def _first_bad_line(path: Path, index: list[int], width: int) -> str:
+def _first_bad_line(path: Path, columns: tuple[str, ...], index: list[int], width: int) -> str:
     """The first line numpy could not read, named with its problem."""
     with path.open(encoding="utf-8-sig", errors="replace", newline="") as handle:
         reader = csv.reader(handle)
@@ -81,7 +91,7 @@ def _first_bad_line(path: Path, index: list[int], width: int) -> str:
             where = f"{path}:{reader.line_num}"
             if len(row) < max(index) + 1:
                 return f"{where}: {len(row)} cells, the header has {width}"
-            for column, i in zip(COLUMNS, index, strict=True):
+            for column, i in zip(columns, index, strict=True):
                 cell = row[i].strip()
                 try:
                     float(cell)

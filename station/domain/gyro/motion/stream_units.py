@@ -111,7 +111,9 @@ def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
         t = stream.t / 1000.0
     else:
         t = stream.t
-    return RecordedStream(t=t, accel_counts=accel, gyro_dps=gyro)
+    return RecordedStream(
+        t=t, accel_counts=accel, gyro_dps=gyro, temperature_c=stream.temperature_c
+    )
 
 
 def _near(value: float, expected: float) -> bool:

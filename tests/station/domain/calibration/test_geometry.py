@@ -187,3 +187,25 @@ def test_the_closest_poses_of_many_match_all_pairs(seed: int, n: int, repeats: i
     np.fill_diagonal(angles, np.inf)
     assert float(result.min_angle_deg[0]) == pytest.approx(angles.min(), abs=1e-6)
     assert int(result.near[0]) == int((angles.min(axis=1) < 10.0).sum())
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(7, 40), close=st.floats(0.001, 30.0))
+def test_near_duplicates_agree_with_the_closest_angle_whatever_is_refused(
+    seed: int, n: int, close: float
+) -> None:
+    # A solve that refuses no duplicates (least squares on a stream, min_angle_deg 0)
+    # counts them against the same 10° as any other: never "0 near-duplicates" beside a
+    # closest pair 0.018° apart.
+    rng = np.random.default_rng(seed)
+    directions = random_directions(rng, n)
+    turn = np.cross(directions[0], rng.standard_normal(3))
+    turn /= np.linalg.norm(turn)
+    angle = np.radians(close)
+    directions[1] = np.cos(angle) * directions[0] + np.sin(angle) * turn
+    poses = 2048.0 + 819.2 * directions
+    result = screen(poses[None], GeometryLimits(min_angle_deg=0.0), refuse_duplicates=False)
+    angles = pair_angles_deg(poses)
+    np.fill_diagonal(angles, np.inf)
+    assert int(result.near[0]) == int((angles.min(axis=1) < 10.0).sum())
+    assert (int(result.near[0]) == 0) == (float(result.min_angle_deg[0]) >= 10.0)

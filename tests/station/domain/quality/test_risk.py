@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from station.domain.quality.risk import decision_risks
+from station.domain.quality.risk import decision_risks, normality
 
 means = st.floats(-2.0, 2.0)
 process = st.floats(0.2, 2.0)
@@ -46,3 +46,22 @@ def test_the_risks_are_those_of_simulated_units(guard: float, lower: float | Non
     # 2e6 units: a rate near 3 % is known to ±0.02 % (1σ).
     assert risks.false_accept == pytest.approx(np.mean(accepted & ~inside), abs=1e-3)
     assert risks.false_reject == pytest.approx(np.mean(~accepted & inside), abs=1e-3)
+
+
+def test_the_normality_check_tells_the_simulators_uniform_population_from_a_normal_one() -> None:
+    # The risks assume a normal population; on a uniform one of the same spread (no
+    # tails) the check says so, and on a normal one it does not.
+    rng = np.random.default_rng(43)
+    normal = normality(rng.normal(819.2, 10.0, 1000))
+    uniform = normality(rng.uniform(800.0, 840.0, 1000))
+    assert normal is not None
+    assert uniform is not None
+    assert normal.normal
+    assert normal.values == 1000
+    assert not uniform.normal
+    assert uniform.statistic > normal.statistic
+
+
+def test_too_few_or_equal_values_are_not_judged() -> None:
+    assert normality([1.0, 2.0, 3.0]) is None
+    assert normality([5.0] * 20) is None
