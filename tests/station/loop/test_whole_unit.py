@@ -168,7 +168,16 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
     assert record.uncertainty is not None
     held = unit["holds"]["uncertainty"]
     assert held == run["uncertainty"] == record.uncertainty.to_json()
-    assert set(held) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}
+    assert set(held) == {
+        "k",
+        "offset",
+        "sensitivity",
+        "gyro_bias_dps",
+        "gyro_matrix",
+        "excluded_influences",
+    }
+    # The putter's gyros declare no turn-on repeatability: U of their bias names it left out.
+    assert held["excluded_influences"] == ["gyro_bias_repeatability"]
     assert record.gyro_matrix.standard_errors is not None
     u_k, se_k = np.array(held["gyro_matrix"]), np.array(record.gyro_matrix.standard_errors)
     assert (u_k >= 2 * se_k * (1 - 1e-9)).all()
