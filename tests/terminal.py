@@ -26,13 +26,16 @@ hang_guard = pytest.mark.timeout(HUNG_TEST_S)
 
 def spawn(argv: Sequence[str], *, env: dict[str, str], cwd: Path) -> pexpect.spawn:
     """``argv`` in a 60×140 terminal, UTF-8; each ``expect`` waits for its text, or
-    :data:`HUNG_STATION_S` for a hung station."""
+    :data:`HUNG_STATION_S` for a hung station. A character torn on the terminal reads as
+    U+FFFD, as a terminal shows it: Ctrl-C can stop a write of the screen between the
+    bytes of a wide character."""
     return pexpect.spawn(
         argv[0],
         list(argv[1:]),
         env=env,
         cwd=str(cwd),
         encoding="utf-8",
+        codec_errors="replace",
         dimensions=(60, 140),
         timeout=HUNG_STATION_S,
     )
