@@ -556,35 +556,12 @@ async def get_certificate(
     found = await repository.run(lambda r: certificate_inputs(r, serial, zone, shifts))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")
+    from station.report.certificate_document import certificate_document
+
+    document = certificate_document(found, format, datetime.now(UTC), zone, language, laboratory)
     if format == "pdf":
-        from station.report.pdf import certificate_pdf
-
-        document = certificate_pdf(
-            found.run,
-            found.profile,
-            datetime.now(UTC),
-            zone,
-            found.golden,
-            laboratory,
-            found.signature,
-        )
         return Response(document, media_type="application/pdf")
-    from station.report import html
-
-    page = html.certificate_page(
-        found.run,
-        found.profile,
-        datetime.now(UTC),
-        found.gyro_fit,
-        found.earlier,
-        zone,
-        found.golden,
-        found.reviews,
-        language,
-        laboratory,
-        found.signature,
-    )
-    return HTMLResponse(page)
+    return HTMLResponse(document)
 
 
 @dashboard.get("/", response_class=HTMLResponse, include_in_schema=False)

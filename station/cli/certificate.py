@@ -72,8 +72,8 @@ def issue(
     from station.domain.i18n import LANGUAGES, Language
     from station.domain.laboratory import Laboratory, load_laboratory
     from station.domain.quality.shifts import parse_shifts
-    from station.report.html import certificate_page
-    from station.report.pdf import PDF_LANGUAGES, certificate_pdf
+    from station.report.certificate_document import CertificateFormat, certificate_document
+    from station.report.pdf import PDF_LANGUAGES
     from station.report.period import plant_zone
 
     if language not in LANGUAGES:
@@ -92,37 +92,14 @@ def issue(
         found = certificate_inputs(repository, serial, zone, starts)
     if found is None:
         raise InputError(f"no calibration run of serial {serial!r}")
-    if format == "pdf":
-        assert output is not None
-        document = certificate_pdf(
-            found.run,
-            found.profile,
-            datetime.now(UTC),
-            zone,
-            found.golden,
-            laboratory,
-            found.signature,
-        )
-        _write(output, document)
-        return
-    page = certificate_page(
-        found.run,
-        found.profile,
-        datetime.now(UTC),
-        found.gyro_fit,
-        found.earlier,
-        zone,
-        found.golden,
-        found.reviews,
-        reader,
-        laboratory,
-        found.signature,
+    document = certificate_document(
+        found, cast(CertificateFormat, format), datetime.now(UTC), zone, reader, laboratory
     )
-    if output is None:
-        out.file.write(page)
+    if output is None:  # a page: --format pdf needs --out, checked above
+        out.file.write(document.decode())
         out.file.flush()
         return
-    _write(output, page.encode())
+    _write(output, document)
 
 
 def _write(output: Path, document: bytes) -> None:

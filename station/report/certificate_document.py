@@ -1,0 +1,70 @@
+"""A unit's certificate as a document: the HTML page or the PDF of the same statements,
+from what the results database holds of it (the server's page and ``calstation
+certificate issue`` render it here)."""
+
+from collections.abc import Sequence
+from datetime import datetime
+from typing import Literal, Protocol
+
+from station.domain.i18n import Language
+from station.domain.laboratory import Laboratory
+from station.domain.limits import LimitsProfile
+from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.signature import Signature
+
+#: The formats a certificate is rendered in.
+CertificateFormat = Literal["html", "pdf"]
+
+
+class CertificateParts(Protocol):
+    """What a certificate states of its unit (``db.certificates.CertificateInputs``)."""
+
+    @property
+    def run(self) -> StoredRun: ...
+    @property
+    def earlier(self) -> Sequence[RunSummary]: ...
+    @property
+    def profile(self) -> LimitsProfile | None: ...
+    @property
+    def gyro_fit(self) -> GyroFitRecord | None: ...
+    @property
+    def golden(self) -> RunSummary | None: ...
+    @property
+    def reviews(self) -> Sequence[HoldReview]: ...
+    @property
+    def signature(self) -> Signature | None: ...
+
+
+def certificate_document(
+    parts: CertificateParts,
+    format: CertificateFormat,
+    issued_at: datetime,
+    zone: str,
+    language: Language,
+    laboratory: Laboratory,
+) -> bytes:
+    """The certificate of ``parts`` as ``format``: the page (UTF-8) in ``language``, or
+    the PDF (English: :data:`station.report.pdf.PDF_LANGUAGES`). The renderers are
+    imported here, when one is asked for: a PDF's library stays out of a page's process."""
+    if format == "pdf":
+        from station.report.pdf import certificate_pdf
+
+        return certificate_pdf(
+            parts.run, parts.profile, issued_at, zone, parts.golden, laboratory, parts.signature
+        )
+    from station.report.html import certificate_page
+
+    page = certificate_page(
+        parts.run,
+        parts.profile,
+        issued_at,
+        parts.gyro_fit,
+        parts.earlier,
+        zone,
+        parts.golden,
+        parts.reviews,
+        language,
+        laboratory,
+        parts.signature,
+    )
+    return page.encode()
