@@ -57,7 +57,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -68,6 +68,7 @@ from sqlalchemy import make_url, text
 from db import RunRepository, make_engine, open_database
 
 sys.path.insert(0, str(ROOT))  # the scale-out parts the tests start, below
+from tests.databases import own_postgres_database
 from tests.scale_out import CHECK_MS, Webhook, haproxy, pgbouncer, start_server, stop
 from tests.servers import free_port
 
@@ -88,19 +89,9 @@ class Load:
     station_errors: list[tuple[float, int]] = field(default_factory=list)
 
 
-@contextmanager
-def own_database(server_url: str) -> Iterator[str]:
+def own_database(server_url: str) -> AbstractContextManager[str]:
     """A database of its own for the benchmark, dropped (its connections ended) at the end."""
-    name = f"calstation_scale_{os.getpid()}"
-    admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(text(f'CREATE DATABASE "{name}"'))
-    try:
-        yield make_url(server_url).set(database=name).render_as_string(hide_password=False)
-    finally:
-        with admin.connect() as connection:
-            connection.execute(text(f'DROP DATABASE "{name}" WITH (FORCE)'))
-        admin.dispose()
+    return own_postgres_database("calstation_scale", server_url)
 
 
 #: Run as the ``postgres`` user when started by root (PostgreSQL refuses root).

@@ -57,10 +57,12 @@ def postgresql_url() -> Iterator[str]:
 
 
 @contextmanager
-def own_postgres_database(prefix: str = "calstation_own") -> Iterator[str]:
-    """The URL of a PostgreSQL database of its own, created empty and dropped (its
-    connections ended) when the block ends."""
-    server_url = postgres_server_url()
+def own_postgres_database(
+    prefix: str = "calstation_own", server_url: str | None = None
+) -> Iterator[str]:
+    """The URL of a PostgreSQL database of its own on ``server_url`` (default: the
+    suite's), created empty and dropped (its connections ended) when the block ends."""
+    server_url = server_url or postgres_server_url()
     name = f"{prefix}_{os.getpid()}_{secrets.token_hex(4)}"
     admin = make_engine(server_url, isolation_level="AUTOCOMMIT")
     with admin.connect() as connection:
