@@ -52,9 +52,11 @@ async def get_alerts(
     format: Annotated[Literal["html", "json"], Query(description="the answer's format")] = "html",
 ) -> Response:
     """The latest alerts, the newest first."""
-    alerts = await reader.run(lambda r: recent_alerts(r.session, LISTED_ALERTS))
+    # The rounds before the alerts: every round counted has committed what it fired or
+    # cleared, so the alerts read after it hold at least that much.
     loop = request.app.state.alert_loop
     rounds = None if loop is None else loop.rounds
+    alerts = await reader.run(lambda r: recent_alerts(r.session, LISTED_ALERTS))
     if format == "json":
         answer = AlertsAnswer(alerts=alerts, rounds=rounds, process=os.getpid())
         return Response(answer.model_dump_json(), media_type="application/json")
