@@ -15,7 +15,7 @@ from db.holds import held_units
 from db.reports import CHART_POINTS, ReportQueries, eol_report
 from db.split import SPLIT_PARAMETERS, split_report
 from station.domain.i18n import Language
-from station.domain.limits import LimitsProfile
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.days import day_end, midnight, plant_date
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.split import SplitBy

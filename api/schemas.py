@@ -1,4 +1,5 @@
-"""Public shapes of the API's answers (the run record itself is :mod:`station.domain.records`)."""
+"""Public shapes of the API's answers (the run record itself is
+:mod:`station.domain.record.records`)."""
 
 from datetime import datetime
 from typing import Annotated
@@ -8,8 +9,7 @@ from pydantic import AfterValidator, BaseModel, Field
 
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroDwells
-from station.domain.record_bounds import plain_document
-from station.domain.records import (
+from station.domain.record.records import (
     Disposition,
     GyroFitRecord,
     GyroSummary,
@@ -20,6 +20,7 @@ from station.domain.records import (
     RunSummary,
     Verdict,
 )
+from station.domain.sensors.record_bounds import plain_document
 
 
 class Problem(BaseModel):
@@ -102,7 +103,7 @@ class UnitGyro(BaseModel):
 
 class ReviewSubmission(BaseModel):
     """``POST /api/v1/units/{serial}/reviews``: a quality review of the unit's latest,
-    failed run (:class:`station.domain.records.HoldReview`; the reviewer is the key's
+    failed run (:class:`station.domain.record.records.HoldReview`; the reviewer is the key's
     holder, the time the server's)."""
 
     model_config = {"extra": "forbid"}

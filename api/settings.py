@@ -9,7 +9,7 @@ from sqlalchemy import make_url
 from db.run_export import PAGE
 from db.settings import DatabaseSettings, DatabaseUrl
 from station.domain.errors import InputError
-from station.domain.laboratory import Laboratory, load_laboratory
+from station.domain.product.laboratory import Laboratory, load_laboratory
 from station.domain.quality.alerts import AlertRules, parse_alert_rules
 from station.domain.quality.shifts import parse_shifts, shift_name
 from station.report.period import plant_zone
@@ -80,7 +80,7 @@ class ApiSettings(DatabaseSettings):
     first page sooner), a fast one larger (fewer round trips). ``laboratory_file``
     (``CALSTATION_LABORATORY_FILE``): a TOML file whose ``[laboratory]`` table names the
     laboratory, its address, where it calibrates, the customer and the traceability of
-    its reference, as its certificates state them (:mod:`station.domain.laboratory`).
+    its reference, as its certificates state them (:mod:`station.domain.product.laboratory`).
     ``report_database_url`` (``CALSTATION_REPORT_DATABASE_URL``): a streaming replica of
     the database (PostgreSQL hot standby) that the report processes read: the end-of-line
     report, the dashboard, the split, the failing runs and the station pages

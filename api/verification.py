@@ -18,10 +18,10 @@ import numpy as np
 
 from station.domain.calibration import CalibrationError, GeometryLimits, solve
 from station.domain.errors import CalstationError
-from station.domain.limits import profile_of
-from station.domain.record_bounds import WIRE_COUNTS_MAX
-from station.domain.records import Coefficients, RunRecord
-from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.product.limits import profile_of
+from station.domain.record.records import Coefficients, RunRecord
+from station.domain.sensors.record_bounds import WIRE_COUNTS_MAX
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 #: Offsets may differ by this much, counts (floating-point noise is ~1e-9).
 OFFSET_TOLERANCE_COUNTS = 1e-3
@@ -38,7 +38,7 @@ def sensor_of(record: RunRecord, submitted: Coefficients) -> SensorSpec:
     product this server does not know, the wire's range at the submitted sensitivity."""
     # Imported here: the products read their run plans, whose poses import scipy, which
     # the server's start does without (tests/api/test_start.py).
-    from station.domain.products import shipped_sensor
+    from station.domain.product.products import shipped_sensor
 
     shipped = shipped_sensor(record.part_number)
     if shipped is not None:

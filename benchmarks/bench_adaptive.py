@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from station.device import DEFAULT_RATE_HZ
-from station.domain.limits import load_profile
-from station.domain.run_settings import RunSettings
+from station.domain.product.limits import load_profile
+from station.domain.product.run_settings import RunSettings
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit

@@ -50,8 +50,8 @@ from db.limits_profiles import profile_row
 from db.models import StoredLimitsProfile
 from db.rollups import rebuild
 from station.domain.calibration import solve
-from station.domain.limits import load_profile
-from station.domain.records import RunRecord
+from station.domain.product.limits import load_profile
+from station.domain.record.records import RunRecord
 from station.simulator.recording import pose_means, six_directions
 from station.simulator.sensor import SensorTruth
 

@@ -27,8 +27,8 @@ import numpy as np
 
 from station.domain.calibration import solve
 from station.domain.calibration.uncertainty import AccelerometerBudget, accelerometer_budget
-from station.domain.poses import POSES
-from station.domain.sensor import ADC_MAX, ADC_MIN
+from station.domain.sensors.sensor import ADC_MAX, ADC_MIN
+from station.domain.signals.poses import POSES
 from station.simulator.coverage import settings_of
 from station.simulator.sensor import SensorTruth, Thermal
 

@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from station.domain.gyro import GyroErrorModel, compensate
 from station.domain.gyro.motion import Move, fit_gyro_matrix, integrate_rates
-from station.domain.poses import pose
+from station.domain.signals.poses import pose
 from station.loop.config import load_config
 from station.simulator.motion import Handling, MotionModel
 from station.simulator.sensor import GYRO_G_SENSITIVITY_PER_G, GYRO_SENSE_AXIS

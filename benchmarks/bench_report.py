@@ -49,7 +49,7 @@ from db.models import StoredLimitsProfile
 from db.reports import ReportQueries, eol_report
 from db.rollups import rebuild
 from db.station_health import CYCLE_RUNS, station_health
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.domain.quality.alerts import parse_alert_rules
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import profile_bounds

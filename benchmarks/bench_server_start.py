@@ -27,7 +27,7 @@ from pathlib import Path
 
 import httpx
 
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.storage import DatabaseStore
 
 ROOT = Path(__file__).resolve().parents[1]

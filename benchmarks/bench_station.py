@@ -30,7 +30,7 @@ from typing import Any
 from rich.console import Console
 
 from station.device import DEFAULT_RATE_HZ, PutterDriver
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.loop.app import StationApp
 from station.loop.config import StationConfig
 from station.loop.demo import ScriptedOperator

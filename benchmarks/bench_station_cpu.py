@@ -54,10 +54,10 @@ from station.device.link import PutterLink
 from station.device.protocol import encode_sample
 from station.domain.calibration.solve import solve
 from station.domain.constants import DEFAULT_RATE_HZ
-from station.domain.records import RunRecord
-from station.domain.run_settings import RunSettings
-from station.domain.samples import SampleBlock
-from station.domain.stillness import judge_window
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import RunRecord
+from station.domain.signals.samples import SampleBlock
+from station.domain.signals.stillness import judge_window
 from station.loop.live_loop import TICK_S
 from station.run.unit_output import UNIT_OUTPUT_SAMPLES
 from station.simulator.putter import VirtualPutter

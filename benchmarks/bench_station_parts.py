@@ -44,11 +44,11 @@ PARTS = (
     ("serial.serialposix", "Serial", "read"),
     ("station.run.capture", "PoseCapture", "_update_live"),
     ("station.run.capture", "PoseCapture", "_judge_live"),
-    ("station.domain.stillness", None, "judge_window"),
-    ("station.domain.samples", "SampleBlock", "summary"),
-    ("station.domain.samples", "SampleBlock", "concat"),
-    ("station.domain.orientation", None, "sense"),
-    ("station.domain.orientation", "Sensed", "matches"),
+    ("station.domain.signals.stillness", None, "judge_window"),
+    ("station.domain.signals.samples", "SampleBlock", "summary"),
+    ("station.domain.signals.samples", "SampleBlock", "concat"),
+    ("station.domain.signals.orientation", None, "sense"),
+    ("station.domain.signals.orientation", "Sensed", "matches"),
     ("station.run.acquisition", "StillnessDetector", "feed"),
     ("station.run.unit_run", "UnitRun", "_accept"),
     ("station.run.unit_run", "UnitRun", "_step_unit_output"),
@@ -62,7 +62,7 @@ IMPORTERS = (
     "station.device.link",
     "station.run.acquisition",
     "station.run.capture",
-    "station.domain.stillness",
+    "station.domain.signals.stillness",
 )
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from bench_api import DEFAULT_URL, T0, bench_schema, new_record, seed
 
 from db import RunRepository, open_database
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 
 
 def records(kind: str, count: int, units: int) -> list[RunRecord]:

@@ -51,8 +51,8 @@ from typing import Any
 from rich.console import Console
 
 from station.device import DEFAULT_RATE_HZ
-from station.domain.limits import load_profile
-from station.domain.run_settings import RunSettings
+from station.domain.product.limits import load_profile
+from station.domain.product.run_settings import RunSettings
 from station.loop.app import StationApp
 from station.loop.config import StationConfig
 from station.loop.demo import MOVE_S, ScriptedOperator

@@ -41,7 +41,7 @@ from station.domain.gyro.motion import (
 )
 from station.domain.gyro.motion.stream_file import read_stream_file
 from station.domain.gyro.motion.stream_units import StreamUnits, check_units, convert
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 RATE_HZ = 102.4
 #: Standard gravity, m/s² (the unit conversion the station declares, stream_units.py).

@@ -9,11 +9,11 @@ from datetime import time
 from db.limits_profiles import stored_profiles
 from db.repository import RunRepository
 from db.signatures import signature_of
-from station.domain.limits import LimitsProfile
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.shifts import shift_start
-from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
-from station.domain.signature import Signature
-from station.domain.unit_state import counts
+from station.domain.record.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.record.signature import Signature
+from station.domain.record.unit_state import counts
 
 
 @dataclass(frozen=True)

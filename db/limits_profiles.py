@@ -1,6 +1,6 @@
 """Limits profiles in the results database: stored once per SHA-256, read by the report.
 
-A run's submission carries its profile (:attr:`station.domain.records.LimitsRef.profile`);
+A run's submission carries its profile (:attr:`station.domain.record.records.LimitsRef.profile`);
 :func:`store_profile` keeps its canonical JSON the first time a run uses it (one
 ``INSERT … ON CONFLICT DO NOTHING`` on the primary key). The report, the certificate
 and the dashboard read profiles from here (:func:`stored_profiles`), never from a
@@ -17,8 +17,8 @@ from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
 from db.models import StoredLimitsProfile
-from station.domain.limits import LimitsProfile, profile_of
-from station.domain.records import LimitsRef, canonical_json, document_sha256
+from station.domain.product.limits import LimitsProfile, profile_of
+from station.domain.record.records import LimitsRef, canonical_json, document_sha256
 
 _INSERT = {
     name: dialect.insert(StoredLimitsProfile).on_conflict_do_nothing(index_elements=["sha256"])
@@ -30,7 +30,8 @@ def store_profile(session: Session, ref: LimitsRef) -> None:
     """Store the profile ``ref`` carries unless its SHA-256 is stored already.
 
     :class:`station.domain.errors.InputError` when the document is not a limits profile
-    (:func:`station.domain.limits.profile_of`); the reference itself checked that it hashes to
+    (:func:`station.domain.product.limits.profile_of`); the reference itself checked that it hashes
+    to
     ``ref.sha256``, and the stored text is the text that hash was taken over.
     """
     profile = profile_of(ref)
@@ -48,7 +49,7 @@ def keep_profile(session: Session, profile: LimitsProfile) -> str:
 def profile_row(profile: LimitsProfile) -> dict[str, str]:
     """The ``limits_profiles`` row of ``profile``: its canonical document, keyed by its hash.
 
-    :func:`station.domain.limits.profile_of` checked that a submitted document is this one.
+    :func:`station.domain.product.limits.profile_of` checked that a submitted document is this one.
     """
     document = profile.document
     return {

@@ -1,11 +1,12 @@
-"""Between the run record (:mod:`station.domain.records`) and the table rows (:mod:`db.models`)."""
+"""Between the run record (:mod:`station.domain.record.records`) and the table rows
+(:mod:`db.models`)."""
 
 import json
 from datetime import datetime
 from typing import Any
 
 from db.models import Run, RunFailure, RunPose
-from station.domain.records import PoseRecord, RunRecord, RunSummary, StoredRun
+from station.domain.record.records import PoseRecord, RunRecord, RunSummary, StoredRun
 
 
 def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> dict[str, Any]:

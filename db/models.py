@@ -97,15 +97,15 @@ class Run(Base):
     excluded_poses: Mapped[list[int] | None] = mapped_column(JsonDocument)
     gyro: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The gyro matrix K fitted from the moves (whole-unit runs), as
-    #: :class:`station.domain.records.GyroMatrixRecord`'s JSON; None otherwise.
+    #: :class:`station.domain.record.records.GyroMatrixRecord`'s JSON; None otherwise.
     gyro_matrix: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: Expanded uncertainties of the coefficients, as
-    #: :class:`station.domain.records.UncertaintyRecord`'s JSON; None on older runs.
+    #: :class:`station.domain.record.records.UncertaintyRecord`'s JSON; None on older runs.
     uncertainty: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The decision rule that judged the run; None on older runs (simple acceptance).
     decision_rule: Mapped[str | None] = mapped_column(String(8))
     #: The coefficients the unit held before the run wrote its own, as
-    #: :class:`station.domain.records.AsFound`'s JSON; None on older runs (0022).
+    #: :class:`station.domain.record.records.AsFound`'s JSON; None on older runs (0022).
     as_found: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
@@ -181,7 +181,8 @@ class RunFailure(Base):
 class Unit(Base):
     """A unit's current state: which run is its latest, and that run's answer, serialised.
 
-    ``calibration`` is the JSON of :class:`station.domain.records.UnitCalibration` for the run
+    ``calibration`` is the JSON of :class:`station.domain.record.records.UnitCalibration` for the
+    run
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
     the run (:mod:`db.units`), so a unit lookup reads one row by primary key. Answers
@@ -216,7 +217,7 @@ class GyroFit(Base):
 
 
 class HoldReview(Base):
-    """A quality review of a unit on hold (:class:`station.domain.records.HoldReview`),
+    """A quality review of a unit on hold (:class:`station.domain.record.records.HoldReview`),
     append-only: a unit's latest review decides whether it may be calibrated again."""
 
     __tablename__ = "hold_reviews"
@@ -256,7 +257,7 @@ class StationKey(Base):
 
 class Signatory(Base):
     """An authorised signatory of certificates and the public half of their Ed25519 key
-    (hex; the private half stays in the file they keep, :mod:`station.domain.signature`)."""
+    (hex; the private half stays in the file they keep, :mod:`station.domain.record.signature`)."""
 
     __tablename__ = "signatories"
 
@@ -268,7 +269,7 @@ class Signatory(Base):
 
 class CertificateSignature(Base):
     """A signatory's signature of a run's certificate
-    (:class:`station.domain.signature.Signature`): one per run."""
+    (:class:`station.domain.record.signature.Signature`): one per run."""
 
     __tablename__ = "certificate_signatures"
 
@@ -461,7 +462,7 @@ class StoredAlert(Base):
 
 class StationOutbox(Base):
     """A station's outbox as it last reported it with a run it sent
-    (:mod:`station.domain.outbox_report`): one row per station, the latest report."""
+    (:mod:`station.domain.record.outbox_report`): one row per station, the latest report."""
 
     __tablename__ = "station_outboxes"
 

@@ -1,7 +1,7 @@
 """The stations' outbox reports in the results database: the latest per station.
 
 A station reports its outbox with each run it sends
-(:class:`station.domain.outbox_report.OutboxReport`); :func:`record_outbox` keeps it
+(:class:`station.domain.record.outbox_report.OutboxReport`); :func:`record_outbox` keeps it
 (``INSERT … ON CONFLICT DO UPDATE``, an older report never over a newer one) in the
 run's transaction, and :func:`latest_outboxes` hands them to the ``[[outbox]]`` alert
 rule (:mod:`db.alerts`).
@@ -15,7 +15,7 @@ from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
 from db.models import StationOutbox
-from station.domain.outbox_report import OutboxReport
+from station.domain.record.outbox_report import OutboxReport
 
 
 def _upsert(statement: postgresql.Insert | sqlite.Insert) -> postgresql.Insert | sqlite.Insert:

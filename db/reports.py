@@ -60,7 +60,7 @@ from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, tr
 from db.what_if import rejudged
 from station.domain.calibration.uncertainty import COVERAGE_FACTOR
 from station.domain.errors import InputError
-from station.domain.limits import LimitsProfile
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.capability import (
     D2,
     capability_warning,
@@ -114,8 +114,8 @@ from station.domain.quality.parameters import (
 )
 from station.domain.quality.risk import decision_risks, normality
 from station.domain.quality.shifts import plant_shifts, shift_name
-from station.domain.records import LimitsRef
-from station.domain.unit_state import ABORTED
+from station.domain.record.records import LimitsRef
+from station.domain.record.unit_state import ABORTED
 
 #: Points drawn on each control chart (the latest runs); its limits use every run.
 CHART_POINTS = 200

@@ -43,8 +43,8 @@ from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import CalstationError, InputError
-from station.domain.outbox_report import OutboxReport
-from station.domain.records import (
+from station.domain.record.outbox_report import OutboxReport
+from station.domain.record.records import (
     GyroFitRecord,
     HoldReview,
     ReviewDecision,
@@ -332,7 +332,7 @@ class RunRepository:
         """Write every unit's answer from ``runs``; return the number of units.
 
         A bulk load of runs uses it; answers missing or of an older shape
-        (:class:`station.domain.unit_state.UnitCalibration`) are written with it when the
+        (:class:`station.domain.record.unit_state.UnitCalibration`) are written with it when the
         database is upgraded (:mod:`db.derived`).
         """
         return refresh_answers(self.session)

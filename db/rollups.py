@@ -21,7 +21,7 @@ on hold, the yield alert) reads from these facts:
 
 - an **attempt** is a production run (not a golden-unit check) that the operator did not
   abort. An abort is a run, never an attempt: it wrote nothing into the unit and says
-  nothing about it (:func:`station.domain.unit_state.counts`, the unit answers' rule);
+  nothing about it (:func:`station.domain.record.unit_state.counts`, the unit answers' rule);
   it is counted apart (``aborts``);
 - a unit's **first attempt** is its earliest attempt ever, its **latest attempt** its
   latest ever, wherever and whenever they are. A unit counts in the cohort (units
@@ -97,7 +97,7 @@ from db.models import (
     RunPose,
     StoredLimitsProfile,
 )
-from station.domain.limits import LimitsProfile
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.capability import (
     HISTOGRAM_BINS,
     histogram_bins,
@@ -111,7 +111,7 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
-from station.domain.unit_state import ABORTED
+from station.domain.record.unit_state import ABORTED
 
 #: The key of every roll-up row (a UTC day, station, operator, lot, product);
 #: ``report_counts`` adds the limits profile.
@@ -336,7 +336,7 @@ PRODUCTION = Run.purpose.is_(None)
 def aborted(run_pk: Any) -> ColumnElement[bool]:
     """Whether the run ``run_pk`` was aborted by the operator (one of its failures says
     so): it says nothing about the unit, is no attempt and no failure of it
-    (:func:`station.domain.unit_state.counts`; the yield definition above)."""
+    (:func:`station.domain.record.unit_state.counts`; the yield definition above)."""
     failure = aliased(RunFailure, name="abort")  # apart from a RunFailure outside
     return exists().where(failure.run_pk == run_pk, failure.code == _ABORTED)
 

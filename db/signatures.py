@@ -1,5 +1,5 @@
 """Authorised signatories' public keys and their signatures of certificates, stored
-(:mod:`station.domain.signature` says what is signed and how it is verified)."""
+(:mod:`station.domain.record.signature` says what is signed and how it is verified)."""
 
 from datetime import UTC, datetime
 from uuid import UUID
@@ -9,8 +9,8 @@ from sqlalchemy.orm import Session
 
 from db.models import CertificateSignature, Signatory
 from station.domain.errors import InputError
-from station.domain.records import RunRecord
-from station.domain.signature import (
+from station.domain.record.records import RunRecord
+from station.domain.record.signature import (
     Signature,
     SignatureMismatchError,
     SignedCertificate,

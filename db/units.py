@@ -1,7 +1,7 @@
 """Each unit's current calibration, kept ready to serve in the ``units`` table.
 
 ``GET /api/v1/units/{serial}`` is the plant's most frequent question. Its answer, the
-JSON of :class:`station.domain.unit_state.UnitCalibration` (what the unit holds, its latest
+JSON of :class:`station.domain.record.unit_state.UnitCalibration` (what the unit holds, its latest
 attempt, its verdict), is written when a run is stored (:func:`record_unit_run`, in the
 submission's transaction) and read back as text by primary key (:class:`UnitLookups`):
 no ORM, no validation and no serialisation on the read path, and one statement for all
@@ -33,8 +33,8 @@ from sqlalchemy.orm import Session
 from db.engine import DatabaseUnavailableError, for_dialect
 from db.mapping import summary_of
 from db.models import Run, RunFailure, Unit
-from station.domain.records import RunSummary, StoredRun
-from station.domain.unit_state import UnitCalibration
+from station.domain.record.records import RunSummary, StoredRun
+from station.domain.record.unit_state import UnitCalibration
 
 
 def _upsert(dialect: Any) -> Any:

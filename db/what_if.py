@@ -4,7 +4,7 @@ Nothing is written: each run's stored values (pose noise, coefficients, verifica
 error, gyro bias, the coefficients' uncertainties, so a candidate with the guarded
 decision rule can be compared with the simple one) and stored failures are read a page
 at a time and judged again by
-:func:`station.domain.judging.rejudge`, the station's own checks. What the report needs is
+:func:`station.domain.product.judging.rejudge`, the station's own checks. What the report needs is
 counted on the way: the runs that pass, the units whose first attempt on the line is in
 range (the report's cohort, by the yield definition of :mod:`db.rollups`) with their
 first and final passes — a unit's latest attempt may lie after the range, so those runs
@@ -22,10 +22,10 @@ from sqlalchemy import ColumnElement, Row, and_, select
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts, RunFailure, RunPose
-from station.domain.judging import Measured, rejudge
-from station.domain.limits import LimitsProfile
+from station.domain.product.judging import Measured, rejudge
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.figures import VerdictFlip
-from station.domain.records import FailureReason
+from station.domain.record.records import FailureReason
 
 #: Runs judged per page.
 PAGE = 2000

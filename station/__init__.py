@@ -1,7 +1,8 @@
 """calstation: the smart putter's production-line calibration station.
 
 The station package holds everything that runs at the line: the calibration math
-(:mod:`station.domain.calibration`), the sensor constants (:mod:`station.domain.sensor`) and the
+(:mod:`station.domain.calibration`), the sensor constants (:mod:`station.domain.sensors.sensor`) and
+the
 command-line interface (:mod:`station.cli`).
 """
 

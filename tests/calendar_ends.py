@@ -5,7 +5,7 @@ from datetime import UTC, datetime, timedelta
 
 from db import Database
 from station.domain.quality.days import FIRST, LAST
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.storage import DatabaseStore
 from tests.db.records import RUN_SECONDS, make_record
 

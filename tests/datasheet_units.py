@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
-from station.domain.limits import load_profiles
+from station.domain.product.limits import load_profiles
 
 AXES = "xyz"
 

@@ -42,7 +42,7 @@ from hypothesis.stateful import (
 
 from db import Database, RunRepository
 from db.base import Base
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.storage import DatabaseStore
 from tests.conftest import NIGHTLY, examples
 from tests.datasheet_units import PRODUCTS, Datasheet, Unit, bounds, run_payload

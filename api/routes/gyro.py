@@ -9,7 +9,7 @@ from api.deps import LabDep, ReaderDep, RepositoryDep
 from api.responses import json_response, problems
 from api.routes.units import SerialPath
 from api.schemas import GyroFitSubmission, UnitGyro
-from station.domain.records import GyroFitRecord
+from station.domain.record.records import GyroFitRecord
 
 log = logging.getLogger(__name__)
 

@@ -14,7 +14,7 @@ from api.deps import QualityDep, ReaderDep, Repository, RepositoryDep
 from api.responses import json_response, problems
 from api.routes.units import SerialPath
 from api.schemas import ReviewList, ReviewSubmission
-from station.domain.records import HoldReview
+from station.domain.record.records import HoldReview
 
 log = logging.getLogger(__name__)
 

@@ -16,10 +16,9 @@ from db import RunQuery
 from db.repository import MAX_PAGE
 from station.domain.constants import PART_NUMBER_PATTERN
 from station.domain.errors import InputError
-from station.domain.limits import profile_of
-from station.domain.outbox_report import OUTBOX_HEADER, parse_outbox_header
-from station.domain.record_bounds import RUN_YEARS, implausible_run_time
-from station.domain.records import (
+from station.domain.product.limits import profile_of
+from station.domain.record.outbox_report import OUTBOX_HEADER, parse_outbox_header
+from station.domain.record.records import (
     IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
     RunRecord,
@@ -27,6 +26,7 @@ from station.domain.records import (
     UtcDatetime,
     Verdict,
 )
+from station.domain.sensors.record_bounds import RUN_YEARS, implausible_run_time
 
 log = logging.getLogger(__name__)
 

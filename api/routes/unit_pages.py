@@ -4,7 +4,7 @@ The unit's every run, oldest first (verdict, failure reasons with their values a
 limits, coefficients, gyro bias, station, operator, time), links to each run's record and
 to its certificate or failure report. A path of its own: ``GET /api/v1/units/{serial}``
 stays the unit's JSON. An unknown serial is a 404 page; a serial that is not one
-(``station.domain.records.SERIAL_PATTERN``) a 422, as everywhere in the API.
+(``station.domain.record.records.SERIAL_PATTERN``) a 422, as everywhere in the API.
 """
 
 from datetime import UTC, datetime
@@ -27,7 +27,7 @@ from db import ReviewRefusedError, RunRepository
 from db.station_health import CYCLE_RUNS, station_health
 from station.domain.i18n import Language
 from station.domain.quality.station_health import StationHealth
-from station.domain.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
+from station.domain.record.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
 
 router = APIRouter(tags=["pages"])
 

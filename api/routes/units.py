@@ -7,8 +7,8 @@ from fastapi import APIRouter, HTTPException, Path, Response, status
 from api.deps import ReaderDep, UnitLookupsDep
 from api.responses import json_response, problems
 from api.schemas import RunList
-from station.domain.records import SERIAL_PATTERN
-from station.domain.unit_state import UnitCalibration
+from station.domain.record.records import SERIAL_PATTERN
+from station.domain.record.unit_state import UnitCalibration
 
 router = APIRouter(
     prefix="/units",

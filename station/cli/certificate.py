@@ -2,7 +2,7 @@
 unit, from its results database, as the results server's page shows it;
 ``calstation certificate signatory NAME``, ``sign SERIAL`` and ``verify FILE``: an
 authorised signatory's key, their signature of a certificate, and its check
-(:mod:`station.domain.signature`)."""
+(:mod:`station.domain.record.signature`)."""
 
 # Light to import: --help and refused arguments read only the signatures below; each
 # command imports its work (SQLAlchemy, the pages) when it runs.
@@ -70,7 +70,7 @@ def issue(
     from db import repository_transaction
     from db.certificates import certificate_inputs
     from station.domain.i18n import LANGUAGES, Language
-    from station.domain.laboratory import Laboratory, load_laboratory
+    from station.domain.product.laboratory import Laboratory, load_laboratory
     from station.domain.quality.shifts import parse_shifts
     from station.report.certificate_document import CertificateFormat, certificate_document
     from station.report.pdf import PDF_LANGUAGES
@@ -133,7 +133,7 @@ def signatory(
     from db import repository_transaction
     from db.signatures import register_signatory
     from station.domain.errors import validation_problem
-    from station.domain.signature import SignatoryName, fingerprint, new_key
+    from station.domain.record.signature import SignatoryName, fingerprint, new_key
 
     try:
         TypeAdapter(SignatoryName).validate_python(name)
@@ -169,8 +169,8 @@ def sign(
     from db import repository_transaction
     from db.certificates import certificate_run
     from db.signatures import add_signature, signatory_key, signed_certificate
-    from station.domain.signature import load_private_key, public_hex
-    from station.domain.signature import sign as sign_record
+    from station.domain.record.signature import load_private_key, public_hex
+    from station.domain.record.signature import sign as sign_record
     from station.report.certificate import document_number
 
     try:
@@ -215,7 +215,7 @@ def verify(
     from db import repository_transaction
     from db.signatures import verify_signed
     from station.domain.errors import validation_problem
-    from station.domain.signature import SignedCertificate
+    from station.domain.record.signature import SignedCertificate
 
     try:
         text = file.read_text(encoding="utf-8")

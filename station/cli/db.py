@@ -69,7 +69,7 @@ def db_rebuild_report(
     from db import DatabaseSettings, open_database
     from db.models import Run
     from db.rollups import lock_submissions, rebuild
-    from station.domain.limits import load_profile
+    from station.domain.product.limits import load_profile
     from station.domain.quality.parameters import profile_bounds
 
     chosen = load_profile(limits, profile)
@@ -254,7 +254,7 @@ def review_command(
     A unit sent to rework is refused at every station's scan until it is reviewed.
     """
     from db import ReviewRefusedError, repository_transaction
-    from station.domain.records import HoldReview
+    from station.domain.record.records import HoldReview
 
     with repository_transaction(database_url) as repository:
         latest = repository.latest_for_serial(serial)

@@ -21,7 +21,7 @@ from rich.table import Table
 from station.cli.output import err, out, print_json
 from station.domain.constants import DEFAULT_ALPHA, DEFAULT_SENSE_AXES, PAPER_PPM_PER_G
 from station.domain.errors import InputError
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.gyro.fit import GyroFitReport
@@ -265,7 +265,7 @@ def _store_fit(serial: str, log_file: Path, report: GyroFitReport, log: GyroLog)
     """Keep ``report`` as the unit's gyro calibration (``GET /api/v1/units/SERIAL/gyro``)."""
     from db import repository_transaction
     from station.domain.gyro.log import GyroDwells
-    from station.domain.records import GyroFitRecord
+    from station.domain.record.records import GyroFitRecord
 
     try:
         record = GyroFitRecord(

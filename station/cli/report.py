@@ -73,7 +73,7 @@ def report(
 
     from db import DatabaseSettings, DatabaseUnavailableError, open_database
     from db.reports import eol_report
-    from station.domain.limits import load_profile
+    from station.domain.product.limits import load_profile
     from station.domain.quality.figures import ReportFilter
     from station.domain.quality.shifts import parse_shifts
     from station.report.period import parse_period, plant_zone

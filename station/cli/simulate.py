@@ -21,7 +21,7 @@ from pydantic import ValidationError
 from station.cli.output import out
 from station.domain.constants import DEFAULT_RATE_HZ, MAX_RATE_HZ
 from station.domain.errors import InputError
-from station.domain.faults import Faults
+from station.domain.sensors.faults import Faults
 
 
 def _address(listen: str) -> tuple[str, int]:
@@ -70,7 +70,7 @@ def simulate(
     ] = None,
 ) -> None:
     """Run a virtual putter that speaks the station's serial protocol."""
-    from station.domain.poses import POSES
+    from station.domain.signals.poses import POSES
     from station.simulator.control import ControlChannel
     from station.simulator.putter import VirtualPutter
 

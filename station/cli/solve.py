@@ -16,13 +16,13 @@ from rich.table import Table
 from station.cli.output import out, print_json
 from station.domain.constants import STILL_WINDOW_S
 from station.domain.errors import InputError
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.arrays import FloatArray
     from station.domain.calibration import Solution, Uncertainty
     from station.domain.calibration.units import DeclaredUnits
-    from station.domain.posefile import PoseFile
+    from station.domain.signals.posefile import PoseFile
 
 #: Decimals the screen shows of an offset or its U, by declared unit (counts: the caller's).
 OFFSET_DECIMALS = {"counts": 0, "g": 3, "m/s2": 2}
@@ -216,8 +216,8 @@ def solve_command(
         solve,
     )
     from station.domain.calibration.units import DeclaredUnits
-    from station.domain.limits import load_profile
-    from station.domain.posefile import read_pose_file
+    from station.domain.product.limits import load_profile
+    from station.domain.signals.posefile import read_pose_file
 
     units = DeclaredUnits(accel_units.value)
     if units.accel != "counts" and (limits is not None or profile is not None):

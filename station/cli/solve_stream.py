@@ -16,7 +16,7 @@ from rich.table import Table
 
 from station.cli.output import out, print_json
 from station.domain.errors import InputError
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.calibration import Model

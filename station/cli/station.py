@@ -17,8 +17,8 @@ from station.domain.constants import MAX_SLOTS
 from station.domain.errors import CalstationError
 
 if TYPE_CHECKING:
-    from station.domain.limits import LimitsProfile
-    from station.domain.records import RunRecord
+    from station.domain.product.limits import LimitsProfile
+    from station.domain.record.records import RunRecord
     from station.loop.app import StationApp
     from station.loop.config import StationConfig
     from station.loop.demo import DemoUnit
@@ -128,7 +128,7 @@ def run_command(
     units: Annotated[int | None, typer.Option(help="Stop after this many units.")] = None,
 ) -> None:
     """The operator station: scan a unit, take its poses, judge it, store it."""
-    from station.domain.limits import load_profile
+    from station.domain.product.limits import load_profile
     from station.loop.keyboard import TerminalKeys
     from station.loop.startup import check_port, prepare_data_dir
 
@@ -204,7 +204,7 @@ def demo_command(
 ) -> None:
     """The station on virtual putters, with a scripted operator: the main job's demo."""
     from station.domain.i18n import tr, trn
-    from station.domain.limits import load_profile
+    from station.domain.product.limits import load_profile
     from station.loop.demo import CablePuller, ScriptedOperator
     from station.loop.fixture.demo import FixtureOperator
     from station.loop.startup import prepare_data_dir

@@ -24,7 +24,7 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import DEFAULT_BAUD, PROTOCOL_VERSION
 from station.device.stats import LinkCounters
 from station.domain.constants import DEFAULT_RATE_HZ, MAX_RATE_HZ
-from station.domain.samples import SAMPLE_COLUMNS
+from station.domain.signals.samples import SAMPLE_COLUMNS
 
 __all__ = [
     "DEFAULT_BAUD",

@@ -3,11 +3,12 @@
 import threading
 from collections.abc import Callable
 
-from station.domain.samples import SampleBlock
+from station.domain.signals.samples import SampleBlock
 
 
 class SampleBuffer:
-    """Blocks of samples (:class:`~station.domain.samples.SampleBlock`), at most ``capacity`` rows.
+    """Blocks of samples (:class:`~station.domain.signals.samples.SampleBlock`), at most
+    ``capacity`` rows.
 
     The reader thread appends blocks; the user drains them. When nobody drains, the
     oldest rows are pushed out and counted in :attr:`overruns`.

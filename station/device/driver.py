@@ -47,8 +47,8 @@ from station.device.protocol import (
 from station.device.stats import LinkCounters
 from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
-from station.domain.samples import SampleBlock
-from station.domain.sensor import ADC_MAX
+from station.domain.sensors.sensor import ADC_MAX
+from station.domain.signals.samples import SampleBlock
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +64,7 @@ class PutterDriver(Closing):
     Open it with :meth:`open`; use it as a context manager or call :meth:`close`. It
     reads only what the unit sends once it is open: the port's input is flushed first
     (``reset_input_buffer``), and :meth:`start_stream` starts a fresh stream.
-    Samples come out as :class:`~station.domain.samples.SampleBlock`: ``seq`` is the
+    Samples come out as :class:`~station.domain.signals.samples.SampleBlock`: ``seq`` is the
     unwrapped sequence number (counting from 0 at each :meth:`start_stream`, gaps
     preserved), ``accel`` in ADC counts (in g from :meth:`drain_calibrated`), ``gyro``
     in deg/s and ``temperature`` in °C.
@@ -113,7 +113,7 @@ class PutterDriver(Closing):
         ``read_timeout`` bounds how long the reader thread blocks in one read;
         ``reply_timeout`` is how long a command waits for its reply before it is sent
         again, ``retries`` times; ``adc_max``: the largest count the unit's accelerometer
-        sends (its product's sensor's, :mod:`station.domain.sensor_spec`).
+        sends (its product's sensor's, :mod:`station.domain.sensors.sensor_spec`).
         """
         try:
             port = open_port(url, baudrate=baudrate, timeout=read_timeout)

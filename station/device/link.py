@@ -36,8 +36,8 @@ from station.device.errors import DeviceDisconnectedError, DeviceError, Protocol
 from station.device.protocol import Frame, FrameParser, FrameType, decode_samples
 from station.device.sequence import SequenceTracker
 from station.device.stats import LinkCounters
-from station.domain.samples import SampleBlock
-from station.domain.sensor import ADC_MAX
+from station.domain.sensors.sensor import ADC_MAX
+from station.domain.signals.samples import SampleBlock
 
 log = logging.getLogger(__name__)
 

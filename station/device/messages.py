@@ -14,7 +14,7 @@ from station.device.protocol import (
     encode_text,
 )
 from station.domain.arrays import FloatArray
-from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 
 @dataclass(frozen=True, slots=True)

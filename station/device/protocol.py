@@ -25,8 +25,8 @@ from typing import Final
 
 import numpy as np
 
-from station.domain.samples import SAMPLE_COLUMNS, SampleBlock
-from station.domain.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.sensors.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.signals.samples import SAMPLE_COLUMNS, SampleBlock
 
 PROTOCOL_VERSION: Final = 1
 SYNC: Final = b"\xa5\x5a"

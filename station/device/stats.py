@@ -8,7 +8,8 @@ class LinkCounters:
     """Counters of one link since it was opened (or the difference of two snapshots).
 
     The four counters a pose's record stores keep the record's names
-    (:class:`station.domain.records.LinkStats`): ``crc_errors`` (well-formed headers whose CRC
+    (:class:`station.domain.record.records.LinkStats`): ``crc_errors`` (well-formed headers whose
+    CRC
     did not match), ``gaps`` (places where samples went missing), ``resyncs`` (see
     :class:`station.device.protocol.FrameParser`) and ``lost_samples`` (samples
     missing according to the sequence numbers). The link also counts ``samples``

@@ -21,7 +21,7 @@ MAX_SLOTS: Final = 8
 MAX_RATE_HZ: Final = 1000
 DEFAULT_RATE_HZ: Final = 500
 
-# The run record (station.domain.records).
+# The run record (station.domain.record.records).
 
 #: A station, operator or lot name (query filters use it too).
 IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
@@ -29,7 +29,7 @@ IDENTIFIER_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9._:@\-]{0,63}$"
 Identifier = Annotated[str, StringConstraints(pattern=IDENTIFIER_PATTERN)]
 """A station, operator, algorithm or limits-profile name."""
 
-#: A product's part number (station.domain.products): letters, digits and ``-._``.
+#: A product's part number (station.domain.product.products): letters, digits and ``-._``.
 PART_NUMBER_PATTERN = r"^[A-Z0-9][A-Z0-9._\-]{0,31}$"
 
 PartNumber = Annotated[str, StringConstraints(pattern=PART_NUMBER_PATTERN)]

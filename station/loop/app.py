@@ -15,8 +15,8 @@ from rich.console import Console, Group, RenderableType
 
 from station.device import DeviceError, PutterDriver
 from station.domain.i18n import tr
-from station.domain.limits import LimitsProfile
-from station.domain.records import RunRecord
+from station.domain.product.limits import LimitsProfile
+from station.domain.record.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
 from station.loop.lifecycle import (

@@ -15,12 +15,12 @@ from pydantic_settings import BaseSettings, SettingsConfigDict, SettingsError
 from station.domain.constants import DEFAULT_PART_NUMBER, MAX_SLOTS, PART_NUMBER_PATTERN
 from station.domain.errors import InputError, validation_problem
 from station.domain.i18n import Language
-from station.domain.laboratory import Laboratory
-from station.domain.limits import load_profile
 from station.domain.patterns import compile_pattern
-from station.domain.products import LabelFormat, Product, Products, load_products
+from station.domain.product.laboratory import Laboratory
+from station.domain.product.limits import load_profile
+from station.domain.product.products import LabelFormat, Product, Products, load_products
+from station.domain.product.run_settings import RunSettings, shipped_plan
 from station.domain.quality.golden import GoldenUnit
-from station.domain.run_settings import RunSettings, shipped_plan
 from station.domain.toml_text import parse_toml
 from station.results.storage import DatabaseUrl, DataDir, default_data_dir
 
@@ -44,7 +44,7 @@ class StationConfig(BaseSettings):
     limits_file: Path | None = None
     limits_profile: str | None = None
     serial_pattern: str = SERIAL_PATTERN
-    #: The product this station calibrates (``station.domain.products``): its limits
+    #: The product this station calibrates (``station.domain.product.products``): its limits
     #: profile and run plan unless ``limits_profile`` names another. None: DIXX-A12.
     part_number: str | None = Field(None, pattern=PART_NUMBER_PATTERN)
     #: The plant's own products (TOML); None: the shipped ``products.toml``.
@@ -60,7 +60,7 @@ class StationConfig(BaseSettings):
     #: The golden unit checked at each shift's start (``[golden]``; none: no check).
     golden: GoldenUnit | None = None
     #: The laboratory its certificates name (``[laboratory]``: name, address,
-    #: location, customer, gravity_m_s2, traceability; :mod:`station.domain.laboratory`).
+    #: location, customer, gravity_m_s2, traceability; :mod:`station.domain.product.laboratory`).
     laboratory: Laboratory = Laboratory()
     #: The operator's language (``CALSTATION_LANGUAGE``, ``--language``): the station's
     #: lines from the catalogues of ``station/domain/locale`` (``station.domain.i18n``).

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from station.domain.sensor_spec import SensorSpec
+from station.domain.sensors.sensor_spec import SensorSpec
 from station.loop.keyboard import PolledKeys
 from station.simulator.putter import VirtualPutter
 

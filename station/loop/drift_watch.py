@@ -13,7 +13,7 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from station.domain.quality.drift import DRIFT_WINDOW, find_drift
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.files import write_atomic
 
 #: Units kept on disk (the statistic reads the last DRIFT_WINDOW of them).

@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from station.domain.i18n import tr
 from station.domain.quality.golden import GoldenUnit, disagreements, due
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.files import disk_problem, write_atomic
 
 

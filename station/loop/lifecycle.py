@@ -37,9 +37,9 @@ from station import __version__
 from station.device import DeviceError, SerialNumberMismatchError
 from station.domain.calibration import Model
 from station.domain.i18n import tr
-from station.domain.limits import LimitsProfile
-from station.domain.products import Label
-from station.domain.records import AsFound, RunRecord
+from station.domain.product.limits import LimitsProfile
+from station.domain.product.products import Label
+from station.domain.record.records import AsFound, RunRecord
 from station.loop.config import StationConfig
 from station.loop.results_link import ResultsLink, UnitLookup
 from station.loop.shift_checks import ShiftChecks

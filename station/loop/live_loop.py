@@ -19,8 +19,8 @@ from rich.text import Text
 
 from station.domain.errors import InputError
 from station.domain.i18n import tr, trn
-from station.domain.limits import LimitsProfile
-from station.domain.records import RunRecord
+from station.domain.product.limits import LimitsProfile
+from station.domain.record.records import RunRecord
 from station.loop.config import StationConfig
 from station.loop.keyboard import KeySource
 from station.loop.lifecycle import UnitLifecycle

@@ -23,7 +23,7 @@ from prometheus_client.core import (
 )
 from prometheus_client.registry import Collector
 
-from station.domain.records import LinkStats
+from station.domain.record.records import LinkStats
 
 if TYPE_CHECKING:
     from station.loop.live_loop import FrontEnd

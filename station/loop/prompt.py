@@ -23,7 +23,7 @@ from rich.console import Group, RenderableType
 from rich.text import Text
 
 from station.domain.i18n import tr
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.loop.screens import serial_prompt, unit_screen, verdict_screen
 from station.results.journal import RunJournal
 from station.run.operator_text import pose_words

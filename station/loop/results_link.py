@@ -30,7 +30,7 @@ from rich.text import Text
 from station.domain.arrays import FloatArray
 from station.domain.gyro import NotIdentifiableError
 from station.domain.i18n import tr
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.loop.unit_history import UnitHistory
 from station.results.disk import DiskWatch
 from station.results.journal import JournalFile

@@ -13,8 +13,8 @@ from rich.table import Table
 from rich.text import Text
 
 from station.domain.i18n import tr
-from station.domain.poses import Pose
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
+from station.domain.signals.poses import Pose
 from station.report.explanations import explanation
 from station.run.operator_text import (
     pose_instruction,

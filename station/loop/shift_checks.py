@@ -16,7 +16,7 @@ from pathlib import Path
 
 from station.domain.i18n import tr
 from station.domain.quality.golden import GoldenUnit
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.loop.drift_watch import DriftWatch
 from station.loop.golden_lock import GoldenLock
 

@@ -8,7 +8,7 @@ retest limit) goes to rework instead. A unit sent to rework is refused until a q
 review releases it for a retest (its attempts then count afresh); a scrapped unit is
 refused for good. When the store cannot be reached the operator is told the history is
 unavailable and goes on. The same runs decide where the unit goes after its verdict
-(:func:`station.domain.unit_state.disposition`, in the run's record).
+(:func:`station.domain.record.unit_state.disposition`, in the run's record).
 """
 
 from collections.abc import Sequence
@@ -22,8 +22,8 @@ from pydantic import ValidationError
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.i18n import tr
 from station.domain.quality.days import wall_clock
-from station.domain.records import HoldReview, RunRecord, RunSummary
-from station.domain.unit_state import UnitCalibration, deciding_review
+from station.domain.record.records import HoldReview, RunRecord, RunSummary
+from station.domain.record.unit_state import UnitCalibration, deciding_review
 from station.results.outbox_files import UnreadableRecordError, read_bytes
 from station.results.storage import RunStore, StoreError
 

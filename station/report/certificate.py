@@ -15,9 +15,9 @@ from datetime import datetime
 import numpy as np
 
 from station.domain.i18n import ENGLISH, Say
-from station.domain.laboratory import Laboratory
-from station.domain.limits import CHECKS, Bounds, LimitsProfile
-from station.domain.records import RunRecord, RunSummary, StoredCoefficients
+from station.domain.product.laboratory import Laboratory
+from station.domain.product.limits import CHECKS, Bounds, LimitsProfile
+from station.domain.record.records import RunRecord, RunSummary, StoredCoefficients
 from station.report.explanations import check_name, unit_words
 
 #: The document's number prefix by the run's verdict: a certificate, or a failure report.

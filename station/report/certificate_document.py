@@ -7,10 +7,10 @@ from datetime import datetime
 from typing import Literal, Protocol
 
 from station.domain.i18n import Language
-from station.domain.laboratory import Laboratory
-from station.domain.limits import LimitsProfile
-from station.domain.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
-from station.domain.signature import Signature
+from station.domain.product.laboratory import Laboratory
+from station.domain.product.limits import LimitsProfile
+from station.domain.record.records import GyroFitRecord, HoldReview, RunSummary, StoredRun
+from station.domain.record.signature import Signature
 
 #: The formats a certificate is rendered in.
 CertificateFormat = Literal["html", "pdf"]

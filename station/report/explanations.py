@@ -1,11 +1,11 @@
 """A failure's explanation in the operator's language, from what the run stores.
 
-A run records each failure reason (:class:`station.domain.records.FailureReason`) with its
+A run records each failure reason (:class:`station.domain.record.records.FailureReason`) with its
 code, the station's English sentence and the parameters the sentence was made of: the
 value measured, the bounds, the axis and the pose. The sentence is the record and stays
 as it was said; English renders it as it is. Korean and Chinese render the reason from
 its code and parameters through the catalogues (:mod:`station.domain.i18n`): a limit
-check (:func:`station.domain.limits.check`) names the check, its axis and pose, the value
+check (:func:`station.domain.product.limits.check`) names the check, its axis and pose, the value
 with its unit and the bounds it missed; the failures found while the run went (a
 saturated axis, no calibration, a failed write-back, no gyro matrix, no verification
 move, an abort) say what happened, with the pose when it is known (the device's or the
@@ -14,8 +14,8 @@ translated.
 """
 
 from station.domain.i18n import Say, language, speaker
-from station.domain.limits import UNITS, Bounds
-from station.domain.records import FailureReason
+from station.domain.product.limits import UNITS, Bounds
+from station.domain.record.records import FailureReason
 
 
 def explanation(failure: FailureReason, lang: str | None = None) -> str:
@@ -71,7 +71,7 @@ def _limit_check(failure: FailureReason, tr: Say) -> str:
 
 
 def check_name(code: str, tr: Say) -> str:
-    """A limit check's name (:data:`station.domain.limits.CHECKS`); its code if unknown."""
+    """A limit check's name (:data:`station.domain.product.limits.CHECKS`); its code if unknown."""
     names = {
         "offset": tr("offset"),
         "sensitivity": tr("sensitivity"),
@@ -89,7 +89,7 @@ def check_name(code: str, tr: Say) -> str:
 
 
 def unit_words(code: str, tr: Say) -> str:
-    """A check's unit (:data:`station.domain.limits.UNITS`) as the operator reads it."""
+    """A check's unit (:data:`station.domain.product.limits.UNITS`) as the operator reads it."""
     units = {
         "counts": tr("counts"),
         "counts/g": tr("counts/g"),

@@ -55,7 +55,8 @@ def field(value: datetime | None, zone: str = "UTC") -> str:
 
 
 class Reason(Protocol):
-    """A failure reason as a run stores it (:class:`station.domain.records.FailureReason`)."""
+    """A failure reason as a run stores it
+    (:class:`station.domain.record.records.FailureReason`)."""
 
     @property
     def code(self) -> str: ...

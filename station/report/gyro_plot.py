@@ -18,7 +18,7 @@ from station.domain.gyro.compensation import compensate
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroLog
 from station.domain.gyro.model import PPM, GyroErrorModel
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -22,8 +22,8 @@ from markupsafe import Markup
 
 from station import __version__
 from station.domain.i18n import ENGLISH, Language, Say, counter, speaker
-from station.domain.laboratory import Laboratory
-from station.domain.limits import LimitsProfile
+from station.domain.product.laboratory import Laboratory
+from station.domain.product.limits import LimitsProfile
 from station.domain.quality.alerts import Alert
 from station.domain.quality.capability import CAPABLE_CPK
 from station.domain.quality.days import day_end, midnight
@@ -43,9 +43,15 @@ from station.domain.quality.station_health import (
     SENSITIVITY_TOLERANCE,
     StationHealth,
 )
-from station.domain.records import FailureReason, GyroFitRecord, HoldReview, RunSummary, StoredRun
-from station.domain.signature import Signature
-from station.domain.unit_state import UnitCalibration, deciding_review
+from station.domain.record.records import (
+    FailureReason,
+    GyroFitRecord,
+    HoldReview,
+    RunSummary,
+    StoredRun,
+)
+from station.domain.record.signature import Signature
+from station.domain.record.unit_state import UnitCalibration, deciding_review
 from station.report import formatting, svg
 from station.report.certificate import (
     as_found,
@@ -725,7 +731,7 @@ def certificate_page(
     ``laboratory``: who issues it, where, for whom, and the reference's traceability
     (configured; none: "not configured"). The coefficients as found and as left
     (:func:`station.report.certificate.as_found`) follow the results. ``signature``:
-    the authorised signatory's (:mod:`station.domain.signature`), named with the links
+    the authorised signatory's (:mod:`station.domain.record.signature`), named with the links
     that verify it; None: the page says it is not signed.
     """
     plot = None

@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Final
 
 from station.domain.i18n import ENGLISH
-from station.domain.laboratory import Laboratory
-from station.domain.limits import LimitsProfile
-from station.domain.records import RunSummary, StoredRun
-from station.domain.signature import Signature
+from station.domain.product.laboratory import Laboratory
+from station.domain.product.limits import LimitsProfile
+from station.domain.record.records import RunSummary, StoredRun
+from station.domain.record.signature import Signature
 from station.report import formatting
 from station.report.certificate import (
     CoefficientState,

@@ -22,8 +22,8 @@ from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import InputError, validation_problem
-from station.domain.poses import POSES
-from station.domain.records import AsFound, PoseRecord, ReplacedCapture, Vector3
+from station.domain.record.records import AsFound, PoseRecord, ReplacedCapture, Vector3
+from station.domain.signals.poses import POSES
 from station.results.files import disk_problem, write_atomic
 
 log = logging.getLogger(__name__)

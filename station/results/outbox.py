@@ -19,7 +19,8 @@ answer and the removal) is still stored once. Nothing in the outbox stops it:
 - the disk refusing the record's file (full, read-only): the record is kept in memory,
   written again at every sync and sent from memory meanwhile.
 
-Each record goes with the outbox's report (:class:`station.domain.outbox_report.OutboxReport`):
+Each record goes with the outbox's report
+(:class:`station.domain.record.outbox_report.OutboxReport`):
 the runs still waiting behind it, the oldest one's wait, and the files set aside, so that
 the results server sees a backlog building at a station (its ``[[outbox]]`` alert rule).
 """
@@ -33,8 +34,8 @@ from functools import partial
 from pathlib import Path
 
 from station.domain.i18n import tr, trn
-from station.domain.outbox_report import OutboxReport
-from station.domain.records import RunRecord
+from station.domain.record.outbox_report import OutboxReport
+from station.domain.record.records import RunRecord
 from station.results.backoff import RecordBackoff
 from station.results.files import write_atomic
 from station.results.outbox_files import UnreadableRecordError, read_record, set_aside

@@ -21,7 +21,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from station.domain.errors import CalstationError
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.files import write_atomic
 
 log = logging.getLogger(__name__)

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.files import disk_problem, write_atomic
 from station.results.journal import RunJournal
 

@@ -45,8 +45,14 @@ from db import (
 from db.settings import DatabaseUrl, DataDir, default_data_dir
 from station.domain.closing import Closing
 from station.domain.errors import CalstationError, InputError
-from station.domain.outbox_report import OUTBOX_HEADER, OutboxReport
-from station.domain.records import GyroFitRecord, HoldReview, RunRecord, RunSummary, StoredRun
+from station.domain.record.outbox_report import OUTBOX_HEADER, OutboxReport
+from station.domain.record.records import (
+    GyroFitRecord,
+    HoldReview,
+    RunRecord,
+    RunSummary,
+    StoredRun,
+)
 
 __all__ = [
     "DataDir",

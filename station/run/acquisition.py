@@ -1,14 +1,14 @@
 """Taking one still pose from a streaming putter: the live still-window detector, the
 acquisition, and why a pose could not be taken.
 
-The judging itself (:func:`station.domain.stillness.judge_window`, its thresholds and its
+The judging itself (:func:`station.domain.signals.stillness.judge_window`, its thresholds and its
 verdict) lives in the domain, so that a recorded stream is segmented by the same code
-(:func:`station.domain.stillness.still_segments`). Live, :class:`StillnessDetector` feeds
-it the driver's blocks; with adaptive capture (:mod:`station.domain.capture_budget`) a
+(:func:`station.domain.signals.stillness.still_segments`). Live, :class:`StillnessDetector` feeds
+it the driver's blocks; with adaptive capture (:mod:`station.domain.product.capture_budget`) a
 still window grows, judged whole at every hop, until its mean's standard error meets the
 budget or it reaches the ceiling. :class:`PoseAcquisition` takes one pose without
 blocking; its result (:class:`PoseResult`) carries the accepted window's summary
-(:class:`station.domain.samples.WindowSummary`, computed once, by the judge).
+(:class:`station.domain.signals.samples.WindowSummary`, computed once, by the judge).
 
 ::
 
@@ -23,10 +23,10 @@ import time
 from dataclasses import dataclass
 
 from station.device import DeviceTimeoutError, LinkCounters, PutterDriver
-from station.domain.capture_budget import WindowPolicy
 from station.domain.errors import CalstationError
-from station.domain.samples import SampleBlock, WindowSummary
-from station.domain.stillness import (
+from station.domain.product.capture_budget import WindowPolicy
+from station.domain.signals.samples import SampleBlock, WindowSummary
+from station.domain.signals.stillness import (
     SpreadScreen,
     StillnessThresholds,
     WindowVerdict,
@@ -78,7 +78,8 @@ class StillnessDetector:
     Blocks are as the driver hands them out (accelerometer in counts). :attr:`last` is
     the latest verdict, for telling the operator what keeps the pose from being taken.
 
-    How long a window is follows ``policy`` (:class:`station.domain.capture_budget.WindowPolicy`;
+    How long a window is follows ``policy``
+    (:class:`station.domain.product.capture_budget.WindowPolicy`;
     by default every window is ``window_samples`` long). Every ``hop_samples`` the
     window from its start to the latest sample is judged whole: refused, the next one is
     the trailing ``floor`` samples; still but not yet enough (its mean's standard error
@@ -147,7 +148,7 @@ class StillnessDetector:
 class PoseResult:
     """One still pose as the acquisition took it.
 
-    ``summary`` is the accepted window's (:class:`station.domain.samples.WindowSummary`:
+    ``summary`` is the accepted window's (:class:`station.domain.signals.samples.WindowSummary`:
     means, standard deviations and count; accelerometer in ADC counts, gyros in deg/s,
     temperature in °C). ``first_seq`` and ``last_seq`` are the window's sequence numbers;
     ``duration_s`` its span and ``wait_s`` the time from the start of the acquisition to

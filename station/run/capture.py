@@ -16,18 +16,18 @@ import numpy as np
 
 from station.device import PutterDriver
 from station.domain.arrays import FloatArray as Array
-from station.domain.capture_budget import WindowPolicy
 from station.domain.i18n import tr
-from station.domain.orientation import (
+from station.domain.product.capture_budget import WindowPolicy
+from station.domain.product.run_settings import RunSettings
+from station.domain.signals.orientation import (
     Sensed,
     ZeroG,
     angle_deg,
     gravity_direction,
     sense,
 )
-from station.domain.poses import POSES, Pose
-from station.domain.run_settings import RunSettings
-from station.domain.samples import SampleBlock
+from station.domain.signals.poses import POSES, Pose
+from station.domain.signals.samples import SampleBlock
 from station.results.journal import RunJournal
 from station.run.acquisition import (
     LinkQualityError,

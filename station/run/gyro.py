@@ -26,10 +26,10 @@ from station.domain.calibration import Calibration, Solution, apply
 from station.domain.gyro import GyroErrorModel, compensate
 from station.domain.gyro.motion import GyroMatrixFit, Move, fit_gyro_matrix
 from station.domain.i18n import tr
-from station.domain.limits import LimitsProfile, check
-from station.domain.record_bounds import CONDITION_MAX
-from station.domain.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
-from station.domain.run_settings import RunSettings
+from station.domain.product.limits import LimitsProfile, check
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
+from station.domain.sensors.record_bounds import CONDITION_MAX
 from station.results.journal import Capture
 from station.run.gyro_check import VerificationMove
 from station.run.gyro_moves import MoveRecorder, RecordedMove

@@ -19,8 +19,8 @@ import numpy as np
 
 from station.device import PutterDriver
 from station.domain.gyro.motion import Move, integrate_rates
-from station.domain.samples import SampleBlock
-from station.domain.stillness import StillnessThresholds, judge_window
+from station.domain.signals.samples import SampleBlock
+from station.domain.signals.stillness import StillnessThresholds, judge_window
 from station.run.unit_output import CalibratedSamples
 
 #: Samples of the still window that ends the move (half a second at 500 samples/s).

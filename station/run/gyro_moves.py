@@ -18,7 +18,7 @@ from typing import Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.samples import SampleBlock
+from station.domain.signals.samples import SampleBlock
 from station.run.acquisition import PoseResult
 
 #: Longest move kept, in device seconds (a unit left lying is no move).

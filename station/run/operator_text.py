@@ -15,7 +15,7 @@ from rich.cells import cell_len, set_cell_size
 from station.device import DeviceTimeoutError, NoReplyError
 from station.domain.i18n import tr
 from station.domain.patterns import full_match
-from station.domain.poses import Pose
+from station.domain.signals.poses import Pose
 from station.run.acquisition import StillnessThresholds, WindowVerdict
 
 #: Longest explanation taken over from an error the station does not know, in terminal
@@ -35,7 +35,8 @@ _PULLED = ("readiness to read but returned no data", "disconnected", "Input/outp
 
 
 def _pose_names() -> dict[str, str]:
-    """Every named pose (station.domain.poses) as the operator says it, in their language."""
+    """Every named pose (station.domain.signals.poses) as the operator says it, in their
+    language."""
     return {
         "shaft_up": tr("shaft up"),
         "shaft_down": tr("shaft down"),

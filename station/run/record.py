@@ -26,8 +26,9 @@ from station.domain.calibration import (
 )
 from station.domain.gyro import summarize_still_poses
 from station.domain.gyro.motion import GyroMatrixFit
-from station.domain.limits import LimitsProfile
-from station.domain.records import (
+from station.domain.product.limits import LimitsProfile
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import (
     Coefficients,
     Disposition,
     FailureReason,
@@ -43,8 +44,7 @@ from station.domain.records import (
     Vector3,
     Verdict,
 )
-from station.domain.run_settings import RunSettings
-from station.domain.sensor_spec import SensorSpec
+from station.domain.sensors.sensor_spec import SensorSpec
 from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from station.device import DeviceTimeoutError, PutterDriver
-from station.domain.samples import SampleBlock
+from station.domain.signals.samples import SampleBlock
 
 #: Calibrated samples averaged to check the unit's own output.
 UNIT_OUTPUT_SAMPLES = 256

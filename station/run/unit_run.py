@@ -10,8 +10,8 @@ of samples is still (:mod:`station.run.capture`). After the fit poses the statio
 solves (:mod:`station.domain.calibration`), asks for the verification pose, writes the
 coefficients into the unit and reads them back (:mod:`station.run.writeback`), and
 checks the unit's own calibrated output (:mod:`station.run.unit_output`). Every check
-is against the limits profile (:mod:`station.domain.limits`); the run ends with a
-:class:`station.domain.records.RunRecord` (:mod:`station.run.record`). The journal is saved
+is against the limits profile (:mod:`station.domain.product.limits`); the run ends with a
+:class:`station.domain.record.records.RunRecord` (:mod:`station.run.record`). The journal is saved
 after every pose, so a crash loses nothing.
 
 :class:`UnitRun` holds the run's state machine (:mod:`station.run.phases`) and what
@@ -31,11 +31,11 @@ from station.domain.arrays import FloatArray
 from station.domain.calibration import CalibrationError, GeometryLimits, Solution, solve
 from station.domain.gyro.motion import GyroMatrixError
 from station.domain.i18n import tr
-from station.domain.limits import LimitsProfile, check
-from station.domain.poses import Pose, pose
-from station.domain.records import PoseRecord, PoseRole, RunRecord
-from station.domain.run_settings import RunSettings
-from station.domain.sensor import ADC_MAX
+from station.domain.product.limits import LimitsProfile, check
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import PoseRecord, PoseRole, RunRecord
+from station.domain.sensors.sensor import ADC_MAX
+from station.domain.signals.poses import Pose, pose
 from station.results.journal import JournalFile, RunJournal
 from station.run import record
 from station.run.acquisition import PoseResult

@@ -2,7 +2,7 @@
 
 A run's failures are those found while it went, in the order found (a saturated axis,
 a failed solve or write-back, the unit's own output, the gyro matrix), then the limit
-checks of what it measured (:func:`station.domain.judging.limit_checks`, which the
+checks of what it measured (:func:`station.domain.product.judging.limit_checks`, which the
 report's what-if uses too): every pose's noise and link loss, the offsets and
 sensitivities, the verification pose's calibrated |g| and the gyro biases, each against
 the limits profile. An abort replaces whatever was found and is not checked: it says
@@ -10,7 +10,7 @@ nothing about the unit. An abort after the write-back is not recorded as an abor
 unit holds the coefficients, and its own output was not checked.
 
 The record (:func:`conclude`) carries, from the start, where the unit goes next
-(:func:`station.domain.unit_state.disposition`, from its earlier runs) and what the run
+(:func:`station.domain.record.unit_state.disposition`, from its earlier runs) and what the run
 was for (the station's golden unit, or production).
 """
 
@@ -21,9 +21,10 @@ import numpy as np
 
 from station.domain.calibration import CalibrationError, Solution, apply
 from station.domain.gyro.motion import GyroMatrixFit
-from station.domain.judging import Measured, limit_checks, uncertainty_of, verdict_failures
-from station.domain.limits import LimitsProfile
-from station.domain.records import (
+from station.domain.product.judging import Measured, limit_checks, uncertainty_of, verdict_failures
+from station.domain.product.limits import LimitsProfile
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import (
     Disposition,
     FailureReason,
     GyroMatrixRecord,
@@ -33,8 +34,7 @@ from station.domain.records import (
     UncertaintyRecord,
     Verdict,
 )
-from station.domain.run_settings import RunSettings
-from station.domain.unit_state import Run, disposition
+from station.domain.record.unit_state import Run, disposition
 from station.results.journal import Capture, RunJournal
 from station.run import record
 

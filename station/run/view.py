@@ -7,7 +7,7 @@ draw any moment of a run without a unit.
 
 from dataclasses import dataclass
 
-from station.domain.poses import Pose
+from station.domain.signals.poses import Pose
 from station.run.acquisition import StillnessThresholds
 from station.run.capture import LiveView
 from station.run.messages import Message

@@ -14,7 +14,7 @@ import numpy as np
 
 from station.device import DeviceCalibration, PutterDriver
 from station.domain.calibration import Calibration
-from station.domain.records import AsFound, StoredCoefficients
+from station.domain.record.records import AsFound, StoredCoefficients
 
 
 def stored(calibration: DeviceCalibration) -> StoredCoefficients:

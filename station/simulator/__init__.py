@@ -8,7 +8,7 @@ Public surface::
         unit.truth.offset_counts
 """
 
-from station.domain.faults import Faults
+from station.domain.sensors.faults import Faults
 from station.simulator.clock import VirtualClock
 from station.simulator.motion import Handling
 from station.simulator.putter import VirtualPutter

@@ -21,8 +21,8 @@ from typing import Final
 
 from pydantic import ValidationError
 
-from station.domain.faults import Faults
-from station.domain.poses import POSES
+from station.domain.sensors.faults import Faults
+from station.domain.signals.poses import POSES
 from station.simulator.putter import VirtualPutter
 
 HELP: Final = (

@@ -39,15 +39,15 @@ from station.domain.calibration.uncertainty import (
 )
 from station.domain.constants import DEFAULT_RATE_HZ
 from station.domain.gyro.motion import calibrate_stream
-from station.domain.poses import POSES
-from station.domain.run_settings import RunSettings, shipped_plan
-from station.domain.sensor import (
+from station.domain.product.run_settings import RunSettings, shipped_plan
+from station.domain.sensors.sensor import (
     ADC_MAX,
     ADC_MIN,
     GYRO_DPS_PER_LSB,
     OFFSET_TEMPCO_COUNTS_PER_C,
     SENSITIVITY_TEMPCO_PER_C,
 )
+from station.domain.signals.poses import POSES
 from station.simulator.recording import (
     k_in_calibrated_frame,
     pose_orientations,
@@ -121,8 +121,8 @@ def simulate_coverage(
     taken ``i·pose_interval_s`` after power-up, at the board's self-heated temperature
     (:class:`~station.simulator.sensor.Thermal`), from a unit whose temperature
     coefficients are drawn uniformly within the datasheet's bounds (those the budget
-    assumes, :data:`~station.domain.sensor.OFFSET_TEMPCO_COUNTS_PER_C`,
-    :data:`~station.domain.sensor.SENSITIVITY_TEMPCO_PER_C`); the truth is then the unit
+    assumes, :data:`~station.domain.sensors.sensor.OFFSET_TEMPCO_COUNTS_PER_C`,
+    :data:`~station.domain.sensors.sensor.SENSITIVITY_TEMPCO_PER_C`); the truth is then the unit
     at the fitted poses' mean temperature, where the calibration holds.
 
     ``knock_g``: when not 0, one fitted pose of each unit, drawn at random, is knocked

@@ -29,10 +29,10 @@ from station.device.messages import DeviceCalibration, Identity
 from station.device.protocol import FrameParser, encode_text
 from station.domain.closing import Closing
 from station.domain.constants import DEFAULT_RATE_HZ
-from station.domain.faults import Faults
-from station.domain.poses import Pose, pose
-from station.domain.samples import SampleBlock
-from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.sensors.faults import Faults
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.signals.poses import Pose, pose
+from station.domain.signals.samples import SampleBlock
 from station.simulator.clock import VirtualClock
 from station.simulator.firmware import Firmware
 from station.simulator.motion import Handling, MotionModel

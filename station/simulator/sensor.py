@@ -25,7 +25,7 @@ from typing import Any, Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.sensor import (
+from station.domain.sensors.sensor import (
     ADC_MAX,
     ADC_MIN,
     CROSS_AXIS_TYPICAL,
@@ -34,7 +34,7 @@ from station.domain.sensor import (
     OFFSET_SPREAD_COUNTS,
     SENSITIVITY_TOLERANCE,
 )
-from station.domain.sensor_spec import SensorSpec
+from station.domain.sensors.sensor_spec import SensorSpec
 
 #: Sense axis of each gyro (x, y, z): the tuning forks detect along y, z and x.
 GYRO_SENSE_AXIS: Final = (1, 2, 0)
@@ -147,7 +147,7 @@ class SensorTruth:
         """An accelerometer drawn uniformly within the datasheet spreads ([Song2006]_
         Table 1), perfect gyros (:meth:`accelerometer`). ``cross_axis``: each off-diagonal
         coupling uniform in ±cross_axis (the KXM52's typical value is
-        :data:`station.domain.sensor.CROSS_AXIS_TYPICAL`)."""
+        :data:`station.domain.sensors.sensor.CROSS_AXIS_TYPICAL`)."""
         offset = NOMINAL_OFFSET_COUNTS + rng.uniform(-offset_spread, offset_spread, 3)
         s = NOMINAL_SENSITIVITY_COUNTS_PER_G * (
             1 + rng.uniform(-sensitivity_tolerance, sensitivity_tolerance, 3)
@@ -159,7 +159,7 @@ class SensorTruth:
     @classmethod
     def draw(cls, rng: np.random.Generator, spec: SensorSpec | None = None) -> "SensorTruth":
         """A unit as the line meets them: every parameter within its datasheet spread;
-        ``spec``: a product's sensor (:mod:`station.domain.products`; default the putter's
+        ``spec``: a product's sensor (:mod:`station.domain.product.products`; default the putter's
         KXM52 behind the 12-bit ADC), its accelerometer's nominal values, spreads, noise
         and ADC range."""
         cross = np.eye(3) + rng.uniform(-CROSS_AXIS_TYPICAL, CROSS_AXIS_TYPICAL, (3, 3)) * (

@@ -3,7 +3,7 @@
 The stream runs on the putter's :class:`~station.simulator.clock.VirtualClock`: at
 each tick it emits every sample due since the last one (at most :data:`MAX_CHUNK`),
 sensed from the motion, thermal and sensor models and damaged by the
-:class:`~station.domain.faults.Faults` in force.
+:class:`~station.domain.sensors.faults.Faults` in force.
 """
 
 import math
@@ -21,9 +21,9 @@ from station.device.protocol import (
 )
 from station.domain.arrays import FloatArray
 from station.domain.constants import DEFAULT_RATE_HZ
-from station.domain.faults import Faults
-from station.domain.samples import SampleBlock
-from station.domain.sensor import AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.sensors.faults import Faults
+from station.domain.sensors.sensor import AXES, GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.signals.samples import SampleBlock
 from station.simulator.clock import VirtualClock
 from station.simulator.motion import MotionModel
 from station.simulator.sensor import SensorTruth, Thermal, accelerometer_counts, gyro_rates

@@ -6,7 +6,7 @@ from datetime import UTC, datetime, timedelta
 
 from db import Database, RunRepository
 from db.models import StoredAlert
-from station.domain.limits import Bounds, check, load_profile
+from station.domain.product.limits import Bounds, check, load_profile
 from tests.db.records import make_record
 
 #: A unit that failed twice, then passed; its station; a golden unit of that station.

@@ -20,7 +20,7 @@ from sqlalchemy import select
 
 from db import Database, RunRepository
 from db.models import StationOutbox
-from station.domain.outbox_report import OUTBOX_HEADER
+from station.domain.record.outbox_report import OUTBOX_HEADER
 from station.results.backoff import RecordBackoff
 from station.results.outbox import Outbox
 from station.results.storage import HttpStore

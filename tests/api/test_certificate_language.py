@@ -15,9 +15,9 @@ from db import Database, RunRepository
 from db.signatures import add_signature, register_signatory
 from station.domain.gyro import fit_log, paper_truth, simulate_log
 from station.domain.i18n import LANGUAGES
-from station.domain.limits import Bounds, check, load_profile
-from station.domain.records import GyroFitRecord, HoldReview
-from station.domain.signature import load_private_key, new_key, sign
+from station.domain.product.limits import Bounds, check, load_profile
+from station.domain.record.records import GyroFitRecord, HoldReview
+from station.domain.record.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import T0, make_record
 from tests.station.report.test_certificate import FACTORY

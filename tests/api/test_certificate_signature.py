@@ -10,7 +10,7 @@ import httpx
 
 from db import Database, RunRepository
 from db.signatures import add_signature, register_signatory
-from station.domain.signature import load_private_key, new_key, sign
+from station.domain.record.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import make_record
 from tests.pdf_pages import page_text, rendered_pages

@@ -11,7 +11,7 @@ from sqlalchemy import func, select
 
 from db import Database
 from db.models import Run, RunPose
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.storage import DatabaseStore, HttpStore, RunStore, StoreUnavailableError
 from tests.conftest import NIGHTLY
 from tests.db.records import T0, make_record

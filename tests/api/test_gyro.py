@@ -11,7 +11,7 @@ import pytest
 from db import Database, RunRepository, open_database
 from station.domain.gyro import fit_log, paper_truth, read_log, simulate_log
 from station.domain.gyro.log import GyroDwells, write_log
-from station.domain.records import GyroFitRecord
+from station.domain.record.records import GyroFitRecord
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 

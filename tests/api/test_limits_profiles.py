@@ -8,8 +8,8 @@ from sqlalchemy import select
 
 from db import Database
 from db.models import StoredLimitsProfile
-from station.domain.limits import Bounds, LimitsProfile, load_profile
-from station.domain.records import document_sha256
+from station.domain.product.limits import Bounds, LimitsProfile, load_profile
+from station.domain.record.records import document_sha256
 from tests.db.records import T0, make_record
 
 RUNS = "/api/v1/runs"

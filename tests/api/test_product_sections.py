@@ -24,7 +24,7 @@ import pytest
 from sqlalchemy import text
 
 from db import Database, RunRepository
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from tests.api.test_page_language import english_phrases
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record

@@ -15,7 +15,7 @@ import pytest
 from sqlalchemy import text
 
 from db import Database, RunRepository
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 from tests.servers import STATION

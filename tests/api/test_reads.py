@@ -8,7 +8,7 @@ import pytest
 from sqlalchemy import text
 
 from db import Database, RunRepository, open_database
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from tests.db.records import T0, make_record
 from tests.servers import local_client, serving
 

@@ -10,7 +10,7 @@ import httpx
 import pytest
 
 from station.domain.quality.days import day_start
-from station.domain.records import document_sha256
+from station.domain.record.records import document_sha256
 from tests.db.records import make_record
 
 RUNS = "/api/v1/runs"

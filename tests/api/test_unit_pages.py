@@ -11,7 +11,7 @@ import httpx
 import pytest
 
 from db import Database, RunRepository
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from tests.db.records import LIMITS, T0, make_record
 from tests.servers import STATION
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from db import Database, RunRepository
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from tests.db.records import OUTCOMES, T0, make_record
 from tests.servers import local_client, serving
 

@@ -6,9 +6,9 @@ from typing import Any
 
 import numpy as np
 
-from station.domain.limits import load_profile
-from station.domain.records import RunRecord
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.product.limits import load_profile
+from station.domain.record.records import RunRecord
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 #: Gravity directions of the six fit poses and one verification pose (unit vectors).
 DIRECTIONS = np.array(

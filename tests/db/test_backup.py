@@ -15,7 +15,7 @@ from sqlalchemy import inspect, select, text
 
 from db import RunRepository, make_engine, open_database
 from db.base import Base
-from station.domain.records import HoldReview
+from station.domain.record.records import HoldReview
 from tests.conftest import CliRunner
 from tests.databases import own_postgres_database
 from tests.db.records import OUTCOMES, T0, make_record

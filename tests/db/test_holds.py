@@ -9,7 +9,7 @@ from db import RunRepository
 from db.holds import held_units
 from db.reports import eol_report
 from station.domain.quality.figures import ReportFilter
-from station.domain.records import HoldReview
+from station.domain.record.records import HoldReview
 from tests.db.records import T0, make_record
 from tests.db.test_unit_truth import ABORT
 

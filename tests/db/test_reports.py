@@ -8,7 +8,7 @@ from sqlalchemy.orm import Session
 
 from db import RunQuery, RunRepository
 from db.reports import eol_report
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.domain.quality.figures import ReportFilter
 from station.report.render import render, rows
 from tests.db.eol_data import SINCE, UNTIL

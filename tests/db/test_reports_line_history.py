@@ -22,7 +22,7 @@ from sqlalchemy.orm import Session
 from db import Database, RunRepository
 from db.reports import eol_report
 from db.rollups import rebuild
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import profile_bounds
 from tests.db.eol_data import IN_RANGE, RUNS, SINCE, UNTIL, insert_line_history

@@ -13,7 +13,7 @@ from db import RunConflictError, RunQuery, RunRepository
 from db.models import RunPose, StationKey
 from db.repository import KeyHolder, encode_cursor, record_sha256
 from station.domain.errors import InputError
-from station.domain.records import StoredRun
+from station.domain.record.records import StoredRun
 from tests.db.records import LIMITS, T0, make_record
 
 

@@ -38,10 +38,10 @@ from db.models import (
 from db.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.domain.errors import InputError
-from station.domain.limits import Bounds, load_profile
+from station.domain.product.limits import Bounds, load_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.parameters import PARAMETERS
-from station.domain.unit_state import UnitCalibration
+from station.domain.record.unit_state import UnitCalibration
 from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import T0, make_record

@@ -17,8 +17,8 @@ from db.models import Unit
 from db.reports import eol_report
 from db.units import answers_are_stale
 from station.domain.quality.figures import ReportFilter
-from station.domain.records import RunRecord
-from station.domain.unit_state import UnitCalibration
+from station.domain.record.records import RunRecord
+from station.domain.record.unit_state import UnitCalibration
 from tests.db.records import T0, make_record
 
 ABORT: dict[str, Any] = {

@@ -1,6 +1,6 @@
 """The product of every run: ``runs.part_number`` (runs stored before it: DIXX-A12).
 
-A line builds more than one product (``station/domain/products.py``); each run records
+A line builds more than one product (``station/domain/product/products.py``); each run records
 the part number of the unit's product. Every run stored before this revision was of the
 one product there was, the putter with the KXM52 behind a 12-bit ADC: DIXX-A12. The
 units' answers gain the field too; the upgrade rewrites them (``db/derived.py``). Plain

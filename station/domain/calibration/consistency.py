@@ -33,7 +33,7 @@ The limit L comes from the limits profile (``fit_residual_counts``) or, by defau
 the noise (:func:`residual_limit`, in the sensor's counts; the putter's is
 :data:`DEFAULT_RESIDUAL_LIMIT_COUNTS`): a pose mean's noise σ is at most the sample
 spread the stillness check lets through, 8 counts of the putter (twice its limit,
-:func:`station.domain.stillness.spread_limit_counts`), over the 1024 samples of a pose,
+:func:`station.domain.signals.stillness.spread_limit_counts`), over the 1024 samples of a pose,
 σ = 0.25 counts; L = 8σ = 2 counts gives a false alarm on a clean pose with probability
 2·(1 − Φ(8)) ≈ 1e-15 at that worst noise (fewer at the sensor's real ~1 count). The
 six-parameter model cannot represent the KXM52's ~2 % cross-axis coupling, which alone
@@ -67,9 +67,9 @@ from station.domain.calibration.least_squares import (
 from station.domain.calibration.model import Model, apply
 from station.domain.calibration.residual import MAX_CONDITION, normalise
 from station.domain.calibration.solution import Solution
-from station.domain.sensor import SAMPLES_PER_POSE
-from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
-from station.domain.stillness import spread_limit_counts
+from station.domain.sensors.sensor import SAMPLES_PER_POSE
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.signals.stillness import spread_limit_counts
 
 #: The largest sample spread a still pose may have, in the stillness limit's spreads:
 #: twice it (8 counts of the putter).

@@ -5,7 +5,7 @@ Every check is vectorised over units: poses come as a (K, N, 3) array of mean co
 each pose comes from a k-d tree beyond a few dozen poses, never from an N×N table).
 
 Every bound in counts is the sensor's (:class:`GeometryLimits`' ``sensor``,
-:mod:`station.domain.sensor_spec`; the putter's by default).
+:mod:`station.domain.sensors.sensor_spec`; the putter's by default).
 
 The values are checked first, each refusal naming its real cause:
 
@@ -50,8 +50,8 @@ from station.domain.calibration.errors import (
     RailValueError,
     TooFewPosesError,
 )
-from station.domain.sensor import ADC_MIN, AXES
-from station.domain.sensor_spec import PUTTER_SENSOR, SensorSpec
+from station.domain.sensors.sensor import ADC_MIN, AXES
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR, SensorSpec
 
 #: Default minimum angle between two poses' gravity directions, degrees.
 MIN_POSE_ANGLE_DEG = 10.0

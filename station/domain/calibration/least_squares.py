@@ -46,7 +46,7 @@ from station.domain.calibration.residual import (
     normalise,
 )
 from station.domain.calibration.solution import CoefficientErrors, Solution, quality_of
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 UNKNOWNS: dict[Model, int] = {"six": 6, "nine": 9}
 

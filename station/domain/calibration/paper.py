@@ -49,7 +49,7 @@ from station.domain.calibration.residual import (
     normalise,
 )
 from station.domain.calibration.solution import Solution, quality_of
-from station.domain.sensor import NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 PAPER_POSES = 6
 #: Units solved together: bounds the batch path's memory and keeps it in cache.

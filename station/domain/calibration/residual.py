@@ -14,7 +14,7 @@ geometry: cond(J) is the **condition number** reported and bounded for every met
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 #: Default maximum condition number of a solve's Jacobian (normalised counts).
 MAX_CONDITION = 1.0e3

@@ -16,7 +16,7 @@ import numpy as np
 from station.domain.arrays import FloatArray
 from station.domain.calibration.geometry import Screen
 from station.domain.calibration.model import Calibration, Model, apply
-from station.domain.sensor_spec import PUTTER_SENSOR
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR
 
 Method = Literal["paper-eq10", "least-squares"]
 

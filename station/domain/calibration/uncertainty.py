@@ -40,7 +40,7 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
 ``model``
     Type B: what the six-parameter model cannot represent. The sensor's cross-axis
     sensitivity, declared per sensor (``cross_axis_bound``: the product's
-    :attr:`~station.domain.sensor_spec.SensorSpec.cross_axis`, ``calstation solve
+    :attr:`~station.domain.sensors.sensor_spec.SensorSpec.cross_axis`, ``calstation solve
     --cross-axis``; by default the KXM52-1050's :data:`CROSS_AXIS_BOUND`, 2 %,
     datasheet, [Song2006]_ Table 1), as a coupling matrix with each off-diagonal term
     rectangular within it; propagated by Monte Carlo ([JCGM101]_) over
@@ -66,7 +66,7 @@ The budget's terms, each a standard uncertainty per coefficient (:data:`TERMS`):
     ``δa_ij = (T_i − T̄)·(κ_o,j + κ_s,j·(a_ij − o_j))`` more, with the unit's temperature
     coefficients of offset κ_o (counts/°C) and sensitivity κ_s (/°C), unknown, rectangular
     within the sensor's datasheet bounds (the product's
-    :class:`~station.domain.sensor_spec.SensorSpec`; the KXM52-1050's
+    :class:`~station.domain.sensors.sensor_spec.SensorSpec`; the KXM52-1050's
     :data:`OFFSET_TEMPCO_BOUND`, :data:`SENSITIVITY_TEMPCO_BOUND` by default) and the
     same at every pose; propagated to first
     order through J⁺ as the pose noise is, linear in κ; the symmetric 95 % interval of
@@ -126,7 +126,7 @@ from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
 from station.domain.calibration.residual import UPPER
 from station.domain.calibration.solution import Solution
-from station.domain.sensor import (
+from station.domain.sensors.sensor import (
     CROSS_AXIS_TYPICAL,
     GYRO_DPS_PER_LSB,
     OFFSET_TEMPCO_COUNTS_PER_C,
@@ -145,7 +145,7 @@ ADC_LSB_COUNTS: Final = 1.0
 #: datasheet's typical cross-axis sensitivity, 2 % ([Song2006]_ Table 1).
 CROSS_AXIS_BOUND: Final = CROSS_AXIS_TYPICAL
 #: The temperature coefficients' half-widths when no sensor is named: the KXM52-1050
-#: datasheet's largest (:mod:`station.domain.sensor`), counts/°C and per °C.
+#: datasheet's largest (:mod:`station.domain.sensors.sensor`), counts/°C and per °C.
 OFFSET_TEMPCO_BOUND: Final = OFFSET_TEMPCO_COUNTS_PER_C
 SENSITIVITY_TEMPCO_BOUND: Final = SENSITIVITY_TEMPCO_PER_C
 #: A pose's sample noise when the file gives means only: the KXM52 at the stream's
@@ -317,7 +317,7 @@ def accelerometer_budget(
         verification_temperature: the verification pose's, °C.
         tempco: the half-widths of the sensor's temperature coefficients of offset
             (counts/°C) and sensitivity (/°C), its datasheet's
-            (:attr:`~station.domain.sensor_spec.SensorSpec.offset_tempco_counts_per_c`;
+            (:attr:`~station.domain.sensors.sensor_spec.SensorSpec.offset_tempco_counts_per_c`;
             the default is the putter's KXM52).
         cross_axis_bound: the unmodelled coupling's half-width (six-parameter model).
         k: the coverage factor.
@@ -455,7 +455,7 @@ def gyro_bias_uncertainty(
     Type A: the pooled within-pose noise σ/√ΣN_i (``spread_dps`` (P, 3) and ``samples``
     (P,) when known), or the poses' scatter s/√P where it exceeds that beyond the χ²
     95 % point (a bias that moves between poses); without spreads the scatter. Type B: the report's
-    quantisation :data:`~station.domain.sensor.GYRO_DPS_PER_LSB`/√12 per sample, averaged
+    quantisation :data:`~station.domain.sensors.sensor.GYRO_DPS_PER_LSB`/√12 per sample, averaged
     as the accelerometer's (module docstring).
     """
     means = np.asarray(pose_means_dps, dtype=np.float64)

@@ -24,7 +24,7 @@ from typing import Final, Literal
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 AccelUnits = Literal["counts", "g", "m/s2"]
 

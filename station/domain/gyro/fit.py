@@ -28,7 +28,7 @@ from station.domain.gyro.identifiability import (
 from station.domain.gyro.log import GyroLog
 from station.domain.gyro.lsq import solve
 from station.domain.gyro.model import PPM, TERMS_PER_AXIS, GyroErrorModel, regressors, term_names
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 Vector = list[float | None]
 Matrix = list[list[float | None]]

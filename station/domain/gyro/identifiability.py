@@ -35,7 +35,7 @@ from station.domain.arrays import FloatArray
 from station.domain.errors import CalstationError, InputError
 from station.domain.gyro.log import GyroLog
 from station.domain.gyro.model import TERMS_PER_AXIS, regressors, term_names
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 RATE_FLOOR_DPS: Final = 1.0
 ACC_SPREAD_FLOOR_G: Final = 0.1

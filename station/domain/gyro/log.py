@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from station.domain.arrays import FloatArray
 from station.domain.errors import InputError
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 RATE_COLUMNS: Final = tuple(f"rate_ref_{a}" for a in AXES)
 ACC_COLUMNS: Final = tuple(f"acc_{a}" for a in AXES)

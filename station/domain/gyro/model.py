@@ -21,7 +21,7 @@ from typing import Final
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 PPM: Final = 1e6
 #: Terms of one gyro axis' row of the model, in regressor column order.

@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from station.domain.arrays import FloatArray
 from station.domain.errors import InputError
 from station.domain.gyro.lsq import solve
-from station.domain.record_bounds import (
+from station.domain.sensors.record_bounds import (
     MEASURE_MAX,
     GyroRate,
     GyroSpread,
@@ -29,7 +29,7 @@ from station.domain.record_bounds import (
     Probability,
     Text,
 )
-from station.domain.sensor import AXES, Axis
+from station.domain.sensors.sensor import AXES, Axis
 
 MIN_POSES_FOR_SLOPE = 4
 MIN_POSES_FOR_TEST = 5
@@ -40,7 +40,8 @@ Slope3 = Annotated[list[Measure], Field(min_length=3, max_length=3)]
 
 
 class GyroAxisStill(BaseModel):
-    """One gyro's figures over the still poses (bounds: :mod:`station.domain.record_bounds`)."""
+    """One gyro's figures over the still poses (bounds:
+    :mod:`station.domain.sensors.record_bounds`)."""
 
     model_config = ConfigDict(allow_inf_nan=False)
 

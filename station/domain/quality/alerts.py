@@ -15,7 +15,7 @@ no longer holds the alert clears, and the next time it holds is a new event. Rul
 - ``cpk``: the Cpk of ``parameter`` (a coefficient) over the last ``runs`` runs (at
   ``station`` or anywhere), against the limits profile of the latest of them, below
   ``target`` (1.33 by default, :data:`station.domain.quality.capability.CAPABLE_CPK`).
-- ``outbox``: a station's latest outbox report (:mod:`station.domain.outbox_report`,
+- ``outbox``: a station's latest outbox report (:mod:`station.domain.record.outbox_report`,
   sent with each run) says ``queued`` runs or more wait behind the run it sent (20 by
   default), or the oldest of them has waited ``hours`` or more (1 by default), or a file
   is set aside (refused or unreadable); one alert per station (``station`` or every

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from station.domain.arrays import FloatArray
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 #: Passed units the statistic looks at.
 DRIFT_WINDOW = 20

@@ -9,7 +9,7 @@ from typing import Literal
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field
 
-from station.domain.records import LimitsRef, Verdict
+from station.domain.record.records import LimitsRef, Verdict
 
 #: What the end-of-line tester does with a unit: its latest run passed, or not.
 Disposition = Literal["ship", "hold"]

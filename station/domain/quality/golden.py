@@ -17,8 +17,8 @@ from datetime import datetime, time, timedelta
 from pydantic import BaseModel, ConfigDict, Field
 
 from station.domain.quality.days import wall_clock
-from station.domain.records import SERIAL_PATTERN, RunRecord
-from station.domain.sensor import AXES
+from station.domain.record.records import SERIAL_PATTERN, RunRecord
+from station.domain.sensors.sensor import AXES
 
 Triple = tuple[float, float, float]
 

@@ -3,16 +3,16 @@
 What a parameter is (its name, limits family and unit), not where it is stored: the
 columns that hold each one are :mod:`db.rollups`' business. Each parameter belongs to a
 limits family (``offset``, ``sensitivity``, ``verification_error``, ``pose_noise``,
-``gyro_bias``: the check codes of a limits profile, :data:`station.domain.limits.CHECKS`).
+``gyro_bias``: the check codes of a limits profile, :data:`station.domain.product.limits.CHECKS`).
 :func:`profile_bounds` is the one place bounds enter the report: from a limits profile
-(:mod:`station.domain.limits`).
+(:mod:`station.domain.product.limits`).
 """
 
 from dataclasses import dataclass
 
-from station.domain.limits import CHECKS, LimitsProfile
+from station.domain.product.limits import CHECKS, LimitsProfile
 
-#: Limits family → ``(lower, upper)`` of the profile's :class:`station.domain.limits.Bounds`
+#: Limits family → ``(lower, upper)`` of the profile's :class:`station.domain.product.limits.Bounds`
 #: (``None`` for an unbounded side): the plain pair the database stores and compares.
 FamilyBounds = dict[str, tuple[float | None, float | None]]
 

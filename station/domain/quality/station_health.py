@@ -19,7 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from station.domain.quality.golden import GoldenUnit
 from station.domain.quality.split import GroupStats
-from station.domain.sensor import AXES
+from station.domain.sensors.sensor import AXES
 
 #: The golden unit's first checks that make its baseline.
 BASELINE_CHECKS = 3

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from db import RunRepository, open_database
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.report.certificate import document_number
 from station.report.formatting import number
 from tests.conftest import CliRunner

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from station.device import DeviceDisconnectedError, PutterDriver, SerialNumberMismatchError
-from station.domain.poses import pose
+from station.domain.signals.poses import pose
 from station.run.acquisition import acquire_pose
 from tests.conftest import REPO_ROOT, CliRunner
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.domain.errors import InputError
-from station.domain.posefile import read_pose_file
+from station.domain.signals.posefile import read_pose_file
 from station.simulator.recording import pose_means, random_directions, spread_directions
 from station.simulator.sensor import SensorTruth
 from tests.conftest import REPO_ROOT, CliRunner, examples

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.domain.sensor import OFFSET_TEMPCO_COUNTS_PER_C, SENSITIVITY_TEMPCO_PER_C
+from station.domain.sensors.sensor import OFFSET_TEMPCO_COUNTS_PER_C, SENSITIVITY_TEMPCO_PER_C
 from station.simulator.coverage import true_sensitivity
 from station.simulator.sensor import SensorTruth, Thermal
 from tests.conftest import REPO_ROOT, CliRunner

@@ -23,8 +23,8 @@ from station.device import (
     SerialNumberMismatchError,
 )
 from station.device.protocol import FrameType, encode_frame, encode_sample
-from station.domain.poses import pose
-from station.domain.samples import SampleBlock
+from station.domain.signals.poses import pose
+from station.domain.signals.samples import SampleBlock
 from station.simulator import VirtualPutter
 from station.simulator.putter import FIRMWARE_VERSION, SENSOR_PART
 from tests.conftest import examples

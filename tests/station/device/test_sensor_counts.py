@@ -1,11 +1,11 @@
 """The driver and the virtual putter of a product whose sensor is not the putter's
-12-bit one: its counts pass the link whole (station.domain.sensor_spec)."""
+12-bit one: its counts pass the link whole (station.domain.sensors.sensor_spec)."""
 
 import numpy as np
 
 from station.device import DeviceCalibration, PutterDriver
-from station.domain.poses import pose
-from station.domain.products import load_products
+from station.domain.product.products import load_products
+from station.domain.signals.poses import pose
 from station.simulator import VirtualPutter
 
 

@@ -7,7 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from station.domain.patterns import compile_pattern, full_match, pattern_groups
-from station.domain.products import Label, LabelFormat
+from station.domain.product.products import Label, LabelFormat
 from station.run.operator_text import not_a_serial
 
 #: Each of these backtracks exponentially in Python's ``re`` on its text (``^(P+)+$``:

@@ -11,9 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pydantic import BaseModel, TypeAdapter
 
-from station.domain.limits import LimitsProfile, load_profile
-from station.domain.record_bounds import plain_document
-from station.domain.records import (
+from station.domain.product.limits import LimitsProfile, load_profile
+from station.domain.record.records import (
     IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
     FailureReason,
@@ -24,6 +23,7 @@ from station.domain.records import (
     ReplacedCapture,
     Serial,
 )
+from station.domain.sensors.record_bounds import plain_document
 
 
 class _Document(BaseModel):

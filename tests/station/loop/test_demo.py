@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.domain.products import load_products
+from station.domain.product.products import load_products
 from tests.conftest import CliRunner
 from tests.db.records import make_record
 

@@ -16,7 +16,7 @@ from uuid import uuid4
 import pexpect
 import pytest
 
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.results.disk import DiskWatch
 from station.results.journal import JournalFile, RunJournal
 from station.results.outbox import Outbox

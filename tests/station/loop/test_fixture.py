@@ -18,10 +18,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from rich.console import Console
 
-from station.domain.faults import Faults
-from station.domain.limits import load_profile
-from station.domain.poses import pose
+from station.domain.product.limits import load_profile
 from station.domain.quality.golden import GoldenUnit
+from station.domain.sensors.faults import Faults
+from station.domain.signals.poses import pose
 from station.loop.config import StationConfig
 from station.loop.fixture.app import FixtureApp, Stage
 from station.loop.fixture.demo import mounts

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.domain.quality.golden import GoldenUnit, disagreements, due
-from station.domain.records import RunRecord
+from station.domain.record.records import RunRecord
 from station.loop.golden_lock import GoldenLock
 from station.loop.shift_checks import ShiftChecks, unlock_usage
 from tests.conftest import examples

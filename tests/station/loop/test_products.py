@@ -5,11 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from station.domain import sensor
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import InputError
-from station.domain.limits import load_profiles
-from station.domain.products import Label, LabelFormat, load_products, parse_products
+from station.domain.product.limits import load_profiles
+from station.domain.product.products import Label, LabelFormat, load_products, parse_products
+from station.domain.sensors import sensor
 from station.loop.config import load_config
 from station.simulator.sensor import ACCEL_NOISE_COUNTS, SensorTruth, accelerometer_counts
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pexpect
 import pytest
 
-from station.domain.faults import Faults
+from station.domain.sensors.faults import Faults
 from tests.conftest import REPO_ROOT, CliRunner
 from tests.station.loop.test_station_terminal import POSE_ASKED, Station
 from tests.terminal import hang_guard

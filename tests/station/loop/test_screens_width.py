@@ -20,10 +20,10 @@ from rich.text import Text
 from station.cli.output import screen_console
 from station.device import SerialNumberMismatchError
 from station.domain.i18n import LANGUAGES, catalogue_text, set_language, tr, trn
-from station.domain.limits import Bounds, check, load_profile
-from station.domain.orientation import Sensed
-from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
-from station.domain.poses import POSES as NAMED_POSES
+from station.domain.product.limits import Bounds, check, load_profile
+from station.domain.signals.orientation import Sensed
+from station.domain.signals.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.domain.signals.poses import POSES as NAMED_POSES
 from station.loop.fixture.screen import FixtureView, fixture_screen
 from station.loop.screens import (
     header,

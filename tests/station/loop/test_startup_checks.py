@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 
 from db.settings import check_database_url
 from station.domain.errors import InputError
-from station.domain.orientation import angle_deg
-from station.domain.pose_plan import check_plan
-from station.domain.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, pose
+from station.domain.product.pose_plan import check_plan
+from station.domain.signals.orientation import angle_deg
+from station.domain.signals.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE, pose
 from station.loop.config import load_config
 from station.loop.startup import check_port
 from station.results.journal import DiscardedJournal, JournalFile, RunJournal

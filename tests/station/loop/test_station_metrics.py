@@ -16,7 +16,7 @@ from rich.console import Console
 
 from station.cli.station import _station
 from station.domain.errors import InputError
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.loop.config import load_config
 from station.loop.demo import ScriptedOperator
 from tests.servers import free_port, local_get

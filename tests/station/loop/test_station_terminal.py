@@ -22,9 +22,9 @@ import pytest
 from sqlalchemy import make_url, text
 
 from db import Database, RunRepository, make_engine, open_database
-from station.domain.faults import Faults
-from station.domain.products import load_products
-from station.domain.sensor_spec import SensorSpec
+from station.domain.product.products import load_products
+from station.domain.sensors.faults import Faults
+from station.domain.sensors.sensor_spec import SensorSpec
 from station.simulator.putter import VirtualPutter
 from tests.conftest import REPO_ROOT
 from tests.databases import postgres_server_url

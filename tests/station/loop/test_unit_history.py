@@ -10,8 +10,8 @@ import pytest
 from db import Database
 from station.device import PutterDriver
 from station.domain.errors import CalstationError
-from station.domain.records import HoldReview, RunRecord
-from station.domain.unit_state import disposition
+from station.domain.record.records import HoldReview, RunRecord
+from station.domain.record.unit_state import disposition
 from station.loop.unit_history import ScanAction, UnitHistory
 from station.results.outbox import Outbox
 from station.results.storage import DatabaseStore, HttpStore, StoreUnavailableError

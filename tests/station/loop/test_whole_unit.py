@@ -19,8 +19,8 @@ import pytest
 
 from db import Database
 from station.device import DeviceCalibration
-from station.domain.limits import load_profile
-from station.domain.records import RunRecord
+from station.domain.product.limits import load_profile
+from station.domain.record.records import RunRecord
 from station.loop.config import load_config
 from station.loop.lifecycle import versions
 from station.results.journal import JournalFile, RunJournal

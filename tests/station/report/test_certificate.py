@@ -9,10 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from station.domain.errors import InputError
-from station.domain.laboratory import Laboratory, load_laboratory
-from station.domain.limits import load_profile
+from station.domain.product.laboratory import Laboratory, load_laboratory
+from station.domain.product.limits import load_profile
 from station.domain.quality.shifts import shift_start
-from station.domain.records import RunRecord, StoredRun
+from station.domain.record.records import RunRecord, StoredRun
 from station.report.certificate import (
     as_found,
     as_left,

@@ -4,7 +4,7 @@ the last page."""
 
 from pathlib import Path
 
-from station.domain.limits import load_profile
+from station.domain.product.limits import load_profile
 from station.report.certificate import document_number
 from station.report.pdf import certificate_pdf
 from tests.db.records import make_record

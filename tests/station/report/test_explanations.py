@@ -10,8 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from station.domain.calibration import CalibrationError
-from station.domain.limits import CHECKS, Bounds, check, load_profile
-from station.domain.records import FailureReason
+from station.domain.product.limits import CHECKS, Bounds, check, load_profile
+from station.domain.record.records import FailureReason
 from station.report.explanations import explanation
 from station.run.verdict import (
     Failures,
@@ -35,7 +35,7 @@ def english_words(text: str) -> set[str]:
 
 @st.composite
 def limit_failures(draw: st.DrawFn) -> FailureReason:
-    """A limit check as :func:`station.domain.limits.check` records it when it fails: a
+    """A limit check as :func:`station.domain.product.limits.check` records it when it fails: a
     value outside its bounds (simple rule), or inside them by less than its U (guarded),
     or not a number."""
     code = draw(st.sampled_from(sorted(CHECKS)))

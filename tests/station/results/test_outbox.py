@@ -17,8 +17,8 @@ from sqlalchemy import func, select
 
 from db import Database
 from db.models import Run, StationOutbox
-from station.domain.outbox_report import OutboxReport
-from station.domain.records import RunRecord
+from station.domain.record.outbox_report import OutboxReport
+from station.domain.record.records import RunRecord
 from station.loop.screens import header
 from station.results.backoff import FIRST_S, RecordBackoff
 from station.results.journal import DiscardedJournal, JournalFile, RunJournal

@@ -10,7 +10,7 @@ import pytest
 
 from db import Database, RunRepository
 from station.domain.gyro import fit_log, paper_truth, simulate_log
-from station.domain.records import GyroFitRecord, RunRecord, Vector3
+from station.domain.record.records import GyroFitRecord, RunRecord, Vector3
 from station.results.storage import (
     DatabaseStore,
     HttpStore,

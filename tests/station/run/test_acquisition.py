@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from station.device import DeviceDisconnectedError, DeviceTimeoutError, PutterDriver
-from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
-from station.domain.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.sensors.sensor import GYRO_DPS_PER_LSB, TEMP_C_PER_LSB
+from station.domain.signals.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.run.acquisition import (
     LinkQualityError,
     NotStillError,

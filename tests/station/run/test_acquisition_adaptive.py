@@ -9,15 +9,15 @@ from hypothesis import strategies as st
 
 from station.device import PutterDriver
 from station.domain.calibration import solve
-from station.domain.capture_budget import (
+from station.domain.product.capture_budget import (
     CRB_SENSITIVITY_PER_SIGMA,
     AdaptiveCapture,
     WindowPolicy,
     pose_budget_counts,
 )
-from station.domain.limits import Bounds, load_profile
-from station.domain.poses import CALIBRATION_POSES, pose
-from station.domain.samples import SampleBlock
+from station.domain.product.limits import Bounds, load_profile
+from station.domain.signals.poses import CALIBRATION_POSES, pose
+from station.domain.signals.samples import SampleBlock
 from station.run.acquisition import StillnessDetector, StillnessThresholds, acquire_pose
 from station.simulator import VirtualPutter
 from tests.conftest import examples

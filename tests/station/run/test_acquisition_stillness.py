@@ -7,8 +7,8 @@ from hypothesis import strategies as st
 from pydantic import ValidationError
 from scipy.spatial.transform import Rotation
 
-from station.domain.poses import POSES, pose
-from station.domain.samples import SampleBlock
+from station.domain.signals.poses import POSES, pose
+from station.domain.signals.samples import SampleBlock
 from station.run.acquisition import StillnessDetector, StillnessThresholds, judge_window
 from station.simulator import VirtualPutter
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from station.device import DeviceCalibration, PutterDriver
-from station.domain.stillness import StillnessThresholds
+from station.domain.signals.stillness import StillnessThresholds
 from station.run.gyro_check import MoveOutcome, VerificationMove
 from station.run.unit_output import UnitOutputCheck
 from station.simulator.putter import VirtualPutter

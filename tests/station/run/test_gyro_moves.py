@@ -10,8 +10,8 @@ from hypothesis import strategies as st
 from station.device import LinkCounters
 from station.domain.calibration import Calibration
 from station.domain.gyro.motion import GyroMatrixError, Move
-from station.domain.run_settings import RunSettings
-from station.domain.samples import SampleBlock
+from station.domain.product.run_settings import RunSettings
+from station.domain.signals.samples import SampleBlock
 from station.run.acquisition import PoseResult
 from station.run.gyro import LiveGyro
 from station.run.gyro_moves import MoveRecorder

@@ -8,13 +8,13 @@ import numpy as np
 
 from station.device import LinkCounters
 from station.domain.calibration import solve
-from station.domain.limits import load_profile
-from station.domain.products import load_products
-from station.domain.record_bounds import ADC_SPAN
-from station.domain.records import FailureReason, PoseRecord, Vector3
-from station.domain.run_settings import RunSettings
-from station.domain.samples import SampleBlock
-from station.domain.sensor_spec import PUTTER_SENSOR
+from station.domain.product.limits import load_profile
+from station.domain.product.products import load_products
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import FailureReason, PoseRecord, Vector3
+from station.domain.sensors.record_bounds import ADC_SPAN
+from station.domain.sensors.sensor_spec import PUTTER_SENSOR
+from station.domain.signals.samples import SampleBlock
 from station.results.journal import Capture, RunJournal
 from station.run.acquisition import PoseResult
 from station.run.record import (

@@ -12,14 +12,14 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from station.device import DeviceCalibration, PutterDriver
-from station.domain.faults import Faults
-from station.domain.limits import Bounds, LimitsProfile, load_profile
-from station.domain.orientation import POSE_TOLERANCE_DEG, sense
-from station.domain.poses import POSES
-from station.domain.products import Product
-from station.domain.records import RunRecord
-from station.domain.run_settings import RunSettings
-from station.domain.sensor import ADC_MAX, OFFSET_TEMPCO_COUNTS_PER_C
+from station.domain.product.limits import Bounds, LimitsProfile, load_profile
+from station.domain.product.products import Product
+from station.domain.product.run_settings import RunSettings
+from station.domain.record.records import RunRecord
+from station.domain.sensors.faults import Faults
+from station.domain.sensors.sensor import ADC_MAX, OFFSET_TEMPCO_COUNTS_PER_C
+from station.domain.signals.orientation import POSE_TOLERANCE_DEG, sense
+from station.domain.signals.poses import POSES
 from station.results.journal import JournalFile, RunJournal
 from station.run.phases import Phase
 from station.run.unit_run import UnitRun, open_unit

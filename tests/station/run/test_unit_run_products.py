@@ -1,14 +1,14 @@
 """A DIXX-D16 unit's run end to end over a real pty: its 16-bit counts are judged, fitted
-and recorded as its own sensor's (station.domain.sensor_spec)."""
+and recorded as its own sensor's (station.domain.sensors.sensor_spec)."""
 
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from station.domain.products import load_products
-from station.domain.run_settings import RunSettings
-from station.domain.stillness import StillnessThresholds
+from station.domain.product.products import load_products
+from station.domain.product.run_settings import RunSettings
+from station.domain.signals.stillness import StillnessThresholds
 from tests.station.run.test_unit_run import Bench, done
 
 D16 = load_products().get("DIXX-D16")

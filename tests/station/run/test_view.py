@@ -5,7 +5,7 @@ import re
 import numpy as np
 from rich.console import Console
 
-from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
+from station.domain.signals.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.loop.screens import unit_screen
 from station.run.acquisition import StillnessThresholds
 from station.run.capture import LiveView

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from station.domain.poses import POSES, pose
+from station.domain.signals.poses import POSES, pose
 from station.simulator.motion import MotionModel
 
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from station.domain.samples import SampleBlock
+from station.domain.signals.samples import SampleBlock
 from station.simulator import VirtualPutter
 
 

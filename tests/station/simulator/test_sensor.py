@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from station.domain.sensor import ADC_MAX
+from station.domain.sensors.sensor import ADC_MAX
 from station.simulator import SensorTruth, Thermal
 from station.simulator.sensor import GYRO_SENSE_AXIS, accelerometer_counts, gyro_rates
 

@@ -4,7 +4,7 @@ The stream is the unit's raw output over the procedure of [Tedaldi2014]_: still 
 in varied orientations, with a hand move between each two. From it:
 
 1. the still poses, by the station's own stillness judge
-   (:func:`station.domain.stillness.still_segments`) on windows fitted to the
+   (:func:`station.domain.signals.stillness.still_segments`) on windows fitted to the
    recording's rests (:func:`chosen_window`) or as given, with its limits fitted to the
    recording's own gyro bias and noise (:func:`adapted_thresholds`), each trimmed by a
    quarter window at both ends;
@@ -49,9 +49,9 @@ from station.domain.constants import STILL_WINDOW_S
 from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
 from station.domain.gyro.motion.matrix_fit import MIN_MOVES, GyroMatrixFit, fit_gyro_matrix
 from station.domain.gyro.motion.moves import Move
-from station.domain.samples import SampleBlock
-from station.domain.sensor import AXES
-from station.domain.stillness import (
+from station.domain.sensors.sensor import AXES
+from station.domain.signals.samples import SampleBlock
+from station.domain.signals.stillness import (
     StillnessThresholds,
     StillSegment,
     still_segments,

@@ -43,7 +43,7 @@ from station.domain.gyro.motion.errors import StreamError
 from station.domain.gyro.motion.integrate import step_rotvecs
 from station.domain.gyro.motion.moves import Move
 from station.domain.gyro.motion.stream import RecordedStream
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 GyroUnits = Literal["dps", "rads"]
 TimeUnits = Literal["s", "ms"]

@@ -4,7 +4,7 @@ import numpy as np
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from station.domain.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
+from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 from station.simulator.sensor import SensorTruth
 
 offsets = st.floats(NOMINAL_OFFSET_COUNTS - 207, NOMINAL_OFFSET_COUNTS + 207)

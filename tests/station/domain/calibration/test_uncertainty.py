@@ -344,7 +344,7 @@ def test_the_six_parameter_model_s_coupling_reaches_the_gyro_matrix() -> None:
     from station.domain.calibration import gyro_matrix_uncertainty
     from station.domain.calibration.uncertainty import model_variance
     from station.domain.gyro.motion import calibrate_stream
-    from station.domain.poses import POSES
+    from station.domain.signals.poses import POSES
     from station.simulator.recording import (
         pose_orientations,
         random_imu,

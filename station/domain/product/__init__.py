@@ -1,0 +1,1 @@
+"""The products: limits, judging, run plans and settings."""

@@ -1,0 +1,1 @@
+"""The unit's record: runs, a unit's state, signatures."""

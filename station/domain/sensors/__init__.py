@@ -1,0 +1,1 @@
+"""The sensors: what the putter's hardware is and can send."""

@@ -1,0 +1,1 @@
+"""The signals: samples, stillness, poses and orientation."""
