@@ -7,6 +7,7 @@ from uuid import UUID
 
 from pydantic import AfterValidator, BaseModel, Field
 
+from station.domain.constants import ReviewDecision
 from station.domain.gyro.fit import GyroFitReport
 from station.domain.gyro.log import GyroDwells
 from station.domain.record.records import (
@@ -16,7 +17,6 @@ from station.domain.record.records import (
     HoldReview,
     LogSource,
     Reason,
-    ReviewDecision,
     RunSummary,
     Verdict,
 )

@@ -33,14 +33,27 @@ class CalibrationMismatchError(CalstationError):
     """The submitted coefficients are not what the submitted poses give."""
 
 
-def sensor_of(record: RunRecord, submitted: Coefficients) -> SensorSpec:
-    """The sensor whose counts ``record``'s poses are: its shipped product's, or for a
-    product this server does not know, the wire's range at the submitted sensitivity."""
+def _shipped_sensor(part_number: str) -> SensorSpec | None:
+    """The sensor of the shipped product ``part_number`` (None: not one this server ships)."""
     # Imported here: the products read their run plans, whose poses import scipy, which
     # the server's start does without (tests/api/test_start.py).
     from station.domain.product.products import shipped_sensor
 
-    shipped = shipped_sensor(record.part_number)
+    return shipped_sensor(part_number)
+
+
+def counts_beyond_sensor(record: RunRecord) -> str | None:
+    """The first pose mean of ``record`` beyond the ADC range of its shipped product's
+    sensor, named (a product this server does not ship: none, the record itself holds
+    the wire's range)."""
+    sensor = _shipped_sensor(record.part_number)
+    return None if sensor is None else record.counts_beyond(sensor.adc_max)
+
+
+def sensor_of(record: RunRecord, submitted: Coefficients) -> SensorSpec:
+    """The sensor whose counts ``record``'s poses are: its shipped product's, or for a
+    product this server does not know, the wire's range at the submitted sensitivity."""
+    shipped = _shipped_sensor(record.part_number)
     if shipped is not None:
         return shipped
     counts_per_g = max(float(np.mean(np.abs(submitted.sensitivity.as_tuple()))), 1.0)

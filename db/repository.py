@@ -41,13 +41,12 @@ from db.models import (
 from db.outbox_reports import record_outbox
 from db.rollups import lock_submissions, record_run
 from db.units import record_unit_run, refresh_answers
-from station.domain.constants import DEFAULT_PART_NUMBER
+from station.domain.constants import DEFAULT_PART_NUMBER, ReviewDecision
 from station.domain.errors import CalstationError, InputError
 from station.domain.record.outbox_report import OutboxReport
 from station.domain.record.records import (
     GyroFitRecord,
     HoldReview,
-    ReviewDecision,
     RunRecord,
     RunSummary,
     StoredRun,

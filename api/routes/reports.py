@@ -55,13 +55,16 @@ from db.limits_profiles import keep_profile, stored_profiles
 from db.reports import CHART_POINTS
 from db.run_export import HEADER, run_page
 from db.split import SPLIT_PARAMETERS, SPLIT_RUNS
+from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.errors import InputError
 from station.domain.i18n import Language
 from station.domain.product.laboratory import Laboratory
 from station.domain.product.limits import LimitsProfile, parse_profiles, pick_profile
 from station.domain.quality.figures import EolReport, ReportFilter
 from station.domain.quality.split import SplitBy, SplitReport
-from station.domain.record.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
+from station.domain.record.records import (
+    SERIAL_PATTERN,
+)
 from station.report.period import MAX_LISTED_UNITS, check_order, parse_moment
 from station.report.render import MEDIA_TYPES
 

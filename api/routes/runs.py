@@ -11,15 +11,14 @@ from api.errors import invalid
 from api.metrics import get_metrics, refuse
 from api.responses import json_response, problems
 from api.schemas import RunList
-from api.verification import CalibrationMismatchError, check_coefficients
+from api.verification import CalibrationMismatchError, check_coefficients, counts_beyond_sensor
 from db import RunQuery
 from db.repository import MAX_PAGE
-from station.domain.constants import PART_NUMBER_PATTERN
+from station.domain.constants import IDENTIFIER_PATTERN, PART_NUMBER_PATTERN
 from station.domain.errors import InputError
 from station.domain.product.limits import profile_of
 from station.domain.record.outbox_report import OUTBOX_HEADER, parse_outbox_header
 from station.domain.record.records import (
-    IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
     RunRecord,
     StoredRun,
@@ -98,7 +97,8 @@ async def get_run(run_id: UUID, repository: ReaderDep) -> Response:
             _422="invalid (each offending field named: a limits profile that does not hash to "
             "its sha256, or holds a bound outside what its quantity can take, is one; a "
             "`started_at` or `finished_at` outside the years "
-            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another), or the poses give other "
+            f"{RUN_YEARS[0]}…{RUN_YEARS[1]} is another, a pose mean beyond the ADC range "
+            "of its product's sensor a third), or the poses give other "
             "coefficients",
         ),
     },
@@ -133,6 +133,9 @@ async def submit_run(
         if why is not None:
             refuse(request, "implausible_time")
             raise invalid(("body", field), why)
+    beyond = counts_beyond_sensor(record)
+    if beyond is not None:
+        raise invalid(("body", "poses"), beyond)
     report = None
     if outbox is not None:
         try:

@@ -25,9 +25,12 @@ from api.routes.units import SerialPath
 from api.schemas import ReviewForm
 from db import ReviewRefusedError, RunRepository
 from db.station_health import CYCLE_RUNS, station_health
+from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.i18n import Language
 from station.domain.quality.station_health import StationHealth
-from station.domain.record.records import IDENTIFIER_PATTERN, SERIAL_PATTERN
+from station.domain.record.records import (
+    SERIAL_PATTERN,
+)
 
 router = APIRouter(tags=["pages"])
 

@@ -28,8 +28,14 @@ from station.domain.gyro.motion import GyroMatrixFit, Move, fit_gyro_matrix
 from station.domain.i18n import tr
 from station.domain.product.limits import LimitsProfile, check
 from station.domain.product.run_settings import RunSettings
-from station.domain.record.records import Axis, FailureReason, GyroMatrixRecord, GyroMove, Vector3
+from station.domain.record.records import (
+    FailureReason,
+    GyroMatrixRecord,
+    GyroMove,
+    Vector3,
+)
 from station.domain.sensors.record_bounds import CONDITION_MAX
+from station.domain.sensors.sensor import Axis
 from station.results.journal import Capture
 from station.run.gyro_check import VerificationMove
 from station.run.gyro_moves import MoveRecorder, RecordedMove

@@ -39,8 +39,13 @@ def _auth(key: str) -> dict[str, str]:
             "body.poses.1.temperature_c",
             "greater than or equal",
         ),
+        (
+            lambda body: body["poses"][2]["mean"].update(y=4096.0),
+            "body.poses",
+            "poses.2.mean: y 4096 outside the ADC range 0…4095",
+        ),
     ],
-    ids=["pose-std", "gyro-bias", "temperature"],
+    ids=["pose-std", "gyro-bias", "temperature", "beyond-its-sensor"],
 )
 def test_a_poison_run_is_refused_naming_the_field_and_the_report_still_answers(
     client: httpx.Client, station_key: str, change: object, loc: str, words: str

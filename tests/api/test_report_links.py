@@ -8,8 +8,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from api.routes.reports import Period
+from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.quality.figures import ReportFilter
-from station.domain.record.records import IDENTIFIER_PATTERN
 from station.report.html import FAILING_RUNS_PATH, REPORT_PATH, RUNS_CSV_PATH, SPLIT_PATH, href
 
 NAMES = st.none() | st.from_regex(IDENTIFIER_PATTERN, fullmatch=True)

@@ -117,7 +117,7 @@ calibration it gives and the coupling itself.
 
 from dataclasses import dataclass, field
 from functools import cache, lru_cache
-from typing import TYPE_CHECKING, Final
+from typing import Final, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -134,8 +134,19 @@ from station.domain.sensors.sensor import (
     SENSITIVITY_TEMPCO_PER_C,
 )
 
-if TYPE_CHECKING:  # the gyro package imports this module: a type only
-    from station.domain.gyro.motion.matrix_fit import GyroMatrixFit
+
+class MoveFit(Protocol):
+    """What the budget of the gyro matrix K reads of its fit from the moves
+    ([Tedaldi2014]_; :class:`station.domain.gyro.motion.GyroMatrixFit`, whose package
+    stands above this one): shapes as documented there."""
+
+    @property
+    def standard_errors(self) -> FloatArray: ...
+    @property
+    def directions(self) -> FloatArray: ...
+    @property
+    def direction_gain(self) -> FloatArray: ...
+
 
 #: Coverage factor of every expanded uncertainty ([JCGM100]_ 6.2.1).
 COVERAGE_FACTOR: Final = 2.0
@@ -489,7 +500,7 @@ def gyro_bias_uncertainty(
 
 
 def gyro_matrix_uncertainty(
-    fit: "GyroMatrixFit", budget: AccelerometerBudget | None, k: float = COVERAGE_FACTOR
+    fit: MoveFit, budget: AccelerometerBudget | None, k: float = COVERAGE_FACTOR
 ) -> FloatArray:
     """Expanded uncertainty (3, 3) of each element of the gyro matrix K (module docstring):
     k·√(max(u_fit², u_model²) + u_geometry²), u_fit the fit's standard errors
@@ -508,7 +519,7 @@ def gyro_matrix_uncertainty(
     return np.asarray(k * np.sqrt(variance), dtype=np.float64)
 
 
-def model_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatArray:
+def model_variance(fit: MoveFit, budget: AccelerometerBudget) -> FloatArray:
     """Variance (3, 3) of K from the six-parameter model's unmodelled cross-axis coupling
     (zero for the nine-parameter model, which represents it). Under each drawn coupling M
     of the accelerometer's ``model`` term a move's end along u reads
@@ -532,7 +543,7 @@ def model_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatAr
     return np.asarray((u**2).reshape(3, 3), dtype=np.float64)
 
 
-def geometry_variance(fit: "GyroMatrixFit", budget: AccelerometerBudget) -> FloatArray:
+def geometry_variance(fit: MoveFit, budget: AccelerometerBudget) -> FloatArray:
     """Variance (3, 3) of K from the accelerometer calibration's error (the moves'
     geometry): each gravity direction u = C(a − o)/|C(a − o)| of a move's end moves by
     ∂u/∂θ·δθ, the same δθ for every move, so ``var(K) = diag(A Σ_θ Aᵀ)`` with

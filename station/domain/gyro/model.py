@@ -24,8 +24,6 @@ from station.domain.arrays import FloatArray
 from station.domain.sensors.sensor import AXES
 
 PPM: Final = 1e6
-#: Terms of one gyro axis' row of the model, in regressor column order.
-TERM_GROUPS: Final = ("bias", "S", "B", "N")
 TERMS_PER_AXIS: Final = 10
 
 

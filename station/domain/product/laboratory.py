@@ -20,7 +20,7 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from station.domain.errors import InputError, validation_problem
-from station.domain.toml_text import parse_toml
+from station.domain.toml_text import parse_toml, read_text
 
 #: One line of a certificate's identity: printable, no line breaks.
 _Line = Annotated[str, Field(min_length=1, max_length=300, pattern=r"^[^\x00-\x1f\x7f]+$")]
@@ -45,13 +45,7 @@ class Laboratory(BaseModel):
 def load_laboratory(path: Path) -> Laboratory:
     """The ``[laboratory]`` table of the TOML file ``path``: an :class:`InputError` of
     one line when it cannot be read, is not TOML or holds a field that is not one."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the laboratory: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not UTF-8 text") from None
-    table = parse_toml(text, str(path)).get("laboratory")
+    table = parse_toml(read_text(path, "laboratory"), str(path)).get("laboratory")
     if not isinstance(table, dict):
         raise InputError(f"{path}: no [laboratory] table")
     try:

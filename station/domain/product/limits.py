@@ -12,7 +12,6 @@ axis or pose) rather than free text.
 
 import math
 from collections.abc import Callable
-from importlib import resources
 from pathlib import Path
 from typing import Annotated, Self
 
@@ -29,7 +28,6 @@ from pydantic import (
 from station.domain.errors import InputError
 from station.domain.record.records import (
     GYRO_MATRIX_MAX,
-    Axis,
     DecisionRule,
     FailureReason,
     LimitsRef,
@@ -45,7 +43,8 @@ from station.domain.sensors.record_bounds import (
     SENSITIVITY_MAX_COUNTS_PER_G,
     Text,
 )
-from station.domain.toml_text import parse_toml
+from station.domain.sensors.sensor import Axis
+from station.domain.toml_text import parse_toml, read_text, shipped_text
 
 DEFAULT_PROFILE = "kxm52-production"
 
@@ -362,17 +361,8 @@ def check(
 def load_profiles(path: Path | None = None) -> dict[str, LimitsProfile]:
     """All profiles of a TOML file (the shipped file when ``path`` is None)."""
     if path is None:
-        source = resources.files("station.domain.profiles").joinpath("limits.toml")
-        text, shown = source.read_text(encoding="utf-8"), "station/domain/profiles/limits.toml"
-    else:
-        shown = str(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise InputError(
-                f"{shown}: cannot read the limits file: {exc.strerror or exc}"
-            ) from None
-    return parse_profiles(text, shown)
+        return parse_profiles(shipped_text("limits.toml"), "station/domain/profiles/limits.toml")
+    return parse_profiles(read_text(path, "limits file"), str(path))
 
 
 def parse_profiles(text: str, shown: str) -> dict[str, LimitsProfile]:

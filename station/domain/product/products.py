@@ -16,7 +16,6 @@ then a regular expression with named groups ``serial`` (required), ``part_number
 """
 
 from functools import cache
-from importlib import resources
 from pathlib import Path
 from typing import Self
 
@@ -28,7 +27,7 @@ from station.domain.patterns import full_match, pattern_groups
 from station.domain.product.limits import LimitsProfile
 from station.domain.product.run_settings import shipped_plan
 from station.domain.sensors.sensor_spec import SensorSpec
-from station.domain.toml_text import parse_toml
+from station.domain.toml_text import parse_toml, read_text, shipped_text
 
 
 class Product(BaseModel):
@@ -126,13 +125,8 @@ def parse_products(text: str, shown: str) -> Products:
 def load_products(path: Path | None = None) -> Products:
     """The products of ``path`` (default: the shipped ``products.toml``)."""
     if path is None:
-        source = resources.files("station.domain.profiles").joinpath("products.toml")
-        return parse_products(source.read_text(encoding="utf-8"), "products.toml")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the products: {exc.strerror}") from None
-    return parse_products(text, str(path))
+        return parse_products(shipped_text("products.toml"), "products.toml")
+    return parse_products(read_text(path, "products"), str(path))
 
 
 @cache

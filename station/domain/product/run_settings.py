@@ -12,7 +12,6 @@ the limits and the poses, model and gyro calibration together.
 
 import tomllib
 from functools import cache
-from importlib import resources
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
@@ -25,6 +24,7 @@ from station.domain.sensors.sensor_spec import SensorSpec
 from station.domain.signals.orientation import POSE_TOLERANCE_DEG
 from station.domain.signals.poses import CALIBRATION_POSES, POSES, VERIFICATION_POSE
 from station.domain.signals.stillness import StillnessThresholds
+from station.domain.toml_text import shipped_text
 
 
 class RunSettings(BaseModel):
@@ -91,8 +91,7 @@ class RunSettings(BaseModel):
 
 @cache
 def _plans() -> dict[str, dict[str, Any]]:
-    source = resources.files("station.domain.profiles").joinpath("plans.toml")
-    plans: dict[str, dict[str, Any]] = tomllib.loads(source.read_text(encoding="utf-8"))["plans"]
+    plans: dict[str, dict[str, Any]] = tomllib.loads(shipped_text("plans.toml"))["plans"]
     return plans
 
 

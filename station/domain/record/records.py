@@ -35,7 +35,6 @@ from station.domain.arrays import FloatArray
 from station.domain.calibration.model import Model
 from station.domain.constants import (
     DEFAULT_PART_NUMBER,
-    IDENTIFIER_PATTERN,
     MAX_SLOTS,
     Identifier,
     PartNumber,
@@ -64,39 +63,6 @@ from station.domain.sensors.record_bounds import (
 )
 from station.domain.sensors.sensor import ADC_MIN, Axis
 from station.domain.signals.samples import WindowSummary
-
-__all__ = [
-    "IDENTIFIER_PATTERN",
-    "SERIAL_PATTERN",
-    "AsFound",
-    "Axis",
-    "Coefficients",
-    "Counts3",
-    "Disposition",
-    "FailureReason",
-    "GyroFitRecord",
-    "GyroMatrixRecord",
-    "GyroMove",
-    "GyroSummary",
-    "HoldReview",
-    "Identifier",
-    "LimitsRef",
-    "LinkStats",
-    "Matrix3",
-    "Model",
-    "PoseRecord",
-    "PoseRole",
-    "QualityMetrics",
-    "ReplacedCapture",
-    "ReviewDecision",
-    "RunRecord",
-    "RunSummary",
-    "StoredCoefficients",
-    "StoredRun",
-    "UtcDatetime",
-    "Vector3",
-    "Verdict",
-]
 
 Verdict = Literal["pass", "fail"]
 #: Where a unit goes after a run: out of the door, back on a station, or to the repair bench.
@@ -541,16 +507,6 @@ class _RunHeader(_Record):
         return self
 
 
-def _adc_max_of(part_number: str) -> int:
-    """The largest count of ``part_number``'s sensor if it is a shipped product, else the
-    wire's."""
-    # Imported here: the products name their limits profiles, whose bounds are these.
-    from station.domain.product.products import shipped_sensor
-
-    sensor = shipped_sensor(part_number)
-    return WIRE_COUNTS_MAX if sensor is None else sensor.adc_max
-
-
 class RunRecord(_RunHeader):
     """One calibration attempt of one unit at one station: what the station submits."""
 
@@ -563,22 +519,22 @@ class RunRecord(_RunHeader):
             raise ValueError("pose indexes must be 0…N-1, each once")
         return self
 
-    @model_validator(mode="after")
-    def _counts_of_its_sensor(self) -> Self:
-        """Every pose mean within the ADC range of the record's product's sensor: a shipped
-        product's (the putter's 0…4095); another product's, the wire's (:data:`Counts3`)."""
-        top = _adc_max_of(self.part_number)
+    def counts_beyond(self, adc_max: int) -> str | None:
+        """The first pose mean above ``adc_max``, the largest count of the record's
+        product's sensor (the putter's 4095), named with its field; None when all are
+        within. The record holds only the wire's bounds (:data:`Counts3`): which sensor a
+        part number has is the product catalogue's, known to the caller."""
         for i, pose in enumerate(self.poses):
             means = [("mean", pose.mean)]
             means += [(f"replaced.{j}.mean", r.mean) for j, r in enumerate(pose.replaced)]
             for where, mean in means:
                 for axis, value in zip("xyz", mean.as_tuple(), strict=True):
-                    if value > top:
-                        raise ValueError(
+                    if value > adc_max:
+                        return (
                             f"poses.{i}.{where}: {axis} {value:.6g} outside the ADC range "
-                            f"0…{top} of {self.part_number}"
+                            f"0…{adc_max} of {self.part_number}"
                         )
-        return self
+        return None
 
     def fit_poses(self) -> tuple[PoseRecord, ...]:
         """The poses that feed the calibration solve, in index order."""

@@ -28,13 +28,16 @@ from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey, Ed25519PublicKey
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.errors import InputError
-from station.domain.record.records import IDENTIFIER_PATTERN, RunRecord, UtcDatetime, canonical_json
+from station.domain.record.records import (
+    RunRecord,
+    UtcDatetime,
+    canonical_json,
+)
 
 #: A signatory's name: an identifier, as a station's or an operator's.
 SignatoryName = Annotated[str, Field(pattern=IDENTIFIER_PATTERN)]
-#: An Ed25519 public key, 32 bytes, as hex (64 digits).
-PublicKeyHex = Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]
 #: An Ed25519 signature, 64 bytes, as hex (128 digits).
 SignatureHex = Annotated[str, Field(pattern=r"^[0-9a-f]{128}$")]
 Sha256Hex = Annotated[str, Field(pattern=r"^[0-9a-f]{64}$")]

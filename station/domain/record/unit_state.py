@@ -27,6 +27,7 @@ from uuid import UUID
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from station.domain.calibration.model import Model
 from station.domain.record.records import (
     Disposition,
     FailureReason,
@@ -35,7 +36,6 @@ from station.domain.record.records import (
     HoldReview,
     LimitsRef,
     Matrix3,
-    Model,
     QualityMetrics,
     RunRecord,
     RunSummary,

@@ -90,9 +90,6 @@ def implausible_run_time(moment: datetime) -> str | None:
     return f"{shown} is outside the years {first}…{last} (UTC): the station's clock is wrong"
 
 
-AdcSpread = Annotated[float, Field(ge=0, le=ADC_SPAN)]
-"""A spread (standard deviation) of ADC readings, counts."""
-
 GyroRate = Annotated[float, Field(ge=-GYRO_RANGE_DPS, le=GYRO_RANGE_DPS)]
 """A gyro reading or a mean of readings (bias), deg/s."""
 
@@ -102,14 +99,8 @@ GyroSpread = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 Temperature = Annotated[float, Field(ge=-TEMPERATURE_RANGE_C, le=TEMPERATURE_RANGE_C)]
 """A temperature the unit reports, °C."""
 
-OffsetCounts = Annotated[float, Field(ge=OFFSET_MIN_COUNTS, le=OFFSET_MAX_COUNTS)]
-"""A calibrated zero-g output, counts."""
-
 Sensitivity = Annotated[float, Field(gt=0, le=SENSITIVITY_MAX_COUNTS_PER_G)]
 """A calibrated sensitivity, counts/g."""
-
-MatrixEntry = Annotated[float, Field(ge=-MATRIX_MAX_G_PER_COUNT, le=MATRIX_MAX_G_PER_COUNT)]
-"""An entry of the counts-to-g matrix, g/count."""
 
 ErrorMg = Annotated[float, Field(ge=0, le=ERROR_MAX_MG)]
 """A residual or verification error, mg."""

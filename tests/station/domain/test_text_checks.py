@@ -11,13 +11,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pydantic import BaseModel, TypeAdapter
 
+from station.domain.constants import IDENTIFIER_PATTERN, Identifier
 from station.domain.product.limits import LimitsProfile, load_profile
 from station.domain.record.records import (
-    IDENTIFIER_PATTERN,
     SERIAL_PATTERN,
     FailureReason,
     GyroMove,
-    Identifier,
     LogSource,
     Reason,
     ReplacedCapture,

@@ -75,7 +75,13 @@ def test_pose_means_must_be_adc_counts() -> None:
     poses = payload["poses"]
     assert isinstance(poses, list)
     poses[2]["mean"]["y"] = 4096.0
-    with pytest.raises(ValidationError, match="ADC range 0…4095"):
+    record = RunRecord.model_validate(payload)
+    assert record.counts_beyond(4095) == (
+        f"poses.2.mean: y 4096 outside the ADC range 0…4095 of {record.part_number}"
+    )
+    assert record.counts_beyond(65535) is None
+    poses[2]["mean"]["y"] = 65536.0
+    with pytest.raises(ValidationError, match="ADC range"):
         RunRecord.model_validate(payload)
 
 
