@@ -38,7 +38,7 @@ async def get_sessions(request: Request) -> async_sessionmaker[AsyncSession]:
 
 
 async def get_readers(request: Request) -> async_sessionmaker[AsyncSession]:
-    """The factory of autocommit sessions (for reads)."""
+    """The factory of read sessions (each transaction bounded by the read timeout)."""
     readers: async_sessionmaker[AsyncSession] = request.app.state.readers
     return readers
 
@@ -60,10 +60,22 @@ async def get_repository(sessions: SessionsDep) -> AsyncIterator[Repository]:
         yield Repository(session)
 
 
+class Reader(Repository):
+    """The run repository of one request's read session: each :meth:`run` a transaction of
+    its own, which carries the read timeout (``SET LOCAL``, :mod:`db.timeouts`) and ends
+    with it, so that no transaction stays open while the request awaits anything else
+    (through a pooler in transaction mode it would hold a PostgreSQL connection)."""
+
+    async def run(self, work: Callable[[RunRepository], T]) -> T:
+        """``work(repository)`` in a transaction of its own on this session."""
+        async with self.session.begin():
+            return await super().run(work)
+
+
 async def get_reader(readers: ReadersDep) -> AsyncIterator[Repository]:
-    """A repository on an autocommit session, for read-only requests."""
+    """A repository for read-only requests, a transaction for each of its reads."""
     async with readers() as session:
-        yield Repository(session)
+        yield Reader(session)
 
 
 RepositoryDep = Annotated[Repository, Depends(get_repository)]

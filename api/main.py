@@ -60,17 +60,15 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         writer = make_async_engine(
             url, pool_size=settings.write_pool_size, max_overflow=0, **options
         )
-        # Reads need no transaction: runs are append-only, so each statement stands
-        # alone. A pool of autocommit connections saves the BEGIN and ROLLBACK round
-        # trips and the isolation switch on every checkout.
-        # Nothing to reset when a connection goes back either: it never opens a transaction.
+        # A read is a transaction: its statement timeout is set in it (SET LOCAL,
+        # db/timeouts.py), the one way the timeout holds through a pooler in transaction
+        # mode. Three round trips more than autocommit (BEGIN, SET LOCAL, ROLLBACK); the
+        # unit lookups keep an autocommit connection of their own (db/units.py).
         reader = make_async_engine(
             url,
             statement_timeout_s=settings.read_timeout_s,
             pool_size=settings.read_pool_size,
             max_overflow=0,
-            isolation_level="AUTOCOMMIT",
-            pool_reset_on_return=None,
             **options,
         )
         # The report and the dashboard: processes and connections of their own, on the

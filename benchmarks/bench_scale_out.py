@@ -32,8 +32,10 @@ With ``--replica`` the benchmark runs a PostgreSQL primary and a streaming repli
 own instead (``initdb`` and ``pg_basebackup -R`` in a temporary directory, each
 ``postgres`` on a free port, run as the ``postgres`` user): the servers of (b) read the
 report from the replica (``CALSTATION_REPORT_DATABASE_URL``, directly, not through
-pgbouncer), and after (b) the replica's lag is measured (WAL bytes behind, the time to
-replay them) and its runs compared with the primary's.
+pgbouncer); during (b) the replica's lag is sampled every second on the primary
+(``pg_stat_replication``: ``replay_lag``, and the WAL bytes sent but not yet replayed),
+after (b) measured once more (WAL bytes behind, the time to replay them), and its runs
+compared with the primary's.
 
 Checks after (b): every run a station saw stored is in the database exactly once and
 no other run of the load is there; the alert was posted exactly once; the 5xx answers
@@ -168,6 +170,65 @@ def replica_lag(primary: str, replica: str) -> tuple[float, float]:
             time.sleep(0.01)
     engine.dispose()
     return time.monotonic() - started, float(behind)
+
+
+#: Seconds between two samples of the replica's lag during the load.
+LAG_EVERY_S = 1.0
+
+
+class LagSampler:
+    """The replica's lag as the primary at ``primary_url`` sees it, every
+    :data:`LAG_EVERY_S` seconds for the ``seconds`` the stations submit: ``replay_lag`` of
+    ``pg_stat_replication`` (from a commit's WAL written on the primary to its replay on
+    the replica; null once the replica has caught up and nothing new is written: 0) and
+    the WAL bytes between the primary's current position and the replica's replay."""
+
+    QUERY = (
+        "SELECT coalesce(extract(epoch FROM replay_lag), 0)::float, "
+        "pg_wal_lsn_diff(pg_current_wal_lsn(), replay_lsn)::float FROM pg_stat_replication"
+    )
+
+    def __init__(self, primary_url: str, seconds: float) -> None:
+        self.duration = seconds
+        self.seconds: list[float] = []
+        self.bytes: list[float] = []
+        self.missing = 0  # samples where no replica was connected
+        self._stop = threading.Event()
+        self._engine = make_engine(primary_url, isolation_level="AUTOCOMMIT")
+        self._thread = threading.Thread(target=self._sample)
+
+    def _sample(self) -> None:
+        until = time.monotonic() + self.duration
+        with self._engine.connect() as connection:
+            while not self._stop.wait(LAG_EVERY_S) and time.monotonic() <= until:
+                row = connection.execute(text(self.QUERY)).first()
+                if row is None:
+                    self.missing += 1
+                else:
+                    self.seconds.append(row[0])
+                    self.bytes.append(row[1])
+
+    def __enter__(self) -> "LagSampler":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self._stop.set()
+        self._thread.join()
+        self._engine.dispose()
+
+    def summary(self) -> str:
+        """p50 / p95 / max of the samples."""
+
+        def spread(values: list[float], scale: float) -> str:
+            figures = (np.percentile(values, 50), np.percentile(values, 95), max(values))
+            return " / ".join(f"{f * scale:,.0f}" for f in figures) if values else "none"
+
+        return (
+            f"replica lag during the load ({len(self.seconds)} samples, one a second; "
+            f"{self.missing} without a replica): replay_lag p50 / p95 / max "
+            f"{spread(self.seconds, 1000)} ms, WAL not yet replayed {spread(self.bytes, 1)} bytes"
+        )
 
 
 async def station(
@@ -367,7 +428,8 @@ def main() -> None:
             ports = [free_port() for _ in range(args.servers)]
             servers = [start_server(pooled, each, directory, **settings) for each in ports]
             try:
-                with haproxy(ports, directory) as base:
+                sampler = None if report_url is None else LagSampler(server_url, args.seconds)
+                with haproxy(ports, directory) as base, sampler or contextlib.nullcontext():
                     t0 = time.monotonic()
                     thread, out = load_in_thread(base, keys, args.readers, args.seconds, t0)
                     time.sleep(args.seconds / 3)
@@ -377,8 +439,8 @@ def main() -> None:
                     servers[0] = start_server(pooled, ports[0], directory, **settings)
                     back_at = time.monotonic() - t0 + CHECK_MS / 1000
                     thread.join()
-                    scaled = out[0]
-                    time.sleep(3)  # the alert loops' next passes
+                scaled = out[0]
+                time.sleep(3)  # the alert loops' next passes
             finally:
                 for each in servers:
                     stop(each)
@@ -394,6 +456,8 @@ def main() -> None:
             f"{len(scaled.station_errors)} {sorted({s for _, s in scaled.station_errors})}"
         )
         if report_url is not None:
+            assert sampler is not None
+            print(sampler.summary())
             seconds, behind = replica_lag(url, report_url)
             print(f"replica: {behind:,.0f} bytes of WAL behind, replayed in {seconds:.2f} s")
             replicated = set(stored_run_ids(report_url))

@@ -9,7 +9,7 @@ from sqlalchemy.ext.asyncio import AsyncEngine, create_async_engine
 from sqlalchemy.orm import Session
 
 from db.settings import check_database_url
-from db.timeouts import sqlite_statement_timeout, with_statement_timeout
+from db.timeouts import postgres_statement_timeout, sqlite_statement_timeout
 from station.domain.errors import CalstationError, InputError
 
 
@@ -55,17 +55,16 @@ def make_async_engine(
 ) -> AsyncEngine:
     """An asyncio engine on the same database as :func:`make_engine` would open.
 
-    ``statement_timeout_s`` bounds each statement on PostgreSQL; SQLite's asyncio driver
-    runs statements in a thread of its own, out of reach of :mod:`db.timeouts`.
+    ``statement_timeout_s`` bounds each statement of a transaction on PostgreSQL; SQLite's
+    asyncio driver runs statements in a thread of its own, out of reach of :mod:`db.timeouts`.
     """
     parsed = make_url(url)
     backend = parsed.get_backend_name()
     if backend not in _ASYNC_DRIVERS:
         raise CalstationError(f"database dialect {backend!r} is not supported")
-    parsed = parsed.set(drivername=_ASYNC_DRIVERS[backend])
+    engine = create_async_engine(parsed.set(drivername=_ASYNC_DRIVERS[backend]), **kwargs)
     if statement_timeout_s is not None and backend == "postgresql":
-        parsed = with_statement_timeout(parsed, statement_timeout_s)
-    engine = create_async_engine(parsed, **kwargs)
+        postgres_statement_timeout(engine.sync_engine, statement_timeout_s)
     if backend == "sqlite":
         _sqlite_events(engine.sync_engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
     return engine
@@ -76,7 +75,8 @@ def make_engine(
 ) -> Engine:
     """An engine for ``url``; SQLite files get foreign keys, WAL and a busy timeout.
 
-    ``statement_timeout_s`` ends any statement that runs longer (:mod:`db.timeouts`).
+    ``statement_timeout_s`` ends any statement that runs longer (:mod:`db.timeouts`; on
+    PostgreSQL, the statements of a transaction).
     A URL whose database or driver cannot be loaded is an :class:`InputError`.
     """
     try:
@@ -92,9 +92,10 @@ def make_engine(
         if statement_timeout_s is not None:
             sqlite_statement_timeout(engine, statement_timeout_s)
         return engine
+    engine = create_engine(parsed, **kwargs)
     if statement_timeout_s is not None and parsed.get_backend_name() == "postgresql":
-        parsed = with_statement_timeout(parsed, statement_timeout_s)
-    return create_engine(parsed, **kwargs)
+        postgres_statement_timeout(engine, statement_timeout_s)
+    return engine
 
 
 class DatabaseUnavailableError(CalstationError):

@@ -1,7 +1,11 @@
 """Statement timeouts of the read connections: a slow read ends, it does not hold on.
 
-PostgreSQL bounds every statement of a connection with ``statement_timeout``, given at
-connection start in the URL's ``options`` (no round trip). SQLite has no such setting:
+PostgreSQL bounds every statement of a transaction with ``statement_timeout``, set by
+``SET LOCAL`` as each transaction begins: it lasts as long as the transaction, so it
+holds through a pooler in transaction mode (pgbouncer), which lends a PostgreSQL
+connection for one transaction and refuses, or ignores, a connection's startup options
+(``-c statement_timeout``); nor does it stay behind on the pooled connection for the next
+client. Statements outside a transaction (autocommit) run without it. SQLite has no such setting:
 a progress handler, called every :data:`SQLITE_CHECK_EVERY` virtual-machine steps,
 interrupts a statement that has run longer than the timeout (synchronous engines only,
 where the handler can be installed on the connection itself). Either way the driver
@@ -11,7 +15,7 @@ raises an error that :func:`is_statement_timeout` recognises.
 import time
 from typing import Any
 
-from sqlalchemy import URL, Engine, event
+from sqlalchemy import Connection, Engine, event
 from sqlalchemy.exc import DBAPIError
 
 #: Virtual-machine steps of SQLite between two looks at the clock.
@@ -21,17 +25,19 @@ SQLITE_CHECK_EVERY = 10_000
 QUERY_CANCELED = "57014"
 
 
-def with_statement_timeout(url: URL, seconds: float) -> URL:
-    """``url`` whose PostgreSQL connections end statements after ``seconds``.
+def postgres_statement_timeout(engine: Engine, seconds: float) -> None:
+    """End the statements of ``engine``'s PostgreSQL transactions after ``seconds``.
 
-    Appended to the ``options`` the URL may already give (e.g. a ``search_path``).
+    One ``SET LOCAL`` as each transaction begins (a round trip after ``BEGIN``); none on
+    a connection in autocommit, which has no transaction to hold it. An asyncio engine is
+    given by its ``sync_engine``.
     """
-    given = url.query.get("options", "")
-    options = " ".join(given) if isinstance(given, tuple) else given
     milliseconds = max(1, round(seconds * 1000))
-    return url.update_query_dict(
-        {"options": f"{options} -cstatement_timeout={milliseconds}".strip()}
-    )
+
+    @event.listens_for(engine, "begin")
+    def _set(connection: Connection) -> None:
+        if not connection.connection.dbapi_connection.autocommit:  # type: ignore[union-attr]
+            connection.exec_driver_sql(f"SET LOCAL statement_timeout = {milliseconds}")
 
 
 def sqlite_statement_timeout(engine: Engine, seconds: float) -> None:

@@ -7,7 +7,8 @@ until it is stored; after the first third of the runs is stored, one server is k
 (SIGKILL) and started again. Every run must then be stored exactly once, and the alert
 that the runs fire posted to the webhook once, though every server checks the rules.
 And reads through pgbouncer's transaction pooling never fail with the server's prepared
-statements off (``CALSTATION_PREPARED_STATEMENTS=false``).
+statements off (``CALSTATION_PREPARED_STATEMENTS=false``), and the read timeout
+(``CALSTATION_READ_TIMEOUT_S``) holds through it without staying on its pooled connections.
 """
 
 import shutil
@@ -22,9 +23,11 @@ from pathlib import Path
 import httpx
 import pytest
 from sqlalchemy import select, text
+from sqlalchemy.exc import OperationalError
 
-from db import RunRepository, open_database
+from db import RunRepository, make_engine, open_database
 from db.models import Run
+from db.timeouts import is_statement_timeout
 from tests.databases import own_postgres_database
 from tests.db.records import make_record
 from tests.scale_out import HUNG_S, Webhook, haproxy, pgbouncer, start_server, stop
@@ -161,3 +164,67 @@ def test_reads_through_transaction_pooling_never_fail_without_prepared_statement
         finally:
             stop(server)
     assert answers == {404}  # no such unit, every time: never a 500
+
+
+#: The read timeout of the tests below (s): a statement waiting on a lock held for the
+#: whole request runs past it, whatever the machine's load.
+READ_TIMEOUT_S = 0.5
+
+
+def test_the_read_timeout_holds_through_transaction_pooling_and_stays_in_its_transaction(
+    database_url: str,
+) -> None:
+    # One PostgreSQL connection behind pgbouncer: every transaction below runs on it, so a
+    # timeout left on it (a session's SET) would show in the next client's transaction.
+    with pgbouncer(database_url, pool_size=1) as pooled:
+        timed = make_engine(pooled, statement_timeout_s=READ_TIMEOUT_S)
+        plain = make_engine(pooled)
+        try:
+            with timed.connect() as connection, pytest.raises(OperationalError) as caught:
+                connection.execute(text("SELECT pg_sleep(30)"))
+            assert is_statement_timeout(caught.value)
+            with timed.connect() as connection:  # a short statement passes
+                assert connection.execute(text("SELECT pg_sleep(0.01)::text")).scalar_one() == ""
+                setting = connection.execute(text("SHOW statement_timeout")).scalar_one()
+            assert setting == f"{round(READ_TIMEOUT_S * 1000)}ms"
+            with plain.connect() as connection:
+                assert connection.execute(text("SHOW statement_timeout")).scalar_one() == "0"
+        finally:
+            timed.dispose()
+            plain.dispose()
+
+
+def test_a_read_past_the_timeout_through_pgbouncer_answers_503_and_the_next_one_works(
+    database_url: str, tmp_path: Path
+) -> None:
+    # The primary's reads (a unit's runs) and the report (its processes) each wait on a
+    # lock held directly on PostgreSQL until their timeout ends them.
+    reads = {
+        "/api/v1/units/PT-NONE/runs": ("runs", 404),
+        "/api/v1/reports/eol": ("report_counts, run_facts", 200),
+    }
+    database = open_database(database_url)
+    with pgbouncer(database_url) as pooled:
+        port = free_port()
+        server = start_server(
+            pooled,
+            port,
+            tmp_path,
+            prepared_statements="false",
+            read_timeout_s=str(READ_TIMEOUT_S),
+        )
+        try:
+            with local_client(f"http://127.0.0.1:{port}") as client:
+                for path, (tables, answered) in reads.items():
+                    with database.engine.connect() as blocker, blocker.begin():
+                        blocker.execute(text(f"LOCK TABLE {tables} IN ACCESS EXCLUSIVE MODE"))
+                        slow = client.get(path)
+                    assert slow.status_code == 503, (path, slow.text)
+                    assert slow.json()["detail"].startswith(
+                        "the read took longer than the server's read timeout "
+                        "(CALSTATION_READ_TIMEOUT_S)"
+                    )
+                    assert client.get(path).status_code == answered, path
+        finally:
+            stop(server)
+            database.dispose()

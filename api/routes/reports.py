@@ -506,7 +506,8 @@ async def _csv_pages(
         while after is not None:
             buffer.seek(0)
             buffer.truncate()
-            rows, after = await session.run_sync(run_page, filter, after, page_size)
+            async with session.begin():  # no transaction open while the client reads
+                rows, after = await session.run_sync(run_page, filter, after, page_size)
             writer.writerows(_csv_row(row) for row in rows)
             yield buffer.getvalue()
 
