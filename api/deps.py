@@ -14,8 +14,8 @@ from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from api.report_pool import ReportPool
 from db import RunRepository
-from db.repository import KeyHolder
-from db.units import UnitLookups
+from db.store.repository import KeyHolder
+from db.store.units import UnitLookups
 
 T = TypeVar("T")
 

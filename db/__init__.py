@@ -19,7 +19,8 @@ Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
 from db.database import Database, open_database, upgrade_database
 from db.engine import DatabaseUnavailableError, make_async_engine, make_engine
 from db.migrate import SchemaOutOfDateError
-from db.repository import (
+from db.settings import DatabaseSettings
+from db.store.repository import (
     ReviewRefusedError,
     RunConflictError,
     RunPage,
@@ -28,7 +29,6 @@ from db.repository import (
     SubmitOutcome,
     repository_transaction,
 )
-from db.settings import DatabaseSettings
 
 __all__ = [
     "Database",

@@ -1,6 +1,6 @@
 """Derived data, written at upgrade when it is missing or of an older definition.
 
-The unit answers (:mod:`db.units`) and the report's facts and roll-ups
+The unit answers (:mod:`db.store.units`) and the report's facts and roll-ups
 (:mod:`db.rollups`) are functions of ``runs``. The migrations create their tables
 only; when they are empty beside stored runs (a migration just added them, or emptied
 facts of an older yield definition, as 0021 did), or the answers are of an older shape,
@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts, Unit
 from db.rollups import lock_submissions, rebuild, stored_bounds
-from db.units import answers_are_stale, refresh_answers
+from db.store.units import answers_are_stale, refresh_answers
 
 
 def rewrite_if_stale(connection: Connection) -> bool:

@@ -31,8 +31,8 @@ from sqlalchemy.ext.asyncio import AsyncConnection, AsyncEngine
 from sqlalchemy.orm import Session
 
 from db.engine import DatabaseUnavailableError, for_dialect
-from db.mapping import summary_of
 from db.models import Run, RunFailure, Unit
+from db.store.mapping import summary_of
 from station.domain.records import RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 
@@ -98,7 +98,7 @@ def record_unit_run(session: Session, run_pk: int, run: RunSummary | StoredRun) 
     """Write the answer about the unit of ``run``, just stored with the key ``run_pk``.
 
     The answer holds the run as ``runs`` gives it back: its limits without the profile
-    (stored apart, :mod:`db.limits_profiles`).
+    (stored apart, :mod:`db.store.limits_profiles`).
     """
     run = run.model_copy(update={"limits": run.limits.model_copy(update={"profile": None})})
     stored = session.execute(

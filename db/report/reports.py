@@ -32,15 +32,16 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import Session, aliased
 
-from db.chart_queries import (
+from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
+from db.report.chart_queries import (
     chart_limits,
     first_moving_ranges,
     latest_chart_points,
     latest_values,
 )
-from db.holds import unreviewed
-from db.limits_profiles import stored_profiles
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
+from db.report.holds import unreviewed
+from db.report.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
+from db.report.what_if import rejudged
 from db.rollups import (
     COUNT_VALUES,
     FAILURE_VALUES,
@@ -56,8 +57,7 @@ from db.rollups import (
     parameter_contributions,
     stored_bounds,
 )
-from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
-from db.what_if import rejudged
+from db.store.limits_profiles import stored_profiles
 from station.domain.calibration.uncertainty import COVERAGE_FACTOR
 from station.domain.errors import InputError
 from station.domain.limits import LimitsProfile
@@ -843,7 +843,7 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
 def report_bounds(session: Session, counts: Sequence[Row[Any]]) -> tuple[FamilyBounds | None, str]:
     """The bounds capability is measured against, and a line saying which and why.
 
-    The stored profile (:mod:`db.limits_profiles`) of the latest run in range (by
+    The stored profile (:mod:`db.store.limits_profiles`) of the latest run in range (by
     finish), or of the latest whose profile is stored; with none stored (runs from
     stations older than stored profiles, or no run in range), the bounds the roll-ups
     were counted with; with none of those either, ``None``: no capability.
@@ -1074,7 +1074,7 @@ def eol_report(
     each product gets a section of its own (:class:`ProductSection`), its runs against
     its own profile; counts and yields stay the line's, with a row per product. A
     ``candidate`` profile adds the what-if: the runs re-judged against it
-    (:mod:`db.what_if`), nothing stored changed; a profile is one product's, so runs of
+    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so runs of
     several products refuse it (:class:`InputError`). ``unit_limit`` cuts the unit
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start

@@ -25,8 +25,6 @@ from sqlalchemy.sql.dml import ReturningInsert
 from db.base import Base
 from db.database import open_database
 from db.engine import for_dialect
-from db.limits_profiles import store_profile
-from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import (
     GyroFit,
     Run,
@@ -38,9 +36,11 @@ from db.models import (
 from db.models import (
     HoldReview as ReviewRow,
 )
-from db.outbox_reports import record_outbox
 from db.rollups import lock_submissions, record_run
-from db.units import record_unit_run, refresh_answers
+from db.store.limits_profiles import store_profile
+from db.store.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
+from db.store.outbox_reports import record_outbox
+from db.store.units import record_unit_run, refresh_answers
 from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import CalstationError, InputError
 from station.domain.outbox_report import OutboxReport
@@ -203,7 +203,7 @@ class RunRepository:
         date in the same transaction (:func:`db.rollups.record_run`); submissions are
         serialised for that (:func:`db.rollups.lock_submissions`). ``outbox``: the
         station's outbox as it sent the run, kept as its latest report
-        (:func:`db.outbox_reports.record_outbox`), a retry's too.
+        (:func:`db.store.outbox_reports.record_outbox`), a retry's too.
         """
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
