@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from db.report.alerts import claim_next, evaluate, mark_delivered, retry_later
+from db.report import claim_next, evaluate, mark_delivered, retry_later
 from station.domain.quality.alerts import AlertRules
 
 # httpx is imported by the loop when it runs: a server without alert rules never posts, and

@@ -33,7 +33,7 @@ from api.routes import (
 )
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
-from db.store.units import UnitLookups
+from db.store import UnitLookups
 from station import __version__
 from station.domain.quality.shifts import parse_shifts
 

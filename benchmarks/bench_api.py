@@ -48,7 +48,7 @@ from sqlalchemy import insert, make_url, text
 from db import RunRepository, make_engine, open_database
 from db.models import StoredLimitsProfile
 from db.rollups import rebuild
-from db.store.limits_profiles import profile_row
+from db.store import profile_row
 from station.domain.calibration import solve
 from station.domain.limits import load_profile
 from station.domain.records import RunRecord

@@ -42,13 +42,18 @@ from api.routes.alerts import LISTED_ALERTS
 from api.routes.reports import PAGE_UNITS
 from db import RunRepository, make_engine, open_database
 from db.models import StoredLimitsProfile
-from db.report.alerts import evaluate, recent_alerts
-from db.report.chart_queries import first_moving_ranges, latest_chart_points
-from db.report.reports import ReportQueries, eol_report
-from db.report.station_health import CYCLE_RUNS, station_health
+from db.report import (
+    CYCLE_RUNS,
+    ReportQueries,
+    eol_report,
+    evaluate,
+    first_moving_ranges,
+    latest_chart_points,
+    recent_alerts,
+    station_health,
+)
 from db.rollups import rebuild
-from db.store.certificates import certificate_run
-from db.store.limits_profiles import profile_row, stored_profiles
+from db.store import certificate_run, profile_row, stored_profiles
 from station.domain.limits import load_profile
 from station.domain.quality.alerts import parse_alert_rules
 from station.domain.quality.figures import ReportFilter

@@ -6,6 +6,8 @@ derived data of an older definition is rewritten in the same transaction as the 
 (:func:`db.derived.rewrite_if_stale`).
 """
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from sqlalchemy import Engine
@@ -16,6 +18,7 @@ from db.derived import rewrite_if_stale
 from db.engine import DatabaseUnavailableError, make_engine
 from db.migrate import current_revision, is_at_head, migrate_schema, require_current
 from db.settings import DatabaseSettings
+from db.store import RunRepository
 
 
 def upgrade(engine: Engine, revision: str = "head") -> None:
@@ -100,3 +103,18 @@ def upgrade_database(url: str | None = None) -> Upgrade:
         database.dispose()
     assert after is not None
     return Upgrade(before, after)
+
+
+@contextmanager
+def repository_transaction(url: str | None = None) -> Iterator[RunRepository]:
+    """A repository in one transaction on the database at ``url``, for one-off commands.
+
+    Opens the database (as :func:`open_database`), commits when the block ends
+    normally, and disposes of the connections either way.
+    """
+    database = open_database(url)
+    try:
+        with database.session() as session, session.begin():
+            yield RunRepository(session)
+    finally:
+        database.dispose()

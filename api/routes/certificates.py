@@ -16,7 +16,7 @@ from api.deps import ReaderDep
 from api.errors import invalid
 from api.responses import json_response, problems
 from db import RunRepository
-from db.store.signatures import signed_certificate, verify_signed
+from db.store import signed_certificate, verify_signed
 from station.domain.errors import InputError
 from station.domain.signature import SignedCertificate
 

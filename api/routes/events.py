@@ -39,7 +39,7 @@ from api.deps import ReadersDep
 from api.errors import RETRY_AFTER_S
 from api.responses import json_problems
 from api.schemas import RunEvent
-from db.store.run_events import last_stored, stored_after
+from db.store import last_stored, stored_after
 
 log = logging.getLogger(__name__)
 

@@ -1,2 +1,63 @@
 """The store of runs and units: what a submission, a unit's page, certificates,
-signatures, holds' reviews, keys and settings and run events write and read."""
+signatures, hold reviews, station keys and run events write and read.
+
+Public surface::
+
+    RunRepository(session)              submit and query runs, reviews, station keys
+    UnitLookups                         a unit's answer, shared by concurrent lookups
+    certificate_inputs / certificate_run   what a unit's certificate states
+    signed_certificate / verify_signed  signatories and signatures of certificates
+    stored_profiles / keep_profile      limits profiles by their SHA-256
+    stored_after / last_stored          the run events' stream
+
+It reads and writes the tables of :mod:`db.models` and the report's roll-ups
+(:mod:`db.rollups`, written with each run); it never imports :mod:`db.report`.
+"""
+
+from db.store.certificates import certificate_inputs, certificate_run
+from db.store.limits_profiles import keep_profile, profile_row, stored_profiles
+from db.store.repository import (
+    MAX_PAGE,
+    KeyHolder,
+    KeyScope,
+    ReviewRefusedError,
+    RunConflictError,
+    RunPage,
+    RunQuery,
+    RunRepository,
+    SubmitOutcome,
+)
+from db.store.run_events import last_stored, stored_after
+from db.store.signatures import (
+    add_signature,
+    register_signatory,
+    signatory_key,
+    signed_certificate,
+    verify_signed,
+)
+from db.store.units import UnitLookups
+
+__all__ = [
+    "MAX_PAGE",
+    "KeyHolder",
+    "KeyScope",
+    "ReviewRefusedError",
+    "RunConflictError",
+    "RunPage",
+    "RunQuery",
+    "RunRepository",
+    "SubmitOutcome",
+    "UnitLookups",
+    "add_signature",
+    "certificate_inputs",
+    "certificate_run",
+    "keep_profile",
+    "last_stored",
+    "profile_row",
+    "register_signatory",
+    "signatory_key",
+    "signed_certificate",
+    "stored_after",
+    "stored_profiles",
+    "verify_signed",
+]

@@ -10,8 +10,7 @@ import binascii
 import hashlib
 import secrets
 from collections import defaultdict
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any, Literal, cast
@@ -23,7 +22,6 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
-from db.database import open_database
 from db.engine import for_dialect
 from db.models import (
     GyroFit,
@@ -468,18 +466,3 @@ class RunRepository:
 
 class ReviewRefusedError(CalstationError):
     """A review of a unit that is not on hold, or of a run that is not its latest."""
-
-
-@contextmanager
-def repository_transaction(url: str | None = None) -> Iterator[RunRepository]:
-    """A repository in one transaction on the database at ``url``, for one-off commands.
-
-    Opens the database (as :func:`db.open_database`), commits when the block ends
-    normally, and disposes of the connections either way.
-    """
-    database = open_database(url)
-    try:
-        with database.session() as session, session.begin():
-            yield RunRepository(session)
-    finally:
-        database.dispose()
