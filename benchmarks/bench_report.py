@@ -327,11 +327,11 @@ def main() -> None:
                 ("parameters: all 16 (statistics, histograms)", partial(q.parameters, bounds)),
                 (
                     "control-chart limits (first run's moving ranges)",
-                    lambda: first_moving_ranges(session, q.conditions()),
+                    lambda: first_moving_ranges(session, q.conditions),
                 ),
                 (
                     "control-chart points (200)",
-                    lambda: latest_chart_points(session, q.conditions(), 200),
+                    lambda: latest_chart_points(session, q.conditions, 200),
                 ),
                 ("latest 1,000 units", lambda: q.latest_runs(1000)),
                 ("every unit (ship/hold list)", lambda: q.latest_runs(None)),

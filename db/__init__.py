@@ -30,7 +30,6 @@ from db.settings import DatabaseSettings
 from db.store import (
     ReviewRefusedError,
     RunConflictError,
-    RunPage,
     RunQuery,
     RunRepository,
     SubmitOutcome,
@@ -42,7 +41,6 @@ __all__ = [
     "DatabaseUnavailableError",
     "ReviewRefusedError",
     "RunConflictError",
-    "RunPage",
     "RunQuery",
     "RunRepository",
     "SchemaOutOfDateError",

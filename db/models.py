@@ -185,7 +185,7 @@ class Unit(Base):
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
     the run (:mod:`db.store.units`), so a unit lookup reads one row by primary key. Answers
-    missing or of an older shape are written at upgrade (:mod:`db.derived`).
+    missing or of an older shape are written at upgrade (:mod:`db.database`).
     """
 
     __tablename__ = "units"

@@ -1,15 +1,6 @@
-"""The end-of-line report's queries over the store's tables and the roll-ups of
-:mod:`db.rollups`: the report's sections, control charts, trends, split, what-if,
+"""The end-of-line report's queries over what :mod:`db.store` stores and the roll-ups of
+:mod:`db.rollups`: the report (``eol_report``), its charts, trends, split and what-if,
 open holds, station health, alerts and the runs export.
-
-Public surface::
-
-    eol_report(session, filter, ...)    the whole report (reports.py)
-    ReportQueries(session, filter)      one SQL statement per section
-    split_report / station_health       the split page, a station's health
-    held_units                          the dashboard's units on hold
-    evaluate / claim_next / ...         the alert rules' loop (alerts.py)
-    run_page                            the runs export, a page at a time
 """
 
 from db.report.alerts import claim_next, evaluate, mark_delivered, recent_alerts, retry_later

@@ -11,7 +11,7 @@ profiles: a few dozen) and applies the capability formulas of
 """
 
 from collections import Counter, defaultdict
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import UTC, date, datetime, time, timedelta
 from typing import Any, NamedTuple
@@ -177,6 +177,8 @@ class ReportQueries:
     def __init__(self, session: Session, filter: ReportFilter) -> None:
         self.session = session
         self.filter = filter
+        #: The ``WHERE`` clauses on ``runs`` of the filter (:func:`conditions`).
+        self.conditions = conditions(filter)
         self.dialect = session.get_bind().dialect.name
         self.days, self.edges = split_days(filter.since, filter.until)
         if self.dialect == "postgresql":
@@ -212,7 +214,7 @@ class ReportQueries:
         edge = or_(*edges) if edges else literal(False)
         # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
         carried = Run.uncertainty["k"].as_float().is_not(None)
-        where = [*self.conditions(), Run.verdict == "pass", carried]
+        where = [*self.conditions, Run.verdict == "pass", carried]
         row = self.session.execute(
             select(
                 func.count(),
@@ -230,28 +232,19 @@ class ReportQueries:
             risks=[] if parameters is None else _risks(parameters, means, values or {}),
         )
 
-    def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
-        """The station, operator, lot and product conditions on ``columns`` (``runs`` or a
-        roll-up)."""
-        return dimensions(self.filter, columns)
-
-    def conditions(self) -> list[ColumnElement[bool]]:
-        """The ``WHERE`` clauses on ``runs`` of the filter."""
-        return conditions(self.filter)
-
     def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
         """The runs of the partial days at the range's ends; ``None`` when there are none."""
         if not self.edges:
             return None
         spans = [and_(Run.started_at >= a, Run.started_at < b) for a, b in self.edges]
-        return [or_(*spans), PRODUCTION, *self._dimensions(Run)]
+        return [or_(*spans), PRODUCTION, *dimensions(self.filter, Run)]
 
     def _rolled_conditions(self, table: Any) -> list[ColumnElement[bool]] | None:
         """The roll-up rows of the whole days in range; ``None`` when there are none."""
         if self.days is None:
             return None
         first, end = self.days
-        where = self._dimensions(table)
+        where = dimensions(self.filter, table)
         if first is not None:
             where.append(table.day >= first)
         if end is not None:
@@ -284,6 +277,19 @@ class ReportQueries:
         ).group_by(*keys)
         return [row for row in self.session.execute(stmt)]
 
+    def _summed(
+        self,
+        table: Any,
+        values: Mapping[str, str],
+        group: Sequence[str],
+        contributions: Callable[[list[ColumnElement[bool]]], Select[Any]],
+    ) -> list[Row[Any]]:
+        """The roll-up rows of ``table`` over the whole days in range and the
+        ``contributions`` of the partial days' runs, merged per ``group``."""
+        edges = self._edge_conditions()
+        raw = [] if edges is None else [contributions(edges)]
+        return self._merged(table, values, group, self._rolled_conditions(table), raw)
+
     # -- counts and yields -------------------------------------------------------------
 
     def station_counts(self) -> list[Row[Any]]:
@@ -295,10 +301,8 @@ class ReportQueries:
         ranges (:mod:`db.rollups`, the yield definition).
         """
         group = ["station_id", *LIMITS]
-        edges = self._edge_conditions()
-        raw = [] if edges is None else [count_contributions(group, edges)]
-        rows = self._merged(
-            ReportCounts, COUNT_VALUES, group, self._rolled_conditions(ReportCounts), raw
+        rows = self._summed(
+            ReportCounts, COUNT_VALUES, group, lambda edges: count_contributions(group, edges)
         )
         return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
@@ -306,11 +310,10 @@ class ReportQueries:
         """Per part number: the counts :meth:`station_counts` sums per station (units,
         runs, passes, retests, aborts, station time), from the roll-ups and the partial
         days as theirs."""
-        group = ["part_number"]
-        edges = self._edge_conditions()
-        values = PRODUCT_COUNT_VALUES
-        raw = [] if edges is None else [count_contributions(group, edges, values=values)]
-        rows = self._merged(ReportCounts, values, group, self._rolled_conditions(ReportCounts), raw)
+        group, values = ["part_number"], PRODUCT_COUNT_VALUES
+        rows = self._summed(
+            ReportCounts, values, group, lambda e: count_contributions(group, e, values=values)
+        )
         return sorted(rows, key=lambda row: str(row.part_number))
 
     # -- failures ----------------------------------------------------------------------
@@ -318,10 +321,8 @@ class ReportQueries:
     def first_failures(self) -> list[Row[Any]]:
         """Failing runs per (first failure code, station, operator)."""
         group = ["code", "station_id", "operator_id"]
-        edges = self._edge_conditions()
-        raw = [] if edges is None else [failure_contributions(group, edges)]
-        return self._merged(
-            ReportFailures, FAILURE_VALUES, group, self._rolled_conditions(ReportFailures), raw
+        return self._summed(
+            ReportFailures, FAILURE_VALUES, group, lambda edges: failure_contributions(group, edges)
         )
 
     # -- parameters --------------------------------------------------------------------
@@ -352,7 +353,7 @@ class ReportQueries:
         if rolled_up:
             rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
         else:
-            rolled, raw = None, self.conditions()
+            rolled, raw = None, self.conditions
         moments_only = values == MOMENT_VALUES
         selects = (
             []
@@ -368,11 +369,13 @@ class ReportQueries:
         or the plant's days ``day`` numbers the runs with (from the runs)."""
         values = TREND_COUNT_VALUES
         if day is None:
-            edges = self._edge_conditions()
-            raw = [] if edges is None else [count_contributions(["day"], edges, values=values)]
-            rolled = self._rolled_conditions(ReportCounts)
-            return self._merged(ReportCounts, values, ["day"], rolled, raw)
-        raw = [count_contributions(["day"], self.conditions(), columns={"day": day}, values=values)]
+            return self._summed(
+                ReportCounts,
+                values,
+                ["day"],
+                lambda e: count_contributions(["day"], e, values=values),
+            )
+        raw = [count_contributions(["day"], self.conditions, columns={"day": day}, values=values)]
         return self._merged(ReportCounts, values, ["day"], None, raw)
 
     def daily_parameters(
@@ -389,7 +392,7 @@ class ReportQueries:
         """The units the report counts, by their first attempt on the line: that run is
         in range and matches the filter (``held``: and the unit's latest attempt, wherever
         and whenever it was, failed). The yield table counts the same units."""
-        where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions()]
+        where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions]
         return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
     def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
@@ -491,7 +494,7 @@ class ReportQueries:
                 RunFailure.uncertainty,
             )
             .join(RunFailure, and_(RunFailure.run_pk == Run.id, RunFailure.position == 0))
-            .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions())
+            .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions)
             .order_by(Run.started_at.desc(), Run.id.desc())
             .limit(limit)
         )
@@ -772,14 +775,14 @@ def _chart_limits(
     f = queries.filter
     narrowed = any(v is not None for v in (f.station_id, f.operator_id, f.lot, f.part_number))
     if narrowed or not all(name in stats for name in COEFFICIENTS):
-        row = chart_limits(queries.session, queries.conditions())._mapping
+        row = chart_limits(queries.session, queries.conditions)._mapping
         return _ChartLimits(
             count=int(row["n"]),
             means={name: row[name] for name in COEFFICIENTS},
             mr_bars={name: row[f"mr_{name}"] for name in COEFFICIENTS},
         )
     n = _total(counts, "charted")
-    first = first_moving_ranges(queries.session, queries.conditions()) if n > 1 else None
+    first = first_moving_ranges(queries.session, queries.conditions) if n > 1 else None
     mr_bars: dict[str, float | None] = {}
     for name in COEFFICIENTS:
         total = sum(float(row._mapping[f"mr_{name}"]) for row in counts)
@@ -892,7 +895,7 @@ def _what_if(
 
     A candidate judges attempts again and leaves aborts aborts: the attempts, so the
     units, retests and aborts, are the report's (``current``)."""
-    judged = rejudged(queries.session, queries.conditions(), candidate)
+    judged = rejudged(queries.session, queries.conditions, candidate)
     counts = replace(
         current,
         runs=judged.runs,
@@ -1010,13 +1013,13 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
             source += "; statistics from the runs, not the roll-ups' other bounds"
     values: dict[str, list[float]] = {}
     if parameters:
-        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
+        values, sampled = latest_values(session, queries.conditions, HISTOGRAM_RUNS)
         parameters = [
             p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
             for p in parameters
         ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
-    charted = latest_chart_points(session, queries.conditions(), points)
+    charted = latest_chart_points(session, queries.conditions, points)
     return _Statistics(
         bounds=bounds,
         source=source,

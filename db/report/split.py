@@ -78,7 +78,7 @@ def _split(
     stmt = (
         select(SPLIT_COLUMNS[by].label("group"), column.label("value"))
         .join(RunFacts, RunFacts.run_pk == Run.id)
-        .where(*queries.conditions())
+        .where(*queries.conditions)
         .order_by(Run.started_at.desc(), Run.id.desc())
         .limit(runs)
     )

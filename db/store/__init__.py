@@ -1,17 +1,7 @@
 """The store of runs and units: what a submission, a unit's page, certificates,
-signatures, hold reviews, station keys and run events write and read.
-
-Public surface::
-
-    RunRepository(session)              submit and query runs, reviews, station keys
-    UnitLookups                         a unit's answer, shared by concurrent lookups
-    certificate_inputs / certificate_run   what a unit's certificate states
-    signed_certificate / verify_signed  signatories and signatures of certificates
-    stored_profiles / keep_profile      limits profiles by their SHA-256
-    stored_after / last_stored          the run events' stream
-
-It reads and writes the tables of :mod:`db.models` and the report's roll-ups
-(:mod:`db.rollups`, written with each run); it never imports :mod:`db.report`.
+signatures, hold reviews, station keys and run events write and read, in the tables of
+:mod:`db.models` (and the roll-ups of :mod:`db.rollups`, written with each run).
+It never imports :mod:`db.report`, whose queries read what it stores.
 """
 
 from db.store.certificates import certificate_inputs, certificate_run
@@ -22,7 +12,6 @@ from db.store.repository import (
     KeyScope,
     ReviewRefusedError,
     RunConflictError,
-    RunPage,
     RunQuery,
     RunRepository,
     SubmitOutcome,
@@ -43,7 +32,6 @@ __all__ = [
     "KeyScope",
     "ReviewRefusedError",
     "RunConflictError",
-    "RunPage",
     "RunQuery",
     "RunRepository",
     "SubmitOutcome",

@@ -9,7 +9,6 @@ import base64
 import binascii
 import hashlib
 import secrets
-from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -36,7 +35,7 @@ from db.models import (
 )
 from db.rollups import lock_submissions, record_run
 from db.store.limits_profiles import store_profile
-from db.store.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
+from db.store.mapping import failure_rows, failures_of, pose_row, run_row, stored_run_of, summary_of
 from db.store.outbox_reports import record_outbox
 from db.store.units import record_unit_run, refresh_answers
 from station.domain.constants import DEFAULT_PART_NUMBER
@@ -45,7 +44,6 @@ from station.domain.outbox_report import OutboxReport
 from station.domain.records import (
     GyroFitRecord,
     HoldReview,
-    ReviewDecision,
     RunRecord,
     RunSummary,
     StoredRun,
@@ -248,7 +246,7 @@ class RunRepository:
                 StoredLimitsProfile.sha256 == run.limits_sha256
             )
         )
-        return stored_run_of(run, self._failures([run.id])[run.id], list(poses), profile)
+        return stored_run_of(run, failures_of(self.session, [run.id])[run.id], list(poses), profile)
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""
@@ -331,24 +329,13 @@ class RunRepository:
 
         A bulk load of runs uses it; answers missing or of an older shape
         (:class:`station.domain.unit_state.UnitCalibration`) are written with it when the
-        database is upgraded (:mod:`db.derived`).
+        database is upgraded (:mod:`db.database`).
         """
         return refresh_answers(self.session)
 
-    def _failures(self, pks: Sequence[int]) -> dict[int, list[RunFailure]]:
-        by_run: dict[int, list[RunFailure]] = defaultdict(list)
-        if pks:
-            for failure in self.session.scalars(
-                select(RunFailure)
-                .where(RunFailure.run_pk.in_(pks))
-                .order_by(RunFailure.run_pk, RunFailure.position)
-            ):
-                by_run[failure.run_pk].append(failure)
-        return by_run
-
     def _summaries(self, runs: Sequence[Run]) -> list[RunSummary]:
         failed = [run.id for run in runs if run.verdict == "fail"]
-        failures = self._failures(failed)
+        failures = failures_of(self.session, failed)
         return [summary_of(run, failures[run.id]) for run in runs]
 
     # -- API keys ----------------------------------------------------------------------
@@ -417,18 +404,7 @@ class RunRepository:
             .where(ReviewRow.serial == serial)
             .order_by(ReviewRow.reviewed_at, ReviewRow.id)
         ).all()
-        return [
-            HoldReview(
-                serial=row.serial,
-                run_id=row.run_id,
-                reviewed_at=row.reviewed_at,
-                reviewer=row.reviewer,
-                root_cause=row.root_cause,
-                repair_action=row.repair_action,
-                decision=cast(ReviewDecision, row.decision),
-            )
-            for row in rows
-        ]
+        return [HoldReview.model_validate(row, from_attributes=True) for row in rows]
 
     # -- gyro error-model fits ----------------------------------------------------------
 

@@ -31,8 +31,8 @@ from sqlalchemy.ext.asyncio import AsyncConnection, AsyncEngine
 from sqlalchemy.orm import Session
 
 from db.engine import DatabaseUnavailableError, for_dialect
-from db.models import Run, RunFailure, Unit
-from db.store.mapping import summary_of
+from db.models import Run, Unit
+from db.store.mapping import failures_of, summary_of
 from station.domain.records import RunSummary, StoredRun
 from station.domain.unit_state import UnitCalibration
 
@@ -61,15 +61,7 @@ def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[i
     runs = session.scalars(
         select(Run).where(Run.serial.in_(serials)).order_by(Run.serial, Run.started_at, Run.id)
     ).all()
-    failures: dict[int, list[RunFailure]] = defaultdict(list)
-    failed = [run.id for run in runs if run.verdict == "fail"]
-    if failed:
-        for failure in session.scalars(
-            select(RunFailure)
-            .where(RunFailure.run_pk.in_(failed))
-            .order_by(RunFailure.run_pk, RunFailure.position)
-        ):
-            failures[failure.run_pk].append(failure)
+    failures = failures_of(session, [run.id for run in runs if run.verdict == "fail"])
     by_serial: dict[str, list[tuple[int, RunSummary]]] = defaultdict(list)
     for run in runs:
         by_serial[run.serial].append((run.id, summary_of(run, failures[run.id])))

@@ -12,7 +12,7 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from db import RunRepository
-from db.derived import rewrite_if_stale
+from db.database import rewrite_if_stale
 from db.models import Unit
 from db.report.reports import eol_report
 from db.store.units import answers_are_stale
