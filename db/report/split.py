@@ -14,7 +14,8 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts
-from db.report.reports import ReportQueries, report_bounds
+from db.report.queries import ReportQueries
+from db.report.reports import report_bounds
 from db.rollups import PER_RUN
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import PARAMETERS
