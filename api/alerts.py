@@ -1,7 +1,7 @@
 """The alert loop of a server process: the plant's rules checked, their alerts posted.
 
 Every ``interval`` the rules are evaluated against the stored runs and the due alerts
-posted to the webhook as JSON (httpx) (:mod:`db.alerts`: stored once per event, held by
+posted to the webhook as JSON (httpx) (:mod:`db.report.alerts`: stored once per event, held by
 one process while it posts). A webhook that does not answer 2xx, or not at all, gets the
 alert again after the retry interval; it is never stored twice. Any number of server
 processes may run the loop at once.
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
-from db.alerts import claim_next, evaluate, mark_delivered, retry_later
+from db.report import claim_next, evaluate, mark_delivered, retry_later
 from station.domain.quality.alerts import AlertRules
 
 # httpx is imported by the loop when it runs: a server without alert rules never posts, and

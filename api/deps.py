@@ -14,8 +14,7 @@ from sqlalchemy.ext.asyncio import AsyncSession, async_sessionmaker
 
 from api.report_pool import ReportPool
 from db import RunRepository
-from db.repository import KeyHolder
-from db.units import UnitLookups
+from db.store import KeyHolder, UnitLookups
 
 T = TypeVar("T")
 

@@ -33,7 +33,7 @@ from api.routes import (
 )
 from api.settings import ApiSettings
 from db import make_async_engine, open_database
-from db.units import UnitLookups
+from db.store import UnitLookups
 from station import __version__
 from station.domain.quality.shifts import parse_shifts
 
@@ -63,7 +63,7 @@ def create_app(settings: ApiSettings | None = None) -> FastAPI:
         # A read is a transaction: its statement timeout is set in it (SET LOCAL,
         # db/timeouts.py), the one way the timeout holds through a pooler in transaction
         # mode. Three round trips more than autocommit (BEGIN, SET LOCAL, ROLLBACK); the
-        # unit lookups keep an autocommit connection of their own (db/units.py).
+        # unit lookups keep an autocommit connection of their own (db/store/units.py).
         reader = make_async_engine(
             url,
             statement_timeout_s=settings.read_timeout_s,

@@ -11,9 +11,14 @@ from dataclasses import dataclass
 from datetime import datetime, time
 
 from db import RunRepository
-from db.holds import held_units
-from db.reports import CHART_POINTS, ReportQueries, eol_report
-from db.split import SPLIT_PARAMETERS, split_report
+from db.report import (
+    CHART_POINTS,
+    SPLIT_PARAMETERS,
+    ReportQueries,
+    eol_report,
+    held_units,
+    split_report,
+)
 from station.domain.i18n import Language
 from station.domain.product.limits import LimitsProfile
 from station.domain.quality.days import day_end, midnight, plant_date

@@ -6,7 +6,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, Field
 from sqlalchemy import make_url
 
-from db.run_export import PAGE
+from db.report import PAGE
 from db.settings import DatabaseSettings, DatabaseUrl
 from station.domain.errors import InputError
 from station.domain.product.laboratory import Laboratory, load_laboratory

@@ -46,9 +46,9 @@ import uvloop
 from sqlalchemy import insert, make_url, text
 
 from db import RunRepository, make_engine, open_database
-from db.limits_profiles import profile_row
 from db.models import StoredLimitsProfile
 from db.rollups import rebuild
+from db.store import profile_row
 from station.domain.calibration import solve
 from station.domain.product.limits import load_profile
 from station.domain.record.records import RunRecord

@@ -41,14 +41,19 @@ from api.report_bodies import dashboard_body, split_body
 from api.routes.alerts import LISTED_ALERTS
 from api.routes.reports import PAGE_UNITS
 from db import RunRepository, make_engine, open_database
-from db.alerts import evaluate, recent_alerts
-from db.certificates import certificate_run
-from db.chart_queries import first_moving_ranges, latest_chart_points
-from db.limits_profiles import profile_row, stored_profiles
 from db.models import StoredLimitsProfile
-from db.reports import ReportQueries, eol_report
+from db.report import (
+    CYCLE_RUNS,
+    ReportQueries,
+    eol_report,
+    evaluate,
+    first_moving_ranges,
+    latest_chart_points,
+    recent_alerts,
+    station_health,
+)
 from db.rollups import rebuild
-from db.station_health import CYCLE_RUNS, station_health
+from db.store import certificate_run, profile_row, stored_profiles
 from station.domain.product.limits import load_profile
 from station.domain.quality.alerts import parse_alert_rules
 from station.domain.quality.figures import ReportFilter
@@ -322,11 +327,11 @@ def main() -> None:
                 ("parameters: all 16 (statistics, histograms)", partial(q.parameters, bounds)),
                 (
                     "control-chart limits (first run's moving ranges)",
-                    lambda: first_moving_ranges(session, q.conditions()),
+                    lambda: first_moving_ranges(session, q.conditions),
                 ),
                 (
                     "control-chart points (200)",
-                    lambda: latest_chart_points(session, q.conditions(), 200),
+                    lambda: latest_chart_points(session, q.conditions, 200),
                 ),
                 ("latest 1,000 units", lambda: q.latest_runs(1000)),
                 ("every unit (ship/hold list)", lambda: q.latest_runs(None)),

@@ -9,26 +9,31 @@ Public surface::
 Errors (SQLAlchemy's own pass through, but for a lost connection at opening)::
 
     station.domain.errors.CalstationError
-    ├── DatabaseUnavailableError    engine.py      the database does not answer
-    ├── SchemaOutOfDateError        migrate.py     the schema is not the one this software
-    │                                              needs (behind, or from a newer calstation)
-    ├── RunConflictError            repository.py  a run with this UUID is stored differently
-    └── ReviewRefusedError          repository.py  a review of a unit not on hold
+    ├── DatabaseUnavailableError    engine.py            the database does not answer
+    ├── SchemaOutOfDateError        migrate.py           the schema is not the one this
+    │                                                    software needs (behind, or newer)
+    ├── RunConflictError            store/repository.py  a run with this UUID is stored
+    │                                                    differently
+    └── ReviewRefusedError          store/repository.py  a review of a unit not on hold
+
+Layout: :mod:`db.store` writes and reads runs and units (submissions, a unit's page,
+certificates, signatures, reviews, keys, run events); :mod:`db.report` holds the report's
+queries, which read the store; the root keeps what both use (the tables of
+:mod:`db.models`, the roll-ups of :mod:`db.rollups`, the engine, settings, migrations,
+backups). ``db.store`` never imports ``db.report`` (an import-linter contract).
 """
 
-from db.database import Database, open_database, upgrade_database
+from db.database import Database, open_database, repository_transaction, upgrade_database
 from db.engine import DatabaseUnavailableError, make_async_engine, make_engine
 from db.migrate import SchemaOutOfDateError
-from db.repository import (
+from db.settings import DatabaseSettings
+from db.store import (
     ReviewRefusedError,
     RunConflictError,
-    RunPage,
     RunQuery,
     RunRepository,
     SubmitOutcome,
-    repository_transaction,
 )
-from db.settings import DatabaseSettings
 
 __all__ = [
     "Database",
@@ -36,7 +41,6 @@ __all__ = [
     "DatabaseUnavailableError",
     "ReviewRefusedError",
     "RunConflictError",
-    "RunPage",
     "RunQuery",
     "RunRepository",
     "SchemaOutOfDateError",

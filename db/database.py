@@ -1,21 +1,30 @@
 """The results database opened: migrated (or its schema checked), with its sessions.
 
 Opening the embedded SQLite database migrates it to the packaged head; a server
-database is migrated by ``calstation db upgrade`` and refused when behind. At the head,
-derived data of an older definition is rewritten in the same transaction as the schema
-(:func:`db.derived.rewrite_if_stale`).
+database is migrated by ``calstation db upgrade`` and refused when behind.
+
+Derived data: the unit answers (:mod:`db.store.units`) and the report's facts and
+roll-ups (:mod:`db.rollups`) are functions of ``runs``. The migrations create their
+tables only; when they are empty beside stored runs (a migration just added them, or
+emptied facts of an older yield definition, as 0021 did), or the answers are of an older
+shape, :func:`rewrite_if_stale` writes both from ``runs`` in the upgrade's transaction.
 """
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
-from sqlalchemy import Engine
+from sqlalchemy import Connection, Engine, select
 from sqlalchemy.exc import OperationalError
 from sqlalchemy.orm import Session, sessionmaker
 
-from db.derived import rewrite_if_stale
 from db.engine import DatabaseUnavailableError, make_engine
 from db.migrate import current_revision, is_at_head, migrate_schema, require_current
+from db.models import Run, RunFacts, Unit
+from db.rollups import lock_submissions, rebuild, stored_bounds
 from db.settings import DatabaseSettings
+from db.store import RunRepository
+from db.store.units import answers_are_stale, refresh_answers
 
 
 def upgrade(engine: Engine, revision: str = "head") -> None:
@@ -28,6 +37,26 @@ def upgrade(engine: Engine, revision: str = "head") -> None:
             migrate_schema(connection, revision)
         if revision == "head":
             rewrite_if_stale(connection)
+
+
+def rewrite_if_stale(connection: Connection) -> bool:
+    """Write the answers and the report's roll-ups if they are missing or stale."""
+    session = Session(bind=connection)
+    if not (_missing(session) or answers_are_stale(session)):
+        return False
+    lock_submissions(connection)
+    refresh_answers(session)
+    session.flush()
+    rebuild(connection, stored_bounds(connection) or None)
+    return True
+
+
+def _missing(session: Session) -> bool:
+    """Whether runs are stored but the answers or the roll-ups were never written."""
+    if session.scalars(select(Run.id).limit(1)).first() is None:
+        return False
+    no_units = session.scalars(select(Unit.serial).limit(1)).first() is None
+    return no_units or session.scalars(select(RunFacts.run_pk).limit(1)).first() is None
 
 
 class Database:
@@ -100,3 +129,18 @@ def upgrade_database(url: str | None = None) -> Upgrade:
         database.dispose()
     assert after is not None
     return Upgrade(before, after)
+
+
+@contextmanager
+def repository_transaction(url: str | None = None) -> Iterator[RunRepository]:
+    """A repository in one transaction on the database at ``url``, for one-off commands.
+
+    Opens the database (as :func:`open_database`), commits when the block ends
+    normally, and disposes of the connections either way.
+    """
+    database = open_database(url)
+    try:
+        with database.session() as session, session.begin():
+            yield RunRepository(session)
+    finally:
+        database.dispose()

@@ -185,8 +185,8 @@ class Unit(Base):
     run
     ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
     ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
-    the run (:mod:`db.units`), so a unit lookup reads one row by primary key. Answers
-    missing or of an older shape are written at upgrade (:mod:`db.derived`).
+    the run (:mod:`db.store.units`), so a unit lookup reads one row by primary key. Answers
+    missing or of an older shape are written at upgrade (:mod:`db.database`).
     """
 
     __tablename__ = "units"
@@ -400,7 +400,7 @@ for _bin in range(HISTOGRAM_BINS):
 class StoredLimitsProfile(Base):
     """A limits profile as a run submitted it: its canonical JSON, keyed by its SHA-256.
 
-    Stored the first time a run carries it (:mod:`db.limits_profiles`), never changed:
+    Stored the first time a run carries it (:mod:`db.store.limits_profiles`), never changed:
     ``document`` hashes to ``sha256``. ``runs.limits_sha256`` refers to it; no foreign
     key, because runs from stations older than stored profiles refer to profiles whose
     content the server never received (and SQLite could add the key only by copying
@@ -426,7 +426,7 @@ class ReportBounds(Base):
 
 
 class StoredAlert(Base):
-    """An alert that fired (:mod:`station.domain.quality.alerts`, :mod:`db.alerts`).
+    """An alert that fired (:mod:`station.domain.quality.alerts`, :mod:`db.report.alerts`).
 
     ``event_key`` is unique: an event is stored once, however many server processes see
     it. ``watch`` names the rule (its kind, scope and thresholds); at most one alert of a

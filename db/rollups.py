@@ -3,7 +3,7 @@
 Every table here is a function of ``runs``, ``poses`` and ``run_failures``, defined once
 as SQL in this module and computed by that SQL in three places: :func:`rebuild` (every
 run: the migration, the benchmark), :func:`record_run` (one submission, in its
-transaction) and the report's edges (:mod:`db.reports`: runs in a partial day).
+transaction) and the report's edges (:mod:`db.report.reports`: runs in a partial day).
 
 - ``run_facts``: per run, its first failure code, pose count, gyro bias, whether it is
   an attempt and its unit's first or latest attempt, whether the unit's latest attempt
@@ -159,7 +159,7 @@ COUNT_VALUES: dict[str, str] = {
     "charted": "sum",
     **{f"mr_{name}": "sum" for name in COEFFICIENTS},
 }
-#: The columns a trend reads (:mod:`db.trends`): no moving ranges, so no earlier run.
+#: The columns a trend reads (:mod:`db.report.trends`): no moving ranges, so no earlier run.
 TREND_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")

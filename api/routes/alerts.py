@@ -12,7 +12,7 @@ from api.deps import ReaderDep
 from api.language import LanguageDep
 from api.responses import problems
 from api.routes.reports import PlantZoneDep
-from db.alerts import recent_alerts
+from db.report import recent_alerts
 from station.domain.quality.alerts import Alert
 
 router = APIRouter(tags=["pages"])

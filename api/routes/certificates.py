@@ -2,7 +2,7 @@
 (``GET /api/v1/runs/{run_id}/signature``, the certificate page's verify link), the signed
 file to verify offline (``GET /api/v1/runs/{run_id}/certificate.json``), and a signed
 file sent to it (``POST /api/v1/certificates/verify``). What is signed and how it is
-checked: :mod:`station.domain.record.signature`; against which key: :mod:`db.signatures`."""
+checked: :mod:`station.domain.record.signature`; against which key: :mod:`db.store.signatures`."""
 
 from datetime import datetime
 from uuid import UUID
@@ -16,7 +16,7 @@ from api.deps import ReaderDep
 from api.errors import invalid
 from api.responses import json_response, problems
 from db import RunRepository
-from db.signatures import signed_certificate, verify_signed
+from db.store import signed_certificate, verify_signed
 from station.domain.errors import InputError
 from station.domain.record.signature import SignedCertificate
 

@@ -7,7 +7,7 @@ its ``data`` a :class:`api.schemas.RunEvent`, and a ``: ping`` comment every 15 
 so that proxies keep the connection open.
 
 Each server process answers its own listeners by asking the database, every
-:data:`POLL_S`, for the runs stored after the last one it sent (:mod:`db.run_events`):
+:data:`POLL_S`, for the runs stored after the last one it sent (:mod:`db.store.run_events`):
 one primary-key range read per listener and poll, on a reader connection taken for that
 read only, whichever server process stored the run. A stream holds every run stored after
 its headers were sent; a listener that lost its connection reloads what it shows (the
@@ -39,7 +39,7 @@ from api.deps import ReadersDep
 from api.errors import RETRY_AFTER_S
 from api.responses import json_problems
 from api.schemas import RunEvent
-from db.run_events import last_stored, stored_after
+from db.store import last_stored, stored_after
 
 log = logging.getLogger(__name__)
 

@@ -50,11 +50,8 @@ from api.report_bodies import (
 from api.report_pool import ReportPool
 from api.responses import problems
 from api.schemas import Problem
-from db.certificates import certificate_inputs
-from db.limits_profiles import keep_profile, stored_profiles
-from db.reports import CHART_POINTS
-from db.run_export import HEADER, run_page
-from db.split import SPLIT_PARAMETERS, SPLIT_RUNS
+from db.report import CHART_POINTS, HEADER, SPLIT_PARAMETERS, SPLIT_RUNS, run_page
+from db.store import certificate_inputs, keep_profile, stored_profiles
 from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.errors import InputError
 from station.domain.i18n import Language

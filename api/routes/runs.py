@@ -13,7 +13,7 @@ from api.responses import json_response, problems
 from api.schemas import RunList
 from api.verification import CalibrationMismatchError, check_coefficients, counts_beyond_sensor
 from db import RunQuery
-from db.repository import MAX_PAGE
+from db.store import MAX_PAGE
 from station.domain.constants import IDENTIFIER_PATTERN, PART_NUMBER_PATTERN
 from station.domain.errors import InputError
 from station.domain.product.limits import profile_of

@@ -24,7 +24,7 @@ from api.routes.reviews import store_review
 from api.routes.units import SerialPath
 from api.schemas import ReviewForm
 from db import ReviewRefusedError, RunRepository
-from db.station_health import CYCLE_RUNS, station_health
+from db.report import CYCLE_RUNS, station_health
 from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.i18n import Language
 from station.domain.quality.station_health import StationHealth

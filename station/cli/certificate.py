@@ -68,7 +68,7 @@ def issue(
     from datetime import UTC, datetime
 
     from db import repository_transaction
-    from db.certificates import certificate_inputs
+    from db.store import certificate_inputs
     from station.domain.i18n import LANGUAGES, Language
     from station.domain.product.laboratory import Laboratory, load_laboratory
     from station.domain.quality.shifts import parse_shifts
@@ -131,7 +131,7 @@ def signatory(
     from pydantic import TypeAdapter, ValidationError
 
     from db import repository_transaction
-    from db.signatures import register_signatory
+    from db.store import register_signatory
     from station.domain.errors import validation_problem
     from station.domain.record.signature import SignatoryName, fingerprint, new_key
 
@@ -167,8 +167,7 @@ def sign(
     from datetime import UTC, datetime
 
     from db import repository_transaction
-    from db.certificates import certificate_run
-    from db.signatures import add_signature, signatory_key, signed_certificate
+    from db.store import add_signature, certificate_run, signatory_key, signed_certificate
     from station.domain.record.signature import load_private_key, public_hex
     from station.domain.record.signature import sign as sign_record
     from station.report.certificate import document_number
@@ -213,7 +212,7 @@ def verify(
     from pydantic import ValidationError
 
     from db import repository_transaction
-    from db.signatures import verify_signed
+    from db.store import verify_signed
     from station.domain.errors import validation_problem
     from station.domain.record.signature import SignedCertificate
 

@@ -20,7 +20,7 @@ from station.domain.constants import Identifier, ReviewDecision
 from station.domain.errors import InputError, validation_problem
 
 if TYPE_CHECKING:
-    from db.repository import KeyScope
+    from db.store import KeyScope
 
 db_app = typer.Typer(
     help="The results database: schema migrations, the report's roll-ups, backups.",

@@ -72,7 +72,7 @@ def report(
     from sqlalchemy.exc import OperationalError
 
     from db import DatabaseSettings, DatabaseUnavailableError, open_database
-    from db.reports import eol_report
+    from db.report import eol_report
     from station.domain.product.limits import load_profile
     from station.domain.quality.figures import ReportFilter
     from station.domain.quality.shifts import parse_shifts

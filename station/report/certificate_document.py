@@ -17,7 +17,7 @@ CertificateFormat = Literal["html", "pdf"]
 
 
 class CertificateParts(Protocol):
-    """What a certificate states of its unit (``db.certificates.CertificateInputs``)."""
+    """What a certificate states of its unit (``db.store.certificates.CertificateInputs``)."""
 
     @property
     def run(self) -> StoredRun: ...

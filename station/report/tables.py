@@ -239,8 +239,8 @@ def split_name(by: str, tr: Say = ENGLISH) -> str:
     return names.get(by, by.replace("_", " "))
 
 
-#: Where a report's limits come from (``bounds_source``, :func:`db.reports.report_bounds`
-#: and :mod:`db.split` word it in English): each wording, its line for the reader.
+#: Where a report's limits come from (``bounds_source``, :func:`db.report.reports.report_bounds`
+#: and :mod:`db.report.split` word it in English): each wording, its line for the reader.
 _SOURCES: tuple[tuple[re.Pattern[str], Callable[[Say, dict[str, str]], str]], ...] = (
     (
         re.compile(r"limits profile (?P<name>.+) \(every run in range\)"),
@@ -297,7 +297,7 @@ def _missing(tr: Say, missing: str) -> str:
     )
 
 
-#: What :func:`db.reports.report_bounds`' wording gets when the statistics are the runs'.
+#: What :func:`db.report.reports.report_bounds`' wording gets when the statistics are the runs'.
 NOT_ROLLED_UP = "; statistics from the runs, not the roll-ups' other bounds"
 
 

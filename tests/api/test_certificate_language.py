@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from api.language import preferred
 from db import Database, RunRepository
-from db.signatures import add_signature, register_signatory
+from db.store.signatures import add_signature, register_signatory
 from station.domain.gyro import fit_log, paper_truth, simulate_log
 from station.domain.i18n import LANGUAGES
 from station.domain.product.limits import Bounds, check, load_profile

@@ -9,7 +9,7 @@ from pathlib import Path
 import httpx
 
 from db import Database, RunRepository
-from db.signatures import add_signature, register_signatory
+from db.store.signatures import add_signature, register_signatory
 from station.domain.record.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import make_record

@@ -1,4 +1,4 @@
-"""The alert rules against stored runs, one round at a time (`db.alerts.evaluate`): a
+"""The alert rules against stored runs, one round at a time (`db.report.alerts.evaluate`): a
 condition that clears and holds again is a new event even when the same run tips it,
 and a rule over a coefficient judges the runs of one product."""
 
@@ -8,8 +8,8 @@ import numpy as np
 from sqlalchemy import select
 
 from db import Database, RunRepository
-from db.alerts import evaluate
 from db.models import StoredAlert
+from db.report.alerts import evaluate
 from station.domain.quality.alerts import parse_alert_rules
 from tests.db.records import T0, make_record
 

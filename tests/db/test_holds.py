@@ -6,8 +6,8 @@ from datetime import timedelta
 from sqlalchemy.orm import Session
 
 from db import RunRepository
-from db.holds import held_units
-from db.reports import eol_report
+from db.report.holds import held_units
+from db.report.reports import eol_report
 from station.domain.quality.figures import ReportFilter
 from station.domain.record.records import HoldReview
 from tests.db.records import T0, make_record

@@ -29,7 +29,6 @@ from db import (
 )
 from db.base import Base
 from db.database import upgrade
-from db.mapping import failure_rows, pose_row, run_row
 from db.migrate import HEAD_REVISION, alembic_config, current_revision
 from db.models import (
     ReportCounts,
@@ -40,9 +39,10 @@ from db.models import (
     StoredLimitsProfile,
     Unit,
 )
-from db.reports import eol_report
-from db.repository import KeyHolder, key_sha256, record_sha256
-from db.units import answer_json
+from db.report.reports import eol_report
+from db.store.mapping import failure_rows, pose_row, run_row
+from db.store.repository import KeyHolder, key_sha256, record_sha256
+from db.store.units import answer_json
 from station.domain.quality.figures import ReportFilter
 from station.report.html import certificate_page
 from tests.db.records import LIMITS, T0, make_record

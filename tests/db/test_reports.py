@@ -7,7 +7,7 @@ import pytest
 from sqlalchemy.orm import Session
 
 from db import RunQuery, RunRepository
-from db.reports import eol_report
+from db.report.reports import eol_report
 from station.domain.product.limits import load_profile
 from station.domain.quality.figures import ReportFilter
 from station.report.render import render, rows

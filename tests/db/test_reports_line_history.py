@@ -20,7 +20,7 @@ from sqlalchemy import Connection
 from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
-from db.reports import eol_report
+from db.report.reports import eol_report
 from db.rollups import rebuild
 from station.domain.product.limits import load_profile
 from station.domain.quality.figures import EolReport, ReportFilter

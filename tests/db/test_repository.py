@@ -11,7 +11,7 @@ from sqlalchemy.orm import Session
 
 from db import RunConflictError, RunQuery, RunRepository
 from db.models import RunPose, StationKey
-from db.repository import KeyHolder, encode_cursor, record_sha256
+from db.store.repository import KeyHolder, encode_cursor, record_sha256
 from station.domain.errors import InputError
 from station.domain.record.records import StoredRun
 from tests.db.records import LIMITS, T0, make_record

@@ -25,7 +25,6 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
-from db.holds import held_units
 from db.models import (
     ReportCounts,
     ReportFailures,
@@ -35,7 +34,8 @@ from db.models import (
     RunFailure,
     Unit,
 )
-from db.reports import eol_report
+from db.report.holds import held_units
+from db.report.reports import eol_report
 from db.rollups import PER_POSE, PER_RUN, _inline, rebuild
 from station.domain.errors import InputError
 from station.domain.product.limits import Bounds, load_profile

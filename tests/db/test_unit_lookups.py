@@ -18,7 +18,7 @@ from db import (
     open_database,
 )
 from db.models import Run
-from db.units import UnitLookups, answer_json
+from db.store.units import UnitLookups, answer_json
 from tests.db.records import T0, make_record
 
 SERIALS = [f"PT-{i:06d}" for i in range(12)]

@@ -12,10 +12,10 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from db import RunRepository
-from db.derived import rewrite_if_stale
+from db.database import rewrite_if_stale
 from db.models import Unit
-from db.reports import eol_report
-from db.units import answers_are_stale
+from db.report.reports import eol_report
+from db.store.units import answers_are_stale
 from station.domain.quality.figures import ReportFilter
 from station.domain.record.records import RunRecord
 from station.domain.record.unit_state import UnitCalibration

@@ -11,7 +11,7 @@ from sqlalchemy.orm import Session
 
 from db import Database, RunRepository
 from db.models import Run, Unit
-from db.units import answer_json
+from db.store.units import answer_json
 from tests.conftest import examples
 from tests.databases import rolled_back
 from tests.db.records import OUTCOMES, T0, make_record

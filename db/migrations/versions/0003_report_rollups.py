@@ -5,7 +5,7 @@ Revises: 0002
 
 Adds ``runs.lot`` (and ``ix_runs_lot_started_at``) and the tables of :mod:`db.rollups`.
 The schema only: the roll-ups of the runs already stored are derived data, filled once
-the database reaches the head (:func:`db.derived.rewrite_if_stale`), by the code of that
+the database reaches the head (:func:`db.database.rewrite_if_stale`), by the code of that
 day, so this revision means the same thing forever.
 """
 

@@ -1,7 +1,7 @@
 """Each unit's current calibration, ready to serve (``units``).
 
 The schema only: the answers about the units already stored are derived data, written
-once the database reaches the head (:func:`db.derived.rewrite_if_stale`).
+once the database reaches the head (:func:`db.database.rewrite_if_stale`).
 
 Revision ID: 0004
 Revises: 0003

@@ -3,7 +3,7 @@
 A line builds more than one product (``station/domain/product/products.py``); each run records
 the part number of the unit's product. Every run stored before this revision was of the
 one product there was, the putter with the KXM52 behind a 12-bit ADC: DIXX-A12. The
-units' answers gain the field too; the upgrade rewrites them (``db/derived.py``). Plain
+units' answers gain the field too; the upgrade rewrites them (``db/database.py``). Plain
 operations only: this revision does not import the project's code, so it stays as
 written.
 

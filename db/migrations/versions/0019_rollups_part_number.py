@@ -7,7 +7,7 @@ up roll-ups as the station rows do, instead of scanning every run in range
 on SQLite, and the roll-ups are derived data: the three tables are created anew, empty,
 and ``run_facts`` is emptied, so that once the database reaches the head the facts and
 roll-ups of the runs already stored are written from ``runs`` by the code of that day
-(:func:`db.derived.rewrite_if_stale`). The downgrade does the same without the part
+(:func:`db.database.rewrite_if_stale`). The downgrade does the same without the part
 number. Plain operations only: this revision does not import the project's code, so it
 stays as written.
 

@@ -8,7 +8,7 @@ station (not a station's runs less the cohort's units, which counted other stati
 gains ``retests`` and ``aborts`` and loses ``listed``, ``units``, ``first_pass`` and
 ``final_pass`` (their sums). The facts and counts of the runs already stored change
 meaning: both tables are emptied, so that once the database reaches the head they are
-written anew from ``runs`` by the code of that day (:func:`db.derived.rewrite_if_stale`,
+written anew from ``runs`` by the code of that day (:func:`db.database.rewrite_if_stale`,
 as after revision 0019). The downgrade does the same with the old columns. Plain
 operations only: this revision does not import the project's code, so it stays as
 written.

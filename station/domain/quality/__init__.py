@@ -4,6 +4,6 @@ Domain, like :mod:`station.domain.record.records` and :mod:`station.domain.produ
 report's figures
 (``figures``: :class:`~station.domain.quality.figures.EolReport` and its parts), the
 parameters it measures and the limits it measures them against (``parameters``), and
-the capability statistics (``capability``). :mod:`db.reports` fills the figures with SQL;
+the capability statistics (``capability``). :mod:`db.report.reports` fills the figures with SQL;
 :mod:`station.report` renders them.
 """

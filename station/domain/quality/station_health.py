@@ -70,7 +70,7 @@ class DriftWarning(_Part):
 
 
 class StationHealth(_Part):
-    """A station's health over its latest runs (:mod:`db.station_health`)."""
+    """A station's health over its latest runs (:mod:`db.report.station_health`)."""
 
     station_id: str
     golden: list[GoldenCheck] = Field(description="the latest golden checks, oldest first")

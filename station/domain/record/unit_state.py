@@ -171,7 +171,7 @@ class UnitCalibration(_UnitPart):
     """A unit's current state: what it holds, its latest attempt, and its verdict.
 
     What ``GET /api/v1/units/{serial}`` answers; the results database keeps it ready,
-    serialised, per serial number (:mod:`db.units`).
+    serialised, per serial number (:mod:`db.store.units`).
     """
 
     serial: str

@@ -12,7 +12,7 @@ from db import Database, RunRepository, make_engine
 from db.database import upgrade
 from db.migrate import HEAD_REVISION
 from db.models import ReportCounts, StationKey
-from db.repository import KeyHolder
+from db.store.repository import KeyHolder
 from tests.conftest import CliRunner
 from tests.db.records import T0, make_record
 

@@ -10,7 +10,7 @@ from sqlalchemy import select
 
 from db import Database
 from db.models import Run
-from db.repository import RunRepository
+from db.store.repository import RunRepository
 from station.results.outbox import Outbox
 from station.results.storage import DatabaseStore, HttpStore
 from tests.conftest import CliRunner

@@ -18,7 +18,8 @@ PROFILES = st.builds(
     st.from_regex(r"[0-9a-f]{12}", fullmatch=True),
 )
 MISSING = st.sampled_from(["no run in range", "no profile of the runs in range stored"])
-#: Every wording of :func:`db.reports.report_bounds` and :mod:`db.split`, as they build it.
+#: Every wording of :func:`db.report.reports.report_bounds` and :mod:`db.report.split`,
+#: as they build it.
 SOURCES = st.one_of(
     PROFILES.map(lambda p: f"limits profile {p} (every run in range)"),
     st.tuples(PROFILES, st.integers(2, 50)).map(

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from db.reports import split_days
+from db.report.queries import split_days
 from station.domain.errors import InputError
 from station.domain.quality.days import FIRST, LAST, day_number, day_start
 from station.report.period import (

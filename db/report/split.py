@@ -4,7 +4,7 @@
 One walk of ``ix_runs_started_at`` backwards over the runs the report's filter selects,
 at most :data:`SPLIT_RUNS` of them, reading the parameter and the split's column only;
 the groups' figures are computed from that sample (the page says so). The limits are the
-report's (:func:`db.reports.report_bounds`); over runs of several products, each
+report's (:func:`db.report.reports.report_bounds`); over runs of several products, each
 product's own, in a section of its own.
 """
 
@@ -14,7 +14,8 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts
-from db.reports import ReportQueries, report_bounds
+from db.report.queries import ReportQueries
+from db.report.reports import report_bounds
 from db.rollups import PER_RUN
 from station.domain.quality.figures import ReportFilter
 from station.domain.quality.parameters import PARAMETERS
@@ -78,7 +79,7 @@ def _split(
     stmt = (
         select(SPLIT_COLUMNS[by].label("group"), column.label("value"))
         .join(RunFacts, RunFacts.run_pk == Run.id)
-        .where(*queries.conditions())
+        .where(*queries.conditions)
         .order_by(Run.started_at.desc(), Run.id.desc())
         .limit(runs)
     )

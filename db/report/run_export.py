@@ -12,7 +12,7 @@ from sqlalchemy import Row, select, tuple_
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts
-from db.reports import conditions
+from db.report.queries import conditions
 from station.domain.quality.figures import ReportFilter
 
 #: The export's columns, in order: the run's identity (its product too), its verdict and

@@ -1,64 +1,38 @@
-"""Aggregation queries of the end-of-line report, one SQL statement per section.
+"""The end-of-line report assembled from the rows of :mod:`db.report.queries`.
 
-Nothing here walks runs in Python. Counts and yields, the Pareto and the parameter
-statistics and histograms add up the daily roll-ups of :mod:`db.rollups` over the
-whole days in range and the same aggregates over the runs of the partial days at its
-ends, in one statement per section (``UNION ALL``, then grouped). The control-chart
-limits add up the stored moving ranges; the control-chart points and the unit list
+The control-chart limits add up the stored moving ranges; the control-chart points
 walk ``ix_runs_started_at`` backwards. Python only merges the grouped rows (stations,
 profiles: a few dozen) and applies the capability formulas of
 :mod:`station.domain.quality.capability`.
 """
 
-from collections import Counter, defaultdict
+from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from datetime import UTC, date, datetime, time, timedelta
+from datetime import UTC, datetime, time, timedelta
 from typing import Any, NamedTuple
 
 from sqlalchemy import (
     ColumnElement,
     Row,
     RowMapping,
-    Select,
-    and_,
-    case,
-    func,
-    literal,
-    or_,
-    select,
-    text,
-    union_all,
 )
-from sqlalchemy.orm import Session, aliased
+from sqlalchemy.orm import Session
 
-from db.chart_queries import (
+from db.report.chart_queries import (
     chart_limits,
     first_moving_ranges,
     latest_chart_points,
     latest_values,
 )
-from db.holds import unreviewed
-from db.limits_profiles import stored_profiles
-from db.models import ReportCounts, ReportFailures, ReportParameters, Run, RunFacts, RunFailure
+from db.report.queries import ReportQueries
+from db.report.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
+from db.report.what_if import rejudged
 from db.rollups import (
-    COUNT_VALUES,
-    FAILURE_VALUES,
     HISTOGRAM,
-    LIMITS,
-    MOMENT_VALUES,
-    PARAMETER_VALUES,
-    PRODUCT_COUNT_VALUES,
-    PRODUCTION,
-    TREND_COUNT_VALUES,
-    count_contributions,
-    failure_contributions,
-    parameter_contributions,
     stored_bounds,
 )
-from db.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
-from db.what_if import rejudged
-from station.domain.calibration.uncertainty import COVERAGE_FACTOR
+from db.store.limits_profiles import stored_profiles
 from station.domain.errors import InputError
 from station.domain.product.limits import LimitsProfile
 from station.domain.quality.capability import (
@@ -75,7 +49,6 @@ from station.domain.quality.capability import (
 )
 from station.domain.quality.control import moving_range_sigma, western_electric
 from station.domain.quality.days import (
-    LAST,
     day_number,
     is_utc,
     midnight,
@@ -83,16 +56,12 @@ from station.domain.quality.days import (
     step,
 )
 from station.domain.quality.figures import (
-    HOLD_AGES,
     ChartPoint,
-    CoefficientRisk,
     ControlChart,
     Distribution,
     EolReport,
     Histogram,
-    HoldCount,
     NearLimits,
-    OpenHolds,
     ParameterStats,
     ParetoEntry,
     ProductSection,
@@ -112,7 +81,6 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
-from station.domain.quality.risk import decision_risks, normality
 from station.domain.quality.shifts import plant_shifts, shift_name
 from station.domain.record.records import LimitsRef
 from station.domain.record.unit_state import ABORTED
@@ -122,441 +90,8 @@ CHART_POINTS = 200
 #: The latest runs in range whose values the histograms draw (bins from the data).
 HISTOGRAM_RUNS = 1000
 
-#: Day 0 of the roll-ups, and their length.
-EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
-DAY = timedelta(days=1)
 #: The last moment before an exclusive end.
 EPSILON = timedelta(microseconds=1)
-
-
-def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
-    """The station, operator, lot and product conditions of ``filter`` on ``columns``
-    (``runs`` or a roll-up)."""
-    where = []
-    if filter.station_id is not None:
-        where.append(columns.station_id == filter.station_id)
-    if filter.operator_id is not None:
-        where.append(columns.operator_id == filter.operator_id)
-    if filter.lot is not None:
-        where.append(columns.lot == filter.lot)
-    if filter.part_number is not None:
-        where.append(columns.part_number == filter.part_number)
-    return where
-
-
-def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
-    """The ``WHERE`` clauses on ``runs`` of ``filter``: production runs only (golden-unit
-    checks are no production units)."""
-    where = []
-    if filter.since is not None:
-        where.append(Run.started_at >= filter.since)
-    if filter.until is not None:
-        where.append(Run.started_at < filter.until)
-    return [*where, PRODUCTION, *dimensions(filter, Run)]
-
-
-def latest_run_aliases() -> tuple[type[Run], type[RunFacts]]:
-    """A unit's latest attempt and its facts, as aliases to join beside the runs selected."""
-    return aliased(Run, name="latest"), aliased(RunFacts, name="latest_facts")
-
-
-def latest_counted(latest: type[Run], facts: type[RunFacts]) -> ColumnElement[bool]:
-    """``facts`` are those of ``latest`` and it is its unit's latest attempt
-    (:mod:`db.rollups`, ``line_latest``)."""
-    return and_(facts.run_pk == latest.id, facts.line_latest.is_(True))
-
-
-class ReportQueries:
-    """The report's queries over the runs ``filter`` selects, in the caller's session.
-
-    The days the range covers whole come from the roll-ups of :mod:`db.rollups`, the
-    partial days at its ends from the same aggregates computed over their runs; a
-    statement adds both up.
-    """
-
-    def __init__(self, session: Session, filter: ReportFilter) -> None:
-        self.session = session
-        self.filter = filter
-        self.dialect = session.get_bind().dialect.name
-        self.days, self.edges = split_days(filter.since, filter.until)
-        if self.dialect == "postgresql":
-            # The raw statements are scans with long expressions: compiling them (JIT)
-            # cost seconds and saved nothing; their sorts and hashes spill to disk with
-            # the default 4 MB of work memory.
-            session.execute(text("SET LOCAL jit = off"))
-            session.execute(text("SET LOCAL work_mem = '256MB'"))
-
-    # -- helpers -----------------------------------------------------------------------
-
-    def near_limits(
-        self,
-        bounds: FamilyBounds,
-        parameters: Sequence[ParameterStats] | None = None,
-        values: Mapping[str, Sequence[float]] | None = None,
-    ) -> NearLimits:
-        """The passing runs in range whose offset or sensitivity lies within its expanded
-        uncertainty U (``runs.uncertainty``) of a bound of ``bounds``: accepted by the
-        simple rule, refused by the guarded one. One counting statement."""
-        edges: list[ColumnElement[bool]] = []
-        standard: list[Any] = []  # the mean U/k of each coefficient
-        for family in ("offset", "sensitivity"):
-            lower, upper = bounds.get(family, (None, None))
-            for axis in "xyz":
-                value = getattr(Run, f"{family}_{axis}")
-                u = Run.uncertainty[(family, axis)].as_float()
-                standard.append(func.avg(u / Run.uncertainty["k"].as_float()))
-                if lower is not None:
-                    edges.append(value - u < lower)
-                if upper is not None:
-                    edges.append(value + u > upper)
-        edge = or_(*edges) if edges else literal(False)
-        # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
-        carried = Run.uncertainty["k"].as_float().is_not(None)
-        where = [*self.conditions(), Run.verdict == "pass", carried]
-        row = self.session.execute(
-            select(
-                func.count(),
-                func.coalesce(func.sum(case((edge, 1), else_=0)), 0),
-                func.count(func.distinct(case((edge, Run.serial), else_=None))),
-                *standard,
-            ).where(*where)
-        ).one()
-        names = [f"{family}_{axis}" for family in ("offset", "sensitivity") for axis in "xyz"]
-        means = {name: value for name, value in zip(names, row[3:], strict=True)}
-        return NearLimits(
-            runs_passed=int(row[0]),
-            within_u=int(row[1]),
-            units=int(row[2]),
-            risks=[] if parameters is None else _risks(parameters, means, values or {}),
-        )
-
-    def _dimensions(self, columns: Any) -> list[ColumnElement[bool]]:
-        """The station, operator, lot and product conditions on ``columns`` (``runs`` or a
-        roll-up)."""
-        return dimensions(self.filter, columns)
-
-    def conditions(self) -> list[ColumnElement[bool]]:
-        """The ``WHERE`` clauses on ``runs`` of the filter."""
-        return conditions(self.filter)
-
-    def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
-        """The runs of the partial days at the range's ends; ``None`` when there are none."""
-        if not self.edges:
-            return None
-        spans = [and_(Run.started_at >= a, Run.started_at < b) for a, b in self.edges]
-        return [or_(*spans), PRODUCTION, *self._dimensions(Run)]
-
-    def _rolled_conditions(self, table: Any) -> list[ColumnElement[bool]] | None:
-        """The roll-up rows of the whole days in range; ``None`` when there are none."""
-        if self.days is None:
-            return None
-        first, end = self.days
-        where = self._dimensions(table)
-        if first is not None:
-            where.append(table.day >= first)
-        if end is not None:
-            where.append(table.day < end)
-        return where
-
-    def _merged(
-        self,
-        table: Any,
-        values: Mapping[str, str],
-        group: Sequence[str],
-        rolled: list[ColumnElement[bool]] | None,
-        raw: Sequence[Select[Any]],
-    ) -> list[Row[Any]]:
-        """Rows of ``table`` (``rolled`` selects them) and ``raw`` contributions with the
-        same columns, merged per ``group``: sums added, minima and maxima kept."""
-        parts = list(raw)
-        if rolled is not None:
-            parts.append(
-                select(
-                    *(getattr(table, g) for g in group), *(getattr(table, v) for v in values)
-                ).where(*rolled)
-            )
-        if not parts:
-            return []
-        merged = union_all(*parts).subquery("merged")
-        keys = [merged.c[g] for g in group]
-        stmt = select(
-            *keys, *(getattr(func, how)(merged.c[v]).label(v) for v, how in values.items())
-        ).group_by(*keys)
-        return [row for row in self.session.execute(stmt)]
-
-    # -- counts and yields -------------------------------------------------------------
-
-    def station_counts(self) -> list[Row[Any]]:
-        """Per station and limits profile: the sums of ``report_counts`` over the range.
-
-        Runs, passes and station time; units counted at their first attempt on the line
-        (``line_*``) with first and final passes; the station's retests (its attempts that
-        are not their unit's first) and aborts; runs with coefficients and their moving
-        ranges (:mod:`db.rollups`, the yield definition).
-        """
-        group = ["station_id", *LIMITS]
-        edges = self._edge_conditions()
-        raw = [] if edges is None else [count_contributions(group, edges)]
-        rows = self._merged(
-            ReportCounts, COUNT_VALUES, group, self._rolled_conditions(ReportCounts), raw
-        )
-        return sorted(rows, key=lambda row: tuple(row[: len(group)]))
-
-    def product_counts(self) -> list[Row[Any]]:
-        """Per part number: the counts :meth:`station_counts` sums per station (units,
-        runs, passes, retests, aborts, station time), from the roll-ups and the partial
-        days as theirs."""
-        group = ["part_number"]
-        edges = self._edge_conditions()
-        values = PRODUCT_COUNT_VALUES
-        raw = [] if edges is None else [count_contributions(group, edges, values=values)]
-        rows = self._merged(ReportCounts, values, group, self._rolled_conditions(ReportCounts), raw)
-        return sorted(rows, key=lambda row: str(row.part_number))
-
-    # -- failures ----------------------------------------------------------------------
-
-    def first_failures(self) -> list[Row[Any]]:
-        """Failing runs per (first failure code, station, operator)."""
-        group = ["code", "station_id", "operator_id"]
-        edges = self._edge_conditions()
-        raw = [] if edges is None else [failure_contributions(group, edges)]
-        return self._merged(
-            ReportFailures, FAILURE_VALUES, group, self._rolled_conditions(ReportFailures), raw
-        )
-
-    # -- parameters --------------------------------------------------------------------
-
-    def parameters(self, bounds: FamilyBounds) -> tuple[dict[str, RowMapping], bool]:
-        """Per parameter: n, Σ(x − c), Σ(x − c)², min, max, out of limits, marginal and
-        histogram bins against ``bounds`` (:func:`db.rollups.parameter_contributions`),
-        and whether the roll-ups answered.
-
-        The roll-ups answer when they were counted with ``bounds``; otherwise every run
-        in range is aggregated (seconds over a long history), and the report says so.
-        """
-        rolled_up = stored_bounds(self.session.connection()) == bounds
-        rows = self._parameter_rows(bounds, [], rolled_up, None)
-        return {row.parameter: row._mapping for row in rows}, rolled_up
-
-    def _parameter_rows(
-        self,
-        bounds: FamilyBounds,
-        group: list[str],
-        rolled_up: bool,
-        columns: Mapping[str, ColumnElement[Any]] | None,
-        values: Mapping[str, str] = PARAMETER_VALUES,
-    ) -> list[Row[Any]]:
-        """The parameters' sums per ``group``: from the roll-ups and the partial days when
-        ``rolled_up``, else from every run in range (``columns``: other keys); ``values``
-        the sums wanted (all, or :data:`MOMENT_VALUES`)."""
-        if rolled_up:
-            rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
-        else:
-            rolled, raw = None, self.conditions()
-        moments_only = values == MOMENT_VALUES
-        selects = (
-            []
-            if raw is None
-            else parameter_contributions(group, raw, bounds, columns, moments_only=moments_only)
-        )
-        return self._merged(ReportParameters, values, ["parameter", *group], rolled, selects)
-
-    # -- trend -------------------------------------------------------------------------
-
-    def daily_counts(self, day: ColumnElement[int] | None) -> list[Row[Any]]:
-        """The sums of ``report_counts`` per day: the roll-ups' UTC days (``day`` ``None``)
-        or the plant's days ``day`` numbers the runs with (from the runs)."""
-        values = TREND_COUNT_VALUES
-        if day is None:
-            edges = self._edge_conditions()
-            raw = [] if edges is None else [count_contributions(["day"], edges, values=values)]
-            rolled = self._rolled_conditions(ReportCounts)
-            return self._merged(ReportCounts, values, ["day"], rolled, raw)
-        raw = [count_contributions(["day"], self.conditions(), columns={"day": day}, values=values)]
-        return self._merged(ReportCounts, values, ["day"], None, raw)
-
-    def daily_parameters(
-        self, bounds: FamilyBounds, day: ColumnElement[int] | None
-    ) -> list[Row[Any]]:
-        """The parameters' sums per parameter and day (as :meth:`daily_counts`)."""
-        rolled_up = day is None and stored_bounds(self.session.connection()) == bounds
-        columns = None if day is None else {"day": day}
-        return self._parameter_rows(bounds, ["day"], rolled_up, columns, MOMENT_VALUES)
-
-    # -- units -------------------------------------------------------------------------
-
-    def _selected(self, held: bool) -> list[ColumnElement[bool]]:
-        """The units the report counts, by their first attempt on the line: that run is
-        in range and matches the filter (``held``: and the unit's latest attempt, wherever
-        and whenever it was, failed). The yield table counts the same units."""
-        where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions()]
-        return [*where, RunFacts.line_final_pass.is_(False)] if held else where
-
-    def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
-        """The units the yield table counts (``held``: those on hold), newest first attempt
-        first, each with its latest attempt (wherever and whenever it was), run count and
-        that run's first failure code; ``offset`` skips the newest (a page)."""
-        # The page first (the units' first runs, cheap conditions: a walk of
-        # ix_runs_started_at, OFFSET included), then the latest run of its units only.
-        page = (
-            select(
-                Run.id.label("first_id"),
-                Run.started_at.label("first_start"),
-                Run.serial,
-                RunFacts.line_final_pass.label("shipped"),
-                RunFacts.unit_runs.label("runs"),
-            )
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .where(*self._selected(held))
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(limit)
-            .offset(offset or None)
-            .subquery("page")
-        )
-        latest, latest_facts = latest_run_aliases()
-        stmt = (
-            select(
-                latest.id,
-                page.c.serial,
-                page.c.shipped,
-                latest.verdict,
-                latest.started_at,
-                latest.station_id,
-                latest.operator_id,
-                page.c.runs,
-                latest_facts.first_failure.label("code"),
-            )
-            .join(latest, latest.serial == page.c.serial)
-            .join(latest_facts, latest_counted(latest, latest_facts))
-            .order_by(page.c.first_start.desc(), page.c.first_id.desc())
-        )
-        return [row for row in self.session.execute(stmt)]
-
-    def open_holds(self, now: datetime) -> OpenHolds:
-        """The held units the yield table counts whose failed latest attempt no review has
-        closed, counted by the age of that run at ``now`` and by its first failure reason:
-        one grouped statement (the held units' first runs, then each one's latest run)."""
-        latest, latest_facts = latest_run_aliases()
-        day, week = now - timedelta(days=1), now - timedelta(days=7)
-        young, middle, old = HOLD_AGES
-        age = case(
-            (latest.started_at >= day, young), (latest.started_at >= week, middle), else_=old
-        ).label("age")
-        code = func.coalesce(latest_facts.first_failure, "").label("code")
-        stmt = (
-            select(age, code, func.count().label("units"))
-            .select_from(Run)
-            .join(RunFacts, RunFacts.run_pk == Run.id)
-            .join(latest, latest.serial == Run.serial)
-            .join(latest_facts, latest_counted(latest, latest_facts))
-            .where(
-                *self._selected(True),
-                latest.verdict == "fail",
-                unreviewed(latest),
-            )
-            .group_by(age, code)
-        )
-        ages: Counter[str] = Counter()
-        causes: Counter[str] = Counter()
-        for row in self.session.execute(stmt):
-            ages[row.age] += row.units
-            causes[row.code or "unknown"] += row.units
-        return OpenHolds(
-            total=sum(ages.values()),
-            by_age=[HoldCount(label=label, units=ages[label]) for label in HOLD_AGES],
-            by_cause=[
-                HoldCount(label=label, units=n)
-                for label, n in sorted(causes.items(), key=lambda item: (-item[1], item[0]))
-            ],
-        )
-
-    def failing_runs(self, code: str, limit: int) -> Sequence[Any]:
-        """The latest ``limit`` failing runs in range whose first failure reason is
-        ``code`` (a Pareto bar's runs), newest first, with that reason."""
-        stmt = (
-            select(
-                Run.run_id,
-                Run.started_at,
-                Run.serial,
-                Run.station_id,
-                Run.operator_id,
-                Run.lot,
-                RunFailure.code,
-                RunFailure.message,
-                RunFailure.measured,
-                RunFailure.lower,
-                RunFailure.upper,
-                RunFailure.axis,
-                RunFailure.pose,
-                RunFailure.uncertainty,
-            )
-            .join(RunFailure, and_(RunFailure.run_pk == Run.id, RunFailure.position == 0))
-            .where(Run.verdict == "fail", RunFailure.code == code, *self.conditions())
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(limit)
-        )
-        return self.session.execute(stmt).all()
-
-
-def _risks(
-    parameters: Sequence[ParameterStats],
-    u_means: Mapping[str, float | None],
-    values: Mapping[str, Sequence[float]],
-) -> list[CoefficientRisk]:
-    """Each coefficient's global decision risks under both rules (:mod:`station.domain.
-    quality.risk`), from its spread in range and the runs' mean standard uncertainty,
-    with the normality check of its latest ``values`` the risks' model assumes."""
-    risks = []
-    for stats in parameters:
-        u = u_means.get(stats.name)
-        if u is None or stats.mean is None or stats.std is None:
-            continue
-        u = float(u)
-        simple = decision_risks(stats.mean, stats.std, u, stats.lower, stats.upper)
-        guarded = decision_risks(
-            stats.mean, stats.std, u, stats.lower, stats.upper, guard=COVERAGE_FACTOR * u
-        )
-        check = normality(values.get(stats.name, ()))
-        risks.append(
-            CoefficientRisk(
-                name=stats.name,
-                u=u,
-                simple_false_accept=simple.false_accept,
-                simple_false_reject=simple.false_reject,
-                guarded_false_accept=guarded.false_accept,
-                guarded_false_reject=guarded.false_reject,
-                normality_statistic=None if check is None else check.statistic,
-                normality_p_value=None if check is None else check.p_value,
-                normality_values=0 if check is None else check.values,
-                normal=None if check is None else check.normal,
-            )
-        )
-    return risks
-
-
-def split_days(
-    since: datetime | None, until: datetime | None
-) -> tuple[tuple[int | None, int | None] | None, list[tuple[datetime, datetime]]]:
-    """The whole UTC days in ``[since, until)`` as ``(first, end)`` day numbers (``None``
-    for an open side; ``None`` altogether when no day is whole) and the partial days at
-    the ends as time spans."""
-    first = None if since is None else -((EPOCH - since) // DAY)
-    end = None if until is None else (until - EPOCH) // DAY
-    edges = []
-    if since is not None and first is not None:
-        if until is not None and end is not None and first >= end:
-            return None, [(since, until)] if since < until else []
-        if since < _day_start(first):
-            edges.append((since, _day_start(first)))
-    if until is not None and end is not None and _day_start(end) < until:
-        edges.append((_day_start(end), until))
-    return (first, end), edges
-
-
-def _day_start(day: int) -> datetime:
-    """The start of the roll-ups' ``day``; the calendar's end (:data:`LAST`) for the day
-    after its last date, which a moment of that date rounds up to."""
-    return EPOCH + day * DAY if day <= day_number(date.max) else LAST
 
 
 # -- assembling the report -------------------------------------------------------------
@@ -772,14 +307,14 @@ def _chart_limits(
     f = queries.filter
     narrowed = any(v is not None for v in (f.station_id, f.operator_id, f.lot, f.part_number))
     if narrowed or not all(name in stats for name in COEFFICIENTS):
-        row = chart_limits(queries.session, queries.conditions())._mapping
+        row = chart_limits(queries.session, queries.conditions)._mapping
         return _ChartLimits(
             count=int(row["n"]),
             means={name: row[name] for name in COEFFICIENTS},
             mr_bars={name: row[f"mr_{name}"] for name in COEFFICIENTS},
         )
     n = _total(counts, "charted")
-    first = first_moving_ranges(queries.session, queries.conditions()) if n > 1 else None
+    first = first_moving_ranges(queries.session, queries.conditions) if n > 1 else None
     mr_bars: dict[str, float | None] = {}
     for name in COEFFICIENTS:
         total = sum(float(row._mapping[f"mr_{name}"]) for row in counts)
@@ -843,7 +378,7 @@ def _charts(limits: _ChartLimits, points: Sequence[Row[Any]]) -> list[ControlCha
 def report_bounds(session: Session, counts: Sequence[Row[Any]]) -> tuple[FamilyBounds | None, str]:
     """The bounds capability is measured against, and a line saying which and why.
 
-    The stored profile (:mod:`db.limits_profiles`) of the latest run in range (by
+    The stored profile (:mod:`db.store.limits_profiles`) of the latest run in range (by
     finish), or of the latest whose profile is stored; with none stored (runs from
     stations older than stored profiles, or no run in range), the bounds the roll-ups
     were counted with; with none of those either, ``None``: no capability.
@@ -892,7 +427,7 @@ def _what_if(
 
     A candidate judges attempts again and leaves aborts aborts: the attempts, so the
     units, retests and aborts, are the report's (``current``)."""
-    judged = rejudged(queries.session, queries.conditions(), candidate)
+    judged = rejudged(queries.session, queries.conditions, candidate)
     counts = replace(
         current,
         runs=judged.runs,
@@ -1010,13 +545,13 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
             source += "; statistics from the runs, not the roll-ups' other bounds"
     values: dict[str, list[float]] = {}
     if parameters:
-        values, sampled = latest_values(session, queries.conditions(), HISTOGRAM_RUNS)
+        values, sampled = latest_values(session, queries.conditions, HISTOGRAM_RUNS)
         parameters = [
             p.model_copy(update={"distribution": _distribution(values[p.name], sampled)})
             for p in parameters
         ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
-    charted = latest_chart_points(session, queries.conditions(), points)
+    charted = latest_chart_points(session, queries.conditions, points)
     return _Statistics(
         bounds=bounds,
         source=source,
@@ -1074,7 +609,7 @@ def eol_report(
     each product gets a section of its own (:class:`ProductSection`), its runs against
     its own profile; counts and yields stay the line's, with a row per product. A
     ``candidate`` profile adds the what-if: the runs re-judged against it
-    (:mod:`db.what_if`), nothing stored changed; a profile is one product's, so runs of
+    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so runs of
     several products refuse it (:class:`InputError`). ``unit_limit`` cuts the unit
     list to the latest units. ``zone`` is
     the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start

@@ -6,9 +6,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import time
 
-from db.limits_profiles import stored_profiles
-from db.repository import RunRepository
-from db.signatures import signature_of
+from db.store.limits_profiles import stored_profiles
+from db.store.repository import RunRepository
+from db.store.signatures import signature_of
 from station.domain.product.limits import LimitsProfile
 from station.domain.quality.shifts import shift_start
 from station.domain.record.records import GyroFitRecord, HoldReview, RunSummary, StoredRun

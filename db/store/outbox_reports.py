@@ -4,7 +4,7 @@ A station reports its outbox with each run it sends
 (:class:`station.domain.record.outbox_report.OutboxReport`); :func:`record_outbox` keeps it
 (``INSERT … ON CONFLICT DO UPDATE``, an older report never over a newer one) in the
 run's transaction, and :func:`latest_outboxes` hands them to the ``[[outbox]]`` alert
-rule (:mod:`db.alerts`).
+rule (:mod:`db.report.alerts`).
 """
 
 from datetime import datetime

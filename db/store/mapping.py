@@ -2,11 +2,16 @@
 (:mod:`db.models`)."""
 
 import json
+from collections import defaultdict
+from collections.abc import Collection
 from datetime import datetime
 from typing import Any
 
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
 from db.models import Run, RunFailure, RunPose
-from station.domain.record.records import PoseRecord, RunRecord, RunSummary, StoredRun
+from station.domain.record.records import FailureReason, PoseRecord, RunRecord, RunSummary, StoredRun
 
 
 def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> dict[str, Any]:
@@ -120,19 +125,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         "uncertainty": run.uncertainty,
         "decision_rule": run.decision_rule,
         "as_found": run.as_found,
-        "failures": [
-            {
-                "code": f.code,
-                "message": f.message,
-                "measured": f.measured,
-                "lower": f.lower,
-                "upper": f.upper,
-                "axis": f.axis,
-                "pose": f.pose,
-                "uncertainty": f.uncertainty,
-            }
-            for f in failures
-        ],
+        "failures": [failure_reason(f) for f in failures],
         "coefficients": {
             "offset": {"x": run.offset_x, "y": run.offset_y, "z": run.offset_z},
             "sensitivity": {
@@ -154,6 +147,24 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         if has_quality
         else None,
     }
+
+
+def failures_of(session: Session, pks: Collection[int]) -> dict[int, list[RunFailure]]:
+    """The stored failures of the runs ``pks``, per run in their order."""
+    by_run: dict[int, list[RunFailure]] = defaultdict(list)
+    if pks:
+        for failure in session.scalars(
+            select(RunFailure)
+            .where(RunFailure.run_pk.in_(pks))
+            .order_by(RunFailure.run_pk, RunFailure.position)
+        ):
+            by_run[failure.run_pk].append(failure)
+    return by_run
+
+
+def failure_reason(failure: RunFailure) -> FailureReason:
+    """A stored failure as the record's reason."""
+    return FailureReason.model_validate(failure, from_attributes=True)
 
 
 def summary_of(run: Run, failures: list[RunFailure]) -> RunSummary:

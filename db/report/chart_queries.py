@@ -1,5 +1,5 @@
 """The control charts' statements: over the runs ``where`` selects (a report's range,
-:func:`db.reports.conditions`), in time order, the coefficients' individuals and moving
+:func:`db.report.queries.conditions`), in time order, the coefficients' individuals and moving
 ranges ([Song2006] offsets and sensitivities; Montgomery's I-MR chart).
 """
 

@@ -31,8 +31,8 @@ from sqlalchemy.ext.asyncio import AsyncConnection, AsyncEngine
 from sqlalchemy.orm import Session
 
 from db.engine import DatabaseUnavailableError, for_dialect
-from db.mapping import summary_of
-from db.models import Run, RunFailure, Unit
+from db.models import Run, Unit
+from db.store.mapping import failures_of, summary_of
 from station.domain.record.records import RunSummary, StoredRun
 from station.domain.record.unit_state import UnitCalibration
 
@@ -61,15 +61,7 @@ def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[i
     runs = session.scalars(
         select(Run).where(Run.serial.in_(serials)).order_by(Run.serial, Run.started_at, Run.id)
     ).all()
-    failures: dict[int, list[RunFailure]] = defaultdict(list)
-    failed = [run.id for run in runs if run.verdict == "fail"]
-    if failed:
-        for failure in session.scalars(
-            select(RunFailure)
-            .where(RunFailure.run_pk.in_(failed))
-            .order_by(RunFailure.run_pk, RunFailure.position)
-        ):
-            failures[failure.run_pk].append(failure)
+    failures = failures_of(session, [run.id for run in runs if run.verdict == "fail"])
     by_serial: dict[str, list[tuple[int, RunSummary]]] = defaultdict(list)
     for run in runs:
         by_serial[run.serial].append((run.id, summary_of(run, failures[run.id])))
@@ -98,7 +90,7 @@ def record_unit_run(session: Session, run_pk: int, run: RunSummary | StoredRun) 
     """Write the answer about the unit of ``run``, just stored with the key ``run_pk``.
 
     The answer holds the run as ``runs`` gives it back: its limits without the profile
-    (stored apart, :mod:`db.limits_profiles`).
+    (stored apart, :mod:`db.store.limits_profiles`).
     """
     run = run.model_copy(update={"limits": run.limits.model_copy(update={"profile": None})})
     stored = session.execute(

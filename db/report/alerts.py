@@ -21,10 +21,10 @@ from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 
 from db.engine import for_dialect
-from db.limits_profiles import stored_profiles
 from db.models import Run, RunFacts, StoredAlert
-from db.outbox_reports import latest_outboxes
 from db.rollups import PRODUCTION
+from db.store.limits_profiles import stored_profiles
+from db.store.outbox_reports import latest_outboxes
 from station.domain.quality.alerts import (
     Alert,
     AlertRules,

@@ -1,7 +1,7 @@
 """The report's trend: per plant day (and shift), units, first-pass and final yield, Cpk.
 
 The days are the plant's (:mod:`station.domain.quality.days`). In UTC they are the roll-ups'
-days, and :class:`db.reports.ReportQueries` adds up the roll-ups as for the rest of the
+days, and :class:`db.report.queries.ReportQueries` adds up the roll-ups as for the rest of the
 report; in another zone a day starts at a local midnight that cuts the roll-ups' days,
 so each run is numbered with its plant day (:func:`day_key`, a ``CASE`` over the days'
 starts) and the runs of the trend's days are aggregated instead (at most

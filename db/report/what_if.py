@@ -21,7 +21,8 @@ from typing import Any
 from sqlalchemy import ColumnElement, Row, and_, select
 from sqlalchemy.orm import Session
 
-from db.models import Run, RunFacts, RunFailure, RunPose
+from db.models import Run, RunFacts, RunPose
+from db.store.mapping import failure_reason, failures_of
 from station.domain.product.judging import Measured, rejudge
 from station.domain.product.limits import LimitsProfile
 from station.domain.quality.figures import VerdictFlip
@@ -159,24 +160,10 @@ def _judged(
             .order_by(RunPose.run_pk, RunPose.index)
         ):
             poses.setdefault(pose.run_pk, []).append(pose)
-        failures: dict[int, list[FailureReason]] = {}
-        for failure in session.scalars(
-            select(RunFailure)
-            .where(RunFailure.run_pk.in_(ids))
-            .order_by(RunFailure.run_pk, RunFailure.position)
-        ):
-            failures.setdefault(failure.run_pk, []).append(
-                FailureReason(
-                    code=failure.code,
-                    message=failure.message,
-                    measured=failure.measured,
-                    lower=failure.lower,
-                    upper=failure.upper,
-                    axis=failure.axis,
-                    pose=failure.pose,
-                    uncertainty=failure.uncertainty,
-                )
-            )
+        failures = {
+            pk: [failure_reason(f) for f in stored]
+            for pk, stored in failures_of(session, ids).items()
+        }
         for row in rows:
             own = poses.get(row.id, [])
             verify = next((p.position for p in own if p.role == "verify"), None)

@@ -9,9 +9,7 @@ import base64
 import binascii
 import hashlib
 import secrets
-from collections import defaultdict
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any, Literal, cast
@@ -23,10 +21,7 @@ from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
 
 from db.base import Base
-from db.database import open_database
 from db.engine import for_dialect
-from db.limits_profiles import store_profile
-from db.mapping import failure_rows, pose_row, run_row, stored_run_of, summary_of
 from db.models import (
     GyroFit,
     Run,
@@ -38,10 +33,12 @@ from db.models import (
 from db.models import (
     HoldReview as ReviewRow,
 )
-from db.outbox_reports import record_outbox
 from db.rollups import lock_submissions, record_run
-from db.units import record_unit_run, refresh_answers
-from station.domain.constants import DEFAULT_PART_NUMBER, ReviewDecision
+from db.store.limits_profiles import store_profile
+from db.store.mapping import failure_rows, failures_of, pose_row, run_row, stored_run_of, summary_of
+from db.store.outbox_reports import record_outbox
+from db.store.units import record_unit_run, refresh_answers
+from station.domain.constants import DEFAULT_PART_NUMBER
 from station.domain.errors import CalstationError, InputError
 from station.domain.record.outbox_report import OutboxReport
 from station.domain.record.records import (
@@ -202,7 +199,7 @@ class RunRepository:
         date in the same transaction (:func:`db.rollups.record_run`); submissions are
         serialised for that (:func:`db.rollups.lock_submissions`). ``outbox``: the
         station's outbox as it sent the run, kept as its latest report
-        (:func:`db.outbox_reports.record_outbox`), a retry's too.
+        (:func:`db.store.outbox_reports.record_outbox`), a retry's too.
         """
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
@@ -249,7 +246,7 @@ class RunRepository:
                 StoredLimitsProfile.sha256 == run.limits_sha256
             )
         )
-        return stored_run_of(run, self._failures([run.id])[run.id], list(poses), profile)
+        return stored_run_of(run, failures_of(self.session, [run.id])[run.id], list(poses), profile)
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""
@@ -332,24 +329,13 @@ class RunRepository:
 
         A bulk load of runs uses it; answers missing or of an older shape
         (:class:`station.domain.record.unit_state.UnitCalibration`) are written with it when the
-        database is upgraded (:mod:`db.derived`).
+        database is upgraded (:mod:`db.database`).
         """
         return refresh_answers(self.session)
 
-    def _failures(self, pks: Sequence[int]) -> dict[int, list[RunFailure]]:
-        by_run: dict[int, list[RunFailure]] = defaultdict(list)
-        if pks:
-            for failure in self.session.scalars(
-                select(RunFailure)
-                .where(RunFailure.run_pk.in_(pks))
-                .order_by(RunFailure.run_pk, RunFailure.position)
-            ):
-                by_run[failure.run_pk].append(failure)
-        return by_run
-
     def _summaries(self, runs: Sequence[Run]) -> list[RunSummary]:
         failed = [run.id for run in runs if run.verdict == "fail"]
-        failures = self._failures(failed)
+        failures = failures_of(self.session, failed)
         return [summary_of(run, failures[run.id]) for run in runs]
 
     # -- API keys ----------------------------------------------------------------------
@@ -418,18 +404,7 @@ class RunRepository:
             .where(ReviewRow.serial == serial)
             .order_by(ReviewRow.reviewed_at, ReviewRow.id)
         ).all()
-        return [
-            HoldReview(
-                serial=row.serial,
-                run_id=row.run_id,
-                reviewed_at=row.reviewed_at,
-                reviewer=row.reviewer,
-                root_cause=row.root_cause,
-                repair_action=row.repair_action,
-                decision=cast(ReviewDecision, row.decision),
-            )
-            for row in rows
-        ]
+        return [HoldReview.model_validate(row, from_attributes=True) for row in rows]
 
     # -- gyro error-model fits ----------------------------------------------------------
 
@@ -467,18 +442,3 @@ class RunRepository:
 
 class ReviewRefusedError(CalstationError):
     """A review of a unit that is not on hold, or of a run that is not its latest."""
-
-
-@contextmanager
-def repository_transaction(url: str | None = None) -> Iterator[RunRepository]:
-    """A repository in one transaction on the database at ``url``, for one-off commands.
-
-    Opens the database (as :func:`db.open_database`), commits when the block ends
-    normally, and disposes of the connections either way.
-    """
-    database = open_database(url)
-    try:
-        with database.session() as session, session.begin():
-            yield RunRepository(session)
-    finally:
-        database.dispose()
