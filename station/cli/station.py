@@ -278,7 +278,7 @@ def demo_command(
         ),
         markup=False,
         highlight=False,
-        soft_wrap=True,
+        soft_wrap=not console.is_terminal,  # a terminal's lines wrap between words
     )
     try:
         stopped = _serve(app)

@@ -231,7 +231,9 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
         accel, gyro = tr("accel"), tr("gyro")
         width = max(cell_len(accel), cell_len(gyro)) + 1  # the bars start in one column
         parts.append(
-            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, "counts")
+            _meter(
+                float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, tr("counts")
+            )
         )
         parts.append(
             _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, gyro, width, "deg/s")

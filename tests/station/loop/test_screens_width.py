@@ -24,7 +24,7 @@ from station.domain.limits import Bounds, check, load_profile
 from station.domain.orientation import Sensed
 from station.domain.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.domain.poses import POSES as NAMED_POSES
-from station.loop.fixture.screen import FixtureView, fixture_screen
+from station.loop.fixture.screen import FixtureView, fixture_screen, scan_keys_help
 from station.loop.fixture.screen import keys_help as fixture_keys_help
 from station.loop.screens import (
     KeysLine,
@@ -357,11 +357,13 @@ def test_the_keys_lines_wrap_between_keys_never_inside_one(
 ) -> None:
     """Each key and what it does ("r redo last pose") stays on one line of the unit's and
     the fixture's screens; each language's keys line lists as many keys as English's."""
-    english = [len(KeysLine(line()).keys) for line in (keys_help, fixture_keys_help)]
+    said = (keys_help, fixture_keys_help, scan_keys_help)
+    english = [len(KeysLine(line()).keys) for line in said]
     set_language(language)
-    fixture = replace(_fixture_view(tmp_path), show_help=False)
-    lines = _on_live(width, unit_screen(_run_view()), fixture_screen(fixture))
-    for line, count in zip((keys_help(), fixture_keys_help()), english, strict=True):
+    cycle = replace(_fixture_view(tmp_path), show_help=False)
+    scan = replace(cycle, stage="scan", scanning=cycle.slots[3])
+    lines = _on_live(width, unit_screen(_run_view()), fixture_screen(cycle), fixture_screen(scan))
+    for line, count in zip((line() for line in said), english, strict=True):
         keys = KeysLine(line).keys
         assert len(keys) == count, keys
         assert [key for key in keys if not any(key in drawn for drawn in lines)] == [], lines
