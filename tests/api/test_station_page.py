@@ -69,6 +69,9 @@ def test_a_station_page_shows_golden_drift_cycle_times_and_versions(
     page = client.get("/stations/line1-st1")
     assert page.status_code == 200
     assert page.text.count('<tr class="golden-check">') == len(GOLDEN_X)
+    # A deviation is shown to the hundredth: a baseline's rounding error reads 0.
+    shown = re.findall(r'<tr class="golden-check">.*?</tr>', page.text, flags=re.S)
+    assert [row for row in shown if re.search(r"\de-\d|-0\b", row)] == []
     assert len(re.findall(r'<p class="problem drift">', page.text)) == 1
     assert page.text.count('<tr class="version">') == 2
     assert '<rect class="box"' in page.text
