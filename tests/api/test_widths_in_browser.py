@@ -20,7 +20,8 @@ WIDTHS = (420, 1400)
 #: How far the page reaches past the window's right edge (px; 0 when it fits).
 OVERFLOW = "document.scrollingElement.scrollWidth - window.innerWidth"
 #: What of the page is cut: a table wider than its box, a chart reaching past the
-#: window, a chart's text outside its chart (an SVG clips it), each named.
+#: window, a chart's text outside its chart (an SVG clips it) or over another of its
+#: texts, each named.
 CUT = """(() => {
   const cut = [], width = window.innerWidth;
   for (const table of document.querySelectorAll("table")) {
@@ -28,12 +29,19 @@ CUT = """(() => {
     if (table.scrollWidth > box.clientWidth + 1) cut.push(`table.${table.className}`);
   }
   for (const chart of document.querySelectorAll("svg.chart")) {
-    const frame = chart.getBoundingClientRect();
+    const frame = chart.getBoundingClientRect(), name = chart.querySelector("title").textContent;
     if (frame.left < -1 || frame.right > width + 1) cut.push(`chart ${frame.right}`);
+    const drawn = [];
     for (const text of chart.querySelectorAll("text")) {
       const r = text.getBoundingClientRect();
       if (r.width && (r.left < frame.left - 1 || r.right > frame.right + 1))
-        cut.push(`"${text.textContent}" of ${chart.querySelector("title").textContent}`);
+        cut.push(`"${text.textContent}" of ${name}`);
+      const over = (o) => r.left < o.right - 1 && o.left < r.right - 1
+        && r.top < o.bottom - 1 && o.top < r.bottom - 1;
+      for (const [other, o] of drawn)
+        if (r.width && over(o))
+          cut.push(`"${text.textContent}" over "${other}" of ${name}`);
+      drawn.push([text.textContent, r]);
     }
   }
   return cut;
