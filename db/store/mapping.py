@@ -11,7 +11,13 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFailure, RunPose
-from station.domain.record.records import FailureReason, PoseRecord, RunRecord, RunSummary, StoredRun
+from station.domain.record.records import (
+    FailureReason,
+    PoseRecord,
+    RunRecord,
+    RunSummary,
+    StoredRun,
+)
 
 
 def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> dict[str, Any]:

@@ -95,15 +95,29 @@ def _station(
     )
 
 
-def _stopped(app: StationApp | FixtureApp) -> None:
-    """A station that stopped holding runs only in memory says where they went (the runs
-    themselves on standard error when no directory took them) and exits with status 2."""
+def _serve(app: StationApp | FixtureApp) -> str | None:
+    """Serve until done; stopped by Ctrl-C, the line that says what it left (the journals
+    stay for the next start)."""
+    try:
+        app.serve()
+    except KeyboardInterrupt:
+        return app.stopped_line()
+    return None
+
+
+def _stopped(app: StationApp | FixtureApp, interrupted: str | None = None) -> None:
+    """A station stopped by Ctrl-C says ``interrupted`` (what it left) on standard error;
+    one that stopped holding runs only in memory says where they went (the runs themselves
+    on standard error when no directory took them) and exits with status 2; Ctrl-C, 130."""
+    if interrupted is not None:
+        err.print(interrupted, markup=False, highlight=False, soft_wrap=True)
     rescued = app.rescued
-    if rescued is None:
-        return
-    for line in rescued.lines:
-        err.print(line, markup=False, highlight=False, soft_wrap=True)
-    raise CalstationError(rescued.sentence)
+    if rescued is not None:
+        for line in rescued.lines:
+            err.print(line, markup=False, highlight=False, soft_wrap=True)
+        raise CalstationError(rescued.sentence)
+    if interrupted is not None:
+        raise SystemExit(EXIT_INTERRUPTED)
 
 
 def run_command(
@@ -151,18 +165,10 @@ def run_command(
     prepare_data_dir(config.data_dir)
     if not config.slots:
         check_port(config.port)
-    stopped = None
     with TerminalKeys() as keys:
         app = _station(config, limits_profile, keys, screen_console(), units)
-        try:
-            app.serve()
-        except KeyboardInterrupt:  # Ctrl-C: the journals stay for the next start
-            stopped = app.stopped_line()
-    if stopped is not None:
-        err.print(stopped, markup=False, highlight=False, soft_wrap=True)
-    _stopped(app)
-    if stopped is not None:
-        raise SystemExit(EXIT_INTERRUPTED)
+        stopped = _serve(app)
+    _stopped(app, stopped)
 
 
 def demo_command(
@@ -272,14 +278,16 @@ def demo_command(
         ),
         markup=False,
         highlight=False,
-        soft_wrap=True,
+        soft_wrap=not console.is_terminal,  # a terminal's lines wrap between words
     )
     try:
-        records = app.serve()
+        stopped = _serve(app)
     finally:
         operator_script.close()
-    _demo_summary(records, operator_script.done, as_json)
-    _stopped(app)
+    records = app.records
+    if stopped is None:
+        _demo_summary(records, operator_script.done, as_json)
+    _stopped(app, stopped)
     if not records:
         why = app.last_note or tr("no unit got through its scan")
         raise CalstationError(tr("demo: no unit was calibrated: {why}", why=why))

@@ -168,6 +168,11 @@ class StationConfig(BaseSettings):
         """The label scanned for the next unit during a unit (of the one-port station)."""
         return self.data_dir.expanduser() / f"next-unit-{self.station_id}.txt"
 
+    def slot_queued_label_path(self, slot: int) -> Path:
+        """The label scanned ahead for the next cycle's unit in ``slot`` (1-based) of a
+        fixture."""
+        return self.data_dir.expanduser() / f"next-unit-{self.station_id}-slot{slot}.txt"
+
     def slot_journal_path(self, slot: int) -> Path:
         """The journal of the run in progress in ``slot`` (1-based) of a fixture."""
         return self.data_dir.expanduser() / f"journal-{self.station_id}-slot{slot}.json"

@@ -127,7 +127,7 @@ def versions(profile: LimitsProfile, model: Model) -> str:
     versions, as shown at the top of the screen."""
     p = profile
     algorithm = ALGORITHMS[model]
-    return f"v{__version__} · {algorithm} · limits {p.name} v{p.version} ({p.sha256[:12]})"
+    return f"v{__version__} · {algorithm} · {tr('limits')} {p.name} v{p.version} ({p.sha256[:12]})"
 
 
 def verdict_line(record: RunRecord) -> str:

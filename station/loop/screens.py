@@ -4,10 +4,12 @@ Pure functions of their arguments (no I/O), so the same screens serve the live
 terminal, the demo's scripted operator and the tests.
 """
 
+from dataclasses import dataclass
+
 from rich.align import Align
 from rich.cells import cell_len
 from rich.columns import Columns
-from rich.console import Group, RenderableType
+from rich.console import Console, ConsoleOptions, Group, RenderableType, RenderResult
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
@@ -81,6 +83,36 @@ def keys_help() -> str:
         "keys: r redo last pose · 1-9 redo a pose already taken (✓) · a abort unit · h help · "
         "scan the next unit's label any time"
     )
+
+
+#: What stands between two keys of a keys line, in every language.
+KEY_SEPARATOR = "·"
+
+
+@dataclass(frozen=True)
+class KeysLine:
+    """A keys line (:func:`keys_help`) wrapped between its keys, never inside one: as
+    many keys to a line as the width holds ("r redo last pose" stays together), a key
+    wider than the whole width folded on its own lines."""
+
+    line: str
+    style: str = "dim"
+
+    @property
+    def keys(self) -> list[str]:
+        """Each key with what it does, as the line lists them."""
+        return [key.strip() for key in self.line.split(KEY_SEPARATOR) if key.strip()]
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        joint = f" {KEY_SEPARATOR} "
+        lines: list[str] = []
+        for key in self.keys:
+            if lines and cell_len(lines[-1] + joint + key) <= options.max_width:
+                lines[-1] += joint + key
+            else:
+                lines.append(key)
+        for line in lines:
+            yield Text(line, style=self.style)
 
 
 def help_text() -> str:
@@ -199,7 +231,9 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
         accel, gyro = tr("accel"), tr("gyro")
         width = max(cell_len(accel), cell_len(gyro)) + 1  # the bars start in one column
         parts.append(
-            _meter(float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, "counts")
+            _meter(
+                float(live.accel_std.max()), limits.accel_std_max_counts, accel, width, tr("counts")
+            )
         )
         parts.append(
             _meter(float(abs(live.gyro_rate).max()), limits.gyro_rate_max_dps, gyro, width, "deg/s")
@@ -221,7 +255,7 @@ def unit_screen(view: RunView, show_help: bool = False) -> RenderableType:
     for message in view.messages:
         style = {"info": "white", "warn": "yellow", "error": "bold red"}.get(message.level, "white")
         parts.append(Text(message.text, style=style))
-    parts.append(Text(help_text() if show_help else keys_help(), style="dim"))
+    parts.append(Text(help_text(), style="dim") if show_help else KeysLine(keys_help()))
     return Panel(Group(*parts), title=title, border_style="cyan")
 
 

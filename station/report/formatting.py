@@ -12,12 +12,13 @@ def percent(value: float | None) -> str:
 
 
 def number(value: float | int | None, digits: int = 4) -> str:
-    """``digits`` significant digits (integers in full); ``–`` for no value."""
+    """``digits`` significant digits (integers in full); ``–`` for no value; zero is
+    ``0``, never ``-0`` (a deviation rounded to nothing)."""
     if value is None:
         return "–"
     if isinstance(value, int):
         return str(value)
-    return f"{value:.{digits}g}"
+    return f"{value:.{digits}g}" if value else "0"
 
 
 def seconds(value: float | None) -> str:

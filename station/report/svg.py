@@ -446,8 +446,9 @@ def trend_chart(
     return _svg(title, body, HEIGHT, CHART_WIDTH)
 
 
-#: A box plot's size: room on the left for the groups' names, a row per group.
-BOX_WIDTH, BOX_LEFT, BOX_RIGHT, BOX_ROW, BOX_TOP = 640, 130, 20, 22, 24
+#: A box plot's size: room on the left for the groups' names, a row per group; as wide
+#: as the other charts, so that on a phone (420 px) its text shrinks no more than theirs.
+BOX_WIDTH, BOX_LEFT, BOX_RIGHT, BOX_ROW, BOX_TOP = CHART_WIDTH, 130, 20, 22, 24
 
 
 def box_plots(report: SplitReport, tr: Say = ENGLISH) -> str:
@@ -475,10 +476,15 @@ def box_plots(report: SplitReport, tr: Say = ENGLISH) -> str:
 
     bottom = height - 20
     body = [_text(BOX_LEFT, 12, title)]
+    # The spans (from, to) of the axis' labels drawn, so that none is drawn over another.
+    spans: list[tuple[float, float]] = []
     for name, limit in (("LSL", report.lower), ("USL", report.upper)):
         if limit is not None:
+            label = f"{name} {number(limit)}"
+            half = CHAR_WIDTH * len(label) / 2
+            spans.append((x(limit) - half, x(limit) + half))
             body.append(_line(x(limit), BOX_TOP - 6, x(limit), bottom, LIMIT_COLOUR, dash=True))
-            body.append(_text(x(limit), bottom + 12, f"{name} {number(limit)}", "middle"))
+            body.append(_text(x(limit), bottom + 12, label, "middle"))
     for i, g in enumerate(groups):
         mid = BOX_TOP + BOX_ROW * i + BOX_ROW / 2
         label = f"{g.group} (n {g.n})"
@@ -496,6 +502,10 @@ def box_plots(report: SplitReport, tr: Say = ENGLISH) -> str:
         if g.outliers:
             colour = ALARM_COLOUR
             body.append(_text(right + 2, mid + 3, f"+{g.outliers}", "start", colour))
-    body.append(_text(BOX_LEFT, bottom + 12, number(low), "start", AXIS_COLOUR))
-    body.append(_text(right, bottom + 12, number(high), "end", AXIS_COLOUR))
+    for end, at, anchor in ((low, BOX_LEFT, "start"), (high, right, "end")):
+        label = number(end)
+        reach = CHAR_WIDTH * len(label)
+        left, rightmost = (at, at + reach) if anchor == "start" else (at - reach, at)
+        if not any(a < rightmost and left < b for a, b in spans):  # a limit's label is there
+            body.append(_text(at, bottom + 12, label, anchor, AXIS_COLOUR))
     return _svg(title, body, height, BOX_WIDTH)

@@ -166,9 +166,9 @@ class JournalFile:
 
 
 class QueuedLabelFile:
-    """The label scanned for the next unit while one was calibrated (Enter at the serial
-    prompt takes it), kept on disk so that a station stopped and started again still has
-    it."""
+    """The label scanned ahead for a slot's next unit while units were calibrated (at the
+    one-port station, Enter at the serial prompt takes it; at a fixture, the slot's scan
+    offers it), kept on disk so that a station stopped and started again still has it."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
@@ -182,8 +182,8 @@ class QueuedLabelFile:
         return text or None
 
     def save(self, label: str | None) -> None:
-        """Keep ``label`` as the next unit's (None: none queued); a disk that refuses is
-        logged, and the label stays in the station's memory."""
+        """Keep ``label`` as the next unit's (None: none queued), atomically; a disk that
+        refuses is logged, and the label stays in the station's memory."""
         try:
             if label is None:
                 self.path.unlink(missing_ok=True)

@@ -69,6 +69,12 @@ def test_a_station_page_shows_golden_drift_cycle_times_and_versions(
     page = client.get("/stations/line1-st1")
     assert page.status_code == 200
     assert page.text.count('<tr class="golden-check">') == len(GOLDEN_X)
+    # A deviation is shown to the hundredth: a baseline's rounding error reads 0.
+    row = r'<tr class="golden-check">.*?<td>([^<]*)</td>\s*<td>([^<]*)</td>'
+    cells = re.findall(row, page.text, flags=re.S)
+    shown = [value for row in cells for cell in row for value in cell.split(", ")]
+    assert len(shown) == 6 * len(GOLDEN_X)
+    assert [value for value in shown if "e" in value or value == "-0"] == []
     assert len(re.findall(r'<p class="problem drift">', page.text)) == 1
     assert page.text.count('<tr class="version">') == 2
     assert '<rect class="box"' in page.text

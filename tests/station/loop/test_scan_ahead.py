@@ -1,10 +1,13 @@
 """Scanning ahead (:class:`station.loop.fixture.ahead.ScanAhead`): what the queue may hold.
 
-The fixture's end-to-end run with labels scanned ahead is in ``test_fixture.py``; here
-any sequence of labels, repeats and Backspaces is typed at the queue directly.
+The fixture's end-to-end run with labels scanned ahead is in ``test_fixture.py``, and
+across a restart of the station's process in ``test_leaving.py``; here any sequence of
+labels, repeats and Backspaces is typed at the queue directly, its files on a real disk.
 """
 
 import itertools
+import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import cast
 
@@ -14,7 +17,7 @@ from hypothesis import strategies as st
 from station.loop.fixture.ahead import ScanAhead
 from station.loop.prompt import Label, LabelReader
 from station.loop.slot import Slot
-from station.results.journal import JournalFile
+from station.results.journal import JournalFile, QueuedLabelFile
 from station.run.operator_text import not_a_serial
 from station.run.unit_run import UnitRun
 
@@ -37,6 +40,11 @@ def slots(count: int, inside: dict[int, str]) -> list[Slot]:
     return made
 
 
+def label_files(folder: Path, slots: Sequence[Slot]) -> list[QueuedLabelFile]:
+    """Where each slot's label scanned ahead is kept, in ``folder``."""
+    return [QueuedLabelFile(folder / f"next-unit-slot{s.number}.txt") for s in slots]
+
+
 labels = st.sampled_from(["PT000001", "PT000002", "PT000003", "PT000004", "PT000005", "nope"])
 
 
@@ -48,31 +56,45 @@ labels = st.sampled_from(["PT000001", "PT000002", "PT000003", "PT000004", "PT000
 def test_the_queue_holds_each_serial_once_in_the_lowest_free_slots(
     count: int, inside: dict[int, str], typed: list[str]
 ) -> None:
-    fixture = slots(count, {n: s for n, s in inside.items() if n <= count})
-    said: list[str] = []
-    ahead = ScanAhead(fixture, tell=said.append, refuse=refuse)
-    expected: list[str] = []  # the model: serials in scan order, slots 1, 2, ... in turn
-    running = {s.serial for s in fixture if s.run is not None}
-    for entry in typed:
-        before, lines = len(said), 1  # one line for every label, and every label taken off
-        ahead.scanned(entry if entry == "\x7f" else Label(entry))
-        if entry == "\x7f":
-            lines = int(bool(expected))
-            expected = expected[:-1]
-        elif entry != "nope" and entry not in expected and entry not in running:
-            expected += [entry][: count - len(expected)]
-        assert len(said) == before + lines, said
-        assert list(ahead.queued.values()) == expected
-        assert sorted(ahead.queued) == list(range(1, len(expected) + 1))
-    taken = [ahead.take(s) for s in fixture]
-    assert [t for t in taken if t is not None] == expected
-    assert not ahead.queued
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        fixture = slots(count, {n: s for n, s in inside.items() if n <= count})
+        said: list[str] = []
+        ahead = ScanAhead(
+            fixture, tell=said.append, refuse=refuse, files=label_files(folder, fixture)
+        )
+        expected: list[str] = []  # the model: serials in scan order, slots 1, 2, ... in turn
+        running = {s.serial for s in fixture if s.run is not None}
+        for entry in typed:
+            before, lines = len(said), 1  # one line for every label, and every label taken off
+            ahead.scanned(entry if entry == "\x7f" else Label(entry))
+            if entry == "\x7f":
+                lines = int(bool(expected))
+                expected = expected[:-1]
+            elif entry != "nope" and entry not in expected and entry not in running:
+                expected += [entry][: count - len(expected)]
+            assert len(said) == before + lines, said
+            assert list(ahead.queued.values()) == expected
+            assert sorted(ahead.queued) == list(range(1, len(expected) + 1))
+            # What a station started again reads from the files is the queue, in its order.
+            again = ScanAhead(
+                fixture, tell=said.append, refuse=refuse, files=label_files(folder, fixture)
+            )
+            assert list(again.queued.items()) == list(ahead.queued.items())
+        offered = [ahead.offered(s) for s in fixture]
+        assert [o for o in offered if o is not None] == expected
+        for slot in fixture:
+            ahead.settled(slot)
+        assert not ahead.queued
+        assert not list(folder.iterdir())
 
 
-def test_each_refusal_says_why_in_one_line() -> None:
+def test_each_refusal_says_why_in_one_line(tmp_path: Path) -> None:
     fixture = slots(2, {1: "PT000001"})
     said: list[str] = []
-    ahead = ScanAhead(fixture, tell=said.append, refuse=refuse)
+    ahead = ScanAhead(
+        fixture, tell=said.append, refuse=refuse, files=label_files(tmp_path, fixture)
+    )
     for label in ("PT000009", "PT000001", "nope", "PT000009", "PT000008", "PT000007", "\x7f"):
         ahead.scanned(label if label == "\x7f" else Label(label))
     assert said == [

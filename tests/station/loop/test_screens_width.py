@@ -24,8 +24,10 @@ from station.domain.product.limits import Bounds, check, load_profile
 from station.domain.signals.orientation import Sensed
 from station.domain.signals.poses import CALIBRATION_POSES, VERIFICATION_POSE, pose
 from station.domain.signals.poses import POSES as NAMED_POSES
-from station.loop.fixture.screen import FixtureView, fixture_screen
+from station.loop.fixture.screen import FixtureView, fixture_screen, scan_keys_help
+from station.loop.fixture.screen import keys_help as fixture_keys_help
 from station.loop.screens import (
+    KeysLine,
     header,
     keys_help,
     pad,
@@ -346,6 +348,25 @@ def test_every_line_fits_the_terminal_and_no_word_is_cut(
     assert _cut_words(lines, sentences, width) == []
     strip = [f"{i + 1} {pose_words(p.name)}" for i, p in enumerate(WHOLE_UNIT)]
     assert [item for item in strip if not any(item in line for line in lines)] == []
+
+
+@pytest.mark.parametrize("width", [80, 120])
+@pytest.mark.parametrize("language", LANGUAGES)
+def test_the_keys_lines_wrap_between_keys_never_inside_one(
+    language: str, width: int, tmp_path: Path
+) -> None:
+    """Each key and what it does ("r redo last pose") stays on one line of the unit's and
+    the fixture's screens; each language's keys line lists as many keys as English's."""
+    said = (keys_help, fixture_keys_help, scan_keys_help)
+    english = [len(KeysLine(line()).keys) for line in said]
+    set_language(language)
+    cycle = replace(_fixture_view(tmp_path), show_help=False)
+    scan = replace(cycle, stage="scan", scanning=cycle.slots[3])
+    lines = _on_live(width, unit_screen(_run_view()), fixture_screen(cycle), fixture_screen(scan))
+    for line, count in zip((line() for line in said), english, strict=True):
+        keys = KeysLine(line).keys
+        assert len(keys) == count, keys
+        assert [key for key in keys if not any(key in drawn for drawn in lines)] == [], lines
 
 
 def test_a_screen_on_a_soft_wrapping_console_would_lose_the_ends_of_its_lines() -> None:
