@@ -226,7 +226,6 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         for field in (f.name for f in fields(Expected)):
             total = getattr(_figures(report.summary), field)
             assert sum(getattr(row, field) for row in added) == total
-    _check_trend(report, history, chosen)
     # an operator's abort is no failure category
     codes = [r.code for r in chosen if r.code not in (None, "aborted")]
     assert {e.code: e.count for e in report.pareto} == {c: codes.count(c) for c in set(codes)}
@@ -245,8 +244,30 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     assert report.open_holds is not None
     assert report.open_holds.total == len(held)  # no review closed any
 
+    zone = ZoneInfo(report.timezone)
+    products = {r.part_number for r in chosen}
+    if len(products) > 1:
+        # No statistic of coefficients spans two products: each has its own section.
+        assert (report.parameters, report.control_charts) == ([], [])
+        _check_trend(report, history, chosen, zone, charted=False)
+        sections = {s.part_number: s for s in report.product_sections}
+        assert sorted(sections) == sorted(products)
+        for part_number, section in sections.items():
+            of = [r for r in chosen if r.part_number == part_number]
+            _check_statistics(section, history, of, zone)
+    else:
+        assert report.product_sections == []
+        _check_statistics(report, history, chosen, zone)
+
+
+def _check_statistics(
+    part: Any, history: list[Planned], chosen: list[Planned], zone: ZoneInfo
+) -> None:
+    """One product's capability, distributions, control charts and trend (the report's
+    own when its runs are of one product, else the product's section)."""
+    _check_trend(part, history, chosen, zone, charted=True)
     xs = [r.offset_x for r in chosen if r.charted]
-    params = {p.name: p for p in report.parameters}
+    params = {p.name: p for p in part.parameters}
     x = params["offset_x"]
     assert (x.count, x.min, x.max) == (len(xs), min(xs, default=None), max(xs, default=None))
     assert params["pose_noise_x"].count == 7 * len(chosen)
@@ -262,7 +283,7 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
     bins = [min(max(math.floor((v - h.start) / h.width), 0), len(h.counts) - 1) for v in xs]
     assert h.counts == [bins.count(i) for i in range(len(h.counts))]
 
-    charts = {c.name: c for c in report.control_charts}
+    charts = {c.name: c for c in part.control_charts}
     if not xs:
         assert charts == {}
         return
@@ -275,9 +296,12 @@ def _check(report: EolReport, history: list[Planned], f: ReportFilter) -> None:
         assert chart.mr_bar is None
 
 
-def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned]) -> None:
-    """Each plant day's units (first run on the line that day), yields and Cpk."""
-    zone = ZoneInfo(report.timezone)
+def _check_trend(
+    report: Any, history: list[Planned], chosen: list[Planned], zone: ZoneInfo, *, charted: bool
+) -> None:
+    """Each plant day's units (first run on the line that day), yields and Cpk in the
+    plant's ``zone`` (``charted``: ``report`` holds one product's capability, its own or a
+    product section's; else no day has a Cpk)."""
     days = [d.day for d in report.trend]
     assert days == sorted(days)
     assert all((b - a).days == 1 for a, b in pairwise(days))
@@ -289,6 +313,9 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
     for trend_day in report.trend:
         that_day = [r for r in chosen if day_of(r) == trend_day.day]
         _check_period(trend_day, expected_figures(history, that_day))
+        if not charted:
+            assert not any(trend_day.cpk.values())
+            continue
         xs = [r.offset_x for r in that_day if r.charted]
         params = {p.name: p for p in report.parameters}
         lower, upper = params["offset_x"].lower, params["offset_x"].upper
@@ -300,14 +327,15 @@ def _check_trend(report: EolReport, history: list[Planned], chosen: list[Planned
             assert trend_day.cpk["offset_x"] == pytest.approx(expected, rel=1e-9)
         elif len(xs) < 2:
             assert trend_day.cpk["offset_x"] is None
-    assert sum(d.units for d in report.trend) == report.summary.units_tested
-    assert sum(d.runs for d in report.trend) == report.summary.runs
+    whole = expected_figures(history, chosen)
+    assert sum(d.units for d in report.trend) == whole.units
+    assert sum(d.runs for d in report.trend) == whole.runs
     for shift in report.shift_trend:
         in_shift = [r for r in chosen if shift.start <= r.started_at < shift.end]
         _check_period(shift, expected_figures(history, in_shift))
     if report.shift_trend:
-        assert sum(s.units for s in report.shift_trend) == report.summary.units_tested
-        assert sum(s.runs for s in report.shift_trend) == report.summary.runs
+        assert sum(s.units for s in report.shift_trend) == whole.units
+        assert sum(s.runs for s in report.shift_trend) == whole.runs
 
 
 def _check_period(period: Any, figures: Expected) -> None:
