@@ -56,13 +56,16 @@ _engine: Engine | None = None
 PARENT_CHECK_S = 1.0
 
 
-def _start(url: str, timeout_s: float, engine_options: dict[str, Any] | None = None) -> None:
+def _start(url: str, timeout_s: float, engine_options: dict[str, Any] | None, server: int) -> None:
+    """Make the report process's engine; end the process once ``server`` (the server
+    process's pid, taken before it started this one) is gone. The pid is handed in, not
+    read here: a server killed while this process started has already left it to init."""
     global _engine
     os.nice(REPORT_NICENESS)
     _engine = make_engine(
         url, statement_timeout_s=timeout_s, pool_size=1, max_overflow=0, **(engine_options or {})
     )
-    threading.Thread(target=_end_with, args=(os.getppid(),), daemon=True).start()
+    threading.Thread(target=_end_with, args=(server,), daemon=True).start()
 
 
 def _end_with(parent: int) -> None:
@@ -112,7 +115,7 @@ class ReportPool:
             processes,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_start,
-            initargs=(url, timeout_s, engine_options),
+            initargs=(url, timeout_s, engine_options, os.getpid()),
         )
 
     async def run(

@@ -10,6 +10,7 @@ import sys
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from pathlib import Path
 
 import pytest
 from sqlalchemy import Connection, text
@@ -51,6 +52,23 @@ def test_a_report_process_imports_no_web_framework() -> None:
         [sys.executable, "-c", probe], cwd=REPO_ROOT, capture_output=True, text=True, check=True
     )
     assert loaded.stdout.strip() == "[]", modules
+
+
+def test_a_report_process_whose_server_is_gone_when_it_starts_ends(tmp_path: Path) -> None:
+    # The server process was killed while its report process started: the report
+    # process, already left to init, must not wait for a parent it will never lose.
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    url = f"sqlite:///{tmp_path / 'report.db'}"
+    started = (
+        "import time; from api.report_pool import _start; "
+        f"_start({url!r}, 1.0, None, {gone.pid}); time.sleep(3600)"
+    )
+    report_process = subprocess.Popen([sys.executable, "-c", started], cwd=REPO_ROOT)
+    try:
+        assert report_process.wait(timeout=120) == 0  # a safety net, not a time measured
+    finally:
+        report_process.kill()
 
 
 def test_a_statement_longer_than_the_timeout_is_ended(database_url: str) -> None:
