@@ -20,7 +20,6 @@ from station.domain.sensor import AXES
 
 if TYPE_CHECKING:
     from station.domain.calibration import Model
-    from station.domain.calibration.units import DeclaredUnits
     from station.domain.gyro.motion import StreamCalibration
     from station.domain.gyro.motion.stream_units import StreamUnits
 
@@ -91,7 +90,7 @@ def solve_stream(
     temperature = temperature_summary(result.temperatures)
     if as_json:
         print_json(
-            accel.restate(result.to_dict())
+            declared.restate_gyro(accel.restate(result.to_dict()))
             | {
                 "units": _units(declared),
                 "temperature_c": temperature,
@@ -99,7 +98,7 @@ def solve_stream(
             }
         )
     else:
-        table = _table(result, file, stream.rate_hz, accel)
+        table = _table(result, file, stream.rate_hz, declared)
         notes = [
             f"DISTURBED still pose {pose + 1}: its spread is {ratio:.3g}× the stills' noise: "
             "its excess counted in U undivided by its sample count"
@@ -112,15 +111,16 @@ def solve_stream(
 
 
 def _units(declared: StreamUnits) -> dict[str, str]:
-    """The JSON's ``units``: the accelerometer's as declared, the gyro bias in deg/s."""
-    return declared.accelerometer.names() | {"gyro_bias": "deg/s", "gyro_matrix": "1"}
+    """The JSON's ``units``: the accelerometer's and the gyro bias' as declared."""
+    return declared.accelerometer.names() | {"gyro_bias": declared.gyro_name, "gyro_matrix": "1"}
 
 
-def _table(result: StreamCalibration, file: Path, rate_hz: float, units: DeclaredUnits) -> Table:
+def _table(result: StreamCalibration, file: Path, rate_hz: float, declared: StreamUnits) -> Table:
     import numpy as np
 
     from station.cli.solve import unit_decimals, unit_headers
 
+    units = declared.accelerometer
     cal, gyro = result.accel.calibration, result.gyro
     fitted = f"{len(result.moves)} moves" if gyro is None else f"{len(gyro.used)} moves fitted"
     table = Table(
@@ -132,18 +132,22 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
     table.add_column("axis")
     table.add_column(offset_header, justify="right")
     table.add_column(sensitivity_header, justify="right")
-    table.add_column("gyro bias (deg/s)", justify="right")
+    table.add_column(f"gyro bias ({declared.gyro_name})", justify="right")
     u = result.uncertainty
     do, ds = unit_decimals(units, 3)
     offset, sensitivity = units.offset(cal.offset), units.sensitivity(cal.sensitivity)
     u_off = None if u.offset is None else units.spread(u.offset)
     u_sens = None if u.sensitivity is None else units.sensitivity(u.sensitivity)
+    bias = declared.gyro_rate(result.bias_dps)
+    u_bias = None if u.gyro_bias_dps is None else declared.gyro_rate(u.gyro_bias_dps)
+    # 4 decimals of deg/s; rad/s is 57 times smaller: two more.
+    db = 4 if declared.gyro == "dps" else 6
     for i, axis in enumerate(AXES):
         table.add_row(
             axis,
             _with_u(offset[i], u_off, i, do),
             _with_u(sensitivity[i], u_sens, i, ds),
-            _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
+            _with_u(bias[i], u_bias, i, db, sign=True),
         )
     accel_line = f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg"
     if gyro is None:
