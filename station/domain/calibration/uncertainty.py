@@ -445,18 +445,37 @@ def accelerometer_budget(
     )
 
 
+def gyro_bias_repeatability(session_biases_dps: ArrayLike) -> FloatArray:
+    """The gyro bias' turn-on to turn-on repeatability (3,) measured across S ≥ 2
+    power-on sessions of one unit (``session_biases_dps`` (S, 3), each session's bias,
+    deg/s): the sessions' sample standard deviation per axis, Type A with S − 1 degrees of
+    freedom ([JCGM100]_ 4.2.2, B.2.15: the same unit measured after a change of
+    condition, its power cycled). Each session's mean carries its own within-session
+    noise too, which is orders smaller than a MEMS gyro's turn-on spread and is left in.
+
+    Raises:
+        ValueError: fewer than two sessions.
+    """
+    biases = np.asarray(session_biases_dps, dtype=np.float64)
+    if biases.ndim != 2 or len(biases) < 2:
+        raise ValueError("the bias repeatability needs at least two sessions")
+    return np.asarray(np.std(biases, axis=0, ddof=1), dtype=np.float64)
+
+
 def gyro_bias_uncertainty(
     pose_means_dps: ArrayLike,
     spread_dps: ArrayLike | None = None,
     samples: ArrayLike | None = None,
     k: float = COVERAGE_FACTOR,
-    repeatability_dps: float = 0.0,
+    repeatability_dps: float | FloatArray = 0.0,
 ) -> FloatArray:
     """Expanded uncertainty (3,) of the gyro bias, the mean of the still poses' means (P, 3).
 
-    ``repeatability_dps``: the sensor's declared turn-on to turn-on repeatability of its
-    bias (a standard deviation, deg/s; Type B, [JCGM100]_ 4.3): one session's mean does
-    not show how the bias moves at the next power-on, so it is added in quadrature.
+    ``repeatability_dps``: the turn-on to turn-on repeatability of the bias (a standard
+    deviation, deg/s, one for all axes or one per axis): declared by the sensor (Type B,
+    [JCGM100]_ 4.3) or measured across power-on sessions
+    (:func:`gyro_bias_repeatability`, Type A). One session's mean does not show how the
+    bias moves at the next power-on, so it is added in quadrature.
 
     Type A: the pooled within-pose noise σ/√ΣN_i (``spread_dps`` (P, 3) and ``samples``
     (P,) when known), or the poses' scatter s/√P where it exceeds that beyond the χ²
