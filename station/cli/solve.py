@@ -60,11 +60,12 @@ class TimeUnitsChoice(StrEnum):
 
 
 def solve_command(
-    file: Annotated[
-        Path,
+    files: Annotated[
+        list[Path],
         typer.Argument(
             help="CSV with a header holding ax,ay,az, one pose a row; with --stream the raw "
-            "samples under t,ax,ay,az,gx,gy,gz."
+            "samples under t,ax,ay,az,gx,gy,gz (several: power-on sessions of one unit, "
+            "their gyro bias repeatability measured and put in U).",
         ),
     ],
     model: Annotated[
@@ -191,7 +192,7 @@ def solve_command(
         except StreamError as exc:
             raise InputError(f"--rate: {exc}") from None
         solve_stream(
-            file,
+            files,
             model.value,
             as_json=as_json,
             still_window_s=still_window,
@@ -209,6 +210,12 @@ def solve_command(
             "--gyro-units, --time-units, --rate, --known-turn-deg and "
             "--gyro-bias-repeatability describe a raw stream: use them with --stream"
         )
+    if len(files) > 1:
+        raise InputError(
+            f"{len(files)} files: several files are power-on sessions of one unit's raw "
+            "recording: use them with --stream, or give one pose file"
+        )
+    file = files[0]
     from station.domain.calibration import (
         CalibrationError,
         Uncertainty,

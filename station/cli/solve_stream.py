@@ -9,6 +9,7 @@ Still poses, accelerometer, gyro bias and gyro matrix K ([Tedaldi2014]_) by
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -19,14 +20,14 @@ from station.domain.errors import InputError
 from station.domain.sensors.sensor import AXES
 
 if TYPE_CHECKING:
+    from station.domain.arrays import FloatArray
     from station.domain.calibration import Model
-    from station.domain.calibration.units import DeclaredUnits
     from station.domain.gyro.motion import StreamCalibration
     from station.domain.gyro.motion.stream_units import StreamUnits
 
 
 def solve_stream(
-    file: Path,
+    files: list[Path],
     model: Model,
     *,
     as_json: bool,
@@ -37,12 +38,81 @@ def solve_stream(
     cross_axis_bound: float | None = None,
     gyro_bias_repeatability_dps: float | None = None,
 ) -> None:
-    """Calibrate the unit recorded in ``file`` (its columns in ``units``: the station's
+    """Calibrate the unit recorded in ``files`` (its columns in ``units``: the station's
     own by default; its whole turns of ``known_turn_deg``, if it declares them; its
     sensor's temperature coefficients ``tempco``, counts/°C and /°C, and cross-axis
     sensitivity ``cross_axis_bound``, the putter's by default; its gyros' declared bias
-    repeatability, if any) and print the result."""
-    from station.cli.solve import excluded, influence_lines, temperature_summary
+    repeatability, if any) and print the result.
+
+    Several files are power-on sessions of one unit: each is calibrated, the sessions'
+    gyro biases give the bias' turn-on to turn-on repeatability
+    (:func:`~station.domain.calibration.uncertainty.gyro_bias_repeatability`), and each
+    session's gyro-bias U holds that measured figure in place of a declared one."""
+    import numpy as np
+
+    from station.domain.calibration.uncertainty import gyro_bias_repeatability
+    from station.domain.gyro.motion.stream_units import StreamUnits
+
+    declared = units or StreamUnits()
+    session = partial(
+        _calibrated,
+        model=model,
+        still_window_s=still_window_s,
+        declared=declared,
+        known_turn_deg=known_turn_deg,
+        tempco=tempco,
+        cross_axis_bound=cross_axis_bound,
+    )
+    if len(files) == 1:
+        result, rate_hz = session(files[0], repeatability_dps=gyro_bias_repeatability_dps)
+        _print(result, files[0], rate_hz, declared, as_json=as_json)
+        return
+    if gyro_bias_repeatability_dps is not None:
+        raise InputError(
+            f"--gyro-bias-repeatability: declared, but {len(files)} sessions measure it: "
+            "leave it out, or give one recording"
+        )
+    biases = np.array([session(f, repeatability_dps=None)[0].bias_dps for f in files])
+    measured = gyro_bias_repeatability(biases)
+    sessions = [(f, *session(f, repeatability_dps=measured)) for f in files]
+    shown = declared.gyro_rate(measured)
+    if as_json:
+        payloads = [_payload(result, declared) | {"file": str(f)} for f, result, _ in sessions]
+        print_json(
+            {
+                "sessions": payloads,
+                "gyro_bias_repeatability": {
+                    "sessions": len(files),
+                    "degrees_of_freedom": len(files) - 1,
+                    "value": [float(v) for v in shown],
+                    "biases": [[float(v) for v in declared.gyro_rate(b)] for b in biases],
+                    "unit": declared.gyro_name,
+                },
+            }
+        )
+        return
+    for f, result, rate_hz in sessions:
+        _print(result, f, rate_hz, declared, as_json=False)
+    values = "  ".join(f"{axis} {v:.4g}" for axis, v in zip(AXES, shown, strict=True))
+    out.print(
+        f"gyro bias repeatability measured across {len(files)} sessions "
+        f"({len(files) - 1} degrees of freedom): {values} {declared.gyro_name} (1 σ), "
+        "in each session's U"
+    )
+
+
+def _calibrated(
+    file: Path,
+    *,
+    model: Model,
+    still_window_s: float | None,
+    declared: StreamUnits,
+    known_turn_deg: float | None,
+    tempco: tuple[float, float] | None,
+    cross_axis_bound: float | None,
+    repeatability_dps: float | FloatArray | None,
+) -> tuple[StreamCalibration, float]:
+    """One recording calibrated (:func:`solve_stream`), and its sample rate."""
     from station.domain.calibration import CalibrationError
     from station.domain.calibration.uncertainty import (
         CROSS_AXIS_BOUND,
@@ -57,14 +127,12 @@ def solve_stream(
     )
     from station.domain.gyro.motion.stream_file import read_stream_file
     from station.domain.gyro.motion.stream_units import (
-        StreamUnits,
         check_declared,
         check_turns,
         check_units,
         convert,
     )
 
-    declared = units or StreamUnits()
     try:
         raw = read_stream_file(file)
         check_declared(raw, declared)
@@ -80,47 +148,60 @@ def solve_stream(
             check_moves=lambda moves, bias: check_turns(moves, bias, declared),
             tempco=tempco or (OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND),
             cross_axis_bound=CROSS_AXIS_BOUND if cross_axis_bound is None else cross_axis_bound,
-            gyro_bias_repeatability_dps=gyro_bias_repeatability_dps,
+            gyro_bias_repeatability_dps=repeatability_dps,
         )
     except CalibrationError as exc:
         where = "" if exc.pose is None else f" (still pose {exc.pose} from 0)"
         raise InputError(f"{file}: accelerometer{where}: {exc}") from None
     except (StreamError, GyroMatrixError) as exc:
         raise InputError(f"{file}: {exc}") from None
-    accel = declared.accelerometer
-    temperature = temperature_summary(result.temperatures)
+    return result, stream.rate_hz
+
+
+def _payload(result: StreamCalibration, declared: StreamUnits) -> dict[str, object]:
+    """The JSON of one recording's calibration, in its declared units."""
+    from station.cli.solve import excluded, temperature_summary
+
+    return declared.restate_gyro(declared.accelerometer.restate(result.to_dict())) | {
+        "units": _units(declared),
+        "temperature_c": temperature_summary(result.temperatures),
+        "excluded_influences": excluded(result.excluded_influences),
+    }
+
+
+def _print(
+    result: StreamCalibration, file: Path, rate_hz: float, declared: StreamUnits, *, as_json: bool
+) -> None:
+    """One recording's calibration on the screen, or as JSON."""
+    from station.cli.solve import influence_lines, temperature_summary
+
     if as_json:
-        print_json(
-            accel.restate(result.to_dict())
-            | {
-                "units": _units(declared),
-                "temperature_c": temperature,
-                "excluded_influences": excluded(result.excluded_influences),
-            }
-        )
-    else:
-        table = _table(result, file, stream.rate_hz, accel)
-        notes = [
-            f"DISTURBED still pose {pose + 1}: its spread is {ratio:.3g}× the stills' noise: "
-            "its excess counted in U undivided by its sample count"
-            for pose, ratio in result.disturbed.items()
-        ]
-        table.caption = "\n".join(
-            [*notes, str(table.caption), *influence_lines(temperature, result.excluded_influences)]
-        )
-        out.print(table)
+        print_json(_payload(result, declared))
+        return
+    table = _table(result, file, rate_hz, declared)
+    notes = [
+        f"DISTURBED still pose {pose + 1}: its spread is {ratio:.3g}× the stills' noise: "
+        "its excess counted in U undivided by its sample count"
+        for pose, ratio in result.disturbed.items()
+    ]
+    temperature = temperature_summary(result.temperatures)
+    table.caption = "\n".join(
+        [*notes, str(table.caption), *influence_lines(temperature, result.excluded_influences)]
+    )
+    out.print(table)
 
 
 def _units(declared: StreamUnits) -> dict[str, str]:
-    """The JSON's ``units``: the accelerometer's as declared, the gyro bias in deg/s."""
-    return declared.accelerometer.names() | {"gyro_bias": "deg/s", "gyro_matrix": "1"}
+    """The JSON's ``units``: the accelerometer's and the gyro bias' as declared."""
+    return declared.accelerometer.names() | {"gyro_bias": declared.gyro_name, "gyro_matrix": "1"}
 
 
-def _table(result: StreamCalibration, file: Path, rate_hz: float, units: DeclaredUnits) -> Table:
+def _table(result: StreamCalibration, file: Path, rate_hz: float, declared: StreamUnits) -> Table:
     import numpy as np
 
     from station.cli.solve import unit_decimals, unit_headers
 
+    units = declared.accelerometer
     cal, gyro = result.accel.calibration, result.gyro
     fitted = f"{len(result.moves)} moves" if gyro is None else f"{len(gyro.used)} moves fitted"
     table = Table(
@@ -132,18 +213,22 @@ def _table(result: StreamCalibration, file: Path, rate_hz: float, units: Declare
     table.add_column("axis")
     table.add_column(offset_header, justify="right")
     table.add_column(sensitivity_header, justify="right")
-    table.add_column("gyro bias (deg/s)", justify="right")
+    table.add_column(f"gyro bias ({declared.gyro_name})", justify="right")
     u = result.uncertainty
     do, ds = unit_decimals(units, 3)
     offset, sensitivity = units.offset(cal.offset), units.sensitivity(cal.sensitivity)
     u_off = None if u.offset is None else units.spread(u.offset)
     u_sens = None if u.sensitivity is None else units.sensitivity(u.sensitivity)
+    bias = declared.gyro_rate(result.bias_dps)
+    u_bias = None if u.gyro_bias_dps is None else declared.gyro_rate(u.gyro_bias_dps)
+    # 4 decimals of deg/s; rad/s is 57 times smaller: two more.
+    db = 4 if declared.gyro == "dps" else 6
     for i, axis in enumerate(AXES):
         table.add_row(
             axis,
             _with_u(offset[i], u_off, i, do),
             _with_u(sensitivity[i], u_sens, i, ds),
-            _with_u(result.bias_dps[i], u.gyro_bias_dps, i, 4, sign=True),
+            _with_u(bias[i], u_bias, i, db, sign=True),
         )
     accel_line = f"accelerometer residual |g|−1: rms {result.accel.quality.residual_rms_mg:.3f} mg"
     if gyro is None:

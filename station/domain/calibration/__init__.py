@@ -11,6 +11,7 @@ Public surface::
     apply(calibration, raw)    counts → g
     accelerometer_budget(...)  the GUM budget of a solve's coefficients (U, k = 2)
     gyro_bias_uncertainty(...) U of the gyro bias from the still poses
+    gyro_bias_repeatability(b) the bias' spread across power-on sessions (S, 3)
 
 .. [Song2006] C.-M. Song, "Autocalibration Method of Three-axis Micromachined
    Accelerometers", 2006.
@@ -53,6 +54,7 @@ from station.domain.calibration.uncertainty import (
     AccelerometerBudget,
     Uncertainty,
     accelerometer_budget,
+    gyro_bias_repeatability,
     gyro_bias_uncertainty,
     gyro_matrix_uncertainty,
 )
@@ -88,6 +90,7 @@ __all__ = [
     "accelerometer_budget",
     "apply",
     "coverage",
+    "gyro_bias_repeatability",
     "gyro_bias_uncertainty",
     "gyro_matrix_uncertainty",
     "pair_angles_deg",

@@ -308,7 +308,7 @@ def calibrate_stream(
     check_moves: Callable[[list[Move], FloatArray], None] | None = None,
     tempco: tuple[float, float] = (OFFSET_TEMPCO_BOUND, SENSITIVITY_TEMPCO_BOUND),
     cross_axis_bound: float = CROSS_AXIS_BOUND,
-    gyro_bias_repeatability_dps: float | None = None,
+    gyro_bias_repeatability_dps: float | FloatArray | None = None,
 ) -> StreamCalibration:
     """Find the stills, fit the accelerometer, the gyro bias and K (module docstring).
 
@@ -321,8 +321,9 @@ def calibrate_stream(
     sensor's temperature coefficients' half-widths (counts/°C, /°C) for the budget's
     temperature term, when the stream has a temperature; ``cross_axis_bound``: its
     cross-axis sensitivity, the six-parameter model's unmodelled coupling;
-    ``gyro_bias_repeatability_dps``: its gyros' turn-on to turn-on bias repeatability
-    (None: not declared, named as excluded from U).
+    ``gyro_bias_repeatability_dps``: its gyros' turn-on to turn-on bias repeatability,
+    declared or measured across sessions, one figure or one per axis (None: neither,
+    named as excluded from U).
 
     Raises:
         StreamError: fewer still poses than ``model`` needs; a gyro bias beyond
@@ -401,7 +402,12 @@ def calibrate_stream(
     )
     uncertainty = Uncertainty.of_budget(budget).with_gyro(
         gyro_bias_uncertainty(
-            gyro_means, gyro_spreads, samples, repeatability_dps=gyro_bias_repeatability_dps or 0.0
+            gyro_means,
+            gyro_spreads,
+            samples,
+            repeatability_dps=0.0
+            if gyro_bias_repeatability_dps is None
+            else gyro_bias_repeatability_dps,
         ),
         None if gyro is None else gyro_matrix_uncertainty(gyro, budget),
     )

@@ -46,6 +46,8 @@ from station.domain.gyro.motion.stream import RecordedStream
 from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 GyroUnits = Literal["dps", "rads"]
+#: How the results name each gyro unit.
+GYRO_UNIT_NAMES: Final[dict[GyroUnits, str]] = {"dps": "deg/s", "rads": "rad/s"}
 TimeUnits = Literal["s", "ms"]
 
 #: Fewer samples a second than this is no IMU recording: the time column is not seconds.
@@ -99,6 +101,34 @@ class StreamUnits:
     def declared(self) -> bool:
         """Whether anything but the station's own units was declared."""
         return self != StreamUnits()
+
+    @property
+    def gyro_name(self) -> str:
+        """The gyro rates' unit as the results name it: ``deg/s`` or ``rad/s``."""
+        return GYRO_UNIT_NAMES[self.gyro]
+
+    def gyro_rate(self, dps: FloatArray) -> FloatArray:
+        """Rates (a bias or its U) in deg/s, the station's unit, in the declared gyro unit."""
+        return np.radians(dps) if self.gyro == "rads" else dps
+
+    def restate_gyro(self, payload: dict[str, object]) -> dict[str, object]:
+        """A stream's JSON (``StreamCalibration.to_dict``) with the gyro bias and its U in
+        the declared gyro unit. Deg/s comes out unchanged (``gyro.bias_dps``,
+        ``uncertainty.gyro_bias_dps``); rad/s under keys without the unit,
+        ``gyro.bias`` and ``uncertainty.gyro_bias``, as the accelerometer's counts keys
+        lose theirs in another unit (``DeclaredUnits.restate``). K is a ratio of rates
+        and the moves' residuals angles: neither depends on the unit."""
+        if self.gyro == "dps":
+            return payload
+        out = dict(payload)
+        for section, key in (("gyro", "bias_dps"), ("uncertainty", "gyro_bias_dps")):
+            part = out.get(section)
+            if isinstance(part, dict) and key in part:
+                restated = {k: v for k, v in part.items() if k != key}
+                rates = self.gyro_rate(np.asarray(part[key], dtype=np.float64))
+                restated[key.removesuffix("_dps")] = [float(v) for v in rates]
+                out[section] = restated
+        return out
 
 
 def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
