@@ -404,14 +404,17 @@ class GyroMatrixRecord(_Record):
 _GyroSpreadValue = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 _MatrixSpread = Annotated[float, Field(ge=0, le=2 * GYRO_MATRIX_MAX)]
 _SpreadRow = tuple[_MatrixSpread, _MatrixSpread, _MatrixSpread]
+_MatrixU = Annotated[float, Field(ge=0, le=MATRIX_MAX_G_PER_COUNT)]
+_MatrixURow = tuple[_MatrixU, _MatrixU, _MatrixU]
 
 
 class UncertaintyRecord(_Record):
     """Expanded uncertainties U = k·u_c of the run's coefficients ([JCGM100]_), in the
     sensor's units (:mod:`station.domain.calibration.uncertainty`): offsets in counts,
     sensitivities in counts/g, gyro biases in deg/s, the gyro matrix K as a fraction, the
-    verification pose's error in mg. A value the run did not measure is left out (None),
-    so a record from before a value was added hashes as it did."""
+    verification pose's error in mg, the nine-parameter model's matrix C in g/count. A
+    value the run did not measure is left out (None), so a record from before a value
+    was added hashes as it did."""
 
     k: Annotated[float, Field(gt=0, le=10, description="coverage factor (2: about 95 %)")]
     offset: Annotated[Spread3 | None, Field(description="U of each offset, counts")] = None
@@ -431,6 +434,13 @@ class UncertaintyRecord(_Record):
         Field(
             description="U of the verification pose's error ||g| − 1|, mg: the calibrated "
             "output's U at that pose and the pose's own noise (docs/calibration.md)"
+        ),
+    ] = None
+    matrix: Annotated[
+        tuple[_MatrixURow, _MatrixURow, _MatrixURow] | None,
+        Field(
+            description="U of each entry of the nine-parameter model's counts-to-g matrix C, "
+            "g/count (upper-triangular: zero below the diagonal)"
         ),
     ] = None
     excluded_influences: Annotated[

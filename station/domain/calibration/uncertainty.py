@@ -87,6 +87,14 @@ U = k·u_c with k = :data:`COVERAGE_FACTOR` (≈ 95 % for a normal distribution,
 [JCGM100]_ 6.2). Validated by Monte Carlo on the simulator
 (``benchmarks/bench_uncertainty.py``, ``docs/benchmarks.md``).
 
+Matrix entries (:attr:`AccelerometerBudget.matrix`). The nine-parameter model's θ holds
+the upper-triangular C itself (g/count; its off-diagonal entries are the axes'
+misalignment and coupling, [Tedaldi2014]_), so each entry's U is k·√ of its diagonal
+element of θ's covariance Σ_θ: the pose noise and quantisation through J⁺, the fit's
+evidence (scaled, as its term is, by a verification ratio above 1) and the drift with
+temperature, as every coefficient's. Its coverage is checked on simulated units with
+known truth (:func:`station.simulator.coverage.simulate_coverage`, group ``matrix``).
+
 Verification error (:attr:`AccelerometerBudget.verification_u`). The verification pose
 a_v is held out of the fit; its error e_v = |r_v|, r_v = |C(θ)·(a_v − o)| − 1 (g; the
 record's ``verification_error_mg`` is 1000·e_v), is the calibrated output's error at a
@@ -220,6 +228,10 @@ class AccelerometerBudget:
         verification_u: the expanded uncertainty U (g) of the verification pose's error
             ||C(a_v − o)| − 1| (``None`` without one; module docstring, *Verification
             error*).
+        matrix: shape (3, 3), the expanded uncertainty U (g/count) of each entry of the
+            nine-parameter model's upper-triangular matrix C (zero below the diagonal;
+            module docstring, *Matrix entries*); ``None`` for the six-parameter model,
+            whose diagonal matrix the sensitivities' U states.
         theta, model: the fit's parameters θ ((o, s) or (o, C_upper)) and its model.
         covariance: shape (p, p), the covariance of θ from the pose noise, quantisation,
             the fit's evidence and the drift with temperature (the gravity directions'
@@ -237,6 +249,7 @@ class AccelerometerBudget:
     k: float = COVERAGE_FACTOR
     verification_ratio: float | None = None
     verification_u: float | None = None
+    matrix: FloatArray | None = None
     theta: FloatArray | None = None
     model: Model = "six"
     covariance: FloatArray | None = None
@@ -281,11 +294,12 @@ class Uncertainty:
     gyro_bias_dps: FloatArray | None = None
     gyro_matrix: FloatArray | None = field(default=None)
     verification_error_mg: float | None = None
+    matrix: FloatArray | None = None
 
     def to_dict(self) -> dict[str, object]:
         """``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z}, "gyro_bias_dps": [3],
-        "gyro_matrix": [[3×3]], "verification_error_mg"}``, keys of unmeasured
-        coefficients left out."""
+        "gyro_matrix": [[3×3]], "verification_error_mg", "matrix": [[3×3]]}``, keys of
+        unmeasured coefficients left out."""
         out: dict[str, object] = {"k": self.k}
         if self.offset is not None:
             out["offset"] = _xyz(self.offset)
@@ -297,6 +311,8 @@ class Uncertainty:
             out["gyro_matrix"] = [[float(v) for v in row] for row in self.gyro_matrix]
         if self.verification_error_mg is not None:
             out["verification_error_mg"] = self.verification_error_mg
+        if self.matrix is not None:
+            out["matrix"] = [[float(v) for v in row] for row in self.matrix]
         return out
 
     @classmethod
@@ -308,6 +324,7 @@ class Uncertainty:
             offset=budget.offset,
             sensitivity=budget.sensitivity,
             verification_error_mg=None if u is None else 1000.0 * u,
+            matrix=budget.matrix,
         )
 
     def with_gyro(
@@ -315,7 +332,13 @@ class Uncertainty:
     ) -> "Uncertainty":
         """The same with the gyros' expanded uncertainties added."""
         return Uncertainty(
-            self.k, self.offset, self.sensitivity, bias_dps, matrix, self.verification_error_mg
+            self.k,
+            self.offset,
+            self.sensitivity,
+            bias_dps,
+            matrix,
+            self.verification_error_mg,
+            self.matrix,
         )
 
 
@@ -362,13 +385,10 @@ def accelerometer_budget(
     var_noise, var_quant = var_noise[keep], var_quant[keep]
     disturbed: dict[int, float] = {}
     if spread is not None:
-        excess, over_noise = _excess_variance(
-            np.asarray(spread, dtype=np.float64).reshape(n_all, 3)[keep]
+        excess, disturbed = disturbed_poses(
+            np.asarray(spread, dtype=np.float64).reshape(n_all, 3), keep
         )
         var_noise = var_noise + excess
-        disturbed = {
-            int(keep[i]): float(over_noise[i]) for i in np.flatnonzero(np.any(excess > 0, axis=1))
-        }
 
     cal = solution.calibration
     model = cal.model
@@ -465,11 +485,20 @@ def accelerometer_budget(
         if ratio > 1.0:
             terms["model"] = terms["model"] * ratio
             terms["fit"] = terms["fit"] * ratio
+    matrix_u: FloatArray | None = None
+    if model == "nine":
+        # The fit's evidence, scaled as its term is by a verification ratio above 1.
+        scaled = covariance
+        if evidence is not None and ratio is not None and ratio > 1.0:
+            scaled = covariance + evidence * (ratio**2 - 1.0)
+        matrix_u = np.zeros((3, 3))
+        matrix_u[UPPER] = k * np.sqrt(np.clip(np.diag(scaled)[3:9], 0.0, None))
     return AccelerometerBudget(
         terms={name: np.asarray(terms[name], dtype=np.float64) for name in TERMS},
         k=k,
         verification_ratio=ratio,
         verification_u=verification_u,
+        matrix=matrix_u,
         theta=theta,
         model=model,
         covariance=covariance,
@@ -655,6 +684,19 @@ def _pose_variances(
     noise = np.where(dithered, np.clip(sd**2 - lsb2, 0.0, None), sd**2) / counts[:, None]
     quant = np.where(dithered, lsb2 / counts[:, None], lsb2)
     return np.asarray(noise, dtype=np.float64), np.asarray(quant, dtype=np.float64)
+
+
+def disturbed_poses(spread: ArrayLike, fitted: ArrayLike) -> tuple[FloatArray, dict[int, float]]:
+    """The poses disturbed while they were taken (module docstring, ``pose_noise``): of
+    the poses' sample spreads ``spread`` (N, 3), counts, those of the ``fitted`` poses
+    (indices) whose spread on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
+    sensor's noise there. Returns the fitted poses' excess variance (len(fitted), 3),
+    counts², and the disturbed poses (index into ``spread``) with their largest spread
+    over the noise (:attr:`AccelerometerBudget.disturbed`)."""
+    keep = np.asarray(fitted, dtype=np.int64)
+    excess, over_noise = _excess_variance(np.asarray(spread, dtype=np.float64)[keep])
+    found = np.flatnonzero(np.any(excess > 0, axis=1))
+    return excess, {int(keep[i]): float(over_noise[i]) for i in found}
 
 
 def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
