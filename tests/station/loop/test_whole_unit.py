@@ -180,8 +180,14 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
         "sensitivity",
         "gyro_bias_dps",
         "gyro_matrix",
+        "verification_error_mg",
+        "matrix",
         "excluded_influences",
     }
+    # The nine-parameter matrix C is upper-triangular: U above its diagonal, none below.
+    u_c = np.array(held["matrix"])
+    assert (u_c[np.triu_indices(3)] > 0).all()
+    assert (u_c[np.tril_indices(3, -1)] == 0).all()
     # The putter's gyros declare no turn-on repeatability: U of their bias names it left out.
     assert held["excluded_influences"] == ["gyro_bias_repeatability"]
     assert record.gyro_matrix.standard_errors is not None
