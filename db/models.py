@@ -104,6 +104,9 @@ class Run(Base):
     uncertainty: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)
     #: The decision rule that judged the run; None on older runs (simple acceptance).
     decision_rule: Mapped[str | None] = mapped_column(String(8))
+    #: The decision rule that judged each limit, by check code; None on older runs
+    #: (0024: their rule guarded the offsets, sensitivities and gyro biases only).
+    check_rules: Mapped[dict[str, str] | None] = mapped_column(JsonDocument)
     #: The coefficients the unit held before the run wrote its own, as
     #: :class:`station.domain.record.records.AsFound`'s JSON; None on older runs (0022).
     as_found: Mapped[dict[str, Any] | None] = mapped_column(JsonDocument)

@@ -526,11 +526,14 @@ def _csv_row(row: Sequence[object]) -> list[object]:
             "description": "the calibration certificate; a unit whose latest run failed gets "
             "its failure report instead (what failed, the values and their limits), its "
             "title and failures in the reader's language (`lang`, else Accept-Language); "
-            "`format=pdf`: the same as a PDF, in English",
+            "`format=pdf`: the same as a PDF, in the same language",
         },
         **problems(
+            400,
             404,
             422,
+            _400="`format=pdf` in ko or zh on a server without the Noto Sans CJK font "
+            "(Debian's fonts-noto-cjk)",
             _404="no run of this serial number",
             _422="an unknown language or format",
         ),
@@ -544,7 +547,8 @@ async def get_certificate(
     language: LanguageDep,
     laboratory: LaboratoryDep,
     format: Annotated[
-        Literal["html", "pdf"], Query(description="html (default), or pdf (in English)")
+        Literal["html", "pdf"],
+        Query(description="html (default), or pdf (in the same language)"),
     ] = "html",
 ) -> Response:
     """The unit's calibration certificate: its latest run (aborts aside), coefficients, poses,
@@ -553,7 +557,8 @@ async def get_certificate(
     report for a unit whose latest run failed. ``lang`` (en, ko, zh; else the
     Accept-Language header's first shipped language, else en): the language of its title
     and its failures (codes and values as stored). ``format=pdf``: the same statements
-    as a PDF (English: its font writes no Hangul or Han)."""
+    as a PDF in the same language (Korean and Chinese with the Noto Sans CJK font; a
+    server without it answers 400 naming the package)."""
     found = await repository.run(lambda r: certificate_inputs(r, serial, zone, shifts))
     if found is None:
         raise HTTPException(status.HTTP_404_NOT_FOUND, f"no calibration run of serial {serial}")

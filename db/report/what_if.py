@@ -59,9 +59,10 @@ def _triple(row: Row[Any], prefix: str, source: str = "") -> tuple[float, float,
     return (float(values[0]), float(values[1]), float(values[2]))
 
 
-def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, float, float]]:
-    """A stored run's U of its offsets, sensitivities and gyro biases (a candidate profile
-    with the guarded rule judges by them; a run stored without them, by its values)."""
+def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, ...]]:
+    """A stored run's U of its offsets, sensitivities, gyro biases and verification error
+    (a candidate profile with the guarded rule judges by them; a run stored without them,
+    by its values)."""
     if not document:
         return {}
     xyz = {
@@ -70,11 +71,11 @@ def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, floa
         if key in document
     }
     bias = document.get("gyro_bias_dps")
-    triples: dict[str, tuple[float, float, float]] = {
-        code: (v[0], v[1], v[2]) for code, v in xyz.items()
-    }
+    triples: dict[str, tuple[float, ...]] = {code: (v[0], v[1], v[2]) for code, v in xyz.items()}
     if bias is not None:
         triples["gyro_bias"] = (float(bias[0]), float(bias[1]), float(bias[2]))
+    if (verification := document.get("verification_error_mg")) is not None:
+        triples["verification_error"] = (float(verification),)
     return triples
 
 

@@ -61,6 +61,7 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
         "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
         "uncertainty": record.uncertainty.to_json() if record.uncertainty else None,
         "decision_rule": record.decision_rule,
+        "check_rules": record.check_rules,
         "as_found": record.as_found.model_dump(mode="json") if record.as_found else None,
         "record_sha256": record_sha256,
     }
@@ -130,6 +131,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         "gyro_matrix": run.gyro_matrix,
         "uncertainty": run.uncertainty,
         "decision_rule": run.decision_rule,
+        "check_rules": run.check_rules,
         "as_found": run.as_found,
         "failures": [failure_reason(f) for f in failures],
         "coefficients": {

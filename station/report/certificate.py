@@ -14,11 +14,13 @@ from datetime import datetime
 
 import numpy as np
 
+from station.domain.calibration.uncertainty import DISTURBED_SPREAD_RATIO, disturbed_poses
 from station.domain.i18n import ENGLISH, Say
 from station.domain.product.laboratory import Laboratory
 from station.domain.product.limits import CHECKS, Bounds, LimitsProfile
-from station.domain.record.records import RunRecord, RunSummary, StoredCoefficients
+from station.domain.record.records import PoseRecord, RunRecord, RunSummary, StoredCoefficients
 from station.report.explanations import check_name, unit_words
+from station.report.formatting import number
 
 #: The document's number prefix by the run's verdict: a certificate, or a failure report.
 NUMBER_PREFIXES = {"pass": "CAL", "fail": "FR"}
@@ -192,8 +194,10 @@ def method(run: RunRecord, tr: Say = ENGLISH) -> list[tuple[str, str]]:
 @dataclass(frozen=True)
 class CheckRow:
     """One check of the run against its limits: what, in which unit, the bounds, the
-    measured values (``"x 2048.1, y …"``; empty when the run did not reach it) and its
-    result: ``pass``, ``fail`` or ``not reached``."""
+    measured values (``"x 2048.1, y …"``; empty when the run did not reach it), its
+    result (``pass``, ``fail`` or ``not reached``) and the decision rule that judged it
+    with its guard band (``"guarded acceptance, w = U: x 0.1, …"``, in the reader's
+    language)."""
 
     name: str
     unit: str
@@ -201,6 +205,7 @@ class CheckRow:
     upper: float | None
     measured: str
     result: str
+    rule: str = ""
 
 
 def _triple(values: tuple[float, float, float]) -> str:
@@ -230,6 +235,35 @@ def _measured(run: RunRecord, code: str, tr: Say) -> str:
     if code == "gyro_verification" and matrix is not None and matrix.verification_deg is not None:
         return f"{matrix.verification_deg:.6g}"
     return ""
+
+
+def _guard_band(run: RunRecord, code: str) -> str:
+    """The U a guarded rule used as the guard band of check ``code`` ("" if none)."""
+    u = run.uncertainty
+    if u is None:
+        return ""
+    k = u.gyro_matrix
+    values = {
+        "offset": None if u.offset is None else u.offset.as_tuple(),
+        "sensitivity": None if u.sensitivity is None else u.sensitivity.as_tuple(),
+        "gyro_bias": u.gyro_bias_dps,
+        "gyro_scale": None if k is None else (k[0][0], k[1][1], k[2][2]),
+    }.get(code)
+    if values is not None:
+        return _triple((values[0], values[1], values[2]))
+    if code == "verification_error" and u.verification_error_mg is not None:
+        return f"{u.verification_error_mg:.3g}"
+    if code == "gyro_misalignment" and k is not None:
+        return f"≤ {max(k[i][j] for i in range(3) for j in range(3) if i != j):.3g}"
+    return ""
+
+
+def _rule_words(run: RunRecord, code: str, tr: Say) -> str:
+    """The decision rule that judged check ``code`` and its guard band, as the document
+    says it (:meth:`~station.domain.record.records.RunRecord.rule_of`)."""
+    if run.rule_of(code) == "simple":
+        return tr("simple acceptance")
+    return tr("guarded acceptance, w = U: {u}", u=_guard_band(run, code) or "—")
 
 
 def _quantities(tr: Say) -> dict[str, str]:
@@ -266,9 +300,111 @@ def check_rows(run: RunRecord, profile: LimitsProfile, tr: Say = ENGLISH) -> lis
                 upper=bounds.upper,
                 measured=measured,
                 result=result,
+                rule=_rule_words(run, code, tr),
             )
         )
     return rows
+
+
+def _terms(run: RunRecord, tr: Say) -> list[str]:
+    """What the expanded uncertainty U of the coefficients holds, the budget's terms in
+    its order (:data:`station.domain.calibration.uncertainty.TERMS`; the fixture's tilt is
+    zero by construction)."""
+    terms = [tr("pose noise"), tr("ADC quantisation")]
+    if run.model == "six":
+        terms.append(tr("the six-parameter model's unmodelled cross-axis coupling"))
+    terms.append(tr("the fit's evidence"))
+    u = run.uncertainty
+    if u is None or "temperature" not in (u.excluded_influences or ()):
+        terms.append(tr("the sensor's drift with temperature across the poses"))
+    return terms
+
+
+def influences(run: RunRecord, tr: Say = ENGLISH) -> list[tuple[str, str]]:
+    """Every influence on the results, as the certificate states it (ISO/IEC 17025:2017
+    7.8.4.1: the conditions that influence the results, the measurement uncertainty):
+    what U holds; each influence the record names as left out of U, and why
+    (``uncertainty.excluded_influences``); each fitted pose de-weighted because it was
+    disturbed while taken (its spread more than
+    :data:`~station.domain.calibration.uncertainty.DISTURBED_SPREAD_RATIO` times the
+    sensor's noise, from the poses' spreads as the budget found them,
+    :func:`~station.domain.calibration.uncertainty.disturbed_poses`); the temperature
+    range the results hold in; and the decision rule with its guard band. Rows of (what,
+    statement) in the reader's language (``tr``); none when the run recorded no U."""
+    u = run.uncertainty
+    if u is None:
+        return []
+    rows = [(tr("in U"), ", ".join(_terms(run, tr)))]
+    why = {
+        "temperature": tr(
+            "not in U: no temperature was recorded at the poses, so the sensor's drift "
+            "across them is not in U"
+        ),
+        "gyro_bias_repeatability": tr(
+            "not in U: the product's gyros declare no turn-on to turn-on repeatability of "
+            "their bias, so U holds this session's mean only"
+        ),
+    }
+    names = {
+        "temperature": tr("temperature"),
+        "gyro_bias_repeatability": tr("gyro bias repeatability"),
+    }
+    for influence in u.excluded_influences or ():
+        rows.append((names[influence], why[influence]))
+    for pose, ratio in disturbed(run):
+        rows.append(
+            (
+                tr("disturbed pose {pose} ({name})", pose=pose.index + 1, name=pose.name),
+                tr(
+                    "its spread was {ratio} times the sensor's noise (above {limit}): "
+                    "de-weighted, its excess variance in U undivided by its samples",
+                    ratio=number(ratio, 3),
+                    limit=number(DISTURBED_SPREAD_RATIO, 2),
+                ),
+            )
+        )
+    span = temperature_range(run)
+    rows.append(
+        (
+            tr("temperature range"),
+            tr(
+                "the results hold at {low} … {high} °C (the run's poses); elsewhere add the "
+                "sensor's drift with temperature to U",
+                low=number(span[0], 4),
+                high=number(span[1], 4),
+            )
+            if span is not None
+            else tr("not recorded: the results hold at the temperature of the calibration"),
+        )
+    )
+    rule = run.decision_rule or "simple"
+    rows.append(
+        (
+            tr("decision rule"),
+            tr("simple acceptance: a value within its limits conforms, whatever its U")
+            if rule == "simple"
+            else tr(
+                "guarded acceptance with guard band w = U: a value that carries its U "
+                "conforms when value ± U lies within its limits; each limit's rule and U "
+                "are under Limits"
+            ),
+        )
+    )
+    return rows
+
+
+def disturbed(run: RunRecord) -> list[tuple[PoseRecord, float]]:
+    """The fitted poses of ``run`` de-weighted because disturbed while taken, each with
+    its largest spread over the sensor's noise (the poses the budget left out as
+    inconsistent are not fitted)."""
+    fit = run.fit_poses()
+    if not fit:
+        return []
+    left_out = set(run.quality.excluded_poses or ()) if run.quality is not None else set()
+    kept = [i for i, pose in enumerate(fit) if pose.index not in left_out]
+    spread = np.array([pose.std.as_tuple() for pose in fit], dtype=float)
+    _, found = disturbed_poses(spread, kept)
+    return [(fit[i], ratio) for i, ratio in sorted(found.items())]
 
 
 @dataclass(frozen=True)

@@ -43,14 +43,22 @@ def certificate_document(
     language: Language,
     laboratory: Laboratory,
 ) -> bytes:
-    """The certificate of ``parts`` as ``format``: the page (UTF-8) in ``language``, or
-    the PDF (English: :data:`station.report.pdf.PDF_LANGUAGES`). The renderers are
-    imported here, when one is asked for: a PDF's library stays out of a page's process."""
+    """The certificate of ``parts`` as ``format``: the page (UTF-8) or the PDF, in
+    ``language`` (a Korean or Chinese PDF needs the Noto Sans CJK font:
+    :func:`station.report.pdf.cjk_font`). The renderers are imported here, when one is
+    asked for: a PDF's library stays out of a page's process."""
     if format == "pdf":
         from station.report.pdf import certificate_pdf
 
         return certificate_pdf(
-            parts.run, parts.profile, issued_at, zone, parts.golden, laboratory, parts.signature
+            parts.run,
+            parts.profile,
+            issued_at,
+            zone,
+            parts.golden,
+            laboratory,
+            parts.signature,
+            language,
         )
     from station.report.html import certificate_page
 

@@ -62,6 +62,7 @@ from station.report.certificate import (
     gyro_as_found,
     gyro_as_left,
     identity,
+    influences,
 )
 from station.report.explanations import explanation
 from station.report.gyro_plot import sense_axes_of, svg_g_sensitivity
@@ -764,6 +765,7 @@ def certificate_page(
         gyro_plot=Markup(plot) if plot is not None else None,
         identity=identity(run, golden, tr, laboratory=laboratory, issued_at=issued_at),
         checks=None if profile is None else check_rows(run, profile, tr),
+        influences=influences(run, tr),
         found=as_found(run),
         left=as_left(run),
         gyro_found=gyro_as_found(run),

@@ -1,19 +1,24 @@
 """The calibration certificate (or failure report) as a PDF: the same statements as the
 HTML page (:mod:`station.report.certificate`), laid out by fpdf2 on A4 pages, each headed
 by the document's title and number and footed by "page x / y" (ISO/IEC 17025:2017
-7.8.2.1 a), and ended by its end mark.
+7.8.2.1 a), and ended by its end mark, in the reader's language.
 
 Text is set in DejaVu Sans, the TrueType font matplotlib ships (its ``fonts/ttf``), so
 the certificate's symbols (±, °, …, −, ⁻¹, ²) print without a system font. DejaVu Sans
-holds no Hangul or Han, so the PDF is in English (:data:`PDF_LANGUAGES`).
+holds no Hangul or Han: a Korean or Chinese PDF embeds Noto Sans CJK (Debian's
+``fonts-noto-cjk``, which ``.ci/run`` installs) as the font its Hangul and Han fall back
+to, found through fontconfig (``fc-match``, :func:`cjk_font`); without it that PDF is
+refused with one line naming the package (:class:`FontMissingError`).
 """
 
+import subprocess
 from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
 from typing import Final
 
-from station.domain.i18n import ENGLISH
+from station.domain.errors import InputError
+from station.domain.i18n import LANGUAGES, Language, Say, speaker
 from station.domain.product.laboratory import Laboratory
 from station.domain.product.limits import LimitsProfile
 from station.domain.record.records import RunSummary, StoredRun
@@ -28,13 +33,24 @@ from station.report.certificate import (
     code_words,
     failure_words,
     identity,
+    influences,
 )
+from station.report.explanations import explanation
 
-#: The languages a PDF certificate is set in: those its font writes.
-PDF_LANGUAGES: Final = ("en",)
+#: The languages a PDF certificate is set in: every shipped language.
+PDF_LANGUAGES: Final = LANGUAGES
+#: The font fontconfig is asked for, by language, for a PDF's Hangul or Han: the Korean
+#: and the Simplified Chinese faces of Noto Sans CJK (their glyph shapes for shared Han).
+CJK_FAMILIES: Final = {"ko": "Noto Sans CJK KR", "zh": "Noto Sans CJK SC"}
+#: Longest wait for ``fc-match`` (it reads fontconfig's cache; a cold one takes a second).
+_FC_MATCH_TIMEOUT_S: Final = 30.0
 
 _MARGIN_MM = 15
 _LINE_MM = 5
+
+
+class FontMissingError(InputError):
+    """A PDF in a language whose script its fonts cannot write on this machine."""
 
 
 def _font_path(name: str) -> Path:
@@ -42,6 +58,31 @@ def _font_path(name: str) -> Path:
     import matplotlib
 
     return Path(matplotlib.get_data_path()) / "fonts" / "ttf" / f"{name}.ttf"
+
+
+def cjk_font(language: str, *, bold: bool = False) -> tuple[Path, int]:
+    """The file and collection index of the Noto Sans CJK face that writes ``language``
+    (one of :data:`CJK_FAMILIES`), as fontconfig matches it; :class:`FontMissingError`
+    when fontconfig matches another family (it answers its nearest font, not none) or
+    cannot be asked."""
+    family = CJK_FAMILIES[language]
+    pattern = f"{family}:style=Bold" if bold else family
+    try:
+        answer = subprocess.run(
+            ["fc-match", "-f", "%{family}\n%{file}\n%{index}\n", pattern],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=_FC_MATCH_TIMEOUT_S,
+        ).stdout.splitlines()
+    except (OSError, subprocess.SubprocessError):
+        answer = []
+    if len(answer) == 3 and family in answer[0].split(","):
+        return Path(answer[1]), int(answer[2])
+    raise FontMissingError(
+        f"a PDF in {language} needs the font {family} (Debian: apt-get install "
+        "fonts-noto-cjk), which fontconfig does not find"
+    )
 
 
 def _n(value: float | None, digits: int = 6) -> str:
@@ -56,14 +97,17 @@ def certificate_pdf(
     golden: RunSummary | None = None,
     laboratory: Laboratory | None = None,
     signature: Signature | None = None,
+    language: Language = "en",
 ) -> bytes:
     """The PDF of ``run``'s certificate (its failure report when it failed), as
     :func:`station.report.html.certificate_page` states it: identity, method, results
-    with U and k, as found and as left, the limits, the statements, the signatory."""
+    with U and k, the influences, as found and as left, the limits, the statements, the
+    signatory; in ``language`` (Korean and Chinese: :func:`cjk_font`)."""
     from fpdf import FPDF
     from fpdf.enums import XPos, YPos
 
-    tr = ENGLISH
+    cjk = (cjk_font(language), cjk_font(language, bold=True)) if language in CJK_FAMILIES else None
+    tr = speaker(language)
     words, said = failure_words(tr), code_words(tr)
     ident = identity(run, golden, tr, laboratory=laboratory, issued_at=issued_at)
     title = words[run.verdict]
@@ -85,6 +129,10 @@ def certificate_pdf(
     pdf.set_auto_page_break(True, margin=_MARGIN_MM + _LINE_MM)
     pdf.add_font("dejavu", fname=str(_font_path("DejaVuSans")))
     pdf.add_font("dejavu", style="B", fname=str(_font_path("DejaVuSans-Bold")))
+    if cjk is not None:  # Hangul and Han from Noto Sans CJK, the rest in DejaVu Sans
+        for style, (file, index) in zip(("", "B"), cjk, strict=True):
+            pdf.add_font("cjk", style=style, fname=str(file), collection_font_number=index)
+        pdf.set_fallback_fonts(["cjk"])
     pdf.set_title(f"{title} {ident.number}")
     pdf.add_page()
 
@@ -118,7 +166,7 @@ def certificate_pdf(
     paragraph(tr("times in {zone} · issued {moment}", zone=zone, moment=_moment(issued_at, zone)))
     if run.verdict == "fail":
         paragraph(words["on_hold"])
-    table(_identity_rows(run, ident, zone, said), widths=(1, 3), headed=False)
+    table(_identity_rows(run, ident, zone, said, tr), widths=(1, 3), headed=False)
 
     heading(tr("Method"))
     table(ident.method, widths=(1, 3), headed=False)
@@ -126,7 +174,16 @@ def certificate_pdf(
     if run.failures:
         heading(words["what_failed"])
         header = [words[k] for k in ("code", "explanation", "measured", "lower", "upper")]
-        rows = [[f.code, f.message, _n(f.measured), _n(f.lower), _n(f.upper)] for f in run.failures]
+        rows = [
+            [
+                f.code,
+                f.message if language == "en" else explanation(f, language),
+                _n(f.measured),
+                _n(f.lower),
+                _n(f.upper),
+            ]
+            for f in run.failures
+        ]
         table([header, *rows], widths=(4, 6, 2, 2, 2))
 
     heading(tr("Coefficients"))
@@ -144,6 +201,16 @@ def certificate_pdf(
                 sensitivity += f" ± {_n(u.sensitivity.as_tuple()[i], 3)}"
             rows.append([axis, offset, sensitivity])
         table(rows)
+        rows = [[tr("axis"), *([tr("matrix (g per count)")] * 3)]]
+        for i, axis in enumerate("xyz"):
+            cells = [_n(v, 6) for v in cal.matrix[i]]
+            if u is not None and u.matrix is not None:
+                cells = [
+                    f"{c} ± {_n(s, 2)}" if s > 0 else c
+                    for c, s in zip(cells, u.matrix[i], strict=True)
+                ]
+            rows.append([axis, *cells])
+        table(rows)
         paragraph(
             tr(
                 "± is the expanded uncertainty U with coverage factor k = {k} (about 95 % "
@@ -155,6 +222,18 @@ def certificate_pdf(
             if u is not None
             else tr("No uncertainty recorded for this run.")
         )
+        if u is not None and u.matrix is not None:
+            paragraph(
+                tr(
+                    "± of the matrix: the expanded uncertainty U of each entry of the "
+                    "nine-parameter model's matrix (k = {k}), from the fit's covariance.",
+                    k=_n(u.k, 2),
+                )
+            )
+    found_influences = influences(run, tr)
+    if found_influences:
+        heading(tr("Influences"))
+        table(found_influences, widths=(1, 3), headed=False)
     if run.gyro is not None:
         heading(tr("Gyro"))
         bias = [_n(v) for v in run.gyro.bias.as_tuple()]
@@ -195,7 +274,7 @@ def certificate_pdf(
         if state is None:
             paragraph(f"{name}: {missing}")
         else:
-            table(_state_rows(name, state))
+            table(_state_rows(name, state, tr))
 
     heading(tr("Limits"))
     if profile is None:
@@ -207,12 +286,13 @@ def certificate_pdf(
         )
     else:
         header = [tr("check"), tr("unit of measure"), words["lower"], words["upper"]]
-        rows = [[*header, words["measured"], tr("result")]]
+        rows = [[*header, words["measured"], tr("result"), tr("decision rule")]]
         for c in check_rows(run, profile, tr):
             lower = _n(c.lower) if c.lower is not None else words["none"]
             upper = _n(c.upper) if c.upper is not None else words["none"]
-            rows.append([c.name, c.unit, lower, upper, c.measured or "—", said[c.result]])
-        table(rows, widths=(3, 2, 2, 2, 4, 2))
+            measured = c.measured or "—"
+            rows.append([c.name, c.unit, lower, upper, measured, said[c.result], c.rule])
+        table(rows, widths=(3, 2, 2, 2, 4, 2, 4))
 
     heading(tr("Statements"))
     paragraph(
@@ -221,7 +301,7 @@ def certificate_pdf(
             "reproduced except in full without the laboratory's written approval."
         )
     )
-    rows = [[tr("authorised by"), _authorised(signature, zone)]]
+    rows = [[tr("authorised by"), _authorised(signature, zone, tr)]]
     if signature is not None:
         over = tr("over the record's SHA-256 {sha256}", sha256=signature.record_sha256)
         rows.append([tr("signature"), f"Ed25519 {signature.signature} {over}"])
@@ -238,17 +318,15 @@ def _moment(value: datetime | None, zone: str) -> str:
     return formatting.moment(value, zone)
 
 
-def _authorised(signature: Signature | None, zone: str) -> str:
-    tr = ENGLISH
+def _authorised(signature: Signature | None, zone: str, tr: Say) -> str:
     if signature is None:
         return tr("not signed by an authorised signatory")
     signed = tr("authorised signatory; signed {moment}", moment=_moment(signature.signed_at, zone))
     return f"{signature.signatory}, {signed}"
 
 
-def _state_rows(name: str, state: CoefficientState) -> list[list[str]]:
-    """One set of coefficients (as found or as left) as table rows."""
-    say = ENGLISH
+def _state_rows(name: str, state: CoefficientState, say: Say) -> list[list[str]]:
+    """One set of coefficients (as found or as left) as table rows, in ``say``'s language."""
     rows = [
         [name, say("offset (counts)"), say("sensitivity (counts/g)"), say("matrix (g per count)")]
     ]
@@ -263,10 +341,10 @@ def _state_rows(name: str, state: CoefficientState) -> list[list[str]]:
 
 
 def _identity_rows(
-    run: StoredRun, ident: Identity, zone: str, said: dict[str, str]
+    run: StoredRun, ident: Identity, zone: str, said: dict[str, str], say: Say
 ) -> list[tuple[str, str]]:
-    """The identity block's rows, as ``templates/identity.html`` lays them out."""
-    say = ENGLISH
+    """The identity block's rows, as ``templates/identity.html`` lays them out, in
+    ``say``'s language."""
     lab = ident.laboratory
     unset = say("not configured")
     golden = ident.golden

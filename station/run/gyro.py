@@ -137,18 +137,12 @@ class LiveGyro:
         return Move(self.recorder.times(move), rates, ends[0], ends[1])
 
     def checks(self, profile: LimitsProfile) -> list[FailureReason]:
-        """K's scale errors (diagonal − 1), misalignments and the verification move
-        against the profile (and a verification move that could not be judged)."""
+        """The verification move against the profile (and a verification move that could
+        not be judged); K's scale errors and misalignments are judged with their U among
+        the run's limit checks (:func:`station.domain.product.judging.limit_checks`)."""
         if self.fit is None:
             return []
-        k = self.fit.scale_matrix
-        found = [check(profile, "gyro_scale", float(k[i, i] - 1), axis=AXES[i]) for i in range(3)]
-        found += [
-            check(profile, "gyro_misalignment", float(k[i, j]), axis=AXES[i])
-            for i in range(3)
-            for j in range(3)
-            if i != j
-        ]
+        found: list[FailureReason | None] = []
         if self.verification_deg is not None:
             found.append(check(profile, "gyro_verification", self.verification_deg))
         found.append(self.failure)

@@ -30,6 +30,7 @@ from station.domain.product.limits import LimitsProfile
 from station.domain.product.run_settings import RunSettings
 from station.domain.record.records import (
     Coefficients,
+    DecisionRule,
     Disposition,
     FailureReason,
     GyroMatrixRecord,
@@ -240,10 +241,13 @@ def run_record(
     poses: tuple[PoseRecord, ...],
     gyro_matrix: GyroMatrixRecord | None = None,
     uncertainty: UncertaintyRecord | None = None,
+    check_rules: dict[str, DecisionRule] | None = None,
 ) -> RunRecord:
     """The record of the finished run, as it goes to the outbox: where its unit goes
     (``disposition``), whether it was the station's ``golden`` unit, the coefficients'
-    ``uncertainty`` (:func:`uncertainty_record`) and the profile's decision rule included."""
+    ``uncertainty`` (:func:`uncertainty_record`), the profile's decision rule and the
+    rule that judged each limit (``check_rules``,
+    :func:`station.domain.product.judging.check_rules`) included."""
     coefficients = quality = None
     if solution is not None:
         cal = solution.calibration.to_dict()
@@ -279,6 +283,7 @@ def run_record(
         gyro_matrix=gyro_matrix,
         uncertainty=uncertainty,
         decision_rule=profile.rule,
+        check_rules=check_rules,
         as_found=journal.as_found,
         poses=poses,
     )

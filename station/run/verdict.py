@@ -4,10 +4,12 @@ A run's failures are those found while it went, in the order found (a saturated 
 a failed solve or write-back, the unit's own output, the gyro matrix), then the limit
 checks of what it measured (:func:`station.domain.product.judging.limit_checks`, which the
 report's what-if uses too): every pose's noise and link loss, the offsets and
-sensitivities, the verification pose's calibrated |g| and the gyro biases, each against
-the limits profile. An abort replaces whatever was found and is not checked: it says
-nothing about the unit. An abort after the write-back is not recorded as an abort: the
-unit holds the coefficients, and its own output was not checked.
+sensitivities, the verification pose's calibrated |g|, the gyro biases and the gyro
+matrix K, each against the limits profile (by its decision rule where the value carries
+its U), and the record names the rule that judged each limit. An abort replaces
+whatever was found and is not checked: it says nothing about the unit. An abort after
+the write-back is not recorded as an abort: the unit holds the coefficients, and its
+own output was not checked.
 
 The record (:func:`conclude`) carries, from the start, where the unit goes next
 (:func:`station.domain.record.unit_state.disposition`, from its earlier runs) and what the run
@@ -21,7 +23,13 @@ import numpy as np
 
 from station.domain.calibration import CalibrationError, Solution, apply
 from station.domain.gyro.motion import GyroMatrixFit
-from station.domain.product.judging import Measured, limit_checks, uncertainty_of, verdict_failures
+from station.domain.product.judging import (
+    Measured,
+    check_rules,
+    limit_checks,
+    uncertainty_of,
+    verdict_failures,
+)
 from station.domain.product.limits import LimitsProfile
 from station.domain.product.run_settings import RunSettings
 from station.domain.record.records import (
@@ -168,10 +176,10 @@ def conclude(
     uncertainty = record.uncertainty_record(
         captures, fit_count, solution, gyro_fit, settings.sensor
     )
+    measured = _measured(captures, solution, fit_count, error, gyro, gyro_matrix, uncertainty)
     if failures.aborted:
         reasons, error = list(failures.found), None
     else:
-        measured = _measured(captures, solution, fit_count, error, gyro, uncertainty)
         reasons = verdict_failures(failures.found, limit_checks(profile, measured))
     if not store:
         return Conclusion(error, None)
@@ -190,6 +198,7 @@ def conclude(
         poses=record.pose_records(captures, evidence),
         gyro_matrix=gyro_matrix,
         uncertainty=uncertainty,
+        check_rules=check_rules(profile, measured),
     )
     return Conclusion(error, run)
 
@@ -210,10 +219,11 @@ def _measured(
     fit_count: int,
     verification_error_mg: float | None,
     gyro: GyroSummary | None,
+    gyro_matrix: GyroMatrixRecord | None,
     uncertainty: UncertaintyRecord | None = None,
 ) -> Measured:
-    """What the limits judge, from the poses taken, the solve, the gyro summary and the
-    coefficients' uncertainties."""
+    """What the limits judge, from the poses taken, the solve, the gyro summary, the gyro
+    matrix K and the uncertainties of the coefficients, K and the verification error."""
     calibration = solution.calibration if solution is not None else None
     u = uncertainty
     return Measured(
@@ -223,10 +233,13 @@ def _measured(
         sensitivity=None if calibration is None else _triple(calibration.sensitivity),
         verification=None if verification_error_mg is None else (fit_count, verification_error_mg),
         gyro_bias=None if gyro is None else gyro.bias.as_tuple(),
+        gyro_matrix=None if gyro_matrix is None else gyro_matrix.matrix,
         uncertainty=uncertainty_of(
             None if u is None or u.offset is None else u.offset.as_tuple(),
             None if u is None or u.sensitivity is None else u.sensitivity.as_tuple(),
             None if u is None or u.gyro_bias_dps is None else u.gyro_bias_dps,
+            None if u is None or verification_error_mg is None else u.verification_error_mg,
+            None if u is None or gyro_matrix is None else u.gyro_matrix,
         ),
     )
 

@@ -14,7 +14,8 @@ do, the gyro pose means to :func:`~station.domain.calibration.uncertainty.gyro_b
 
 The truth compared with: the offsets, and the sensitivities as the model defines them
 (six: each axis' own counts/g, ``diag(S)``; nine: ``1/diag(C)`` of the upper-triangular
-C with ``C = Q·S⁻¹``), and the gyro biases.
+C with ``C = Q·S⁻¹``), the gyro biases, and for the nine-parameter model C's entries above
+its diagonal (group :data:`MATRIX`).
 
 The gyro matrix K (:func:`simulate_gyro_matrix_coverage`): a whole unit's stream, sample
 by sample (:mod:`station.simulator.recording`: K with ±1 % scale and ±0.5 % misalignment,
@@ -58,6 +59,12 @@ from station.simulator.sensor import REFERENCE_TEMPERATURE_C, SensorTruth, Therm
 
 #: The coefficient groups a coverage is counted over.
 GROUPS = ("offset", "sensitivity", "gyro_bias")
+#: The nine-parameter model's off-diagonal entries of C (its misalignment and coupling),
+#: counted apart (:attr:`Coverage.checked` ``"matrix"``; not in :meth:`Coverage.fraction`
+#: of all groups, which the six-parameter profiles share).
+MATRIX = "matrix"
+#: The entries of C above its diagonal.
+_OFF_DIAGONAL = ((0, 1), (0, 2), (1, 2))
 
 
 @dataclass(frozen=True)
@@ -82,12 +89,19 @@ def settings_of(profile: str) -> RunSettings:
     return RunSettings(**(shipped_plan(profile) or {}))
 
 
+def true_matrix(truth: SensorTruth) -> FloatArray:
+    """The unit's nine-parameter matrix C (3, 3), g/count: the upper-triangular R of
+    ``inv(counts_per_g) = Q·R`` with a positive diagonal (``|C(a − o)| = |g|`` for every
+    reading, the fit's model)."""
+    r = np.linalg.qr(np.linalg.inv(truth.counts_per_g))[1]
+    return np.asarray(np.diag(np.sign(np.diag(r))) @ r, dtype=np.float64)
+
+
 def true_sensitivity(truth: SensorTruth, model: Model) -> FloatArray:
     """The sensitivities as ``model`` defines them (module docstring)."""
     if model == "six":
         return truth.sensitivity_counts_per_g
-    r = np.linalg.qr(np.linalg.inv(truth.counts_per_g))[1]
-    return np.asarray(1.0 / np.abs(np.diag(r)), dtype=np.float64)
+    return np.asarray(1.0 / np.diag(true_matrix(truth)), dtype=np.float64)
 
 
 def tilted(directions: FloatArray, tilt_deg: float, rng: np.random.Generator) -> FloatArray:
@@ -141,9 +155,9 @@ def simulate_coverage(
     nominal = np.array([POSES[name].gravity_body for name in names])
     samples = settings.stillness.window_samples
     model: Model = settings.model
-    checked = dict.fromkeys(GROUPS, 0)
-    inside = dict.fromkeys(GROUPS, 0)
-    ratio_sum = dict.fromkeys(GROUPS, 0.0)
+    checked = dict.fromkeys((*GROUPS, MATRIX), 0)
+    inside = dict.fromkeys((*GROUPS, MATRIX), 0)
+    ratio_sum = dict.fromkeys((*GROUPS, MATRIX), 0.0)
     refused = 0
     fit = len(settings.poses)
     temperatures = (
@@ -218,7 +232,14 @@ def simulate_coverage(
             checked[group] += 3
             inside[group] += int(np.sum(error <= u))
             ratio_sum[group] += float(np.sum(error / u))
-    mean_ratio = {g: ratio_sum[g] / checked[g] if checked[g] else float("nan") for g in GROUPS}
+        if budget.matrix is not None:
+            rows, columns = zip(*_OFF_DIAGONAL, strict=True)
+            error = np.abs(cal.matrix - true_matrix(truth))[rows, columns]
+            u = budget.matrix[rows, columns]
+            checked[MATRIX] += 3
+            inside[MATRIX] += int(np.sum(error <= u))
+            ratio_sum[MATRIX] += float(np.sum(error / u))
+    mean_ratio = {g: ratio_sum[g] / checked[g] if checked[g] else float("nan") for g in checked}
     return Coverage(checked, inside, refused, mean_ratio)
 
 

@@ -13,7 +13,7 @@ from db.store.signatures import add_signature, register_signatory
 from station.domain.record.signature import load_private_key, new_key, sign
 from station.report.certificate import document_number
 from tests.db.records import make_record
-from tests.pdf_pages import page_text, rendered_pages
+from tests.pdf_pages import cjk_font_installed, page_text, rendered_pages
 
 ANN_PEM, ANN = new_key()
 BOB_PEM, BOB = new_key()
@@ -54,6 +54,15 @@ def test_the_server_verifies_a_signed_certificate_and_refuses_a_changed_one(
     last = " ".join(page_text(path, len(pages)).split())
     assert "ann, authorised signatory; signed" in last
     assert f"page {len(pages)} / {len(pages)}" in last
+    # The same PDF in the reader's language: Korean, its Hangul from Noto Sans CJK.
+    cjk_font_installed("ko")
+    korean = client.get("/api/v1/units/U8/certificate", params={"format": "pdf", "lang": "ko"})
+    assert korean.headers["content-type"] == "application/pdf"
+    path = tmp_path / "U8-ko.pdf"
+    path.write_bytes(korean.content)
+    pages = rendered_pages(path)
+    assert "교정 성적서" in page_text(path, 1)
+    assert "ann" in page_text(path, len(pages))
 
     signed = client.get(f"/api/v1/runs/{record.run_id}/certificate.json").json()
     answer = client.post("/api/v1/certificates/verify", json=signed)

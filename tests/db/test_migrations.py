@@ -44,6 +44,17 @@ from db.store.mapping import failure_rows, pose_row, run_row
 from db.store.repository import KeyHolder, key_sha256, record_sha256
 from db.store.units import answer_json
 from station.domain.quality.figures import ReportFilter
+from station.domain.record.signature import (
+    SignatureMismatchError,
+    SignedCertificate,
+    canonical_record,
+    load_private_key,
+    new_key,
+    sign,
+    station_record,
+    verify,
+)
+from station.report.certificate import document_number
 from station.report.html import certificate_page
 from tests.db.records import LIMITS, T0, make_record
 from tests.db.test_rollups import rollup_rows
@@ -139,6 +150,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
             del row["part_number"]  # a column of revision 0014
             del row["fixture_slot"]  # a column of revision 0015
             del row["as_found"]  # a column of revision 0022
+            del row["check_rules"]  # a column of revision 0024
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             if record.failures:
                 connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
@@ -284,6 +296,7 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
             del row["part_number"]  # a column of revision 0014
             del row["fixture_slot"]  # a column of revision 0015
             del row["as_found"]  # a column of revision 0022
+            del row["check_rules"]  # a column of revision 0024
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
         upgrade(engine)
@@ -307,6 +320,7 @@ def test_runs_from_before_as_found_say_not_recorded(empty_url: str) -> None:
         with engine.begin() as connection:
             row = run_row(record, received_at=T0, record_sha256=record_sha256(record))
             del row["as_found"]
+            del row["check_rules"]  # a column of revision 0024
             pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
             connection.execute(insert(RunPose), [pose_row(pk, p) for p in record.poses])
         upgrade(engine)
@@ -316,6 +330,48 @@ def test_runs_from_before_as_found_say_not_recorded(empty_url: str) -> None:
         assert stored.as_found is None
         page = certificate_page(stored, None, T0)
         assert '<p class="as-found">as found: not recorded</p>' in page
+    finally:
+        engine.dispose()
+
+
+def test_a_guarded_run_from_before_check_rules_keeps_its_rules_and_its_signature(
+    empty_url: str,
+) -> None:
+    """Revision 0024 adds ``runs.check_rules``; a guarded run stored before it guarded
+    its offsets, sensitivities and gyro biases only and judged K and the verification
+    error by their values: read back, its record says so, and its signature (over the
+    record as signed then) still verifies."""
+    engine = make_engine(empty_url)
+    try:
+        upgrade(engine, "0023")
+        # As the server holds it (its limits profile stored apart) and a signatory signs it.
+        reference = {key: value for key, value in LIMITS.items() if key != "profile"}
+        record = make_record(decision_rule="guarded", limits=reference)
+        assert record.check_rules is None
+        pem, public = new_key()
+        key = load_private_key(pem, "key.pem")
+        signature = sign(record, document_number(record), "alice", key, T0)
+        with engine.begin() as connection:
+            row = run_row(record, received_at=T0, record_sha256=record_sha256(record))
+            del row["check_rules"]
+            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
+            connection.execute(insert(RunPose), [pose_row(pk, p) for p in record.poses])
+        upgrade(engine)
+        with Session(engine) as session:
+            stored = RunRepository(session).get(record.run_id)
+        assert stored is not None
+        assert stored.check_rules is None
+        assert [stored.rule_of(c) for c in ("offset", "sensitivity", "gyro_bias")] == [
+            "guarded"
+        ] * 3
+        for code in ("gyro_scale", "gyro_misalignment", "verification_error", "pose_noise"):
+            assert stored.rule_of(code) == "simple"
+        assert "check_rules" not in canonical_record(station_record(stored)).decode()
+        verify(SignedCertificate(record=station_record(stored), signature=signature), public)
+        # One digit changed in the record still fails: the check can fail.
+        changed = station_record(stored).model_copy(update={"decision_rule": "simple"})
+        with pytest.raises(SignatureMismatchError):
+            verify(SignedCertificate(record=changed, signature=signature), public)
     finally:
         engine.dispose()
 
@@ -396,6 +452,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
                 del row["part_number"]  # a column of revision 0014
                 del row["fixture_slot"]  # a column of revision 0015
                 del row["as_found"]  # a column of revision 0022
+                del row["check_rules"]  # a column of revision 0024
                 connection.execute(insert(Run), row)
         upgrade(engine)
         with Session(engine) as session:

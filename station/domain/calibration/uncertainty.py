@@ -92,6 +92,30 @@ U = k·u_c with k = :data:`COVERAGE_FACTOR` (≈ 95 % for a normal distribution,
 [JCGM100]_ 6.2). Validated by Monte Carlo on the simulator
 (``benchmarks/bench_uncertainty.py``, ``docs/benchmarks.md``).
 
+Matrix entries (:attr:`AccelerometerBudget.matrix`). The nine-parameter model's θ holds
+the upper-triangular C itself (g/count; its off-diagonal entries are the axes'
+misalignment and coupling, [Tedaldi2014]_), so each entry's U is k·√ of its diagonal
+element of θ's covariance Σ_θ: the pose noise and quantisation through J⁺, the fit's
+evidence (scaled, as its term is, by a verification ratio above 1) and the drift with
+temperature, as every coefficient's. Its coverage is checked on simulated units with
+known truth (:func:`station.simulator.coverage.simulate_coverage`, group ``matrix``).
+
+Verification error (:attr:`AccelerometerBudget.verification_u`). The verification pose
+a_v is held out of the fit; its error e_v = |r_v|, r_v = |C(θ)·(a_v − o)| − 1 (g; the
+record's ``verification_error_mg`` is 1000·e_v), is the calibrated output's error at a
+tilted pose. To first order::
+
+    δr_v = J_v·δθ + (C^T n_v)^T·δa_v,        J_v = ∂r_v/∂θ
+
+so its variance combines the calibrated output's uncertainty at that pose, J_v Σ_θ J_vᵀ
+(the fit poses' noise and quantisation through θ = −J⁺δr, the fit's evidence, the
+six-parameter model's misfit there from the ``model`` term's draws, and the drift with
+temperature through θ together with the pose's own, the same κ), and the verification
+pose's own noise and quantisation as each fitted pose's (``pose_noise``,
+``quantisation``). For the six-parameter model the fit's evidence and the model's misfit
+are one unmodelled effect: the larger counts. U(e_v) = k·u(r_v); it is not scaled by the
+verification ratio, which is the error itself over it.
+
 Gyro bias (:func:`gyro_bias_uncertainty`): the mean over the still poses; Type A the
 within-pose noise σ/√(Σ N_i), or the poses' scatter s/√P where it exceeds that beyond
 the χ² 95 % point (the scatter would also carry a g-dependent bias, which [Park2014]_
@@ -218,6 +242,13 @@ class AccelerometerBudget:
         k: the coverage factor of :attr:`expanded`.
         verification_ratio: |r_v|/(k·u(r_v)) of the verification pose (``None`` without
             one); above 1 it scaled the ``model`` and ``fit`` terms.
+        verification_u: the expanded uncertainty U (g) of the verification pose's error
+            ||C(a_v − o)| − 1| (``None`` without one; module docstring, *Verification
+            error*).
+        matrix: shape (3, 3), the expanded uncertainty U (g/count) of each entry of the
+            nine-parameter model's upper-triangular matrix C (zero below the diagonal;
+            module docstring, *Matrix entries*); ``None`` for the six-parameter model,
+            whose diagonal matrix the sensitivities' U states.
         theta, model: the fit's parameters θ ((o, s) or (o, C_upper)) and its model.
         covariance: shape (p, p), the covariance of θ from the pose noise, quantisation,
             the fit's evidence and the drift with temperature (the gravity directions'
@@ -234,6 +265,8 @@ class AccelerometerBudget:
     terms: dict[str, FloatArray]
     k: float = COVERAGE_FACTOR
     verification_ratio: float | None = None
+    verification_u: float | None = None
+    matrix: FloatArray | None = None
     theta: FloatArray | None = None
     model: Model = "six"
     covariance: FloatArray | None = None
@@ -277,10 +310,13 @@ class Uncertainty:
     sensitivity: FloatArray | None = None
     gyro_bias_dps: FloatArray | None = None
     gyro_matrix: FloatArray | None = field(default=None)
+    verification_error_mg: float | None = None
+    matrix: FloatArray | None = None
 
     def to_dict(self) -> dict[str, object]:
         """``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z}, "gyro_bias_dps": [3],
-        "gyro_matrix": [[3×3]]}``, keys of unmeasured coefficients left out."""
+        "gyro_matrix": [[3×3]], "verification_error_mg", "matrix": [[3×3]]}``, keys of
+        unmeasured coefficients left out."""
         out: dict[str, object] = {"k": self.k}
         if self.offset is not None:
             out["offset"] = _xyz(self.offset)
@@ -290,18 +326,37 @@ class Uncertainty:
             out["gyro_bias_dps"] = [float(v) for v in self.gyro_bias_dps]
         if self.gyro_matrix is not None:
             out["gyro_matrix"] = [[float(v) for v in row] for row in self.gyro_matrix]
+        if self.verification_error_mg is not None:
+            out["verification_error_mg"] = self.verification_error_mg
+        if self.matrix is not None:
+            out["matrix"] = [[float(v) for v in row] for row in self.matrix]
         return out
 
     @classmethod
     def of_budget(cls, budget: AccelerometerBudget) -> "Uncertainty":
-        """The accelerometer's part."""
-        return cls(k=budget.k, offset=budget.offset, sensitivity=budget.sensitivity)
+        """The accelerometer's part, with its verification error's U in mg."""
+        u = budget.verification_u
+        return cls(
+            k=budget.k,
+            offset=budget.offset,
+            sensitivity=budget.sensitivity,
+            verification_error_mg=None if u is None else 1000.0 * u,
+            matrix=budget.matrix,
+        )
 
     def with_gyro(
         self, bias_dps: FloatArray | None, matrix: FloatArray | None = None
     ) -> "Uncertainty":
         """The same with the gyros' expanded uncertainties added."""
-        return Uncertainty(self.k, self.offset, self.sensitivity, bias_dps, matrix)
+        return Uncertainty(
+            self.k,
+            self.offset,
+            self.sensitivity,
+            bias_dps,
+            matrix,
+            self.verification_error_mg,
+            self.matrix,
+        )
 
 
 def accelerometer_budget(
@@ -347,13 +402,10 @@ def accelerometer_budget(
     var_noise, var_quant = var_noise[keep], var_quant[keep]
     disturbed: dict[int, float] = {}
     if spread is not None:
-        excess, over_noise = _excess_variance(
-            np.asarray(spread, dtype=np.float64).reshape(n_all, 3)[keep]
+        excess, disturbed = disturbed_poses(
+            np.asarray(spread, dtype=np.float64).reshape(n_all, 3), keep
         )
         var_noise = var_noise + excess
-        disturbed = {
-            int(keep[i]): float(over_noise[i]) for i in np.flatnonzero(np.any(excess > 0, axis=1))
-        }
 
     cal = solution.calibration
     model = cal.model
@@ -398,6 +450,7 @@ def accelerometer_budget(
         terms["model"], model_rv, model_draws = _model_term(theta, n, g, cross_axis_bound, u_dir)
 
     # The evidence of the residuals (redundant fits only).
+    evidence: FloatArray | None = None  # its covariance of θ
     rows, p = jac.shape
     if rows > p:
         offset, c = _unpack(theta, model)
@@ -409,7 +462,8 @@ def accelerometer_budget(
             expected += float(np.sum(left**2 @ kappa_variance)) / (rows - p)
         if sigma2 > expected * chi2_quantile(rows - p) / (rows - p):
             cov = np.linalg.pinv((jac / scale).T @ (jac / scale)) / np.outer(scale, scale)
-            covariance = covariance + cov * (sigma2 - expected)
+            evidence = cov * (sigma2 - expected)
+            covariance = covariance + evidence
             terms["fit"] = np.sqrt(
                 np.clip(np.einsum("ij,jk,ik->i", g, cov, g), 0.0, None) * (sigma2 - expected)
             )
@@ -418,6 +472,7 @@ def accelerometer_budget(
             terms["model"], terms["fit"] = worst, np.zeros(6)
 
     ratio: float | None = None
+    verification_u: float | None = None
     if verification is not None and u_dir is not None:
         av = np.asarray(verification, dtype=np.float64)
         var_temperature = 0.0
@@ -428,7 +483,7 @@ def accelerometer_budget(
             row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
             row = row - (jv @ pinv @ drift)[0]
             var_temperature = float(row**2 @ kappa_variance)
-        ratio = _verification_ratio(
+        rv, predicted, var_model = _verification_variance(
             theta,
             model,
             av,
@@ -437,16 +492,30 @@ def accelerometer_budget(
             pinv,
             w_noise + w_quant,
             model_rv,
-            k,
             var_temperature,
         )
+        ratio = abs(rv) / (k * np.sqrt(predicted)) if predicted > 0 else float("inf")
+        # The fit's evidence and the model's misfit are one unmodelled effect for the
+        # six-parameter model: the larger counts, once (as for the coefficients).
+        beyond = max(0.0, _evidence_at(theta, model, av, evidence) - var_model)
+        verification_u = float(k * np.sqrt(predicted + beyond))
         if ratio > 1.0:
             terms["model"] = terms["model"] * ratio
             terms["fit"] = terms["fit"] * ratio
+    matrix_u: FloatArray | None = None
+    if model == "nine":
+        # The fit's evidence, scaled as its term is by a verification ratio above 1.
+        scaled = covariance
+        if evidence is not None and ratio is not None and ratio > 1.0:
+            scaled = covariance + evidence * (ratio**2 - 1.0)
+        matrix_u = np.zeros((3, 3))
+        matrix_u[UPPER] = k * np.sqrt(np.clip(np.diag(scaled)[3:9], 0.0, None))
     return AccelerometerBudget(
         terms={name: np.asarray(terms[name], dtype=np.float64) for name in TERMS},
         k=k,
         verification_ratio=ratio,
+        verification_u=verification_u,
+        matrix=matrix_u,
         theta=theta,
         model=model,
         covariance=covariance,
@@ -653,6 +722,19 @@ def _pose_variances(
     return np.asarray(noise, dtype=np.float64), np.asarray(quant, dtype=np.float64)
 
 
+def disturbed_poses(spread: ArrayLike, fitted: ArrayLike) -> tuple[FloatArray, dict[int, float]]:
+    """The poses disturbed while they were taken (module docstring, ``pose_noise``): of
+    the poses' sample spreads ``spread`` (N, 3), counts, those of the ``fitted`` poses
+    (indices) whose spread on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
+    sensor's noise there. Returns the fitted poses' excess variance (len(fitted), 3),
+    counts², and the disturbed poses (index into ``spread``) with their largest spread
+    over the noise (:attr:`AccelerometerBudget.disturbed`)."""
+    keep = np.asarray(fitted, dtype=np.int64)
+    excess, over_noise = _excess_variance(np.asarray(spread, dtype=np.float64)[keep])
+    found = np.flatnonzero(np.any(excess > 0, axis=1))
+    return excess, {int(keep[i]): float(over_noise[i]) for i in found}
+
+
 def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Per fitted pose and axis (N, 3), the variance a disturbed pose's mean carries beyond
     its noise's (module docstring, ``pose_noise``): σ² − σ_noise² where σ exceeds
@@ -851,7 +933,7 @@ def _model_term(
     return term, np.asarray(rv, dtype=np.float64), (coupled, thetas)
 
 
-def _verification_ratio(
+def _verification_variance(
     theta: FloatArray,
     model: Model,
     av: FloatArray,
@@ -860,12 +942,12 @@ def _verification_ratio(
     pinv: FloatArray,
     w_fit: FloatArray,
     model_rv: FloatArray | None,
-    k: float,
     var_temperature: float = 0.0,
-) -> float:
-    """|r_v| over k times its predicted standard deviation: the fit's noise through θ,
-    the verification pose's own noise, the model's misfit and the drift with temperature
-    (``var_temperature``)."""
+) -> tuple[float, float, float]:
+    """The verification pose's misfit r_v = |C(a_v − o)| − 1 (g), its predicted
+    variance (g²): the fit poses' noise through θ, the verification pose's own noise and
+    quantisation, the model's misfit there and the drift with temperature
+    (``var_temperature``); and the model's misfit's part of it (g²)."""
     offset, c = _unpack(theta, model)
     gv = c @ (av - offset)
     rv = float(np.linalg.norm(gv) - 1.0)
@@ -880,8 +962,18 @@ def _verification_ratio(
     )
     var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
     var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
-    predicted = np.sqrt(var_fit + var_own + var_model + var_temperature)
-    return float(abs(rv) / (k * predicted)) if predicted > 0 else float("inf")
+    return rv, var_fit + var_own + var_model + var_temperature, var_model
+
+
+def _evidence_at(
+    theta: FloatArray, model: Model, av: FloatArray, evidence: FloatArray | None
+) -> float:
+    """The fit's evidence (its covariance of θ beyond the noise's, ``evidence``) at the
+    verification pose's misfit, g²: J_v Σ J_vᵀ (0 without it)."""
+    if evidence is None:
+        return 0.0
+    jv, _, _ = _jacobians(theta, av[None, :], model)
+    return float(max(0.0, (jv @ evidence @ jv.T)[0, 0]))
 
 
 def _xyz(values: FloatArray) -> dict[str, float]:

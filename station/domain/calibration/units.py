@@ -117,6 +117,8 @@ class DeclaredUnits:
                 restated["offset"] = _xyz(self.spread(_array(u["offset"])))
             if "sensitivity" in u:
                 restated["sensitivity"] = _xyz(self.sensitivity(_array(u["sensitivity"])))
+            if "matrix" in u:  # the nine-parameter matrix's U scales as the matrix
+                restated["matrix"] = self.matrix(np.asarray(u["matrix"], dtype=np.float64)).tolist()
             out["uncertainty"] = restated
         for counts_key, key in (
             ("residual_limit_counts", "residual_limit"),

@@ -6,19 +6,36 @@ re-judge stored runs against a candidate limits profile (:func:`rejudge`, the re
 what-if). Each value is compared with the profile by :func:`station.domain.product.limits.check`, in
 a
 fixed order: every pose's noise per axis and link loss, the offsets, the sensitivities,
-the verification pose's error, the gyro biases. A verdict's failures are those found
-while the run went (in the order found), then the checks' failures not among them; a
-run passes without failures.
+the verification pose's error, the gyro biases, the gyro matrix K's scale errors and
+misalignments. A verdict's failures are those found while the run went (in the order
+found), then the checks' failures not among them; a run passes without failures.
+
+Each value that carries an expanded uncertainty U (the coefficients, the verification
+error, K's entries: :data:`GUARDED_CHECKS`) is judged by the profile's decision rule with
+it; the others by simple acceptance. :func:`check_rules` says which rule judged each
+limit, as the run's record keeps it.
 """
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-from station.domain.product.limits import LimitsProfile, check
-from station.domain.record.records import FailureReason
+from station.domain.product.limits import CHECKS, LimitsProfile, check
+from station.domain.record.records import DecisionRule, FailureReason
 from station.domain.sensors.sensor import AXES
 
 Triple = tuple[float, float, float]
+Matrix = tuple[Triple, Triple, Triple]
+
+#: Each check whose value carries an expanded uncertainty U, and the key of
+#: :attr:`Measured.uncertainty` that holds it: the checks a ``guarded`` rule judges with U.
+GUARDED_CHECKS: dict[str, str] = {
+    "offset": "offset",
+    "sensitivity": "sensitivity",
+    "verification_error": "verification_error",
+    "gyro_bias": "gyro_bias",
+    "gyro_scale": "gyro_matrix",
+    "gyro_misalignment": "gyro_matrix",
+}
 
 #: The checks :func:`rejudge` takes again from a stored run's values. Link loss is
 #: stored only when it failed (its value in the failure), so a stored run is re-judged
@@ -34,9 +51,11 @@ class Measured:
     ``pose_noise``: per pose index, the standard deviation of its samples per axis
     (counts); ``link_loss``: per pose index, the fraction of samples lost; ``offset``,
     ``sensitivity``: the solved coefficients; ``verification``: the verification pose's
-    index and its error (mg); ``gyro_bias``: deg/s; ``uncertainty``: the expanded
-    uncertainty U of each axis' ``offset``, ``sensitivity`` and ``gyro_bias`` (keys as the
-    fields'), which a profile's guarded decision rule judges with.
+    index and its error (mg); ``gyro_bias``: deg/s; ``gyro_matrix``: K (row = gyro);
+    ``uncertainty``: the expanded uncertainty U of each axis' ``offset``, ``sensitivity``
+    and ``gyro_bias`` (keys as the fields', three values), of the ``verification_error``
+    (one, mg) and of K's ``gyro_matrix`` entries (nine, row by row), which a profile's
+    guarded decision rule judges with.
     """
 
     pose_noise: Mapping[int, Triple] = field(default_factory=dict)
@@ -45,7 +64,8 @@ class Measured:
     sensitivity: Triple | None = None
     verification: tuple[int, float] | None = None
     gyro_bias: Triple | None = None
-    uncertainty: Mapping[str, Triple] = field(default_factory=dict)
+    gyro_matrix: Matrix | None = None
+    uncertainty: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
 
 
 def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReason]:
@@ -62,24 +82,81 @@ def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReas
             reasons.append(check(profile, code, value, axis=axis, uncertainty=_u(u, code, i)))
     if measured.verification is not None:
         pose, error = measured.verification
-        reasons.append(check(profile, "verification_error", error, pose=pose))
+        reasons.append(
+            check(
+                profile,
+                "verification_error",
+                error,
+                pose=pose,
+                uncertainty=_u(u, "verification_error", 0),
+            )
+        )
     for i, (axis, bias) in enumerate(zip(AXES, measured.gyro_bias or (), strict=False)):
         reasons.append(
             check(profile, "gyro_bias", bias, axis=axis, uncertainty=_u(u, "gyro_bias", i))
         )
+    k = measured.gyro_matrix
+    if k is not None:
+        for i, axis in enumerate(AXES):
+            reasons.append(
+                check(
+                    profile,
+                    "gyro_scale",
+                    k[i][i] - 1.0,
+                    axis=axis,
+                    uncertainty=_u(u, "gyro_matrix", 4 * i),
+                )
+            )
+        for i, j in ((i, j) for i in range(3) for j in range(3) if i != j):
+            reasons.append(
+                check(
+                    profile,
+                    "gyro_misalignment",
+                    k[i][j],
+                    axis=AXES[i],
+                    uncertainty=_u(u, "gyro_matrix", 3 * i + j),
+                )
+            )
     return [r for r in reasons if r is not None]
 
 
-def _u(uncertainty: Mapping[str, Triple], code: str, axis: int) -> float | None:
-    values = uncertainty.get(code)
-    return None if values is None else values[axis]
+def check_rules(profile: LimitsProfile, measured: Measured) -> dict[str, DecisionRule]:
+    """The decision rule that judges each limit ``profile`` sets (by check code): the
+    profile's where the value carries its U in ``measured`` (:data:`GUARDED_CHECKS`),
+    simple acceptance elsewhere (a value without U is judged by itself)."""
+    rules: dict[str, DecisionRule] = {}
+    for code, name in CHECKS.items():
+        if getattr(profile, name) is None:
+            continue
+        key = GUARDED_CHECKS.get(code)
+        rules[code] = profile.rule if key in measured.uncertainty else "simple"
+    return rules
+
+
+def _u(uncertainty: Mapping[str, tuple[float, ...]], key: str, index: int) -> float | None:
+    values = uncertainty.get(key)
+    return None if values is None else values[index]
 
 
 def uncertainty_of(
-    offset: Triple | None, sensitivity: Triple | None, gyro_bias: Triple | None
-) -> dict[str, Triple]:
-    """:attr:`Measured.uncertainty` from the U of each coefficient family (None: unknown)."""
-    families = (("offset", offset), ("sensitivity", sensitivity), ("gyro_bias", gyro_bias))
+    offset: Triple | None,
+    sensitivity: Triple | None,
+    gyro_bias: Triple | None,
+    verification_error: float | None = None,
+    gyro_matrix: Matrix | None = None,
+) -> dict[str, tuple[float, ...]]:
+    """:attr:`Measured.uncertainty` from the U of each coefficient family, of the
+    verification error and of K (None: unknown)."""
+    families: tuple[tuple[str, tuple[float, ...] | None], ...] = (
+        ("offset", offset),
+        ("sensitivity", sensitivity),
+        ("gyro_bias", gyro_bias),
+        ("verification_error", None if verification_error is None else (verification_error,)),
+        (
+            "gyro_matrix",
+            None if gyro_matrix is None else tuple(v for row in gyro_matrix for v in row),
+        ),
+    )
     return {code: values for code, values in families if values is not None}
 
 
@@ -114,7 +191,9 @@ def rejudge(
         sensitivity=measured.sensitivity,
         verification=measured.verification,
         gyro_bias=measured.gyro_bias,
+        gyro_matrix=measured.gyro_matrix,
         uncertainty=measured.uncertainty,
     )
-    found = [f for f in stored if f.code not in REJUDGED]
+    again = (*REJUDGED, *(("gyro_scale", "gyro_misalignment") if measured.gyro_matrix else ()))
+    found = [f for f in stored if f.code not in again]
     return verdict_failures(found, limit_checks(profile, measured))

@@ -74,6 +74,12 @@ PoseRole = Literal["fit", "verify"]
 #: acceptance with a guard band w = U (the value ± U within the limits).
 DecisionRule = Literal["simple", "guarded"]
 
+#: The checks a ``guarded`` decision rule judged with their U on records that do not
+#: name the rule of each check (:attr:`_RunHeader.check_rules` None: stored before the
+#: gyro matrix K and the verification error carried their U into the verdict); every
+#: other check of such a record was judged by simple acceptance.
+GUARDED_BEFORE_CHECK_RULES: Final = ("offset", "sensitivity", "gyro_bias")
+
 #: Largest count a database INTEGER column holds.
 _INT32_MAX = 2**31 - 1
 
@@ -365,13 +371,17 @@ class GyroMatrixRecord(_Record):
 _GyroSpreadValue = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 _MatrixSpread = Annotated[float, Field(ge=0, le=2 * GYRO_MATRIX_MAX)]
 _SpreadRow = tuple[_MatrixSpread, _MatrixSpread, _MatrixSpread]
+_MatrixU = Annotated[float, Field(ge=0, le=MATRIX_MAX_G_PER_COUNT)]
+_MatrixURow = tuple[_MatrixU, _MatrixU, _MatrixU]
 
 
 class UncertaintyRecord(_Record):
     """Expanded uncertainties U = k·u_c of the run's coefficients ([JCGM100]_), in the
     sensor's units (:mod:`station.domain.calibration.uncertainty`): offsets in counts,
-    sensitivities in counts/g, gyro biases in deg/s, the gyro matrix K as a fraction. A
-    coefficient the run did not measure is left out (None)."""
+    sensitivities in counts/g, gyro biases in deg/s, the gyro matrix K as a fraction, the
+    verification pose's error in mg, the nine-parameter model's matrix C in g/count. A
+    value the run did not measure is left out (None), so a record from before a value
+    was added hashes as it did."""
 
     k: Annotated[float, Field(gt=0, le=10, description="coverage factor (2: about 95 %)")]
     offset: Annotated[Spread3 | None, Field(description="U of each offset, counts")] = None
@@ -385,6 +395,20 @@ class UncertaintyRecord(_Record):
     gyro_matrix: Annotated[
         tuple[_SpreadRow, _SpreadRow, _SpreadRow] | None,
         Field(description="U of each element of the gyro matrix K"),
+    ] = None
+    verification_error_mg: Annotated[
+        ErrorMg | None,
+        Field(
+            description="U of the verification pose's error ||g| − 1|, mg: the calibrated "
+            "output's U at that pose and the pose's own noise (docs/calibration.md)"
+        ),
+    ] = None
+    matrix: Annotated[
+        tuple[_MatrixURow, _MatrixURow, _MatrixURow] | None,
+        Field(
+            description="U of each entry of the nine-parameter model's counts-to-g matrix C, "
+            "g/count (upper-triangular: zero below the diagonal)"
+        ),
     ] = None
     excluded_influences: Annotated[
         tuple[Literal["temperature", "gyro_bias_repeatability"], ...] | None,
@@ -491,6 +515,24 @@ class _RunHeader(_Record):
     #: The coefficients the unit held before the run wrote its own (as-found); None on
     #: records from before the station read them.
     as_found: AsFound | None = None
+    #: The decision rule that judged each limit of the profile, by check code
+    #: (``station.domain.product.limits.CHECKS``): ``guarded`` where the profile's rule is and the
+    #: value's U (``uncertainty``) was known, else ``simple``. None on records from
+    #: before (their rule, :data:`GUARDED_BEFORE_CHECK_RULES`, :meth:`rule_of`); left
+    #: out of the record's JSON when None, so they hash and verify as they did.
+    check_rules: dict[Identifier, DecisionRule] | None = Field(
+        None, exclude_if=lambda rules: rules is None
+    )
+
+    def rule_of(self, code: str) -> DecisionRule:
+        """The decision rule that judged check ``code`` (ILAC-G8:09/2019): the record's
+        own (:attr:`check_rules`), or on a record from before, its run's rule for the
+        checks it guarded then and simple acceptance for the others."""
+        if self.check_rules is not None:
+            return self.check_rules.get(code, "simple")
+        if code in GUARDED_BEFORE_CHECK_RULES:
+            return self.decision_rule or "simple"
+        return "simple"
 
     @model_validator(mode="after")
     def _consistent_outcome(self) -> Self:

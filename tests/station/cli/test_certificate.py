@@ -6,6 +6,7 @@ signatory's key, signature and its verification, as real processes."""
 import json
 import os
 import sqlite3
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -16,7 +17,8 @@ from station.report.certificate import document_number
 from station.report.formatting import number
 from tests.conftest import CliRunner
 from tests.db.records import make_record
-from tests.pdf_pages import page_text, rendered_pages
+from tests.pdf_pages import cjk_font_installed, page_text, rendered_pages
+from tests.station.report.test_certificate_influences import U
 
 STATION = """station_id = "line2-st9"
 operator_id = "qa-ann"
@@ -79,7 +81,6 @@ def test_the_station_s_own_certificate_states_its_lab_and_the_unit_as_found_and_
         (("PT000001", "--language", "fr"), "--language 'fr' is not one of en, ko, zh"),
         (("PT000001", "--config", "/nonexistent.toml"), "cannot read the laboratory"),
         (("PT000001", "--format", "pdf"), "--format pdf needs --out FILE"),
-        (("PT000001", "--format", "pdf", "--language", "ko"), "--format pdf is in English only"),
         (("PT000001", "--format", "doc"), "--format 'doc' is not one of html, pdf"),
     ],
 )
@@ -174,3 +175,61 @@ def test_a_signatory_signs_and_a_changed_digit_or_another_key_is_refused(
     pages = rendered_pages(pdf)
     assert f"{number}" in page_text(pdf, 1)
     assert "ann, authorised signatory; signed" in " ".join(page_text(pdf, len(pages)).split())
+
+
+#: A fontconfig that knows no font: a machine without fonts-noto-cjk, as fc-match sees it.
+NO_FONTS = """<?xml version="1.0"?>
+<!DOCTYPE fontconfig SYSTEM "fonts.dtd">
+<fontconfig><dir>{fonts}</dir><cachedir>{fonts}/cache</cachedir></fontconfig>
+"""
+
+
+@pytest.mark.parametrize(
+    ("language", "words"),
+    [("ko", ("교정 성적서", "영향 요인", "단순 판정")), ("zh", ("校准证书", "影响量"))],
+)
+def test_the_pdf_is_issued_in_korean_and_chinese_with_the_cjk_font_embedded(
+    run_cli: CliRunner, tmp_path: Path, language: str, words: tuple[str, ...]
+) -> None:
+    cjk_font_installed(language)
+    record = make_record(serial="PT000044", model="nine", uncertainty=U)
+    db = ("--database-url", _database_with(tmp_path, record))
+    pdf = tmp_path / f"PT000044-{language}.pdf"
+    args = ("certificate", "issue", "PT000044", "--format", "pdf", "--language", language)
+    made = run_cli(*args, "--out", str(pdf), *db, env=_env(tmp_path))
+    assert made.returncode == 0, made.stderr
+    pages = rendered_pages(pdf)  # poppler draws every page
+    whole = " ".join(page_text(pdf, i) for i in range(1, len(pages) + 1))
+    for word in words:
+        assert word in whole, word
+    assert document_number(record) in page_text(pdf, 1)
+    assert "2081.9" in whole  # the values as stored, beside the words
+    # The Hangul and Han come from the embedded Noto Sans CJK, the rest from DejaVu Sans.
+    fonts = subprocess.run(["pdffonts", str(pdf)], capture_output=True, text=True, check=True)
+    assert "NotoSansCJK" in fonts.stdout
+    assert "DejaVuSans" in fonts.stdout
+    embedded = [line.split()[-5] for line in fonts.stdout.splitlines()[2:]]
+    assert embedded
+    assert set(embedded) == {"yes"}
+
+
+def test_a_cjk_pdf_without_the_font_is_one_line_naming_the_package(
+    run_cli: CliRunner, tmp_path: Path
+) -> None:
+    fonts = tmp_path / "fonts"
+    fonts.mkdir()
+    (fonts / "fonts.conf").write_text(NO_FONTS.format(fonts=fonts))
+    db = ("--database-url", _database_with(tmp_path, make_record(serial="PT000045")))
+    env = {**_env(tmp_path), "FONTCONFIG_FILE": str(fonts / "fonts.conf")}
+    pdf = tmp_path / "PT000045.pdf"
+    args = ("certificate", "issue", "PT000045", "--format", "pdf", "--language", "ko")
+    refused = run_cli(*args, "--out", str(pdf), *db, env=env)
+    assert refused.returncode == 2
+    assert refused.stderr.strip() == (
+        "calstation: error: a PDF in ko needs the font Noto Sans CJK KR "
+        "(Debian: apt-get install fonts-noto-cjk), which fontconfig does not find"
+    )
+    assert not pdf.exists()
+    # The same machine still issues the English PDF: DejaVu Sans is matplotlib's own.
+    english = run_cli(*args[:-2], "--out", str(pdf), *db, env=env)
+    assert english.returncode == 0, english.stderr

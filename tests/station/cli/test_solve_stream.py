@@ -58,8 +58,12 @@ def test_json_keeps_the_solve_keys_and_adds_poses_and_gyro(
     assert data["disturbed_poses"] == []  # every still as quiet as the others
     # One shape for the uncertainties, every coefficient measured: the gyro's too.
     u = data["uncertainty"]
-    assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix"}
+    assert set(u) == {"k", "offset", "sensitivity", "gyro_bias_dps", "gyro_matrix", "matrix"}
     assert u["k"] == 2
+    # The nine-parameter matrix C is upper-triangular: U above its diagonal, none below.
+    u_c = np.array(u["matrix"])
+    assert (u_c[np.triu_indices(3)] > 0).all()
+    assert (u_c[np.tril_indices(3, -1)] == 0).all()
     # K's U: twice the fit's σ and the moves' geometry, in quadrature (docs/calibration.md)
     assert (np.array(u["gyro_matrix"]) >= 2 * se * (1 - 1e-9)).all()
     assert (np.array(u["gyro_matrix"]) > 2 * se * 1.001).any()

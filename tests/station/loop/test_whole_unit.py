@@ -19,8 +19,8 @@ import pytest
 
 from db import Database
 from station.device import DeviceCalibration
-from station.domain.product.limits import load_profile
-from station.domain.record.records import RunRecord
+from station.domain.product.limits import Bounds, LimitsProfile, load_profile
+from station.domain.record.records import Model, RunRecord
 from station.loop.config import load_config
 from station.loop.lifecycle import versions
 from station.results.journal import JournalFile, RunJournal
@@ -39,12 +39,18 @@ SPEED = 20.0
 class WholeUnit:
     """A run of the whole-unit profile on one virtual putter, and what it left behind."""
 
-    def __init__(self, tmp: Path, seed: int) -> None:
+    def __init__(
+        self,
+        tmp: Path,
+        seed: int,
+        profile: LimitsProfile | None = None,
+        model: Model = "nine",
+    ) -> None:
         self.putter = VirtualPutter(seed=seed, serial=SERIAL, speed=SPEED)
         self.url = self.putter.serve_socket()
         config = load_config(None, {"limits_profile": "whole-unit"})
-        self.settings = config.run
-        self.profile = load_profile(None, "whole-unit")
+        self.settings = config.run.model_copy(update={"model": model})
+        self.profile = profile or load_profile(None, "whole-unit")
         journal = RunJournal(
             run_id=uuid.uuid4(),
             serial=SERIAL,
@@ -174,8 +180,14 @@ def test_the_whole_unit_run_is_stored_and_answered_through_the_api(
         "sensitivity",
         "gyro_bias_dps",
         "gyro_matrix",
+        "verification_error_mg",
+        "matrix",
         "excluded_influences",
     }
+    # The nine-parameter matrix C is upper-triangular: U above its diagonal, none below.
+    u_c = np.array(held["matrix"])
+    assert (u_c[np.triu_indices(3)] > 0).all()
+    assert (u_c[np.tril_indices(3, -1)] == 0).all()
     # The putter's gyros declare no turn-on repeatability: U of their bias names it left out.
     assert held["excluded_influences"] == ["gyro_bias_repeatability"]
     assert record.gyro_matrix.standard_errors is not None
@@ -196,3 +208,88 @@ def test_the_header_names_the_algorithm_the_record_names(
     assert f" · {record.algorithm} · " in shown
     assert record.algorithm == "autocal-ls9"
     assert " · autocal-eq10 · " in versions(load_profile(), "six")
+
+
+@pytest.mark.timeout(400)
+def test_k_and_the_verification_error_inside_a_limit_but_within_u_pass_simple_fail_guarded(
+    tmp_path: Path,
+) -> None:
+    # The whole-unit plan with the six-parameter accelerometer: K's U and the
+    # verification error's U then hold the model's unmodelled cross-axis coupling (the
+    # KXM52's 2 %, ~0.015 for K's entries, ~20 mg for the error), the same on every
+    # run, while the same virtual unit (seed 12) gives the same K and error run after
+    # run to a few hundredths of that: a limit half a U beyond the first run's value is
+    # inside on every run, but within U of it.
+    def run(name: str, profile: LimitsProfile | None = None) -> RunRecord:
+        (tmp_path / name).mkdir()
+        bench = WholeUnit(tmp_path / name, seed=12, profile=profile, model="six")
+        try:
+            return bench.drive()
+        finally:
+            bench.close()
+
+    first = run("first")
+    assert first.verdict == "pass", first.failures
+    assert first.gyro_matrix is not None
+    assert first.quality is not None
+    assert first.uncertainty is not None
+    assert first.uncertainty.gyro_matrix is not None
+    u_k = np.array(first.uncertainty.gyro_matrix)
+    k = np.array(first.gyro_matrix.matrix)
+    off = ~np.eye(3, dtype=bool)
+    i, j = np.argwhere(off & (k == k[off].max()))[0]
+    error, u_error = first.quality.verification_error_mg, first.uncertainty.verification_error_mg
+    assert error is not None
+    assert u_error is not None
+    shipped = load_profile(None, "whole-unit")
+    assert shipped.gyro_misalignment is not None
+    edge = shipped.model_copy(
+        update={
+            "gyro_misalignment": Bounds(
+                lower=shipped.gyro_misalignment.lower, upper=float(k[i, j] + u_k[i, j] / 2)
+            ),
+            "verification_error_mg": Bounds(upper=error + u_error / 2),
+        }
+    )
+    assert edge.gyro_misalignment is not None
+    assert edge.verification_error_mg.upper is not None
+
+    def inside_but_within_u(record: RunRecord) -> None:
+        assert record.gyro_matrix is not None
+        assert record.quality is not None
+        assert record.uncertainty is not None
+        assert record.uncertainty.gyro_matrix is not None
+        value, u = record.gyro_matrix.matrix[i][j], record.uncertainty.gyro_matrix[i][j]
+        assert edge.gyro_misalignment is not None
+        limit = edge.gyro_misalignment.upper
+        assert limit is not None
+        assert limit - u < value <= limit
+        error = record.quality.verification_error_mg
+        u_error = record.uncertainty.verification_error_mg
+        limit = edge.verification_error_mg.upper
+        assert error is not None
+        assert u_error is not None
+        assert limit is not None
+        assert limit - u_error < error <= limit
+
+    simple = run("simple", edge)
+    inside_but_within_u(simple)
+    assert simple.verdict == "pass", simple.failures
+    assert simple.rule_of("gyro_misalignment") == simple.rule_of("verification_error") == "simple"
+    guarded = run("guarded", edge.model_copy(update={"decision_rule": "guarded"}))
+    inside_but_within_u(guarded)
+    assert guarded.verdict == "fail"
+    assert {(f.code, f.axis) for f in guarded.failures} == {
+        ("verification_error", None),
+        ("gyro_misalignment", "xyz"[i]),
+    }
+    for failure in guarded.failures:
+        # Refused inside the bounds, by the guard: the failure names the U it used.
+        assert failure.measured is not None
+        assert failure.upper is not None
+        assert failure.measured <= failure.upper
+        assert failure.uncertainty is not None
+        assert "guarded acceptance" in failure.message
+    assert guarded.rule_of("gyro_misalignment") == "guarded"
+    assert guarded.rule_of("verification_error") == "guarded"
+    assert guarded.rule_of("pose_noise") == "simple"

@@ -147,7 +147,14 @@ def test_a_pass_stores_coefficients_the_unit_holds(bench: Bench) -> None:
     # Every coefficient carries its expanded uncertainty; the six-pose run has no K.
     assert record.uncertainty is not None
     shape = record.uncertainty.to_json()
-    assert set(shape) == {"k", "offset", "sensitivity", "gyro_bias_dps", "excluded_influences"}
+    assert set(shape) == {
+        "k",
+        "offset",
+        "sensitivity",
+        "gyro_bias_dps",
+        "verification_error_mg",
+        "excluded_influences",
+    }
     # The poses carry temperatures; the putter declares no gyro-bias repeatability.
     assert shape["excluded_influences"] == ["gyro_bias_repeatability"]
     assert shape["k"] == 2.0

@@ -6,7 +6,12 @@ at half the right U, 99.99 % at twice it; mean |error|/U: 0.80 and 0.20 against 
 import numpy as np
 import pytest
 
-from station.simulator.coverage import GROUPS, simulate_coverage, simulate_gyro_matrix_coverage
+from station.simulator.coverage import (
+    GROUPS,
+    MATRIX,
+    simulate_coverage,
+    simulate_gyro_matrix_coverage,
+)
 
 
 @pytest.mark.parametrize(("profile", "tilt_deg"), [("kxm52-production", 5.0), ("whole-unit", 0.0)])
@@ -19,6 +24,14 @@ def test_the_truth_lies_within_the_expanded_uncertainty_95_percent_of_the_time(
         assert coverage.checked[group] == 750
         assert 0.90 <= coverage.fraction(group) <= 0.99, group
         assert 0.30 <= coverage.mean_ratio[group] <= 0.52, group
+    # The nine-parameter model's entries of C above the diagonal (misalignment and
+    # coupling) carry their U from θ's covariance: 96.0 % within ±U, mean |e|/U 0.38.
+    if profile == "whole-unit":
+        assert coverage.checked[MATRIX] == 750
+        assert 0.90 <= coverage.fraction(MATRIX) <= 0.99
+        assert 0.30 <= coverage.mean_ratio[MATRIX] <= 0.52
+    else:
+        assert coverage.checked[MATRIX] == 0
 
 
 def test_poses_along_the_axes_give_the_six_parameter_sensitivities_their_right_width() -> None:
