@@ -51,13 +51,7 @@ def signature_of(session: Session, run_id: UUID) -> Signature | None:
     row = session.scalar(select(CertificateSignature).where(CertificateSignature.run_id == run_id))
     if row is None:
         return None
-    return Signature(
-        certificate=row.certificate,
-        record_sha256=row.record_sha256,
-        signatory=row.signatory,
-        signed_at=row.signed_at,
-        signature=row.signature,
-    )
+    return Signature.model_validate(row, from_attributes=True)
 
 
 def verify_signed(session: Session, signed: SignedCertificate) -> None:
