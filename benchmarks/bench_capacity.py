@@ -32,11 +32,12 @@ from bench_scale_out import own_database
 from sqlalchemy import text
 
 from db import RunRepository, make_engine, open_database
+from db.partitions import is_partition
 
 STATIONS = [f"line1-st{i}" for i in range(1, 9)]
 OPERATORS = ["op-a", "op-b", "op-c"]  # one a shift
 #: Tables that grow with the runs, and with the station-days.
-PER_RUN = ("runs", "poses", "run_failures", "run_facts")
+PER_RUN = ("run_ids", "runs", "poses", "run_failures", "run_facts")
 PER_STATION_DAY = ("report_counts", "report_failures", "report_parameters", "report_bounds")
 
 
@@ -68,20 +69,29 @@ def store(url: str, runs: int, days: int, units: int) -> None:
 
 
 def measure(url: str) -> dict[str, tuple[int, int]]:
-    """Each table's rows and total bytes (heap, TOAST, indexes), after VACUUM ANALYZE."""
+    """Each table's rows and total bytes (heap, TOAST, indexes; a partitioned table's
+    over its partitions), after VACUUM ANALYZE."""
     engine = make_engine(url)
     with engine.connect().execution_options(isolation_level="AUTOCOMMIT") as connection:
         connection.execute(text("VACUUM ANALYZE"))
-        tables = connection.scalars(
-            text("SELECT tablename FROM pg_tables WHERE schemaname = 'public' ORDER BY 1")
-        ).all()
+        tables = [
+            table
+            for table in connection.scalars(
+                text("SELECT tablename FROM pg_tables WHERE schemaname = 'public' ORDER BY 1")
+            )
+            if not is_partition(table)
+        ]
         sizes = {}
         for table in tables:
             rows = connection.execute(text(f'SELECT count(*) FROM "{table}"')).scalar_one()
             size = connection.execute(
-                text("SELECT pg_total_relation_size(:t)"), {"t": f'public."{table}"'}
+                text(
+                    "SELECT coalesce(sum(pg_total_relation_size(relid)), "
+                    "pg_total_relation_size(:t)) FROM pg_partition_tree(:t)"
+                ),
+                {"t": f'public."{table}"'},
             ).scalar_one()
-            sizes[table] = (rows, size)
+            sizes[table] = (rows, int(size))
     engine.dispose()
     return sizes
 

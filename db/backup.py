@@ -3,10 +3,10 @@
 PostgreSQL is backed up by its own tools: ``pg_dump --format=custom`` writes one
 archive of the whole database (schema, runs, units, reviews, keys, the report's
 roll-ups and the schema revision), consistent as of one snapshot while the stations go
-on submitting; ``pg_restore`` loads it into another database, owned by whoever
-restores it (``--no-owner``), in one transaction. SQLite is copied page by page
-through its online backup API (``sqlite3.Connection.backup``), also consistent while
-the server writes, to a file that is itself a SQLite database.
+on submitting; ``pg_restore`` turns it into a script that ``psql`` runs in another
+database, owned by whoever restores it (``--no-owner``), in one transaction. SQLite is
+copied page by page through its online backup API (``sqlite3.Connection.backup``), also
+consistent while the server writes, to a file that is itself a SQLite database.
 
 A backup never overwrites a file, and is written beside it under another name first,
 so that a half-written one is never taken for a backup. A restore goes into an empty
@@ -18,6 +18,7 @@ import os
 import shutil
 import sqlite3
 import subprocess
+import tempfile
 from contextlib import closing
 from pathlib import Path
 
@@ -39,12 +40,18 @@ def _libpq(url: str | URL) -> tuple[str, dict[str, str]]:
     return dsn, env
 
 
-def _run_tool(tool: str, *args: str, env: dict[str, str]) -> None:
-    """Run a PostgreSQL client tool; its failure is an :class:`InputError` with its first
-    line."""
+def _tool(tool: str) -> str:
+    """The path of a PostgreSQL client tool; :class:`InputError` when it is not installed."""
     program = shutil.which(tool)
     if program is None:
         raise InputError(f"{tool} is not installed (PostgreSQL's client tools)")
+    return program
+
+
+def _run_tool(tool: str, *args: str, env: dict[str, str]) -> None:
+    """Run a PostgreSQL client tool; its failure is an :class:`InputError` with its first
+    line."""
+    program = _tool(tool)
     done = subprocess.run([program, *args], env=env, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         lines = [line for line in done.stderr.splitlines() if line.strip()]
@@ -113,20 +120,7 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
     if not file.is_file():
         raise InputError(f"no backup at {file}")
     if not _is_sqlite(url):
-        _refuse_unless_empty(url, replace=replace)
-        dsn, env = _libpq(url)
-        options = ["--clean", "--if-exists"] if replace else []
-        _run_tool(
-            "pg_restore",
-            "--no-owner",
-            "--no-privileges",
-            "--single-transaction",
-            "--exit-on-error",
-            *options,
-            f"--dbname={dsn}",
-            str(file),
-            env=env,
-        )
+        _restore_postgresql(url, file, _refuse_unless_empty(url, replace=replace))
         return
     with closing(sqlite3.connect(f"{file.resolve().as_uri()}?mode=ro", uri=True)) as backup:
         try:
@@ -138,10 +132,67 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
             backup.backup(database)
 
 
-def _refuse_unless_empty(url: str | URL, *, replace: bool) -> None:
+def _refuse_unless_empty(url: str | URL, *, replace: bool) -> list[str]:
+    """The tables the database holds, which only ``replace`` lets a restore drop."""
     tables = database_tables(url)
     if tables and not replace:
         raise InputError(
             f"the database holds {len(tables)} tables: restore into an empty database, "
             "or replace what it holds with --replace"
         )
+    return tables
+
+
+def _restore_postgresql(url: str | URL, file: Path, tables: list[str]) -> None:
+    """``pg_restore``'s script of ``file``, after dropping ``tables``, run by ``psql`` in
+    one transaction: a restore that fails leaves the database as it was.
+
+    Not ``pg_restore --clean``: it drops each partition's primary key on its own, which
+    PostgreSQL refuses (the key belongs to the partitioned table's).
+    """
+    dsn, env = _libpq(url)
+    restore, psql = _tool("pg_restore"), _tool("psql")
+    with (
+        tempfile.TemporaryFile() as restore_errors,
+        tempfile.TemporaryFile() as psql_errors,
+        subprocess.Popen(
+            [restore, "--no-owner", "--no-privileges", "--file=-", str(file)],
+            stdout=subprocess.PIPE,
+            stderr=restore_errors,
+            env=env,
+        ) as script,
+        subprocess.Popen(
+            [
+                psql,
+                "--no-psqlrc",
+                "--quiet",
+                "--single-transaction",
+                "--set=ON_ERROR_STOP=1",
+                f"--dbname={dsn}",
+                "--file=-",
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+            stderr=psql_errors,
+            env=env,
+        ) as run,
+    ):
+        assert script.stdout is not None
+        assert run.stdin is not None
+        if tables:
+            run.stdin.write(f"DROP TABLE {', '.join(map(_quoted, tables))} CASCADE;\n".encode())
+        shutil.copyfileobj(script.stdout, run.stdin)
+        run.stdin.close()
+        for tool, process, errors in (
+            ("pg_restore", script, restore_errors),
+            ("psql", run, psql_errors),
+        ):
+            if process.wait() != 0:
+                errors.seek(0)
+                lines = errors.read().decode(errors="replace").splitlines()
+                first = next((line for line in lines if "ERROR" in line or "error" in line), None)
+                raise InputError(f"{tool} failed: {first or f'exit {process.returncode}'}")
+
+
+def _quoted(name: str) -> str:
+    return '"' + name.replace('"', '""') + '"'

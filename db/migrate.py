@@ -19,7 +19,7 @@ SCRIPT_LOCATION = "db:migrations"
 #: The newest revision the packaged migrations reach: the schema this software needs.
 #: A new migration moves it (tests/db/test_migrations.py holds it to Alembic's own
 #: reading of the scripts).
-HEAD_REVISION = "0024"
+HEAD_REVISION = "0025"
 #: Alembic's version table: one row, the revision the schema is at (none when empty).
 VERSION_TABLE = "alembic_version"
 

@@ -1,10 +1,13 @@
 """Tables of the results database.
 
 ``runs`` is append-only: a retest is a new row, a unit's current verdict is its latest
-run's (by ``started_at``), its first run stays for first-pass yield. Each run owns its
-``poses`` and its ``run_failures``; ``units`` holds each unit's current calibration,
-ready to serve, kept in step with ``runs`` at every submission; ``station_keys`` holds
-the hashed API keys of the stations that submit over HTTP.
+run's (by ``started_at``), its first run stays for first-pass yield. ``run_ids`` registers
+each run (its UUID, its key, its start) and every row that belongs to a run refers to it
+there, so that ``runs`` and ``poses`` can be partitioned by month on PostgreSQL (migration
+0025, :mod:`db.partitions`). Each run owns its ``poses`` and its ``run_failures``;
+``units`` holds each unit's current calibration, ready to serve, kept in step with
+``runs`` at every submission; ``station_keys`` holds the hashed API keys of the stations
+that submit over HTTP.
 
 ``run_facts`` and the ``report_*`` tables hold what the end-of-line report derives from
 those rows (per-run facts, daily roll-ups); :mod:`db.rollups` builds and maintains them.
@@ -28,7 +31,7 @@ from sqlalchemy import (
     Uuid,
     text,
 )
-from sqlalchemy.orm import Mapped, mapped_column, relationship
+from sqlalchemy.orm import Mapped, mapped_column
 
 from db.base import Base, JsonDocument, UtcDateTime
 from station.domain.quality.capability import HISTOGRAM_BINS
@@ -39,8 +42,33 @@ BigId = BigInteger().with_variant(Integer(), "sqlite")
 NAME = 64
 
 
+class RunId(Base):
+    """The register of runs: each run's UUID, unique, and the key its rows share.
+
+    ``run_pk`` numbers the runs (``runs.id`` is the same number); the unique ``run_id``
+    decides whether a submission is new (``INSERT … ON CONFLICT (run_id) DO NOTHING``).
+    The register is not partitioned, so ``runs`` needs no unique constraint of its own:
+    PostgreSQL requires each unique constraint of a partitioned table to hold its
+    partition key, which would let a UUID reused with another start through.
+    """
+
+    __tablename__ = "run_ids"
+
+    run_pk: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid(), unique=True)
+    started_at: Mapped[datetime] = mapped_column(UtcDateTime())
+
+
+#: How a run's rows refer to it: by its key in the register.
+RUN_KEY = "run_ids.run_pk"
+
+
 class Run(Base):
-    """One calibration attempt of one unit at one station."""
+    """One calibration attempt of one unit at one station.
+
+    On PostgreSQL the table is partitioned by month of ``started_at`` and its primary key
+    is ``(id, started_at)`` (migration 0025); the models state the key both backends share.
+    """
 
     __tablename__ = "runs"
     __table_args__ = (
@@ -57,8 +85,10 @@ class Run(Base):
         Index("ix_runs_part_number_started_at", "part_number", "started_at", "id"),
     )
 
-    id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
-    run_id: Mapped[uuid.UUID] = mapped_column(Uuid(), unique=True)
+    id: Mapped[int] = mapped_column(
+        BigId, ForeignKey(RUN_KEY, ondelete="CASCADE"), primary_key=True, autoincrement=False
+    )
+    run_id: Mapped[uuid.UUID] = mapped_column(Uuid())
     serial: Mapped[str] = mapped_column(String(NAME))
     station_id: Mapped[str] = mapped_column(String(NAME))
     operator_id: Mapped[str] = mapped_column(String(NAME))
@@ -113,25 +143,23 @@ class Run(Base):
     #: SHA-256 of the submitted record's canonical JSON: tells a retry from a clash.
     record_sha256: Mapped[str] = mapped_column(String(64))
 
-    poses: Mapped[list["RunPose"]] = relationship(
-        back_populates="run", order_by="RunPose.index", lazy="raise"
-    )
-    failures: Mapped[list["RunFailure"]] = relationship(
-        back_populates="run", order_by="RunFailure.position", lazy="raise"
-    )
-
 
 class RunPose(Base):
-    """One still pose of a run: the accepted capture (counts, deg/s, °C) and link health."""
+    """One still pose of a run: the accepted capture (counts, deg/s, °C) and link health.
+
+    ``started_at`` is the run's: on PostgreSQL the table is partitioned by its month, as
+    ``runs`` is, and its keys hold it (migration 0025).
+    """
 
     __tablename__ = "poses"
     __table_args__ = (
-        UniqueConstraint("run_pk", "index"),
+        UniqueConstraint("run_pk", "index", "started_at"),
         CheckConstraint("role IN ('fit', 'verify')", name="role"),
     )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
-    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    run_pk: Mapped[int] = mapped_column(ForeignKey(RUN_KEY, ondelete="CASCADE"))
+    started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     index: Mapped[int] = mapped_column(Integer())
     name: Mapped[str] = mapped_column(String(NAME))
     role: Mapped[str] = mapped_column(String(8))
@@ -153,8 +181,6 @@ class RunPose(Base):
     #: Captures of this pose thrown away and taken again, for audit.
     replaced: Mapped[list[dict[str, Any]]] = mapped_column(JsonDocument)
 
-    run: Mapped[Run] = relationship(back_populates="poses", lazy="raise")
-
 
 class RunFailure(Base):
     """One reason a run failed: the check, the measured value and its bounds."""
@@ -166,7 +192,7 @@ class RunFailure(Base):
     )
 
     id: Mapped[int] = mapped_column(BigId, primary_key=True, autoincrement=True)
-    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    run_pk: Mapped[int] = mapped_column(ForeignKey(RUN_KEY, ondelete="CASCADE"))
     position: Mapped[int] = mapped_column(Integer())
     code: Mapped[str] = mapped_column(String(NAME))
     message: Mapped[str] = mapped_column(String(500))
@@ -177,8 +203,6 @@ class RunFailure(Base):
     pose: Mapped[int | None] = mapped_column(Integer())
     #: The value's expanded uncertainty U when guarded acceptance refused it (0016).
     uncertainty: Mapped[float | None] = mapped_column(Double())
-
-    run: Mapped[Run] = relationship(back_populates="failures", lazy="raise")
 
 
 class Unit(Base):
@@ -195,7 +219,7 @@ class Unit(Base):
     __tablename__ = "units"
 
     serial: Mapped[str] = mapped_column(String(NAME), primary_key=True)
-    run_pk: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    run_pk: Mapped[int] = mapped_column(ForeignKey(RUN_KEY, ondelete="CASCADE"))
     started_at: Mapped[datetime] = mapped_column(UtcDateTime())
     calibration: Mapped[str] = mapped_column(Text())
 
@@ -300,7 +324,7 @@ class RunFacts(Base):
     __tablename__ = "run_facts"
 
     run_pk: Mapped[int] = mapped_column(
-        ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True, autoincrement=False
+        ForeignKey(RUN_KEY, ondelete="CASCADE"), primary_key=True, autoincrement=False
     )
     first_failure: Mapped[str | None] = mapped_column(String(NAME))
     poses: Mapped[int] = mapped_column(Integer())

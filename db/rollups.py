@@ -133,6 +133,10 @@ PER_POSE: dict[str, InstrumentedAttribute[float | None]] = {
     f"pose_noise_{a}": getattr(RunPose, f"std_{a}") for a in "xyz"
 }
 
+#: A run's poses: by its key and its start, so that PostgreSQL reads the run's month of
+#: ``poses`` only (both tables are partitioned by month, :mod:`db.partitions`).
+OWN_POSES = and_(RunPose.run_pk == Run.id, RunPose.started_at == Run.started_at)
+
 #: The pose noise of a run summed over its poses (``run_facts``), by fact column: a
 #: trend's moments of the per-pose parameters read these, one row per run.
 NOISE_TOTALS: dict[str, ColumnElement[float]] = {
@@ -362,12 +366,12 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
         select(RunFailure.code)
         .where(RunFailure.run_pk == Run.id, RunFailure.position == 0)
         .scalar_subquery(),
-        select(func.count()).select_from(RunPose).where(RunPose.run_pk == Run.id).scalar_subquery(),
+        select(func.count()).select_from(RunPose).where(OWN_POSES).scalar_subquery(),
         bias["x"],
         bias["y"],
         bias["z"],
         *(
-            select(func.sum(total)).where(RunPose.run_pk == Run.id).scalar_subquery()
+            select(func.sum(total)).where(OWN_POSES).scalar_subquery()
             for total in NOISE_TOTALS.values()
         ),
         attempt,
@@ -535,7 +539,7 @@ def parameter_contributions(
         return [_moments(keys, where, bounds, columns)]
     selects = []
     runs = Run.__table__.join(RunFacts.__table__, RunFacts.run_pk == Run.id)
-    poses = RunPose.__table__.join(Run.__table__, RunPose.run_pk == Run.id)
+    poses = RunPose.__table__.join(Run.__table__, OWN_POSES)
     for rows, stored in ((runs, PER_RUN), (poses, PER_POSE)):
         specs = [spec for spec in PARAMETERS if spec.name in stored]
         limits = _limits_of(specs, bounds)

@@ -6,7 +6,7 @@ ranges ([Song2006] offsets and sensitivities; Montgomery's I-MR chart).
 from collections.abc import Sequence
 from typing import Any
 
-from sqlalchemy import ColumnElement, Row, func, select
+from sqlalchemy import ColumnElement, Row, func, select, tuple_
 from sqlalchemy.orm import Session, aliased
 
 from db.models import Run, RunFacts, RunPose
@@ -94,7 +94,7 @@ def latest_values(
     One walk of ``ix_runs_started_at`` backwards for the per-run values, one read of
     those runs' poses for the per-pose ones."""
     latest = (
-        select(Run.id, *(column.label(name) for name, column in PER_RUN.items()))
+        select(Run.id, Run.started_at, *(column.label(name) for name, column in PER_RUN.items()))
         .join(RunFacts, RunFacts.run_pk == Run.id)
         .where(*where)
         .order_by(Run.started_at.desc(), Run.id.desc())
@@ -109,7 +109,7 @@ def latest_values(
                 values[name].append(float(value))
     if rows:
         poses = select(*(column.label(name) for name, column in PER_POSE.items())).where(
-            RunPose.run_pk.in_([row.id for row in rows])
+            tuple_(RunPose.run_pk, RunPose.started_at).in_([(r.id, r.started_at) for r in rows])
         )
         for pose in session.execute(poses):
             for name in PER_POSE:

@@ -18,7 +18,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from sqlalchemy import ColumnElement, Row, and_, select
+from sqlalchemy import ColumnElement, Row, and_, select, tuple_
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts, RunPose
@@ -146,7 +146,7 @@ def _judged(
         rows = list(session.execute(stmt).all())
         if not rows:
             return
-        ids = [row.id for row in rows]
+        keys = [(row.id, row.started_at) for row in rows]
         poses: dict[int, list[Any]] = {}
         for pose in session.execute(
             select(
@@ -157,13 +157,13 @@ def _judged(
                 RunPose.std_y,
                 RunPose.std_z,
             )
-            .where(RunPose.run_pk.in_(ids))
+            .where(tuple_(RunPose.run_pk, RunPose.started_at).in_(keys))
             .order_by(RunPose.run_pk, RunPose.index)
         ):
             poses.setdefault(pose.run_pk, []).append(pose)
         failures = {
             pk: [failure_reason(f) for f in stored]
-            for pk, stored in failures_of(session, ids).items()
+            for pk, stored in failures_of(session, [pk for pk, _ in keys]).items()
         }
         for row in rows:
             own = poses.get(row.id, [])

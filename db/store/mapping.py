@@ -20,10 +20,13 @@ from station.domain.record.records import (
 )
 
 
-def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> dict[str, Any]:
-    """The ``runs`` row of ``record``."""
+def run_row(
+    record: RunRecord, *, pk: int, received_at: datetime, record_sha256: str
+) -> dict[str, Any]:
+    """The ``runs`` row of ``record``, numbered ``pk`` in the register of runs."""
     cal, quality = record.coefficients, record.quality
     return {
+        "id": pk,
         "run_id": record.run_id,
         "serial": record.serial,
         "station_id": record.station_id,
@@ -67,11 +70,12 @@ def run_row(record: RunRecord, *, received_at: datetime, record_sha256: str) -> 
     }
 
 
-def pose_row(run_pk: int, pose: PoseRecord) -> dict[str, Any]:
-    """The ``poses`` row of one pose of run ``run_pk``."""
+def pose_row(run_pk: int, started_at: datetime, pose: PoseRecord) -> dict[str, Any]:
+    """The ``poses`` row of one pose of run ``run_pk``, started at ``started_at``."""
     gyro = pose.gyro_mean
     return {
         "run_pk": run_pk,
+        "started_at": started_at,
         "index": pose.index,
         "name": pose.name,
         "role": pose.role,

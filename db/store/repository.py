@@ -12,10 +12,10 @@ import secrets
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
-from typing import Any, Literal, cast
+from typing import Any, Literal, TypeVarTuple, cast
 from uuid import UUID
 
-from sqlalchemy import insert, select, text, tuple_, update
+from sqlalchemy import Select, insert, select, text, tuple_, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
@@ -26,6 +26,7 @@ from db.models import (
     GyroFit,
     Run,
     RunFailure,
+    RunId,
     RunPose,
     StationKey,
     StoredLimitsProfile,
@@ -55,14 +56,16 @@ _POSES = Base.metadata.tables[RunPose.__tablename__]
 _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 # Built once, values bound at execution: the compiled statement is cached.
-_INSERT_NEW_RUN: dict[str, ReturningInsert[int]] = {
-    "postgresql": postgresql.insert(Run)
+_REGISTER_RUN: dict[str, ReturningInsert[int]] = {
+    "postgresql": postgresql.insert(RunId)
     .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(Run.id),
-    "sqlite": sqlite.insert(Run)
+    .returning(RunId.run_pk),
+    "sqlite": sqlite.insert(RunId)
     .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(Run.id),
+    .returning(RunId.run_pk),
 }
+
+Ts = TypeVarTuple("Ts")
 
 #: Largest page of a run list.
 MAX_PAGE = 500
@@ -113,6 +116,14 @@ class RunPage:
 
     runs: list[RunSummary]
     next_cursor: str | None
+
+
+def _by_run_id(query: Select[*Ts], run_id: UUID) -> Select[*Ts]:
+    """``query`` of ``runs`` narrowed to the run ``run_id``, found in the register: by its
+    key and its start, so that PostgreSQL reads one month's partition."""
+    return query.join(RunId, (RunId.run_pk == Run.id) & (RunId.started_at == Run.started_at)).where(
+        RunId.run_id == run_id
+    )
 
 
 def record_sha256(record: RunRecord) -> str:
@@ -192,8 +203,9 @@ class RunRepository:
     ) -> SubmitOutcome:
         """Store ``record`` unless a run with its UUID is stored already.
 
-        The unique constraint on ``run_id`` decides (``INSERT … ON CONFLICT DO
-        NOTHING``), so concurrent duplicates cannot both land. A retry of the same record
+        The register's unique ``run_id`` decides (``INSERT … ON CONFLICT DO NOTHING``
+        into ``run_ids``, which numbers the run), so concurrent duplicates cannot both
+        land. A retry of the same record
         returns the stored run; the same UUID with other content raises
         :class:`RunConflictError`. A new run brings the report's facts and roll-ups up to
         date in the same transaction (:func:`db.rollups.record_run`); submissions are
@@ -203,14 +215,16 @@ class RunRepository:
         """
         digest = record_sha256(record)
         received_at = received_at or datetime.now(UTC)
-        row = run_row(record, received_at=received_at, record_sha256=digest)
         lock_submissions(self.session.connection())
-        pk = self.session.execute(self._insert_new_run(), row).scalar_one_or_none()
+        pk = self.session.execute(
+            for_dialect(self.session, _REGISTER_RUN),
+            {"run_id": record.run_id, "started_at": record.started_at},
+        ).scalar_one_or_none()
         if outbox is not None:
             record_outbox(self.session, record.station_id, outbox, received_at)
         if pk is None:
             stored_digest = self.session.scalars(
-                select(Run.record_sha256).where(Run.run_id == record.run_id)
+                _by_run_id(select(Run.record_sha256), record.run_id)
             ).one()
             if stored_digest != digest:
                 raise RunConflictError(
@@ -219,8 +233,13 @@ class RunRepository:
             stored = self.get(record.run_id)
             assert stored is not None
             return SubmitOutcome(created=False, run=stored)
+        self.session.execute(
+            insert(Run), run_row(record, pk=pk, received_at=received_at, record_sha256=digest)
+        )
         store_profile(self.session, record.limits)
-        self.session.execute(insert(_POSES), [pose_row(pk, pose) for pose in record.poses])
+        self.session.execute(
+            insert(_POSES), [pose_row(pk, record.started_at, pose) for pose in record.poses]
+        )
         if record.failures:
             self.session.execute(insert(_FAILURES), failure_rows(pk, record))
         record_run(self.session.connection(), pk)
@@ -229,17 +248,15 @@ class RunRepository:
         record_unit_run(self.session, pk, stored)
         return SubmitOutcome(created=True, run=stored)
 
-    def _insert_new_run(self) -> ReturningInsert[int]:
-        """``INSERT … ON CONFLICT (run_id) DO NOTHING RETURNING id`` in the session's dialect."""
-        return for_dialect(self.session, _INSERT_NEW_RUN)
-
     def get(self, run_id: UUID) -> StoredRun | None:
         """One run with its poses and failure reasons."""
-        run = self.session.scalars(select(Run).where(Run.run_id == run_id)).one_or_none()
+        run = self.session.scalars(_by_run_id(select(Run), run_id)).one_or_none()
         if run is None:
             return None
         poses = self.session.scalars(
-            select(RunPose).where(RunPose.run_pk == run.id).order_by(RunPose.index)
+            select(RunPose)
+            .where(RunPose.run_pk == run.id, RunPose.started_at == run.started_at)
+            .order_by(RunPose.index)
         ).all()
         profile = self.session.scalar(
             select(StoredLimitsProfile.document).where(

@@ -1,5 +1,5 @@
 """``calstation db upgrade``, ``calstation db rebuild-report``, ``calstation db
-backup|restore FILE``, ``calstation keys
+partitions``, ``calstation db backup|restore FILE``, ``calstation keys
 create|revoke --station ID|--lab ID|--quality ID`` and ``calstation review SERIAL``: the
 results database by hand."""
 
@@ -102,6 +102,34 @@ def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
     else:
         said = f"migrated from schema revision {upgrade.before} to {upgrade.after}"
     out.print(f"database {_shown(url)} {said}", markup=False)
+
+
+@db_app.command("partitions")
+def db_partitions(
+    ahead: Annotated[
+        int, typer.Option("--ahead", help="Months to have past the current one.", min=0)
+    ] = 12,
+    database_url: DatabaseUrlOption = None,
+) -> None:
+    """Create the monthly partitions of runs and poses ahead (PostgreSQL; a monthly job).
+    Runs stored in the default partition (their month had none) move into their month."""
+    from db import DatabaseSettings, open_database
+    from db.partitions import add_months, require_partitioned
+
+    url = database_url or DatabaseSettings.from_environment().url()
+    require_partitioned(url)
+    database = open_database(url)
+    try:
+        with database.engine.begin() as connection:
+            months = add_months(connection, ahead)
+    finally:
+        database.dispose()
+    created = ", ".join(months.created) or "none"
+    out.print(
+        f"database {_shown(url)}: runs and poses by month from {months.first} to {months.last}; "
+        f"created {created}; {months.moved} runs moved in from the default partition",
+        markup=False,
+    )
 
 
 BackupFile = Annotated[

@@ -1,9 +1,6 @@
 """Migrations: an empty database reaches head matching the models; SQLite needs no set-up."""
 
 import ast
-import os
-import secrets
-from collections.abc import Iterator
 from datetime import timedelta
 from pathlib import Path
 from typing import Any
@@ -13,7 +10,7 @@ from alembic import command
 from alembic.autogenerate import compare_metadata
 from alembic.runtime.migration import MigrationContext
 from alembic.script import ScriptDirectory
-from sqlalchemy import func, insert, inspect, make_url, select, text
+from sqlalchemy import Connection, func, insert, inspect, select, text
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -39,11 +36,13 @@ from db.models import (
     StoredLimitsProfile,
     Unit,
 )
+from db.partitions import include_name
 from db.report.reports import eol_report
 from db.store.mapping import failure_rows, pose_row, run_row
 from db.store.repository import KeyHolder, key_sha256, record_sha256
 from db.store.units import answer_json
 from station.domain.quality.figures import ReportFilter
+from station.domain.record.records import RunRecord
 from station.domain.record.signature import (
     SignatureMismatchError,
     SignedCertificate,
@@ -67,36 +66,53 @@ def scripts_head() -> str:
     return head
 
 
-@pytest.fixture(params=["sqlite", pytest.param("postgresql", marks=pytest.mark.postgres)])
-def empty_url(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[str]:
-    """An empty database: a new SQLite file, or a new schema next to the session's."""
-    if request.param == "sqlite":
-        yield f"sqlite:///{tmp_path / 'empty.sqlite3'}"
-        return
-    session_url = make_url(request.getfixturevalue("postgresql_url"))
-    schema = f"calstation_empty_{os.getpid()}_{secrets.token_hex(4)}"
-    admin = make_engine(session_url.render_as_string(False), isolation_level="AUTOCOMMIT")
-    with admin.connect() as connection:
-        connection.execute(text(f'CREATE SCHEMA "{schema}"'))
-    try:
-        url = session_url.update_query_dict({"options": f"-csearch_path={schema}"})
-        yield url.render_as_string(hide_password=False)
-    finally:
-        with admin.connect() as connection:
-            connection.execute(text(f'DROP SCHEMA "{schema}" CASCADE'))
-        admin.dispose()
-
-
 def _before_0016(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Failure rows as a database before revision 0016 holds them (no ``uncertainty``)."""
     return [{k: v for k, v in row.items() if k != "uncertainty"} for row in rows]
+
+
+#: The revision that added each column of ``runs`` after 0003.
+_ADDED = {
+    "disposition": "0006",
+    "gyro_matrix": "0008",
+    "purpose": "0009",
+    "excluded_poses": "0010",
+    "uncertainty": "0013",
+    "decision_rule": "0013",
+    "part_number": "0014",
+    "fixture_slot": "0015",
+    "as_found": "0022",
+    "check_rules": "0024",
+}
+
+
+def store_at(
+    connection: Connection, revision: str, record: RunRecord, digest: str = "0" * 64
+) -> None:
+    """Store ``record`` with its poses and failures as a database at ``revision`` (at
+    least 0003, before 0025) holds them: the columns added later left out."""
+    pk = connection.scalar(select(func.coalesce(func.max(Run.id), 0) + 1))
+    row = run_row(record, pk=pk, received_at=T0, record_sha256=digest)
+    kept = {name: value for name, value in row.items() if _ADDED.get(name, revision) <= revision}
+    connection.execute(insert(Run), kept)
+    poses = [pose_row(pk, record.started_at, pose) for pose in record.poses]
+    for pose in poses:
+        del pose["started_at"]  # a column of revision 0025
+    connection.execute(insert(RunPose), poses)
+    if record.failures:
+        failures = failure_rows(pk, record)
+        connection.execute(
+            insert(RunFailure), failures if revision >= "0016" else _before_0016(failures)
+        )
 
 
 def test_head_matches_the_models_with_no_autogenerate_diff(empty_url: str) -> None:
     engine = make_engine(empty_url)
     upgrade(engine)
     with engine.connect() as connection:
-        context = MigrationContext.configure(connection, opts={"compare_type": True})
+        context = MigrationContext.configure(
+            connection, opts={"compare_type": True, "include_name": include_name}
+        )
         diff = compare_metadata(context, Base.metadata)
     engine.dispose()
     assert diff == []
@@ -141,19 +157,7 @@ def test_the_units_migration_fills_each_units_current_state(empty_url: str) -> N
     other = make_record(serial="PT-000002", started_at=T0 + timedelta(hours=2))
     with engine.begin() as connection:  # runs stored before the units table existed
         for record in (retest, first, other):
-            row = run_row(record, received_at=T0, record_sha256="0" * 64)
-            del row["disposition"]  # a column of revision 0006
-            del row["purpose"]  # a column of revision 0009
-            del row["gyro_matrix"]  # a column of revision 0008
-            del row["excluded_poses"]  # a column of revision 0010
-            del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
-            del row["part_number"]  # a column of revision 0014
-            del row["fixture_slot"]  # a column of revision 0015
-            del row["as_found"]  # a column of revision 0022
-            del row["check_rules"]  # a column of revision 0024
-            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
-            if record.failures:
-                connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
+            store_at(connection, "0003", record)
     upgrade(engine)
     database = Database(engine)
     with database.session() as session:
@@ -287,18 +291,7 @@ def test_the_disposition_migration_keeps_every_row_of_every_run(empty_url: str) 
         upgrade(engine, "0005")
         record = make_record(verdict="fail")
         with engine.begin() as connection:  # a run stored before runs had a disposition
-            row = run_row(record, received_at=T0, record_sha256="0" * 64)
-            del row["disposition"]
-            del row["purpose"]  # a column of revision 0009
-            del row["gyro_matrix"]
-            del row["excluded_poses"]
-            del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
-            del row["part_number"]  # a column of revision 0014
-            del row["fixture_slot"]  # a column of revision 0015
-            del row["as_found"]  # a column of revision 0022
-            del row["check_rules"]  # a column of revision 0024
-            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
-            connection.execute(insert(RunFailure), _before_0016(failure_rows(pk, record)))
+            store_at(connection, "0005", record)
         upgrade(engine)
         with Session(engine) as session:
             (stored,) = RunRepository(session).history(record.serial)
@@ -318,11 +311,7 @@ def test_runs_from_before_as_found_say_not_recorded(empty_url: str) -> None:
         upgrade(engine, "0021")
         record = make_record()
         with engine.begin() as connection:
-            row = run_row(record, received_at=T0, record_sha256=record_sha256(record))
-            del row["as_found"]
-            del row["check_rules"]  # a column of revision 0024
-            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
-            connection.execute(insert(RunPose), [pose_row(pk, p) for p in record.poses])
+            store_at(connection, "0021", record, record_sha256(record))
         upgrade(engine)
         with Session(engine) as session:
             stored = RunRepository(session).get(record.run_id)
@@ -352,10 +341,7 @@ def test_a_guarded_run_from_before_check_rules_keeps_its_rules_and_its_signature
         key = load_private_key(pem, "key.pem")
         signature = sign(record, document_number(record), "alice", key, T0)
         with engine.begin() as connection:
-            row = run_row(record, received_at=T0, record_sha256=record_sha256(record))
-            del row["check_rules"]
-            pk = connection.execute(insert(Run).returning(Run.id), row).scalar_one()
-            connection.execute(insert(RunPose), [pose_row(pk, p) for p in record.poses])
+            store_at(connection, "0023", record, record_sha256(record))
         upgrade(engine)
         with Session(engine) as session:
             stored = RunRepository(session).get(record.run_id)
@@ -444,16 +430,7 @@ def test_runs_from_before_stored_profiles_keep_the_report_working(empty_url: str
         )
         with engine.begin() as connection:
             for record in (shipped, other):
-                row = run_row(record, received_at=T0, record_sha256="0" * 64)
-                del row["purpose"]  # a column of revision 0009
-                del row["gyro_matrix"]  # a column of revision 0008
-                del row["excluded_poses"]  # a column of revision 0010
-                del row["uncertainty"], row["decision_rule"]  # columns of revision 0013
-                del row["part_number"]  # a column of revision 0014
-                del row["fixture_slot"]  # a column of revision 0015
-                del row["as_found"]  # a column of revision 0022
-                del row["check_rules"]  # a column of revision 0024
-                connection.execute(insert(Run), row)
+                store_at(connection, "0006", record)
         upgrade(engine)
         with Session(engine) as session:
             stored = session.scalars(select(StoredLimitsProfile.sha256)).all()
