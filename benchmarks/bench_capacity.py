@@ -69,29 +69,32 @@ def store(url: str, runs: int, days: int, units: int) -> None:
 
 
 def measure(url: str) -> dict[str, tuple[int, int]]:
-    """Each table's rows and total bytes (heap, TOAST, indexes; a partitioned table's
-    over its partitions), after VACUUM ANALYZE."""
+    """Each table's rows and total bytes (heap, TOAST, indexes), after VACUUM ANALYZE. A
+    partitioned table's bytes are those of its partitions that hold rows: the months
+    created ahead, empty, are a fixed cost (their empty indexes), not bytes a row."""
     engine = make_engine(url)
     with engine.connect().execution_options(isolation_level="AUTOCOMMIT") as connection:
         connection.execute(text("VACUUM ANALYZE"))
-        tables = [
-            table
-            for table in connection.scalars(
-                text("SELECT tablename FROM pg_tables WHERE schemaname = 'public' ORDER BY 1")
-            )
-            if not is_partition(table)
-        ]
+        tables = connection.scalars(
+            text("SELECT tablename FROM pg_tables WHERE schemaname = 'public' ORDER BY 1")
+        ).all()
+        counted = {
+            table: connection.execute(text(f'SELECT count(*) FROM "{table}"')).scalar_one()
+            for table in tables
+        }
         sizes = {}
         for table in tables:
-            rows = connection.execute(text(f'SELECT count(*) FROM "{table}"')).scalar_one()
-            size = connection.execute(
-                text(
-                    "SELECT coalesce(sum(pg_total_relation_size(relid)), "
-                    "pg_total_relation_size(:t)) FROM pg_partition_tree(:t)"
-                ),
-                {"t": f'public."{table}"'},
-            ).scalar_one()
-            sizes[table] = (rows, int(size))
+            if is_partition(table):
+                continue
+            parts = [p for p in tables if p.startswith(f"{table}_") and is_partition(p)] or [table]
+            size = sum(
+                connection.execute(
+                    text("SELECT pg_total_relation_size(:t)"), {"t": f'public."{part}"'}
+                ).scalar_one()
+                for part in parts
+                if counted[part] or part == table
+            )
+            sizes[table] = (counted[table], size)
     engine.dispose()
     return sizes
 

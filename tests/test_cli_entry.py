@@ -75,6 +75,7 @@ REFUSED = {
     "gyro simulate-centrifuge": ("--seed", "x"),
     "db upgrade": ("--no-such-option",),
     "db rebuild-report": ("--no-such-option",),
+    "db partitions": ("--ahead", "-1"),
     "db backup": (),
     "db restore": ("line.backup", "--replace", "x"),
     "keys create": ("--station", "not a name"),

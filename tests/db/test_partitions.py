@@ -40,7 +40,10 @@ def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
     empty_url: str,
 ) -> None:
     now = datetime.now(UTC)
-    starts = [now - timedelta(days=days) for days in (75, 40, 0)]
+    # Two months before this one, this one, and a station whose clock said 2001.
+    starts = [now - timedelta(days=days) for days in (75, 40, 0)] + [
+        datetime(2001, 5, 3, tzinfo=UTC)
+    ]
     records = [
         make_record(serial=f"PT-00000{i}", started_at=start) for i, start in enumerate(starts)
     ]
@@ -61,9 +64,11 @@ def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
                     )
                 )
             )
-        assert {f"runs_{_month_of(s)}" for s in starts} <= partitions
-        assert f"runs_{_month_of(now + timedelta(days=400))}" not in partitions
-        assert len(partitions) >= 13 + 1  # the current month, twelve ahead, the default
+        ahead = [now.replace(day=1) + timedelta(days=31 * i) for i in range(13)]
+        assert partitions == {
+            *(f"runs_{_month_of(moment)}" for moment in starts + ahead),
+            "runs_default",
+        }  # the months with runs, the current one and twelve ahead: not 2001 to now
         with Session(engine) as session:
             repository = RunRepository(session)
             for record in records:

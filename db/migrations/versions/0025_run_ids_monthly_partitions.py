@@ -11,8 +11,8 @@ that belonged to a run (``runs`` itself, ``poses``, ``run_failures``, ``run_fact
 PostgreSQL requires every unique constraint of a partitioned table to hold the partition
 key, and a foreign key onto one to name it; with the references on ``run_ids`` neither
 is needed, and ``runs`` and ``poses`` become tables partitioned by range of
-``started_at``: one partition a calendar month (UTC, ``runs_2026_12``), from the month of
-the oldest run to twelve months past the current one, and a ``runs_default`` /
+``started_at``: one partition a calendar month (UTC, ``runs_2026_12``) for each month that
+holds runs and from the current month to twelve past it, and a ``runs_default`` /
 ``poses_default`` for any start outside them. Their primary keys become ``(id,
 started_at)``. ``calstation db partitions`` creates the months ahead as time goes on
 (:mod:`db.partitions`). SQLite keeps plain tables. Plain operations only: this revision
@@ -24,6 +24,7 @@ Revises: 0024
 
 import re
 from collections.abc import Sequence
+from datetime import UTC, datetime
 
 import sqlalchemy as sa
 from alembic import op
@@ -49,13 +50,10 @@ RUN_INDEXES = {
     "ix_runs_part_number_started_at": "part_number, started_at, id",
 }
 
-#: The month of the oldest run (the current one when there is none) and the current month,
-#: as months since year 0 (``year * 12 + month - 1``), in UTC.
+#: Each month that holds runs, as months since year 0 (``year * 12 + month - 1``), in UTC.
 MONTHS = """
-SELECT CAST(extract(year FROM oldest) * 12 + extract(month FROM oldest) - 1 AS integer),
-       CAST(extract(year FROM current) * 12 + extract(month FROM current) - 1 AS integer)
-FROM (SELECT coalesce(min(started_at), now()) AT TIME ZONE 'UTC' AS oldest,
-             now() AT TIME ZONE 'UTC' AS current FROM runs) AS moments
+SELECT DISTINCT CAST(extract(year FROM moment) * 12 + extract(month FROM moment) - 1 AS integer)
+FROM (SELECT started_at AT TIME ZONE 'UTC' AS moment FROM runs) AS moments
 """
 
 
@@ -166,8 +164,10 @@ def _partition() -> None:
             "INCLUDING CONSTRAINTS) PARTITION BY RANGE (started_at)"
         )
     op.execute("ALTER TABLE poses_by_month ALTER COLUMN started_at SET NOT NULL")
-    first, current = op.get_bind().execute(sa.text(MONTHS)).one()
-    for month in range(min(first, current), current + AHEAD + 1):
+    now = datetime.now(UTC)
+    current = now.year * 12 + now.month - 1
+    months = {*op.get_bind().scalars(sa.text(MONTHS)), *range(current, current + AHEAD + 1)}
+    for month in sorted(months):
         for table in ("runs", "poses"):
             op.execute(
                 f"CREATE TABLE {table}_{month // 12:04d}_{month % 12 + 1:02d} "
