@@ -10,13 +10,11 @@ from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime, time, timedelta
+from itertools import groupby
+from operator import attrgetter
 from typing import Any, NamedTuple
 
-from sqlalchemy import (
-    ColumnElement,
-    Row,
-    RowMapping,
-)
+from sqlalchemy import ColumnElement, Row, RowMapping
 from sqlalchemy.orm import Session
 
 from db.report.chart_queries import (
@@ -25,13 +23,19 @@ from db.report.chart_queries import (
     latest_chart_points,
     latest_values,
 )
-from db.report.queries import ReportQueries
-from db.report.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
-from db.report.what_if import rejudged
-from db.rollups import (
-    HISTOGRAM,
-    stored_bounds,
+from db.report.queries import DIMENSIONS, ReportQueries
+from db.report.trends import (
+    TREND_DAYS,
+    PeriodSums,
+    day_key,
+    moments,
+    ratio,
+    shift_key,
+    trend_days,
+    trend_shifts,
 )
+from db.report.what_if import rejudged
+from db.rollups import HISTOGRAM, stored_bounds
 from db.store.limits_profiles import stored_profiles
 from station.domain.errors import InputError
 from station.domain.product.limits import LimitsProfile
@@ -44,17 +48,9 @@ from station.domain.quality.capability import (
     histogram_bins,
     individuals_limits,
     observed_ppm,
-    shifted_moments,
-    tolerance,
 )
 from station.domain.quality.control import moving_range_sigma, western_electric
-from station.domain.quality.days import (
-    day_number,
-    is_utc,
-    midnight,
-    plant_days,
-    step,
-)
+from station.domain.quality.days import day_number, is_utc, midnight, plant_days, step
 from station.domain.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -95,10 +91,6 @@ EPSILON = timedelta(microseconds=1)
 
 
 # -- assembling the report -------------------------------------------------------------
-
-
-def _ratio(part: float, whole: float) -> float | None:
-    return part / whole if whole else None
 
 
 @dataclass(frozen=True)
@@ -153,16 +145,16 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         units_passed=n.final_pass,
         units_failed=n.units - n.final_pass,
         first_pass_units=n.first_pass,
-        report_yield=_ratio(n.runs_passed, n.runs),
-        first_pass_yield=_ratio(n.first_pass, n.units),
-        final_yield=_ratio(n.final_pass, n.units),
+        report_yield=ratio(n.runs_passed, n.runs),
+        first_pass_yield=ratio(n.first_pass, n.units),
+        final_yield=ratio(n.final_pass, n.units),
         retests=retests,
-        retest_rate=_ratio(retests, n.units),
+        retest_rate=ratio(retests, n.units),
         hours=hours,
         units_per_hour=units_per_hour(n.units, seconds),
-        cycle_time_per_run_s=_ratio(seconds, n.runs) if seconds is not None else None,
-        cycle_time_per_unit_s=_ratio(seconds, n.units) if seconds is not None else None,
-        cycle_time_per_pose_s=_ratio(seconds, n.poses) if seconds is not None else None,
+        cycle_time_per_run_s=ratio(seconds, n.runs) if seconds is not None else None,
+        cycle_time_per_unit_s=ratio(seconds, n.units) if seconds is not None else None,
+        cycle_time_per_pose_s=ratio(seconds, n.poses) if seconds is not None else None,
         poses=n.poses,
     )
 
@@ -171,7 +163,7 @@ def units_per_hour(units: int, station_seconds: float | None) -> float | None:
     """Units per hour of station time (``station_seconds``, Σ finish − start of the
     runs): 3600 / seconds per unit, on the same basis as the cycle times beside it, the
     same for any page over the same runs (the dashboard's, the report's)."""
-    return _ratio(3600 * units, station_seconds) if station_seconds else None
+    return ratio(3600 * units, station_seconds) if station_seconds else None
 
 
 def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
@@ -233,13 +225,8 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
     """One parameter's statistics from its row of :meth:`ReportQueries.parameters`."""
     lower, upper = bounds[spec.family]
     start, width, _ = histogram_bins(lower, upper)
-    low, high = tolerance(lower, upper)
     count = 0 if row is None else int(row["n"])
-    mean, std = (
-        shifted_moments(count, float(row["sum"]), float(row["squares"]), (low + high) / 2)
-        if row is not None and count
-        else (None, None)
-    )
+    mean, std = moments(row, lower, upper) if row is not None and count else (None, None)
     out = 0 if row is None else int(row["outside"])
     capability = cpk(mean, std, lower, upper)
     return ParameterStats(
@@ -304,8 +291,7 @@ def _chart_limits(
     narrowed by station, operator or lot, or reported without limits (no statistics),
     are ordered and differenced in SQL.
     """
-    f = queries.filter
-    narrowed = any(v is not None for v in (f.station_id, f.operator_id, f.lot, f.part_number))
+    narrowed = any(getattr(queries.filter, name) is not None for name in DIMENSIONS)
     if narrowed or not all(name in stats for name in COEFFICIENTS):
         row = chart_limits(queries.session, queries.conditions)._mapping
         return _ChartLimits(
@@ -511,12 +497,8 @@ def several_products(parts: Sequence[str]) -> str:
 def _profiles_used(counts: Sequence[Row[Any]]) -> list[LimitsRef]:
     """The limits profiles the runs of ``counts`` (:meth:`ReportQueries.station_counts`)
     were judged by."""
-    return [
-        LimitsRef(name=name, version=version, sha256=sha)
-        for name, version, sha in sorted(
-            {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
-        )
-    ]
+    refs = sorted({(r.limits_name, r.limits_version, r.limits_sha256) for r in counts})
+    return [LimitsRef(name=name, version=version, sha256=sha) for name, version, sha in refs]
 
 
 @dataclass(frozen=True)
@@ -564,18 +546,20 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
 def _section(
     session: Session,
     filter: ReportFilter,
+    part_number: str,
     points: int,
     zone: str,
     shifts: Sequence[time],
 ) -> ProductSection:
-    """One product's section of a report over several: ``filter`` narrowed to it."""
-    assert filter.part_number is not None
+    """One product's section of a report over several: ``filter`` narrowed to
+    ``part_number``."""
+    filter = filter.model_copy(update={"part_number": part_number})
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
     stats = _statistics(queries, counts, points)
     trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
     return ProductSection(
-        part_number=filter.part_number,
+        part_number=part_number,
         filter=filter,
         bounds_source=stats.source,
         limits_profiles=_profiles_used(counts),
@@ -620,9 +604,6 @@ def eol_report(
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
     hours = _hours(filter, counts)
-    by_station: dict[str, list[Row[Any]]] = defaultdict(list)
-    for row in counts:
-        by_station[row.station_id].append(row)
     units = [
         UnitVerdict(
             serial=row.serial,
@@ -647,16 +628,7 @@ def eol_report(
         None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
     )
     trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
-    sections = [
-        _section(
-            session,
-            filter.model_copy(update={"part_number": part}),
-            chart_points,
-            zone,
-            shifts,
-        )
-        for part in several
-    ]
+    sections = [_section(session, filter, part, chart_points, zone, shifts) for part in several]
     generated_at = now or datetime.now(UTC)
     return EolReport(
         generated_at=generated_at,
@@ -668,12 +640,9 @@ def eol_report(
         ),
         limits_profiles=_profiles_used(counts),
         summary=_summary(line, hours),
-        stations=[
-            StationSummary(
-                station_id=station,
-                summary=_summary(_counts(rows_), hours),
-            )
-            for station, rows_ in sorted(by_station.items())
+        stations=[  # counts are sorted by station
+            StationSummary(station_id=station, summary=_summary(_counts(list(rows)), hours))
+            for station, rows in groupby(counts, attrgetter("station_id"))
         ],
         products=products,
         timezone=zone,

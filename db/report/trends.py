@@ -14,7 +14,7 @@ zone.
 """
 
 from collections import defaultdict
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from datetime import date, datetime
 from typing import Any
 
@@ -54,17 +54,38 @@ def shift_key(shifts: Sequence[Shift]) -> ColumnElement[int]:
     return period_key([(s.end, i) for i, s in enumerate(shifts[:-1])], len(shifts) - 1)
 
 
-def _ratio(part: int, whole: int) -> float | None:
+def ratio(part: float, whole: float) -> float | None:
+    """``part / whole``; ``None`` of nothing."""
     return part / whole if whole else None
 
 
-def _cpk(row: Mapping[str, Any], bounds: FamilyBounds, family: str) -> float | None:
-    lower, upper = bounds[family]
+def moments(
+    row: Mapping[Any, Any], lower: float | None, upper: float | None
+) -> tuple[float | None, float | None]:
+    """Mean and standard deviation of a parameter from its ``row`` of ``report_parameters``
+    sums: n, Σ(x − c) and Σ(x − c)² about c, the centre of the tolerance [``lower``,
+    ``upper``]."""
     low, high = tolerance(lower, upper)
-    mean, std = shifted_moments(
+    return shifted_moments(
         int(row["n"]), float(row["sum"]), float(row["squares"]), (low + high) / 2
     )
-    return cpk(mean, std, lower, upper)
+
+
+def _cpk(row: Mapping[Any, Any], bounds: FamilyBounds, family: str) -> float | None:
+    lower, upper = bounds[family]
+    return cpk(*moments(row, lower, upper), lower, upper)
+
+
+def _added(
+    rows: Sequence[Row[Any]], names: Collection[str], key: Callable[[Row[Any]], Any]
+) -> dict[Any, dict[str, Any]]:
+    """The columns ``names`` of ``rows`` added up per ``key(row)``."""
+    added: dict[Any, dict[str, Any]] = defaultdict(lambda: dict.fromkeys(names, 0))
+    for row in rows:
+        into = added[key(row)]
+        for name in names:
+            into[name] += row._mapping[name]
+    return added
 
 
 class PeriodSums:
@@ -102,46 +123,28 @@ class PeriodSums:
     ) -> "PeriodSums":
         """From finer rows (``day`` a finer key), added up per ``period(key)``: every
         column a trend reads is a sum."""
-        added: dict[int, dict[str, Any]] = defaultdict(lambda: dict.fromkeys(TREND_COUNT_VALUES, 0))
-        for r in counts:
-            into = added[period(int(r.day))]
-            for name in TREND_COUNT_VALUES:
-                into[name] += r._mapping[name]
-        stats: dict[tuple[int, str], dict[str, Any]] = defaultdict(
-            lambda: dict.fromkeys(MOMENT_VALUES, 0)
+        return cls(
+            _added(counts, TREND_COUNT_VALUES, lambda r: period(int(r.day))),
+            _added(parameters, MOMENT_VALUES, lambda r: (period(int(r.day)), r.parameter)),
+            bounds,
         )
-        for r in parameters:
-            into = stats[(period(int(r.day)), r.parameter)]
-            for name in MOMENT_VALUES:
-                into[name] += r._mapping[name]
-        return cls(added, stats, bounds)
 
     def figures(self, n: int) -> dict[str, Any]:
         """The :class:`TrendFigures` fields of period ``n`` (zeros without runs)."""
-        row = self.counts.get(n)
-        runs, passed, units, first, final = (
-            (0, 0, 0, 0, 0)
-            if row is None
-            else (
-                int(row["runs"]),
-                int(row["runs_passed"]),
-                int(row["line_units"]),
-                int(row["line_first_pass"]),
-                int(row["line_final_pass"]),
-            )
-        )
-        bounds = self.bounds
+        row = self.counts.get(n, {})
+        sums = {name: int(row.get(name, 0)) for name in TREND_COUNT_VALUES}
+        units = sums["line_units"]
         return {
-            "runs": runs,
-            "runs_passed": passed,
+            "runs": sums["runs"],
+            "runs_passed": sums["runs_passed"],
             "units": units,
-            "first_pass_yield": _ratio(first, units),
-            "final_yield": _ratio(final, units),
-            "run_yield": _ratio(passed, runs),
+            "first_pass_yield": ratio(sums["line_first_pass"], units),
+            "final_yield": ratio(sums["line_final_pass"], units),
+            "run_yield": ratio(sums["runs_passed"], sums["runs"]),
             "cpk": {
                 spec.name: (
-                    _cpk(self.stats[(n, spec.name)], bounds, spec.family)
-                    if bounds is not None and (n, spec.name) in self.stats
+                    _cpk(self.stats[(n, spec.name)], self.bounds, spec.family)
+                    if self.bounds is not None and (n, spec.name) in self.stats
                     else None
                 )
                 for spec in PARAMETERS
