@@ -115,18 +115,10 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
     if not _is_sqlite(url):
         _refuse_unless_empty(url, replace=replace)
         dsn, env = _libpq(url)
-        options = ["--clean", "--if-exists"] if replace else []
-        _run_tool(
-            "pg_restore",
-            "--no-owner",
-            "--no-privileges",
-            "--single-transaction",
-            "--exit-on-error",
-            *options,
-            f"--dbname={dsn}",
-            str(file),
-            env=env,
-        )
+        options = ["--no-owner", "--no-privileges", "--single-transaction", "--exit-on-error"]
+        if replace:
+            options += ["--clean", "--if-exists"]
+        _run_tool("pg_restore", *options, f"--dbname={dsn}", str(file), env=env)
         return
     with closing(sqlite3.connect(f"{file.resolve().as_uri()}?mode=ro", uri=True)) as backup:
         try:

@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Run
 from db.rollups import PRODUCTION
+from station.domain.quality.parameters import COEFFICIENTS
 from station.domain.quality.split import group_stats
 from station.domain.quality.station_health import StationHealth, VersionUse, golden_checks
 
@@ -30,12 +31,7 @@ def station_health(session: Session, station_id: str) -> StationHealth | None:
             Run.started_at,
             Run.serial,
             Run.verdict,
-            Run.offset_x,
-            Run.offset_y,
-            Run.offset_z,
-            Run.sensitivity_x,
-            Run.sensitivity_y,
-            Run.sensitivity_z,
+            *(getattr(Run, c) for c in COEFFICIENTS),
         )
         .where(Run.station_id == station_id, Run.purpose == "golden")
         .order_by(Run.started_at.desc(), Run.id.desc())
