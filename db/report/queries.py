@@ -115,9 +115,8 @@ class ReportQueries:
         self.filter = filter
         #: The ``WHERE`` clauses on ``runs`` of the filter (:func:`conditions`).
         self.conditions = conditions(filter)
-        self.dialect = session.get_bind().dialect.name
         self.days, self.edges = split_days(filter.since, filter.until)
-        if self.dialect == "postgresql":
+        if session.get_bind().dialect.name == "postgresql":
             # The raw statements are scans with long expressions: compiling them (JIT)
             # cost seconds and saved nothing; their sorts and hashes spill to disk with
             # the default 4 MB of work memory.

@@ -7,14 +7,14 @@ profiles: a few dozen) and applies the capability formulas of
 """
 
 from collections import defaultdict
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime, time, timedelta
+from datetime import UTC, datetime, time
 from itertools import groupby
 from operator import attrgetter
-from typing import Any, NamedTuple
+from typing import Any
 
-from sqlalchemy import ColumnElement, Row, RowMapping
+from sqlalchemy import Row, RowMapping
 from sqlalchemy.orm import Session
 
 from db.report.chart_queries import (
@@ -24,16 +24,7 @@ from db.report.chart_queries import (
     latest_values,
 )
 from db.report.queries import DIMENSIONS, ReportQueries
-from db.report.trends import (
-    TREND_DAYS,
-    PeriodSums,
-    day_key,
-    moments,
-    ratio,
-    shift_key,
-    trend_days,
-    trend_shifts,
-)
+from db.report.trends import moments, ratio, report_trend
 from db.report.what_if import rejudged
 from db.rollups import HISTOGRAM, stored_bounds
 from db.store.limits_profiles import stored_profiles
@@ -50,7 +41,6 @@ from station.domain.quality.capability import (
     observed_ppm,
 )
 from station.domain.quality.control import moving_range_sigma, western_electric
-from station.domain.quality.days import day_number, is_utc, midnight, plant_days, step
 from station.domain.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -65,8 +55,6 @@ from station.domain.quality.figures import (
     ReportFilter,
     StationSummary,
     Summary,
-    TrendDay,
-    TrendShift,
     UnitVerdict,
     WhatIf,
 )
@@ -77,7 +65,7 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
-from station.domain.quality.shifts import plant_shifts, shift_name
+from station.domain.quality.shifts import shift_name
 from station.domain.record.records import LimitsRef
 from station.domain.record.unit_state import ABORTED
 
@@ -85,9 +73,6 @@ from station.domain.record.unit_state import ABORTED
 CHART_POINTS = 200
 #: The latest runs in range whose values the histograms draw (bins from the data).
 HISTOGRAM_RUNS = 1000
-
-#: The last moment before an exclusive end.
-EPSILON = timedelta(microseconds=1)
 
 
 # -- assembling the report -------------------------------------------------------------
@@ -183,25 +168,17 @@ def _products(queries: ReportQueries, hours: float | None) -> list[ProductSummar
     ]
 
 
-class _FailingRow(NamedTuple):
-    """Failing runs of one first failure reason, station and operator (a Pareto row)."""
-
-    code: str
-    station_id: str
-    operator_id: str
-    runs: int
-
-
-def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
-    """Failing runs by first failure reason; an operator's abort is no failure of the
-    unit and no category here (the summary counts aborts apart)."""
+def _pareto(rows: Iterable[Sequence[Any]]) -> list[ParetoEntry]:
+    """Failing runs by first failure reason, from ``rows`` of (first failure reason,
+    station, operator, failing runs); an operator's abort is no failure of the unit and no
+    category here (the summary counts aborts apart)."""
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
-    for row in rows:
-        if row.code == ABORTED:
+    for code, station, operator, runs in rows:
+        if code == ABORTED:
             continue
-        code, station, operator, n = row.code, row.station_id, row.operator_id, int(row.runs)
+        n = int(runs)
         counts[code] += n
         stations[code][station] += n
         operators[code][operator] += n
@@ -426,71 +403,13 @@ def _what_if(
     return WhatIf(
         limits=candidate.ref,
         summary=_summary(counts, hours),
-        pareto=_pareto([_FailingRow(*key, n) for key, n in judged.failures.items()]),
+        pareto=_pareto((*key, n) for key, n in judged.failures.items()),
         parameters=parameters,
         pass_to_fail=judged.pass_to_fail,
         fail_to_pass=judged.fail_to_pass,
         flips=judged.flips,
         flips_total=judged.flips_total,
         kept=kept,
-    )
-
-
-def _trend(
-    session: Session,
-    filter: ReportFilter,
-    counts: Sequence[Row[Any]],
-    bounds: FamilyBounds | None,
-    zone: str,
-    shifts: Sequence[time],
-) -> tuple[list[TrendDay], list[TrendShift]]:
-    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times).
-
-    In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
-    another zone one scan numbers each run with its day and its shift together.
-    """
-    if not counts:
-        return [], []
-    start = filter.since or min(row.first_start for row in counts)
-    end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
-    days = plant_days(start, end, zone, TREND_DAYS)
-    since = midnight(days[0], zone)
-    periods = plant_shifts(max(start, since), end, zone, shifts, TREND_DAYS * len(shifts))
-
-    def sums(first: datetime, key: ColumnElement[int] | None) -> tuple[Any, Any]:
-        queries = ReportQueries(
-            session, filter.model_copy(update={"since": max(first, filter.since or first)})
-        )
-        parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
-        return queries.daily_counts(key), parameters
-
-    if is_utc(zone):
-        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
-        if not periods:
-            return trend_days(days, by_day), []
-        by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift)
-    if not periods:
-        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
-        return trend_days(days, by_day), []
-    # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
-    # runs of the first shift before its midnight, which no listed day shows.
-    before = step(days[0], -1)
-    base, width = day_number(before), len(periods)
-    key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
-    rows = sums(min(since, periods[0].start), key)
-    by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
-    by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
-    return trend_days(days, by_day), trend_shifts(periods, by_shift)
-
-
-def several_products(parts: Sequence[str]) -> str:
-    """Why a what-if is refused over the runs of several products (``parts``): a candidate
-    limits profile is one product's."""
-    return (
-        f"a what-if's candidate limits profile is one product's, and the runs selected are "
-        f"of {len(parts)} products ({', '.join(parts)}): choose one (part_number)"
     )
 
 
@@ -557,7 +476,7 @@ def _section(
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
     stats = _statistics(queries, counts, points)
-    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
+    trend, shift_trend = report_trend(session, filter, counts, stats.bounds, zone, shifts)
     return ProductSection(
         part_number=part_number,
         filter=filter,
@@ -617,17 +536,19 @@ def eol_report(
         )
         for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
-    failures = queries.first_failures()
     line = _counts(counts)
     products = _products(queries, hours)
     several = [p.part_number for p in products] if len(products) > 1 else []
     if candidate is not None and several:
-        raise InputError(several_products(several))
+        raise InputError(
+            f"a what-if's candidate limits profile is one product's, and the runs selected are "
+            f"of {len(several)} products ({', '.join(several)}): choose one (part_number)"
+        )
     stats = _Statistics() if several else _statistics(queries, counts, chart_points)
     what_if = (
         None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
     )
-    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
+    trend, shift_trend = report_trend(session, filter, counts, stats.bounds, zone, shifts)
     sections = [_section(session, filter, part, chart_points, zone, shifts) for part in several]
     generated_at = now or datetime.now(UTC)
     return EolReport(
@@ -649,7 +570,7 @@ def eol_report(
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
         shift_trend=shift_trend,
-        pareto=_pareto(failures),
+        pareto=_pareto(queries.first_failures()),
         parameters=stats.parameters,
         control_charts=stats.charts,
         units=units,

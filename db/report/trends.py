@@ -15,21 +15,27 @@ zone.
 
 from collections import defaultdict
 from collections.abc import Callable, Collection, Mapping, Sequence
-from datetime import date, datetime
+from dataclasses import dataclass
+from datetime import date, datetime, time, timedelta
 from typing import Any
 
 from sqlalchemy import ColumnElement, Integer, Row, case, literal
+from sqlalchemy.orm import Session
 
 from db.models import Run
+from db.report.queries import ReportQueries
 from db.rollups import MOMENT_VALUES, TREND_COUNT_VALUES
 from station.domain.quality.capability import cpk, shifted_moments, tolerance
-from station.domain.quality.days import day_end, day_number
-from station.domain.quality.figures import TrendDay, TrendShift
+from station.domain.quality.days import day_end, day_number, is_utc, midnight, plant_days, step
+from station.domain.quality.figures import ReportFilter, TrendDay, TrendShift
 from station.domain.quality.parameters import PARAMETERS, FamilyBounds
-from station.domain.quality.shifts import Shift
+from station.domain.quality.shifts import Shift, plant_shifts
 
 #: The most days a trend shows: the latest of the range.
 TREND_DAYS = 31
+
+#: The last moment before an exclusive end.
+EPSILON = timedelta(microseconds=1)
 
 
 def period_key(ends: Sequence[tuple[datetime, int]], last: int) -> ColumnElement[int]:
@@ -88,19 +94,14 @@ def _added(
     return added
 
 
+@dataclass(frozen=True)
 class PeriodSums:
     """The sums of ``report_counts`` and ``report_parameters`` columns per period (a day
     or a shift, by its number) and the figures of a period from them."""
 
-    def __init__(
-        self,
-        counts: Mapping[int, Mapping[Any, Any]],
-        stats: Mapping[tuple[int, str], Mapping[Any, Any]],
-        bounds: FamilyBounds | None,
-    ) -> None:
-        self.counts = counts
-        self.stats = stats
-        self.bounds = bounds
+    counts: Mapping[int, Mapping[Any, Any]]
+    stats: Mapping[tuple[int, str], Mapping[Any, Any]]
+    bounds: FamilyBounds | None
 
     @classmethod
     def of_rows(
@@ -164,3 +165,52 @@ def trend_shifts(shifts: Sequence[Shift], sums: PeriodSums) -> list[TrendShift]:
         TrendShift(day=s.day, shift=s.name, start=s.start, end=s.end, **sums.figures(i))
         for i, s in enumerate(shifts)
     ]
+
+
+def report_trend(
+    session: Session,
+    filter: ReportFilter,
+    counts: Sequence[Row[Any]],
+    bounds: FamilyBounds | None,
+    zone: str,
+    shifts: Sequence[time],
+) -> tuple[list[TrendDay], list[TrendShift]]:
+    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
+    over their shifts when the plant has ``shifts`` (start times).
+
+    In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
+    another zone one scan numbers each run with its day and its shift together.
+    """
+    if not counts:
+        return [], []
+    start = filter.since or min(row.first_start for row in counts)
+    end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
+    days = plant_days(start, end, zone, TREND_DAYS)
+    since = midnight(days[0], zone)
+    periods = plant_shifts(max(start, since), end, zone, shifts, TREND_DAYS * len(shifts))
+
+    def sums(first: datetime, key: ColumnElement[int] | None) -> tuple[Any, Any]:
+        queries = ReportQueries(
+            session, filter.model_copy(update={"since": max(first, filter.since or first)})
+        )
+        parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
+        return queries.daily_counts(key), parameters
+
+    if is_utc(zone):
+        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
+        if not periods:
+            return trend_days(days, by_day), []
+        by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
+        return trend_days(days, by_day), trend_shifts(periods, by_shift)
+    if not periods:
+        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
+        return trend_days(days, by_day), []
+    # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
+    # runs of the first shift before its midnight, which no listed day shows.
+    before = step(days[0], -1)
+    base, width = day_number(before), len(periods)
+    key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
+    rows = sums(min(since, periods[0].start), key)
+    by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
+    by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
+    return trend_days(days, by_day), trend_shifts(periods, by_shift)
