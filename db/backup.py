@@ -91,18 +91,6 @@ def backup_database(url: str | URL, file: Path) -> None:
         partial.unlink(missing_ok=True)
 
 
-def database_tables(url: str | URL) -> list[str]:
-    """The tables of the database at ``url`` (of its default schema)."""
-    engine = make_engine(url)
-    try:
-        with engine.connect() as connection:
-            return inspect(connection).get_table_names()
-    except OperationalError as exc:
-        raise DatabaseUnavailableError.of(url, exc) from None
-    finally:
-        engine.dispose()
-
-
 def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> None:
     """Restore the backup ``file`` into the database at ``url``.
 
@@ -131,7 +119,16 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
 
 
 def _refuse_unless_empty(url: str | URL, *, replace: bool) -> None:
-    tables = database_tables(url)
+    """Refuse to restore into the database at ``url`` if it holds a table (of its default
+    schema), unless told to ``replace`` what it holds."""
+    engine = make_engine(url)
+    try:
+        with engine.connect() as connection:
+            tables = inspect(connection).get_table_names()
+    except OperationalError as exc:
+        raise DatabaseUnavailableError.of(url, exc) from None
+    finally:
+        engine.dispose()
     if tables and not replace:
         raise InputError(
             f"the database holds {len(tables)} tables: restore into an empty database, "

@@ -150,14 +150,13 @@ class ReportQueries:
         edge = or_(*edges) if edges else literal(False)
         # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
         carried = Run.uncertainty["k"].as_float().is_not(None)
-        where = [*self.conditions, Run.verdict == "pass", carried]
         row = self.session.execute(
             select(
                 func.count(),
                 func.coalesce(func.sum(case((edge, 1), else_=0)), 0),
                 func.count(func.distinct(case((edge, Run.serial), else_=None))),
                 *standard,
-            ).where(*where)
+            ).where(*self.conditions, Run.verdict == "pass", carried)
         ).one()
         return NearLimits(
             runs_passed=int(row[0]),

@@ -121,7 +121,7 @@ def _counts(rows: Sequence[Row[Any]]) -> _Counts:
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    seconds, retests = n.seconds, n.retests
+    seconds = n.seconds
     return Summary(
         aborted_runs=n.aborted,
         runs=n.runs,
@@ -133,8 +133,8 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         report_yield=ratio(n.runs_passed, n.runs),
         first_pass_yield=ratio(n.first_pass, n.units),
         final_yield=ratio(n.final_pass, n.units),
-        retests=retests,
-        retest_rate=ratio(retests, n.units),
+        retests=n.retests,
+        retest_rate=ratio(n.retests, n.units),
         hours=hours,
         units_per_hour=units_per_hour(n.units, seconds),
         cycle_time_per_run_s=ratio(seconds, n.runs) if seconds is not None else None,
@@ -360,16 +360,13 @@ def report_bounds(session: Session, counts: Sequence[Row[Any]]) -> tuple[FamilyB
                 why = f"the latest run's, of {len(latest_first)} profiles in range"
             else:
                 why = "the latest run's whose profile is stored"
-            return profile_bounds(stored[ref.sha256]), f"limits profile {_named(ref)} ({why})"
+            named = f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
+            return profile_bounds(stored[ref.sha256]), f"limits profile {named} ({why})"
     binned = stored_bounds(session.connection())
     missing = "no run in range" if not latest_first else "no profile of the runs in range stored"
     if binned:
         return binned, f"the bounds the roll-ups were counted with ({missing})"
     return None, f"no limits ({missing}): no capability"
-
-
-def _named(ref: LimitsRef) -> str:
-    return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
 
 
 def _capability(queries: ReportQueries, bounds: FamilyBounds) -> tuple[list[ParameterStats], bool]:
@@ -512,13 +509,13 @@ def eol_report(
     each product gets a section of its own (:class:`ProductSection`), its runs against
     its own profile; counts and yields stay the line's, with a row per product. A
     ``candidate`` profile adds the what-if: the runs re-judged against it
-    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so runs of
-    several products refuse it (:class:`InputError`). ``unit_limit`` cuts the unit
-    list to the latest units. ``zone`` is
-    the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
-    times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest attempt failed), ``unit_offset`` skips the newest (pages);
-    ``open_holds``: count the open holds too; ``candidate_kept``: the candidate is stored.
+    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so
+    runs of several products refuse it (:class:`InputError`). ``unit_limit`` cuts the
+    unit list to the latest units. ``zone`` is the plant's time zone: the trend's days
+    are its days; ``shifts`` its shifts' start times, for a trend per shift too.
+    ``held_only`` lists only the held units (latest attempt failed), ``unit_offset``
+    skips the newest (pages); ``open_holds``: count the open holds too;
+    ``candidate_kept``: the candidate is stored.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()

@@ -196,21 +196,19 @@ def report_trend(
         parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
         return queries.daily_counts(key), parameters
 
+    if not periods:
+        key = None if is_utc(zone) else day_key(days, zone)
+        return trend_days(days, PeriodSums.of_rows(*sums(since, key), bounds)), []
     if is_utc(zone):
         by_day = PeriodSums.of_rows(*sums(since, None), bounds)
-        if not periods:
-            return trend_days(days, by_day), []
         by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift)
-    if not periods:
-        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
-        return trend_days(days, by_day), []
-    # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
-    # runs of the first shift before its midnight, which no listed day shows.
-    before = step(days[0], -1)
-    base, width = day_number(before), len(periods)
-    key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
-    rows = sums(min(since, periods[0].start), key)
-    by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
-    by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
+    else:
+        # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
+        # runs of the first shift before its midnight, which no listed day shows.
+        before = step(days[0], -1)
+        base, width = day_number(before), len(periods)
+        key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
+        rows = sums(min(since, periods[0].start), key)
+        by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
+        by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
     return trend_days(days, by_day), trend_shifts(periods, by_shift)
