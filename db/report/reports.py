@@ -121,7 +121,6 @@ def _counts(rows: Sequence[Row[Any]]) -> _Counts:
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    seconds = n.seconds
     return Summary(
         aborted_runs=n.aborted,
         runs=n.runs,
@@ -136,10 +135,10 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         retests=n.retests,
         retest_rate=ratio(n.retests, n.units),
         hours=hours,
-        units_per_hour=units_per_hour(n.units, seconds),
-        cycle_time_per_run_s=ratio(seconds, n.runs) if seconds is not None else None,
-        cycle_time_per_unit_s=ratio(seconds, n.units) if seconds is not None else None,
-        cycle_time_per_pose_s=ratio(seconds, n.poses) if seconds is not None else None,
+        units_per_hour=units_per_hour(n.units, n.seconds),
+        cycle_time_per_run_s=ratio(n.seconds, n.runs) if n.seconds is not None else None,
+        cycle_time_per_unit_s=ratio(n.seconds, n.units) if n.seconds is not None else None,
+        cycle_time_per_pose_s=ratio(n.seconds, n.poses) if n.seconds is not None else None,
         poses=n.poses,
     )
 

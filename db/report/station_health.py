@@ -66,16 +66,15 @@ def station_health(session: Session, station_id: str) -> StationHealth | None:
     )
     times = session.execute(select(latest.c.started_at, latest.c.finished_at)).all()
     seconds = [(finished - started).total_seconds() for started, finished in times]
+    used = (latest.c.software_version, latest.c.limits_name, latest.c.limits_version)
     versions = session.execute(
         select(
-            latest.c.software_version,
-            latest.c.limits_name,
-            latest.c.limits_version,
+            *used,
             func.count().label("runs"),
             func.min(latest.c.started_at).label("first"),
             func.max(latest.c.started_at).label("last"),
         )
-        .group_by(latest.c.software_version, latest.c.limits_name, latest.c.limits_version)
+        .group_by(*used)
         .order_by(func.max(latest.c.started_at).desc())
     ).all()
     return StationHealth(

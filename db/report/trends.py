@@ -1,16 +1,15 @@
 """The report's trend: per plant day (and shift), units, first-pass and final yield, Cpk.
 
-The days are the plant's (:mod:`station.domain.quality.days`). In UTC they are the roll-ups'
-days, and :class:`db.report.queries.ReportQueries` adds up the roll-ups as for the rest of the
-report; in another zone a day starts at a local midnight that cuts the roll-ups' days,
-so each run is numbered with its plant day (:func:`day_key`, a ``CASE`` over the days'
-starts) and the runs of the trend's days are aggregated instead (at most
+The days are the plant's (:mod:`station.domain.quality.days`). In UTC they are the
+roll-ups' days, and :class:`db.report.queries.ReportQueries` adds up the roll-ups as for
+the rest of the report; in another zone a day starts at a local midnight that cuts the
+roll-ups' days, so each run is numbered with its plant day (:func:`day_key`, a ``CASE``
+over the days' starts) and the runs of the trend's days are aggregated instead (at most
 :data:`TREND_DAYS` of them). Units count on the day of their first attempt on the line
 (the yield definition of :mod:`db.rollups`), as in the summary, so the days' units add
 up to the summary's over the same runs. The plant's shifts
-(:mod:`station.domain.quality.shifts`) cut the same days finer: each run is numbered with
-its shift (:func:`shift_key`) and the runs of the trend's shifts are aggregated, in any
-zone.
+(:mod:`station.domain.quality.shifts`) cut the same days finer: each run is numbered with its
+shift (:func:`shift_key`) and the runs of the trend's shifts are aggregated, in any zone.
 """
 
 from collections import defaultdict
@@ -77,7 +76,11 @@ def moments(
     )
 
 
-def _cpk(row: Mapping[Any, Any], bounds: FamilyBounds, family: str) -> float | None:
+def _cpk(row: Mapping[Any, Any] | None, bounds: FamilyBounds | None, family: str) -> float | None:
+    """The Cpk of a parameter of ``family`` from its ``row`` of sums against ``bounds``;
+    ``None`` without either."""
+    if row is None or bounds is None:
+        return None
     lower, upper = bounds[family]
     return cpk(*moments(row, lower, upper), lower, upper)
 
@@ -143,11 +146,7 @@ class PeriodSums:
             "final_yield": ratio(sums["line_final_pass"], units),
             "run_yield": ratio(sums["runs_passed"], sums["runs"]),
             "cpk": {
-                spec.name: (
-                    _cpk(self.stats[(n, spec.name)], self.bounds, spec.family)
-                    if self.bounds is not None and (n, spec.name) in self.stats
-                    else None
-                )
+                spec.name: _cpk(self.stats.get((n, spec.name)), self.bounds, spec.family)
                 for spec in PARAMETERS
             },
         }
