@@ -341,10 +341,8 @@ class ReportQueries:
             page.c.runs,
             LATEST_FACTS.first_failure.label("code"),
         )
-        stmt = _join_latest(stmt, page.c.serial)
-        return list(
-            self.session.execute(stmt.order_by(page.c.first_start.desc(), page.c.first_id.desc()))
-        )
+        newest = (page.c.first_start.desc(), page.c.first_id.desc())
+        return list(self.session.execute(_join_latest(stmt, page.c.serial).order_by(*newest)))
 
     def open_holds(self, now: datetime) -> OpenHolds:
         """The held units the yield table counts whose failed latest attempt no review has

@@ -448,12 +448,11 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
             for p in parameters
         ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
-    charted = latest_chart_points(session, queries.conditions, points)
     return _Statistics(
         bounds=bounds,
         source=source,
         parameters=parameters,
-        charts=_charts(limits, charted),
+        charts=_charts(limits, latest_chart_points(session, queries.conditions, points)),
         near_limits=None if bounds is None else queries.near_limits(bounds, parameters, values),
     )
 
