@@ -309,7 +309,7 @@ class ReportQueries:
         where: list[ColumnElement[bool]] = [RunFacts.line_first.is_(True), *self.conditions]
         return [*where, RunFacts.line_final_pass.is_(False)] if held else where
 
-    def latest_runs(self, limit: int | None, offset: int, held: bool) -> list[Row[Any]]:
+    def latest_runs(self, limit: int | None, offset: int = 0, held: bool = False) -> list[Row[Any]]:
         """The units the yield table counts (``held``: those on hold), newest first attempt
         first, each with its latest attempt (wherever and whenever it was), run count and
         that run's first failure code; ``offset`` skips the newest (a page)."""
