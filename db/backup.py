@@ -91,6 +91,18 @@ def backup_database(url: str | URL, file: Path) -> None:
         partial.unlink(missing_ok=True)
 
 
+def database_tables(url: str | URL) -> list[str]:
+    """The tables of the database at ``url`` (of its default schema)."""
+    engine = make_engine(url)
+    try:
+        with engine.connect() as connection:
+            return inspect(connection).get_table_names()
+    except OperationalError as exc:
+        raise DatabaseUnavailableError.of(url, exc) from None
+    finally:
+        engine.dispose()
+
+
 def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> None:
     """Restore the backup ``file`` into the database at ``url``.
 
@@ -103,10 +115,18 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
     if not _is_sqlite(url):
         _refuse_unless_empty(url, replace=replace)
         dsn, env = _libpq(url)
-        options = ["--no-owner", "--no-privileges", "--single-transaction", "--exit-on-error"]
-        if replace:
-            options += ["--clean", "--if-exists"]
-        _run_tool("pg_restore", *options, f"--dbname={dsn}", str(file), env=env)
+        options = ["--clean", "--if-exists"] if replace else []
+        _run_tool(
+            "pg_restore",
+            "--no-owner",
+            "--no-privileges",
+            "--single-transaction",
+            "--exit-on-error",
+            *options,
+            f"--dbname={dsn}",
+            str(file),
+            env=env,
+        )
         return
     with closing(sqlite3.connect(f"{file.resolve().as_uri()}?mode=ro", uri=True)) as backup:
         try:
@@ -119,16 +139,7 @@ def restore_database(url: str | URL, file: Path, *, replace: bool = False) -> No
 
 
 def _refuse_unless_empty(url: str | URL, *, replace: bool) -> None:
-    """Refuse to restore into the database at ``url`` if it holds a table (of its default
-    schema), unless told to ``replace`` what it holds."""
-    engine = make_engine(url)
-    try:
-        with engine.connect() as connection:
-            tables = inspect(connection).get_table_names()
-    except OperationalError as exc:
-        raise DatabaseUnavailableError.of(url, exc) from None
-    finally:
-        engine.dispose()
+    tables = database_tables(url)
     if tables and not replace:
         raise InputError(
             f"the database holds {len(tables)} tables: restore into an empty database, "
