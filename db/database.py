@@ -64,16 +64,13 @@ class Database:
 
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
-        self.sessions = sessionmaker(engine, expire_on_commit=False)
+        #: A new session on each call (use it as a context manager).
+        self.session = sessionmaker(engine, expire_on_commit=False)
 
     @property
     def is_sqlite(self) -> bool:
         """Whether this is the embedded (SQLite) database."""
         return self.engine.dialect.name == "sqlite"
-
-    def session(self) -> Session:
-        """A new session (use it as a context manager)."""
-        return self.sessions()
 
     def dispose(self) -> None:
         """Close every pooled connection."""

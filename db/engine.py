@@ -84,17 +84,15 @@ def make_engine(
     except ValueError as exc:
         raise InputError(f"database URL: {exc}") from None
     parsed = make_url(url)
-    if parsed.get_backend_name() == "sqlite":
-        if parsed.database and parsed.database != ":memory:":
-            Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
-        engine = create_engine(parsed, **kwargs)
-        _sqlite_events(engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
-        if statement_timeout_s is not None:
-            sqlite_statement_timeout(engine, statement_timeout_s)
-        return engine
+    sqlite = parsed.get_backend_name() == "sqlite"
+    if sqlite and parsed.database and parsed.database != ":memory:":
+        Path(parsed.database).expanduser().parent.mkdir(parents=True, exist_ok=True)
     engine = create_engine(parsed, **kwargs)
-    if statement_timeout_s is not None and parsed.get_backend_name() == "postgresql":
-        postgres_statement_timeout(engine, statement_timeout_s)
+    if sqlite:
+        _sqlite_events(engine, autocommit=kwargs.get("isolation_level") == "AUTOCOMMIT")
+    if statement_timeout_s is not None:
+        timeout = sqlite_statement_timeout if sqlite else postgres_statement_timeout
+        timeout(engine, statement_timeout_s)
     return engine
 
 

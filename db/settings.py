@@ -98,11 +98,9 @@ class DatabaseSettings(BaseSettings):
 
         ``database_password`` replaces the URL's password, escaped as a URL needs it.
         """
-        if self.database_url:
-            if self.database_password is None:
-                return self.database_url
-            url = make_url(self.database_url).set(
-                password=self.database_password.get_secret_value()
-            )
-            return url.render_as_string(hide_password=False)
-        return f"sqlite:///{self.data_dir.expanduser() / SQLITE_FILE_NAME}"
+        if not self.database_url:
+            return f"sqlite:///{self.data_dir.expanduser() / SQLITE_FILE_NAME}"
+        if self.database_password is None:
+            return self.database_url
+        url = make_url(self.database_url).set(password=self.database_password.get_secret_value())
+        return url.render_as_string(hide_password=False)

@@ -58,6 +58,5 @@ def sqlite_statement_timeout(engine: Engine, seconds: float) -> None:
 def is_statement_timeout(exc: DBAPIError) -> bool:
     """Whether the database ended the statement for running too long."""
     driver = exc.orig
-    if getattr(driver, "sqlstate", None) == QUERY_CANCELED:
-        return True
-    return type(driver).__module__ == "sqlite3" and str(driver) == "interrupted"
+    postgres = getattr(driver, "sqlstate", None) == QUERY_CANCELED
+    return postgres or (type(driver).__module__ == "sqlite3" and str(driver) == "interrupted")

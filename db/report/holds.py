@@ -4,9 +4,8 @@ A unit is on hold when its latest attempt (on the line, aborts aside:
 ``run_facts.line_latest``, the yield definition of :mod:`db.rollups`) failed; a unit with
 nothing but aborts was never attempted and is not on hold. The line dashboard lists the
 latest of them, any day, with the answer ``GET /api/v1/units/{serial}`` gives
-(:class:`station.domain.record.unit_state.UnitCalibration`: its attempts, where the station sent it,
-and
-``holds``, the coefficients of its last verified write-back), read from ``units``.
+(:class:`station.domain.record.unit_state.UnitCalibration`: its attempts, where the station
+sent it, and ``holds``, the coefficients of its last verified write-back), read from ``units``.
 
 The list walks ``ix_runs_verdict_started_at`` backwards over the failing runs and stops at
 ``limit`` units. The count comes from the report's daily roll-ups, kept up to date at

@@ -46,10 +46,7 @@ from db.rollups import (
     stored_bounds,
 )
 from station.domain.calibration.uncertainty import COVERAGE_FACTOR
-from station.domain.quality.days import (
-    LAST,
-    day_number,
-)
+from station.domain.quality.days import LAST, day_number
 from station.domain.quality.figures import (
     HOLD_AGES,
     CoefficientRisk,
@@ -59,29 +56,26 @@ from station.domain.quality.figures import (
     ParameterStats,
     ReportFilter,
 )
-from station.domain.quality.parameters import (
-    FamilyBounds,
-)
+from station.domain.quality.parameters import COEFFICIENTS, FamilyBounds
 from station.domain.quality.risk import decision_risks, normality
 
 #: Day 0 of the roll-ups, and their length.
 EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
 DAY = timedelta(days=1)
 
+#: The fields of a filter that narrow the runs beyond time: a column of ``runs`` and of
+#: the roll-ups each.
+DIMENSIONS = ("station_id", "operator_id", "lot", "part_number")
+
 
 def dimensions(filter: ReportFilter, columns: Any) -> list[ColumnElement[bool]]:
     """The station, operator, lot and product conditions of ``filter`` on ``columns``
     (``runs`` or a roll-up)."""
-    where = []
-    if filter.station_id is not None:
-        where.append(columns.station_id == filter.station_id)
-    if filter.operator_id is not None:
-        where.append(columns.operator_id == filter.operator_id)
-    if filter.lot is not None:
-        where.append(columns.lot == filter.lot)
-    if filter.part_number is not None:
-        where.append(columns.part_number == filter.part_number)
-    return where
+    return [
+        getattr(columns, name) == value
+        for name in DIMENSIONS
+        if (value := getattr(filter, name)) is not None
+    ]
 
 
 def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
@@ -95,15 +89,17 @@ def conditions(filter: ReportFilter) -> list[ColumnElement[bool]]:
     return [*where, PRODUCTION, *dimensions(filter, Run)]
 
 
-def latest_run_aliases() -> tuple[type[Run], type[RunFacts]]:
-    """A unit's latest attempt and its facts, as aliases to join beside the runs selected."""
-    return aliased(Run, name="latest"), aliased(RunFacts, name="latest_facts")
+#: A unit's latest attempt and its facts, joined beside the runs selected by :func:`_join_latest`.
+LATEST = aliased(Run, name="latest")
+LATEST_FACTS = aliased(RunFacts, name="latest_facts")
 
 
-def latest_counted(latest: type[Run], facts: type[RunFacts]) -> ColumnElement[bool]:
-    """``facts`` are those of ``latest`` and it is its unit's latest attempt
-    (:mod:`db.rollups`, ``line_latest``)."""
-    return and_(facts.run_pk == latest.id, facts.line_latest.is_(True))
+def _join_latest(stmt: Select[Any], serial: Any) -> Select[Any]:
+    """``stmt`` joined with the latest attempt of the unit ``serial`` (:data:`LATEST`) and
+    its facts (:data:`LATEST_FACTS`; :mod:`db.rollups`, ``line_latest``)."""
+    return stmt.join(LATEST, LATEST.serial == serial).join(
+        LATEST_FACTS, and_(LATEST_FACTS.run_pk == LATEST.id, LATEST_FACTS.line_latest.is_(True))
+    )
 
 
 class ReportQueries:
@@ -119,9 +115,8 @@ class ReportQueries:
         self.filter = filter
         #: The ``WHERE`` clauses on ``runs`` of the filter (:func:`conditions`).
         self.conditions = conditions(filter)
-        self.dialect = session.get_bind().dialect.name
         self.days, self.edges = split_days(filter.since, filter.until)
-        if self.dialect == "postgresql":
+        if session.get_bind().dialect.name == "postgresql":
             # The raw statements are scans with long expressions: compiling them (JIT)
             # cost seconds and saved nothing; their sorts and hashes spill to disk with
             # the default 4 MB of work memory.
@@ -133,12 +128,13 @@ class ReportQueries:
     def near_limits(
         self,
         bounds: FamilyBounds,
-        parameters: Sequence[ParameterStats] | None = None,
-        values: Mapping[str, Sequence[float]] | None = None,
+        parameters: Sequence[ParameterStats],
+        values: Mapping[str, Sequence[float]],
     ) -> NearLimits:
         """The passing runs in range whose offset or sensitivity lies within its expanded
         uncertainty U (``runs.uncertainty``) of a bound of ``bounds``: accepted by the
-        simple rule, refused by the guarded one. One counting statement."""
+        simple rule, refused by the guarded one; with the coefficients' decision risks
+        (:func:`_risks`). One counting statement."""
         edges: list[ColumnElement[bool]] = []
         standard: list[Any] = []  # the mean U/k of each coefficient
         for family in ("offset", "sensitivity"):
@@ -154,22 +150,19 @@ class ReportQueries:
         edge = or_(*edges) if edges else literal(False)
         # A run without uncertainties holds JSON null, whose "k" reads as SQL NULL.
         carried = Run.uncertainty["k"].as_float().is_not(None)
-        where = [*self.conditions, Run.verdict == "pass", carried]
         row = self.session.execute(
             select(
                 func.count(),
                 func.coalesce(func.sum(case((edge, 1), else_=0)), 0),
                 func.count(func.distinct(case((edge, Run.serial), else_=None))),
                 *standard,
-            ).where(*where)
+            ).where(*self.conditions, Run.verdict == "pass", carried)
         ).one()
-        names = [f"{family}_{axis}" for family in ("offset", "sensitivity") for axis in "xyz"]
-        means = {name: value for name, value in zip(names, row[3:], strict=True)}
         return NearLimits(
             runs_passed=int(row[0]),
             within_u=int(row[1]),
             units=int(row[2]),
-            risks=[] if parameters is None else _risks(parameters, means, values or {}),
+            risks=_risks(parameters, dict(zip(COEFFICIENTS, row[3:], strict=True)), values),
         )
 
     def _edge_conditions(self) -> list[ColumnElement[bool]] | None:
@@ -191,17 +184,23 @@ class ReportQueries:
             where.append(table.day < end)
         return where
 
-    def _merged(
+    def _summed(
         self,
         table: Any,
         values: Mapping[str, str],
         group: Sequence[str],
-        rolled: list[ColumnElement[bool]] | None,
-        raw: Sequence[Select[Any]],
+        contributions: Callable[[list[ColumnElement[bool]]], Sequence[Select[Any]]],
+        rolled_up: bool = True,
     ) -> list[Row[Any]]:
-        """Rows of ``table`` (``rolled`` selects them) and ``raw`` contributions with the
-        same columns, merged per ``group``: sums added, minima and maxima kept."""
-        parts = list(raw)
+        """The ``values`` of ``table`` per ``group``: when ``rolled_up``, its roll-up rows
+        over the whole days in range and the ``contributions`` (same columns) of the
+        partial days' runs, else the contributions of every run in range; merged, sums
+        added, minima and maxima kept."""
+        if rolled_up:
+            rolled, raw = self._rolled_conditions(table), self._edge_conditions()
+        else:
+            rolled, raw = None, self.conditions
+        parts = [] if raw is None else list(contributions(raw))
         if rolled is not None:
             parts.append(
                 select(
@@ -215,20 +214,7 @@ class ReportQueries:
         stmt = select(
             *keys, *(getattr(func, how)(merged.c[v]).label(v) for v, how in values.items())
         ).group_by(*keys)
-        return [row for row in self.session.execute(stmt)]
-
-    def _summed(
-        self,
-        table: Any,
-        values: Mapping[str, str],
-        group: Sequence[str],
-        contributions: Callable[[list[ColumnElement[bool]]], Select[Any]],
-    ) -> list[Row[Any]]:
-        """The roll-up rows of ``table`` over the whole days in range and the
-        ``contributions`` of the partial days' runs, merged per ``group``."""
-        edges = self._edge_conditions()
-        raw = [] if edges is None else [contributions(edges)]
-        return self._merged(table, values, group, self._rolled_conditions(table), raw)
+        return list(self.session.execute(stmt))
 
     # -- counts and yields -------------------------------------------------------------
 
@@ -242,7 +228,7 @@ class ReportQueries:
         """
         group = ["station_id", *LIMITS]
         rows = self._summed(
-            ReportCounts, COUNT_VALUES, group, lambda edges: count_contributions(group, edges)
+            ReportCounts, COUNT_VALUES, group, lambda where: [count_contributions(group, where)]
         )
         return sorted(rows, key=lambda row: tuple(row[: len(group)]))
 
@@ -252,7 +238,7 @@ class ReportQueries:
         days as theirs."""
         group, values = ["part_number"], PRODUCT_COUNT_VALUES
         rows = self._summed(
-            ReportCounts, values, group, lambda e: count_contributions(group, e, values=values)
+            ReportCounts, values, group, lambda w: [count_contributions(group, w, values=values)]
         )
         return sorted(rows, key=lambda row: str(row.part_number))
 
@@ -262,7 +248,7 @@ class ReportQueries:
         """Failing runs per (first failure code, station, operator)."""
         group = ["code", "station_id", "operator_id"]
         return self._summed(
-            ReportFailures, FAILURE_VALUES, group, lambda edges: failure_contributions(group, edges)
+            ReportFailures, FAILURE_VALUES, group, lambda w: [failure_contributions(group, w)]
         )
 
     # -- parameters --------------------------------------------------------------------
@@ -276,55 +262,43 @@ class ReportQueries:
         in range is aggregated (seconds over a long history), and the report says so.
         """
         rolled_up = stored_bounds(self.session.connection()) == bounds
-        rows = self._parameter_rows(bounds, [], rolled_up, None)
-        return {row.parameter: row._mapping for row in rows}, rolled_up
-
-    def _parameter_rows(
-        self,
-        bounds: FamilyBounds,
-        group: list[str],
-        rolled_up: bool,
-        columns: Mapping[str, ColumnElement[Any]] | None,
-        values: Mapping[str, str] = PARAMETER_VALUES,
-    ) -> list[Row[Any]]:
-        """The parameters' sums per ``group``: from the roll-ups and the partial days when
-        ``rolled_up``, else from every run in range (``columns``: other keys); ``values``
-        the sums wanted (all, or :data:`MOMENT_VALUES`)."""
-        if rolled_up:
-            rolled, raw = self._rolled_conditions(ReportParameters), self._edge_conditions()
-        else:
-            rolled, raw = None, self.conditions
-        moments_only = values == MOMENT_VALUES
-        selects = (
-            []
-            if raw is None
-            else parameter_contributions(group, raw, bounds, columns, moments_only=moments_only)
+        rows = self._summed(
+            ReportParameters,
+            PARAMETER_VALUES,
+            ["parameter"],
+            lambda where: parameter_contributions([], where, bounds),
+            rolled_up,
         )
-        return self._merged(ReportParameters, values, ["parameter", *group], rolled, selects)
+        return {row.parameter: row._mapping for row in rows}, rolled_up
 
     # -- trend -------------------------------------------------------------------------
 
     def daily_counts(self, day: ColumnElement[int] | None) -> list[Row[Any]]:
         """The sums of ``report_counts`` per day: the roll-ups' UTC days (``day`` ``None``)
         or the plant's days ``day`` numbers the runs with (from the runs)."""
-        values = TREND_COUNT_VALUES
-        if day is None:
-            return self._summed(
-                ReportCounts,
-                values,
-                ["day"],
-                lambda e: count_contributions(["day"], e, values=values),
-            )
-        raw = [count_contributions(["day"], self.conditions, columns={"day": day}, values=values)]
-        return self._merged(ReportCounts, values, ["day"], None, raw)
+        values, columns = TREND_COUNT_VALUES, None if day is None else {"day": day}
+        return self._summed(
+            ReportCounts,
+            values,
+            ["day"],
+            lambda w: [count_contributions(["day"], w, columns=columns, values=values)],
+            rolled_up=day is None,
+        )
 
     def daily_parameters(
         self, bounds: FamilyBounds, day: ColumnElement[int] | None
     ) -> list[Row[Any]]:
-        """The parameters' sums per parameter and day (as :meth:`daily_counts`)."""
+        """The parameters' sums per parameter and day (as :meth:`daily_counts`): only
+        :data:`MOMENT_VALUES`, for the Cpk."""
         rolled_up = day is None and stored_bounds(self.session.connection()) == bounds
         columns = None if day is None else {"day": day}
-        return self._parameter_rows(bounds, ["day"], rolled_up, columns, MOMENT_VALUES)
+        return self._summed(
+            ReportParameters,
+            MOMENT_VALUES,
+            ["parameter", "day"],
+            lambda w: parameter_contributions(["day"], w, bounds, columns, moments_only=True),
+            rolled_up,
+        )
 
     # -- units -------------------------------------------------------------------------
 
@@ -356,47 +330,38 @@ class ReportQueries:
             .offset(offset or None)
             .subquery("page")
         )
-        latest, latest_facts = latest_run_aliases()
-        stmt = (
-            select(
-                latest.id,
-                page.c.serial,
-                page.c.shipped,
-                latest.verdict,
-                latest.started_at,
-                latest.station_id,
-                latest.operator_id,
-                page.c.runs,
-                latest_facts.first_failure.label("code"),
-            )
-            .join(latest, latest.serial == page.c.serial)
-            .join(latest_facts, latest_counted(latest, latest_facts))
-            .order_by(page.c.first_start.desc(), page.c.first_id.desc())
+        stmt = select(
+            LATEST.id,
+            page.c.serial,
+            page.c.shipped,
+            LATEST.verdict,
+            LATEST.started_at,
+            LATEST.station_id,
+            LATEST.operator_id,
+            page.c.runs,
+            LATEST_FACTS.first_failure.label("code"),
         )
-        return [row for row in self.session.execute(stmt)]
+        newest = (page.c.first_start.desc(), page.c.first_id.desc())
+        return list(self.session.execute(_join_latest(stmt, page.c.serial).order_by(*newest)))
 
     def open_holds(self, now: datetime) -> OpenHolds:
         """The held units the yield table counts whose failed latest attempt no review has
         closed, counted by the age of that run at ``now`` and by its first failure reason:
         one grouped statement (the held units' first runs, then each one's latest run)."""
-        latest, latest_facts = latest_run_aliases()
         day, week = now - timedelta(days=1), now - timedelta(days=7)
         young, middle, old = HOLD_AGES
         age = case(
-            (latest.started_at >= day, young), (latest.started_at >= week, middle), else_=old
+            (LATEST.started_at >= day, young), (LATEST.started_at >= week, middle), else_=old
         ).label("age")
-        code = func.coalesce(latest_facts.first_failure, "").label("code")
-        stmt = (
+        code = func.coalesce(LATEST_FACTS.first_failure, "").label("code")
+        runs = (
             select(age, code, func.count().label("units"))
             .select_from(Run)
             .join(RunFacts, RunFacts.run_pk == Run.id)
-            .join(latest, latest.serial == Run.serial)
-            .join(latest_facts, latest_counted(latest, latest_facts))
-            .where(
-                *self._selected(True),
-                latest.verdict == "fail",
-                unreviewed(latest),
-            )
+        )
+        stmt = (
+            _join_latest(runs, Run.serial)
+            .where(*self._selected(True), LATEST.verdict == "fail", unreviewed(LATEST))
             .group_by(age, code)
         )
         ages: Counter[str] = Counter()

@@ -7,16 +7,14 @@ profiles: a few dozen) and applies the capability formulas of
 """
 
 from collections import defaultdict
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime, time, timedelta
-from typing import Any, NamedTuple
+from datetime import UTC, datetime, time
+from itertools import groupby
+from operator import attrgetter
+from typing import Any
 
-from sqlalchemy import (
-    ColumnElement,
-    Row,
-    RowMapping,
-)
+from sqlalchemy import Row, RowMapping
 from sqlalchemy.orm import Session
 
 from db.report.chart_queries import (
@@ -25,13 +23,10 @@ from db.report.chart_queries import (
     latest_chart_points,
     latest_values,
 )
-from db.report.queries import ReportQueries
-from db.report.trends import TREND_DAYS, PeriodSums, day_key, shift_key, trend_days, trend_shifts
+from db.report.queries import DIMENSIONS, ReportQueries
+from db.report.trends import moments, ratio, report_trend
 from db.report.what_if import rejudged
-from db.rollups import (
-    HISTOGRAM,
-    stored_bounds,
-)
+from db.rollups import HISTOGRAM, stored_bounds
 from db.store.limits_profiles import stored_profiles
 from station.domain.errors import InputError
 from station.domain.product.limits import LimitsProfile
@@ -44,17 +39,8 @@ from station.domain.quality.capability import (
     histogram_bins,
     individuals_limits,
     observed_ppm,
-    shifted_moments,
-    tolerance,
 )
 from station.domain.quality.control import moving_range_sigma, western_electric
-from station.domain.quality.days import (
-    day_number,
-    is_utc,
-    midnight,
-    plant_days,
-    step,
-)
 from station.domain.quality.figures import (
     ChartPoint,
     ControlChart,
@@ -69,8 +55,6 @@ from station.domain.quality.figures import (
     ReportFilter,
     StationSummary,
     Summary,
-    TrendDay,
-    TrendShift,
     UnitVerdict,
     WhatIf,
 )
@@ -81,7 +65,7 @@ from station.domain.quality.parameters import (
     ParameterSpec,
     profile_bounds,
 )
-from station.domain.quality.shifts import plant_shifts, shift_name
+from station.domain.quality.shifts import shift_name
 from station.domain.record.records import LimitsRef
 from station.domain.record.unit_state import ABORTED
 
@@ -90,15 +74,8 @@ CHART_POINTS = 200
 #: The latest runs in range whose values the histograms draw (bins from the data).
 HISTOGRAM_RUNS = 1000
 
-#: The last moment before an exclusive end.
-EPSILON = timedelta(microseconds=1)
-
 
 # -- assembling the report -------------------------------------------------------------
-
-
-def _ratio(part: float, whole: float) -> float | None:
-    return part / whole if whole else None
 
 
 @dataclass(frozen=True)
@@ -144,7 +121,6 @@ def _counts(rows: Sequence[Row[Any]]) -> _Counts:
 
 
 def _summary(n: _Counts, hours: float | None) -> Summary:
-    seconds, retests = n.seconds, n.retests
     return Summary(
         aborted_runs=n.aborted,
         runs=n.runs,
@@ -153,16 +129,16 @@ def _summary(n: _Counts, hours: float | None) -> Summary:
         units_passed=n.final_pass,
         units_failed=n.units - n.final_pass,
         first_pass_units=n.first_pass,
-        report_yield=_ratio(n.runs_passed, n.runs),
-        first_pass_yield=_ratio(n.first_pass, n.units),
-        final_yield=_ratio(n.final_pass, n.units),
-        retests=retests,
-        retest_rate=_ratio(retests, n.units),
+        report_yield=ratio(n.runs_passed, n.runs),
+        first_pass_yield=ratio(n.first_pass, n.units),
+        final_yield=ratio(n.final_pass, n.units),
+        retests=n.retests,
+        retest_rate=ratio(n.retests, n.units),
         hours=hours,
-        units_per_hour=units_per_hour(n.units, seconds),
-        cycle_time_per_run_s=_ratio(seconds, n.runs) if seconds is not None else None,
-        cycle_time_per_unit_s=_ratio(seconds, n.units) if seconds is not None else None,
-        cycle_time_per_pose_s=_ratio(seconds, n.poses) if seconds is not None else None,
+        units_per_hour=units_per_hour(n.units, n.seconds),
+        cycle_time_per_run_s=ratio(n.seconds, n.runs) if n.seconds is not None else None,
+        cycle_time_per_unit_s=ratio(n.seconds, n.units) if n.seconds is not None else None,
+        cycle_time_per_pose_s=ratio(n.seconds, n.poses) if n.seconds is not None else None,
         poses=n.poses,
     )
 
@@ -171,7 +147,7 @@ def units_per_hour(units: int, station_seconds: float | None) -> float | None:
     """Units per hour of station time (``station_seconds``, Σ finish − start of the
     runs): 3600 / seconds per unit, on the same basis as the cycle times beside it, the
     same for any page over the same runs (the dashboard's, the report's)."""
-    return _ratio(3600 * units, station_seconds) if station_seconds else None
+    return ratio(3600 * units, station_seconds) if station_seconds else None
 
 
 def _hours(filter: ReportFilter, rows: Sequence[Row[Any]]) -> float | None:
@@ -191,25 +167,17 @@ def _products(queries: ReportQueries, hours: float | None) -> list[ProductSummar
     ]
 
 
-class _FailingRow(NamedTuple):
-    """Failing runs of one first failure reason, station and operator (a Pareto row)."""
-
-    code: str
-    station_id: str
-    operator_id: str
-    runs: int
-
-
-def _pareto(rows: Sequence[Row[Any] | _FailingRow]) -> list[ParetoEntry]:
-    """Failing runs by first failure reason; an operator's abort is no failure of the
-    unit and no category here (the summary counts aborts apart)."""
+def _pareto(rows: Iterable[Sequence[Any]]) -> list[ParetoEntry]:
+    """Failing runs by first failure reason, from ``rows`` of (first failure reason,
+    station, operator, failing runs); an operator's abort is no failure of the unit and no
+    category here (the summary counts aborts apart)."""
     counts: dict[str, int] = defaultdict(int)
     stations: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
     operators: dict[str, dict[str, int]] = defaultdict(lambda: defaultdict(int))
-    for row in rows:
-        if row.code == ABORTED:
+    for code, station, operator, runs in rows:
+        if code == ABORTED:
             continue
-        code, station, operator, n = row.code, row.station_id, row.operator_id, int(row.runs)
+        n = int(runs)
         counts[code] += n
         stations[code][station] += n
         operators[code][operator] += n
@@ -233,13 +201,8 @@ def _parameter(spec: ParameterSpec, bounds: FamilyBounds, row: RowMapping | None
     """One parameter's statistics from its row of :meth:`ReportQueries.parameters`."""
     lower, upper = bounds[spec.family]
     start, width, _ = histogram_bins(lower, upper)
-    low, high = tolerance(lower, upper)
     count = 0 if row is None else int(row["n"])
-    mean, std = (
-        shifted_moments(count, float(row["sum"]), float(row["squares"]), (low + high) / 2)
-        if row is not None and count
-        else (None, None)
-    )
+    mean, std = moments(row, lower, upper) if row is not None and count else (None, None)
     out = 0 if row is None else int(row["outside"])
     capability = cpk(mean, std, lower, upper)
     return ParameterStats(
@@ -304,8 +267,7 @@ def _chart_limits(
     narrowed by station, operator or lot, or reported without limits (no statistics),
     are ordered and differenced in SQL.
     """
-    f = queries.filter
-    narrowed = any(v is not None for v in (f.station_id, f.operator_id, f.lot, f.part_number))
+    narrowed = any(getattr(queries.filter, name) is not None for name in DIMENSIONS)
     if narrowed or not all(name in stats for name in COEFFICIENTS):
         row = chart_limits(queries.session, queries.conditions)._mapping
         return _ChartLimits(
@@ -397,16 +359,13 @@ def report_bounds(session: Session, counts: Sequence[Row[Any]]) -> tuple[FamilyB
                 why = f"the latest run's, of {len(latest_first)} profiles in range"
             else:
                 why = "the latest run's whose profile is stored"
-            return profile_bounds(stored[ref.sha256]), f"limits profile {_named(ref)} ({why})"
+            named = f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
+            return profile_bounds(stored[ref.sha256]), f"limits profile {named} ({why})"
     binned = stored_bounds(session.connection())
     missing = "no run in range" if not latest_first else "no profile of the runs in range stored"
     if binned:
         return binned, f"the bounds the roll-ups were counted with ({missing})"
     return None, f"no limits ({missing}): no capability"
-
-
-def _named(ref: LimitsRef) -> str:
-    return f"{ref.name} v{ref.version} ({ref.sha256[:12]})"
 
 
 def _capability(queries: ReportQueries, bounds: FamilyBounds) -> tuple[list[ParameterStats], bool]:
@@ -440,7 +399,7 @@ def _what_if(
     return WhatIf(
         limits=candidate.ref,
         summary=_summary(counts, hours),
-        pareto=_pareto([_FailingRow(*key, n) for key, n in judged.failures.items()]),
+        pareto=_pareto((*key, n) for key, n in judged.failures.items()),
         parameters=parameters,
         pass_to_fail=judged.pass_to_fail,
         fail_to_pass=judged.fail_to_pass,
@@ -450,73 +409,11 @@ def _what_if(
     )
 
 
-def _trend(
-    session: Session,
-    filter: ReportFilter,
-    counts: Sequence[Row[Any]],
-    bounds: FamilyBounds | None,
-    zone: str,
-    shifts: Sequence[time],
-) -> tuple[list[TrendDay], list[TrendShift]]:
-    """The trend over the plant's days of the range (the latest :data:`TREND_DAYS`), and
-    over their shifts when the plant has ``shifts`` (start times).
-
-    In UTC the days come from the roll-ups and the shifts from a scan of their runs; in
-    another zone one scan numbers each run with its day and its shift together.
-    """
-    if not counts:
-        return [], []
-    start = filter.since or min(row.first_start for row in counts)
-    end = filter.until - EPSILON if filter.until else max(row.last_finish for row in counts)
-    days = plant_days(start, end, zone, TREND_DAYS)
-    since = midnight(days[0], zone)
-    periods = plant_shifts(max(start, since), end, zone, shifts, TREND_DAYS * len(shifts))
-
-    def sums(first: datetime, key: ColumnElement[int] | None) -> tuple[Any, Any]:
-        queries = ReportQueries(
-            session, filter.model_copy(update={"since": max(first, filter.since or first)})
-        )
-        parameters = [] if bounds is None else queries.daily_parameters(bounds, key)
-        return queries.daily_counts(key), parameters
-
-    if is_utc(zone):
-        by_day = PeriodSums.of_rows(*sums(since, None), bounds)
-        if not periods:
-            return trend_days(days, by_day), []
-        by_shift = PeriodSums.of_rows(*sums(periods[0].start, shift_key(periods)), bounds)
-        return trend_days(days, by_day), trend_shifts(periods, by_shift)
-    if not periods:
-        by_day = PeriodSums.of_rows(*sums(since, day_key(days, zone)), bounds)
-        return trend_days(days, by_day), []
-    # Key (day − d₀)·S + shift over S shifts; the day before the first (d₀) holds the
-    # runs of the first shift before its midnight, which no listed day shows.
-    before = step(days[0], -1)
-    base, width = day_number(before), len(periods)
-    key = (day_key([before, *days], zone) - base) * width + shift_key(periods)
-    rows = sums(min(since, periods[0].start), key)
-    by_day = PeriodSums.regrouped(*rows, bounds, lambda k: k // width + base)
-    by_shift = PeriodSums.regrouped(*rows, bounds, lambda k: k % width)
-    return trend_days(days, by_day), trend_shifts(periods, by_shift)
-
-
-def several_products(parts: Sequence[str]) -> str:
-    """Why a what-if is refused over the runs of several products (``parts``): a candidate
-    limits profile is one product's."""
-    return (
-        f"a what-if's candidate limits profile is one product's, and the runs selected are "
-        f"of {len(parts)} products ({', '.join(parts)}): choose one (part_number)"
-    )
-
-
 def _profiles_used(counts: Sequence[Row[Any]]) -> list[LimitsRef]:
     """The limits profiles the runs of ``counts`` (:meth:`ReportQueries.station_counts`)
     were judged by."""
-    return [
-        LimitsRef(name=name, version=version, sha256=sha)
-        for name, version, sha in sorted(
-            {(r.limits_name, r.limits_version, r.limits_sha256) for r in counts}
-        )
-    ]
+    refs = sorted({(r.limits_name, r.limits_version, r.limits_sha256) for r in counts})
+    return [LimitsRef(name=name, version=version, sha256=sha) for name, version, sha in refs]
 
 
 @dataclass(frozen=True)
@@ -551,12 +448,11 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
             for p in parameters
         ]
     limits = _chart_limits(queries, counts, {p.name: p for p in parameters})
-    charted = latest_chart_points(session, queries.conditions, points)
     return _Statistics(
         bounds=bounds,
         source=source,
         parameters=parameters,
-        charts=_charts(limits, charted),
+        charts=_charts(limits, latest_chart_points(session, queries.conditions, points)),
         near_limits=None if bounds is None else queries.near_limits(bounds, parameters, values),
     )
 
@@ -564,18 +460,20 @@ def _statistics(queries: ReportQueries, counts: Sequence[Row[Any]], points: int)
 def _section(
     session: Session,
     filter: ReportFilter,
+    part_number: str,
     points: int,
     zone: str,
     shifts: Sequence[time],
 ) -> ProductSection:
-    """One product's section of a report over several: ``filter`` narrowed to it."""
-    assert filter.part_number is not None
+    """One product's section of a report over several: ``filter`` narrowed to
+    ``part_number``."""
+    filter = filter.model_copy(update={"part_number": part_number})
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
     stats = _statistics(queries, counts, points)
-    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
+    trend, shift_trend = report_trend(session, filter, counts, stats.bounds, zone, shifts)
     return ProductSection(
-        part_number=filter.part_number,
+        part_number=part_number,
         filter=filter,
         bounds_source=stats.source,
         limits_profiles=_profiles_used(counts),
@@ -609,20 +507,17 @@ def eol_report(
     each product gets a section of its own (:class:`ProductSection`), its runs against
     its own profile; counts and yields stay the line's, with a row per product. A
     ``candidate`` profile adds the what-if: the runs re-judged against it
-    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so runs of
-    several products refuse it (:class:`InputError`). ``unit_limit`` cuts the unit
-    list to the latest units. ``zone`` is
-    the plant's time zone: the trend's days are its days; ``shifts`` its shifts' start
-    times, for a trend per shift too. ``held_only`` lists only the
-    held units (latest attempt failed), ``unit_offset`` skips the newest (pages);
-    ``open_holds``: count the open holds too; ``candidate_kept``: the candidate is stored.
+    (:mod:`db.report.what_if`), nothing stored changed; a profile is one product's, so
+    runs of several products refuse it (:class:`InputError`). ``unit_limit`` cuts the
+    unit list to the latest units. ``zone`` is the plant's time zone: the trend's days
+    are its days; ``shifts`` its shifts' start times, for a trend per shift too.
+    ``held_only`` lists only the held units (latest attempt failed), ``unit_offset``
+    skips the newest (pages); ``open_holds``: count the open holds too;
+    ``candidate_kept``: the candidate is stored.
     """
     queries = ReportQueries(session, filter)
     counts = queries.station_counts()
     hours = _hours(filter, counts)
-    by_station: dict[str, list[Row[Any]]] = defaultdict(list)
-    for row in counts:
-        by_station[row.station_id].append(row)
     units = [
         UnitVerdict(
             serial=row.serial,
@@ -636,27 +531,20 @@ def eol_report(
         )
         for row in queries.latest_runs(unit_limit, unit_offset, held_only)
     ]
-    failures = queries.first_failures()
     line = _counts(counts)
     products = _products(queries, hours)
     several = [p.part_number for p in products] if len(products) > 1 else []
     if candidate is not None and several:
-        raise InputError(several_products(several))
+        raise InputError(
+            f"a what-if's candidate limits profile is one product's, and the runs selected are "
+            f"of {len(several)} products ({', '.join(several)}): choose one (part_number)"
+        )
     stats = _Statistics() if several else _statistics(queries, counts, chart_points)
     what_if = (
         None if candidate is None else _what_if(queries, candidate, line, hours, candidate_kept)
     )
-    trend, shift_trend = _trend(session, filter, counts, stats.bounds, zone, shifts)
-    sections = [
-        _section(
-            session,
-            filter.model_copy(update={"part_number": part}),
-            chart_points,
-            zone,
-            shifts,
-        )
-        for part in several
-    ]
+    trend, shift_trend = report_trend(session, filter, counts, stats.bounds, zone, shifts)
+    sections = [_section(session, filter, part, chart_points, zone, shifts) for part in several]
     generated_at = now or datetime.now(UTC)
     return EolReport(
         generated_at=generated_at,
@@ -668,19 +556,16 @@ def eol_report(
         ),
         limits_profiles=_profiles_used(counts),
         summary=_summary(line, hours),
-        stations=[
-            StationSummary(
-                station_id=station,
-                summary=_summary(_counts(rows_), hours),
-            )
-            for station, rows_ in sorted(by_station.items())
+        stations=[  # counts are sorted by station
+            StationSummary(station_id=station, summary=_summary(_counts(list(rows)), hours))
+            for station, rows in groupby(counts, attrgetter("station_id"))
         ],
         products=products,
         timezone=zone,
         trend=trend,
         shifts=[shift_name(at) for at in shifts],
         shift_trend=shift_trend,
-        pareto=_pareto(failures),
+        pareto=_pareto(queries.first_failures()),
         parameters=stats.parameters,
         control_charts=stats.charts,
         units=units,

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import Row, select, tuple_
+from sqlalchemy import select, tuple_
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts
@@ -57,9 +57,6 @@ def run_page(
     )
     if after is not None:
         stmt = stmt.where(tuple_(Run.started_at, Run.id) > tuple_(*after))
-    rows: list[Row[Any]] = list(session.execute(stmt).all())
-    page: list[Sequence[Any]] = [tuple(row)[2:] for row in rows]
-    last: tuple[datetime, int] | None = None
-    if len(rows) == size:
-        last = (rows[-1].started_at, rows[-1].id)
-    return page, last
+    rows = session.execute(stmt).all()
+    last = (rows[-1].started_at, rows[-1].id) if len(rows) == size else None
+    return [tuple(row)[2:] for row in rows], last

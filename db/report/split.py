@@ -75,9 +75,8 @@ def _split(
     queries = ReportQueries(session, filter)
     bounds, bounds_source = report_bounds(session, queries.station_counts())
     lower, upper = (None, None) if bounds is None else bounds[spec.family]
-    column = PER_RUN[parameter]
     stmt = (
-        select(SPLIT_COLUMNS[by].label("group"), column.label("value"))
+        select(SPLIT_COLUMNS[by].label("group"), PER_RUN[parameter].label("value"))
         .join(RunFacts, RunFacts.run_pk == Run.id)
         .where(*queries.conditions)
         .order_by(Run.started_at.desc(), Run.id.desc())

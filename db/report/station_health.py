@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Run
 from db.rollups import PRODUCTION
+from station.domain.quality.parameters import COEFFICIENTS
 from station.domain.quality.split import group_stats
 from station.domain.quality.station_health import StationHealth, VersionUse, golden_checks
 
@@ -30,12 +31,7 @@ def station_health(session: Session, station_id: str) -> StationHealth | None:
             Run.started_at,
             Run.serial,
             Run.verdict,
-            Run.offset_x,
-            Run.offset_y,
-            Run.offset_z,
-            Run.sensitivity_x,
-            Run.sensitivity_y,
-            Run.sensitivity_z,
+            *(getattr(Run, c) for c in COEFFICIENTS),
         )
         .where(Run.station_id == station_id, Run.purpose == "golden")
         .order_by(Run.started_at.desc(), Run.id.desc())
@@ -70,16 +66,15 @@ def station_health(session: Session, station_id: str) -> StationHealth | None:
     )
     times = session.execute(select(latest.c.started_at, latest.c.finished_at)).all()
     seconds = [(finished - started).total_seconds() for started, finished in times]
+    used = (latest.c.software_version, latest.c.limits_name, latest.c.limits_version)
     versions = session.execute(
         select(
-            latest.c.software_version,
-            latest.c.limits_name,
-            latest.c.limits_version,
+            *used,
             func.count().label("runs"),
             func.min(latest.c.started_at).label("first"),
             func.max(latest.c.started_at).label("last"),
         )
-        .group_by(latest.c.software_version, latest.c.limits_name, latest.c.limits_version)
+        .group_by(*used)
         .order_by(func.max(latest.c.started_at).desc())
     ).all()
     return StationHealth(
