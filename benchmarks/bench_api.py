@@ -65,13 +65,21 @@ STEP_S = 15  # one run every 15 s across the plant
 LIMITS = load_profile().ref.model_dump(mode="json")
 POST_RUNS = 3000  # at most, submitted as fast as answered
 
+#: The register of runs first (numbered 1…runs), then the runs under those numbers.
+SEED_RUN_IDS_SQL = """
+INSERT INTO run_ids (run_pk, run_id, started_at)
+SELECT g, gen_random_uuid(), :t0 + make_interval(secs => g * :step)
+FROM generate_series(1, :runs) AS g;
+SELECT setval('run_ids_run_pk_seq', :runs)
+"""
+
 SEED_SQL = """
-INSERT INTO runs (run_id, serial, station_id, operator_id, started_at, finished_at,
+INSERT INTO runs (id, run_id, serial, station_id, operator_id, started_at, finished_at,
     received_at, software_version, algorithm, model, limits_name, limits_version,
     limits_sha256, verdict, offset_x, offset_y, offset_z, sensitivity_x, sensitivity_y,
     sensitivity_z, matrix, residual_rms_mg, residual_max_mg, condition_number,
     verification_error_mg, gyro, record_sha256, part_number)
-SELECT gen_random_uuid(),
+SELECT g, run_id,
        'PT-' || lpad((g % :units)::text, 7, '0'),
        'line' || (g % :stations / 4 + 1) || '-st' || (g % :stations % 4 + 1),
        'op-' || (g % 40),
@@ -90,13 +98,14 @@ SELECT gen_random_uuid(),
        md5(g::text) || md5((g + 1)::text),
        'DIXX-A12'
 FROM (SELECT g, abs(hashint4(g)) AS hashint FROM generate_series(1, :runs) AS g) AS s
+JOIN run_ids ON run_pk = g
 """
 
 SEED_POSES_SQL = """
-INSERT INTO poses (run_pk, index, name, role, mean_x, mean_y, mean_z, std_x, std_y, std_z,
-    sample_count, gyro_x, gyro_y, gyro_z, temperature_c, crc_errors, gaps, resyncs,
-    lost_samples, replaced)
-SELECT r.id, p, 'pose' || p, CASE WHEN p = 6 THEN 'verify' ELSE 'fit' END,
+INSERT INTO poses (run_pk, started_at, index, name, role, mean_x, mean_y, mean_z, std_x,
+    std_y, std_z, sample_count, gyro_x, gyro_y, gyro_z, temperature_c, crc_errors, gaps,
+    resyncs, lost_samples, replaced)
+SELECT r.id, r.started_at, p, 'pose' || p, CASE WHEN p = 6 THEN 'verify' ELSE 'fit' END,
        r.offset_x + 800 * (p % 3 = 0)::int, r.offset_y + 800 * (p % 3 = 1)::int,
        r.offset_z + 800 * (p % 3 = 2)::int, 1.1, 1.2, 1.3, 1024, 0.01, -0.02, 0.005, 24.5,
        0, 0, 0, 0, '[]'::jsonb
@@ -187,6 +196,8 @@ def seed(url: str, runs: int) -> tuple[str, int]:
     units = max(1, int(runs * UNITS_PER_RUN))
     started = time.perf_counter()
     with database.engine.begin() as connection:
+        for statement in SEED_RUN_IDS_SQL.split(";"):
+            connection.execute(text(statement), {"t0": T0, "step": STEP_S, "runs": runs})
         connection.execute(
             text(SEED_SQL),
             {

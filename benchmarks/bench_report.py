@@ -70,6 +70,15 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
     """Generate ``runs`` runs with their poses and failure reasons in SQL."""
     connection.execute(
         text("""
+        INSERT INTO run_ids (run_pk, run_id, started_at)
+        SELECT g, md5(g::text)::uuid, timestamptz '2026-01-01 00:00Z' + g * interval '40 seconds'
+        FROM generate_series(1, :runs) AS g
+        """),
+        {"runs": runs},
+    )
+    connection.execute(text("SELECT setval('run_ids_run_pk_seq', :runs)"), {"runs": runs})
+    connection.execute(
+        text("""
         INSERT INTO runs (id, run_id, serial, station_id, operator_id, lot, started_at, finished_at,
             received_at, software_version, algorithm, model, limits_name, limits_version,
             limits_sha256, verdict, offset_x, offset_y, offset_z, sensitivity_x,
@@ -103,10 +112,10 @@ def fill(connection: Any, runs: int, sha256: str) -> None:
     connection.execute(text("ANALYZE runs"))
     connection.execute(
         text("""
-        INSERT INTO poses (run_pk, index, name, role, mean_x, mean_y, mean_z, std_x, std_y,
-            std_z, sample_count, gyro_x, gyro_y, gyro_z, temperature_c, crc_errors, gaps,
+        INSERT INTO poses (run_pk, started_at, index, name, role, mean_x, mean_y, mean_z, std_x,
+            std_y, std_z, sample_count, gyro_x, gyro_y, gyro_z, temperature_c, crc_errors, gaps,
             resyncs, lost_samples, replaced)
-        SELECT r.id, i, 'pose' || i, CASE WHEN i = 6 THEN 'verify' ELSE 'fit' END,
+        SELECT r.id, r.started_at, i, 'pose' || i, CASE WHEN i = 6 THEN 'verify' ELSE 'fit' END,
             2048 + 800 * sin(i), 2048 + 800 * cos(i), 2048, 1 + 2 * random(), 1 + 2 * random(),
             1 + 2 * random(), 1024, 0.01, -0.02, 0.005, 24.5, 0, 0, 0, 0, '[]'::jsonb
         FROM runs r, generate_series(0, 6) AS i
