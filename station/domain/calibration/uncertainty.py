@@ -144,7 +144,7 @@ calibration it gives and the coupling itself.
    method for IMU calibration without external equipments", ICRA 2014.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache, lru_cache
 from typing import Final, Protocol
 
@@ -152,8 +152,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.domain.arrays import FloatArray
-from station.domain.calibration.model import Model
-from station.domain.calibration.residual import UPPER
+from station.domain.calibration.model import Model, xyz
+from station.domain.calibration.residual import UPPER, pack, unpack
 from station.domain.calibration.solution import Solution
 from station.domain.sensors.sensor import (
     CROSS_AXIS_TYPICAL,
@@ -277,10 +277,8 @@ class AccelerometerBudget:
     @property
     def combined(self) -> FloatArray:
         """Shape (6,), the combined standard uncertainty u_c = √Σ u²."""
-        total = np.zeros(6)
-        for values in self.terms.values():
-            total = total + values**2
-        return np.asarray(np.sqrt(total), dtype=np.float64)
+        squares = sum((values**2 for values in self.terms.values()), np.zeros(6))
+        return np.asarray(np.sqrt(squares), dtype=np.float64)
 
     @property
     def expanded(self) -> FloatArray:
@@ -319,9 +317,9 @@ class Uncertainty:
         unmeasured coefficients left out."""
         out: dict[str, object] = {"k": self.k}
         if self.offset is not None:
-            out["offset"] = _xyz(self.offset)
+            out["offset"] = xyz(self.offset)
         if self.sensitivity is not None:
-            out["sensitivity"] = _xyz(self.sensitivity)
+            out["sensitivity"] = xyz(self.sensitivity)
         if self.gyro_bias_dps is not None:
             out["gyro_bias_dps"] = [float(v) for v in self.gyro_bias_dps]
         if self.gyro_matrix is not None:
@@ -348,15 +346,7 @@ class Uncertainty:
         self, bias_dps: FloatArray | None, matrix: FloatArray | None = None
     ) -> "Uncertainty":
         """The same with the gyros' expanded uncertainties added."""
-        return Uncertainty(
-            self.k,
-            self.offset,
-            self.sensitivity,
-            bias_dps,
-            matrix,
-            self.verification_error_mg,
-            self.matrix,
-        )
+        return replace(self, gyro_bias_dps=bias_dps, gyro_matrix=matrix)
 
 
 def accelerometer_budget(
@@ -409,7 +399,7 @@ def accelerometer_budget(
 
     cal = solution.calibration
     model = cal.model
-    theta = _pack(cal.offset, cal.matrix, model)
+    theta = pack(cal.offset, cal.matrix, model)  # in counts; C_upper in g/count
     jac, dr_da, n = _jacobians(theta, a, model)
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
@@ -443,7 +433,7 @@ def accelerometer_budget(
     u_dir: FloatArray | None = None
     if verification is not None:
         av = np.asarray(verification, dtype=np.float64)
-        offset, c = _unpack(theta, model)
+        offset, c = unpack(theta, model)
         gv = c @ (av - offset)
         u_dir = gv / np.linalg.norm(gv)
     if model == "six" and cross_axis_bound > 0:
@@ -453,7 +443,7 @@ def accelerometer_budget(
     evidence: FloatArray | None = None  # its covariance of θ
     rows, p = jac.shape
     if rows > p:
-        offset, c = _unpack(theta, model)
+        offset, c = unpack(theta, model)
         residual = np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
         sigma2 = float(residual @ residual) / (rows - p)
         expected = float(np.mean(w_noise + w_quant))
@@ -647,12 +637,12 @@ def geometry_variance(fit: MoveFit, budget: AccelerometerBudget) -> FloatArray:
     if budget.theta is None or budget.covariance is None:
         return np.zeros((3, 3))
     theta, cov = budget.theta, budget.covariance
-    offset, c = _unpack(theta, budget.model)
+    offset, c = unpack(theta, budget.model)
     ends = fit.directions.reshape(-1, 3)
     counts = offset + np.linalg.solve(c, ends.T).T  # (2M, 3)
 
     def directions(t: FloatArray) -> FloatArray:
-        o, m = _unpack(t, budget.model)
+        o, m = unpack(t, budget.model)
         g = (counts - o) @ m.T
         return np.asarray(g / np.linalg.norm(g, axis=1, keepdims=True), dtype=np.float64)
 
@@ -676,7 +666,7 @@ def _drift_jacobian(
     """∂r/∂κ (N, 6) of poses a (N, 3) taken ``delta`` (N,) °C from the calibration's
     temperature, κ = (κ_o, κ_s) the temperature coefficients (module docstring,
     ``temperature``): δa_ij = Δ_i·(κ_o,j + κ_s,j·(a_ij − o_j)), δr_i = (∂r_i/∂a_i)·δa_i."""
-    offset, _ = _unpack(theta, model)
+    offset, _ = unpack(theta, model)
     return np.hstack([dr_da * delta[:, None], dr_da * (a - offset) * delta[:, None]])
 
 
@@ -747,23 +737,9 @@ def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
     return np.asarray(excess, dtype=np.float64), np.asarray(ratio, dtype=np.float64)
 
 
-def _pack(offset: FloatArray, matrix: FloatArray, model: Model) -> FloatArray:
-    """θ in counts: (o, s) for six, (o, C_upper) in g/count for nine."""
-    tail = 1.0 / np.diag(matrix) if model == "six" else matrix[UPPER]
-    return np.concatenate([offset, tail])
-
-
-def _unpack(theta: FloatArray, model: Model) -> tuple[FloatArray, FloatArray]:
-    if model == "six":
-        return theta[:3], np.diag(1.0 / theta[3:6])
-    c = np.zeros((3, 3))
-    c[UPPER] = theta[3:9]
-    return theta[:3], c
-
-
 def _jacobians(theta: FloatArray, a: FloatArray, model: Model) -> tuple[FloatArray, ...]:
     """J = ∂r/∂θ (N, p), ∂r_i/∂a_i (N, 3) and the unit calibrated gravity n (N, 3)."""
-    offset, c = _unpack(theta, model)
+    offset, c = unpack(theta, model)
     d = a - offset
     gvec = d @ c.T
     n = gvec / np.linalg.norm(gvec, axis=1, keepdims=True)
@@ -948,7 +924,7 @@ def _verification_variance(
     variance (g²): the fit poses' noise through θ, the verification pose's own noise and
     quantisation, the model's misfit there and the drift with temperature
     (``var_temperature``); and the model's misfit's part of it (g²)."""
-    offset, c = _unpack(theta, model)
+    offset, c = unpack(theta, model)
     gv = c @ (av - offset)
     rv = float(np.linalg.norm(gv) - 1.0)
     jv, dv, _ = _jacobians(theta, av[None, :], model)
@@ -974,7 +950,3 @@ def _evidence_at(
         return 0.0
     jv, _, _ = _jacobians(theta, av[None, :], model)
     return float(max(0.0, (jv @ evidence @ jv.T)[0, 0]))
-
-
-def _xyz(values: FloatArray) -> dict[str, float]:
-    return {"x": float(values[0]), "y": float(values[1]), "z": float(values[2])}

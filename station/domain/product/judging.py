@@ -17,11 +17,11 @@ limit, as the run's record keeps it.
 """
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from station.domain.product.limits import CHECKS, LimitsProfile, check
 from station.domain.record.records import DecisionRule, FailureReason
-from station.domain.sensors.sensor import AXES
+from station.domain.sensors.sensor import AXES, Axis
 
 Triple = tuple[float, float, float]
 Matrix = tuple[Triple, Triple, Triple]
@@ -77,46 +77,27 @@ def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReas
         if i in measured.link_loss:
             reasons.append(check(profile, "link_loss", measured.link_loss[i], pose=i))
     u = measured.uncertainty
+
+    def guarded(
+        code: str, value: float, index: int, axis: Axis | None = None, pose: int | None = None
+    ) -> FailureReason | None:
+        """The check of a value that may carry its U: entry ``index`` of its U's key."""
+        uncertainty = _u(u, GUARDED_CHECKS[code], index)
+        return check(profile, code, value, axis=axis, pose=pose, uncertainty=uncertainty)
+
     for code, values in (("offset", measured.offset), ("sensitivity", measured.sensitivity)):
         for i, (axis, value) in enumerate(zip(AXES, values or (), strict=False)):
-            reasons.append(check(profile, code, value, axis=axis, uncertainty=_u(u, code, i)))
+            reasons.append(guarded(code, value, i, axis))
     if measured.verification is not None:
         pose, error = measured.verification
-        reasons.append(
-            check(
-                profile,
-                "verification_error",
-                error,
-                pose=pose,
-                uncertainty=_u(u, "verification_error", 0),
-            )
-        )
+        reasons.append(guarded("verification_error", error, 0, pose=pose))
     for i, (axis, bias) in enumerate(zip(AXES, measured.gyro_bias or (), strict=False)):
-        reasons.append(
-            check(profile, "gyro_bias", bias, axis=axis, uncertainty=_u(u, "gyro_bias", i))
-        )
+        reasons.append(guarded("gyro_bias", bias, i, axis))
     k = measured.gyro_matrix
     if k is not None:
-        for i, axis in enumerate(AXES):
-            reasons.append(
-                check(
-                    profile,
-                    "gyro_scale",
-                    k[i][i] - 1.0,
-                    axis=axis,
-                    uncertainty=_u(u, "gyro_matrix", 4 * i),
-                )
-            )
+        reasons += [guarded("gyro_scale", k[i][i] - 1.0, 4 * i, AXES[i]) for i in range(3)]
         for i, j in ((i, j) for i in range(3) for j in range(3) if i != j):
-            reasons.append(
-                check(
-                    profile,
-                    "gyro_misalignment",
-                    k[i][j],
-                    axis=AXES[i],
-                    uncertainty=_u(u, "gyro_matrix", 3 * i + j),
-                )
-            )
+            reasons.append(guarded("gyro_misalignment", k[i][j], 3 * i + j, AXES[i]))
     return [r for r in reasons if r is not None]
 
 
@@ -184,16 +165,7 @@ def rejudge(
         for f in stored
         if f.code == "link_loss" and f.pose is not None and f.measured is not None
     }
-    measured = Measured(
-        pose_noise=measured.pose_noise,
-        link_loss={**measured.link_loss, **losses},
-        offset=measured.offset,
-        sensitivity=measured.sensitivity,
-        verification=measured.verification,
-        gyro_bias=measured.gyro_bias,
-        gyro_matrix=measured.gyro_matrix,
-        uncertainty=measured.uncertainty,
-    )
+    measured = replace(measured, link_loss={**measured.link_loss, **losses})
     again = (*REJUDGED, *(("gyro_scale", "gyro_misalignment") if measured.gyro_matrix else ()))
     found = [f for f in stored if f.code not in again]
     return verdict_failures(found, limit_checks(profile, measured))
