@@ -287,19 +287,15 @@ def still_segments(block: SampleBlock, limits: StillnessThresholds) -> list[Stil
 
 #: A refused window's reason without its numbers: what kind of refusal it is.
 _NUMBERS = re.compile(r"[-+]?\d[\d.]*%?")
+_OTHER_COUNTS = (
+    "the accelerometer not in this putter's counts (zero 2048, 819.2 counts/g)? "
+    "declare --accel-units"
+)
 #: What each kind of refusal, in most windows of a recording, says about it.
 _HINTS = (
     ("turning", "a unit never at rest, a gyro's rate swinging, or gyro units not deg/s?"),
-    (
-        "at the ADC rail",
-        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
-        "counts/g)? declare --accel-units",
-    ),
-    (
-        "is not 1 g",
-        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
-        "counts/g)? declare --accel-units",
-    ),
+    ("at the ADC rail", _OTHER_COUNTS),
+    ("is not 1 g", _OTHER_COUNTS),
     ("spread", "more noise than the stillness limits allow, or the unit never held still?"),
 )
 

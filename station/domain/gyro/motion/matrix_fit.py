@@ -142,14 +142,7 @@ class _Moves:
         #: Each move's raw steps summed: ``K⁻¹·swept`` is its rotation vector for a turn
         #: about a fixed axis.
         swept = np.array([r.sum(axis=0) for r in raw]).reshape(-1, 3)
-        returns = np.array(
-            [
-                np.degrees(np.arccos(np.clip(m.gravity_before @ m.gravity_after, -1, 1)))
-                < SAME_POSE_DEG
-                for m in moves
-            ],
-            dtype=bool,
-        )
+        returns = np.array([m.gravity_turn_deg < SAME_POSE_DEG for m in moves], dtype=bool)
         #: What each move that returns to the pose it left sweeps, degrees (its raw rates).
         self.returned_deg = np.degrees(np.linalg.norm(swept[returns], axis=1))
         self.turns = (
@@ -241,14 +234,9 @@ def fit_gyro_matrix(
     if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
         raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
     bias = np.asarray(bias_dps, dtype=np.float64)
-    unusable: list[UnusableMove] = []
-    used: list[int] = []
-    for index, move in enumerate(moves):
-        problem = move.problem(gap_factor)
-        if problem is None:
-            used.append(index)
-        else:
-            unusable.append(UnusableMove(index, problem))
+    problems = [move.problem(gap_factor) for move in moves]
+    used = [index for index, problem in enumerate(problems) if problem is None]
+    unusable = [UnusableMove(i, why) for i, why in enumerate(problems) if why is not None]
     if len(used) < min_moves:
         why = "; ".join(f"move {u.index}: {u.reason}" for u in unusable)
         raise GyroMatrixError(

@@ -38,6 +38,12 @@ class Move:
     gravity_before: FloatArray
     gravity_after: FloatArray
 
+    @property
+    def gravity_turn_deg(self) -> float:
+        """The angle between the gravity directions at the move's two ends, degrees."""
+        cosine = np.clip(self.gravity_before @ self.gravity_after, -1, 1)
+        return float(np.degrees(np.arccos(cosine)))
+
     def problem(self, gap_factor: float = GAP_FACTOR) -> str | None:
         """Why the move cannot be integrated, or None when it can."""
         n = len(self.t)
