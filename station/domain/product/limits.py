@@ -66,26 +66,26 @@ class Bounds(BaseModel):
         return self
 
     @property
-    def _sides(self) -> tuple[float, float]:
-        """The bounds with a missing side at ∓∞."""
+    def sides(self) -> tuple[float, float]:
+        """``(lower, upper)`` with a missing side at ∓∞."""
         low = self.lower if self.lower is not None else -math.inf
         return low, self.upper if self.upper is not None else math.inf
 
     def contains(self, value: float) -> bool:
         """Whether ``value`` lies within the bounds (a NaN or an infinity never does: a
         measurement is finite, and an open side is not a licence for ±∞)."""
-        low, high = self._sides
+        low, high = self.sides
         return math.isfinite(value) and low <= value <= high
 
     def guarded(self, value: float, u: float) -> bool:
         """Whether ``value ± u`` lies within the bounds: guarded acceptance with a guard
         band w = u on each side (ILAC-G8:09/2019 4.2.2, JCGM 106:2012 8.3.3)."""
-        low, high = self._sides
+        low, high = self.sides
         return math.isfinite(value) and low + u <= value <= high - u
 
     def margin(self, value: float) -> float:
         """How far ``value`` lies inside the nearer bound (negative: outside)."""
-        low, high = self._sides
+        low, high = self.sides
         return min(value - low, high - value)
 
     def describe(self) -> str:

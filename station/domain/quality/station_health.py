@@ -15,8 +15,9 @@ from collections.abc import Sequence
 from datetime import datetime
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from station.domain.quality.figures import FigurePart
 from station.domain.quality.golden import GoldenUnit
 from station.domain.quality.split import GroupStats
 from station.domain.sensors.sensor import AXES
@@ -29,11 +30,7 @@ SENSITIVITY_TOLERANCE: float = GoldenUnit.model_fields["sensitivity_tolerance_co
 Triple = tuple[float, float, float]
 
 
-class _Part(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class GoldenCheck(_Part):
+class GoldenCheck(FigurePart):
     """One golden-unit check: its coefficients' distance from the baseline."""
 
     run_id: str
@@ -44,7 +41,7 @@ class GoldenCheck(_Part):
     sensitivity_deviation: Triple | None = Field(description="counts/g from the baseline")
 
 
-class VersionUse(_Part):
+class VersionUse(FigurePart):
     """Runs of one software version and limits profile, first and last seen."""
 
     software_version: str
@@ -54,7 +51,7 @@ class VersionUse(_Part):
     last: datetime
 
 
-class DriftWarning(_Part):
+class DriftWarning(FigurePart):
     """A golden unit's latest check that failed, or an axis of it beyond tolerance of its
     baseline. ``checked_at`` is a moment (UTC): a page shows it in the plant's zone."""
 
@@ -69,7 +66,7 @@ class DriftWarning(_Part):
     tolerance: float | None = Field(default=None, description="the tolerance it is beyond")
 
 
-class StationHealth(_Part):
+class StationHealth(FigurePart):
     """A station's health over its latest runs (:mod:`db.report.station_health`)."""
 
     station_id: str
@@ -148,13 +145,10 @@ def golden_checks(
 
 
 def _mean(triples: Sequence[Triple]) -> Triple:
-    n = len(triples)
-    return (
-        sum(t[0] for t in triples) / n,
-        sum(t[1] for t in triples) / n,
-        sum(t[2] for t in triples) / n,
-    )
+    x, y, z = (sum(column) / len(triples) for column in zip(*triples, strict=True))
+    return (x, y, z)
 
 
 def _less(value: Triple, reference: Triple) -> Triple:
-    return (value[0] - reference[0], value[1] - reference[1], value[2] - reference[2])
+    x, y, z = (v - r for v, r in zip(value, reference, strict=True))
+    return (x, y, z)

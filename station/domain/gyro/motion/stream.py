@@ -90,13 +90,8 @@ class RecordedStream:
             raise StreamError(f"stream: gyro must be ({n}, 3), got {self.gyro_dps.shape}")
         if self.temperature_c is not None and self.temperature_c.shape != (n,):
             raise StreamError(f"stream: temperature must be ({n},)")
-        finite = (
-            np.isfinite(self.t).all()
-            and np.isfinite(self.accel_counts).all()
-            and np.isfinite(self.gyro_dps).all()
-            and (self.temperature_c is None or np.isfinite(self.temperature_c).all())
-        )
-        if not finite:
+        columns = (self.t, self.accel_counts, self.gyro_dps, self.temperature_c)
+        if not all(np.isfinite(c).all() for c in columns if c is not None):
             raise StreamError("stream: a value is not a finite number")
         if n < 2:
             raise StreamError(f"stream: {n} samples, too few to calibrate from")
