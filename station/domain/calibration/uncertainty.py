@@ -410,14 +410,9 @@ def accelerometer_budget(
     w_noise = np.einsum("ij,ij->i", dr_da**2, var_noise)
     w_quant = np.einsum("ij,ij->i", dr_da**2, var_quant)
     covariance = (pinv * (w_noise + w_quant)) @ pinv.T
-    terms = {
-        "pose_noise": np.sqrt(gp**2 @ w_noise),
-        "quantisation": np.sqrt(gp**2 @ w_quant),
-        "model": np.zeros(6),
-        "fit": np.zeros(6),
-        "temperature": np.zeros(6),
-        "tilt": np.zeros(6),
-    }
+    terms = {name: np.zeros(6) for name in TERMS}  # tilt stays zero (module docstring)
+    terms["pose_noise"] = np.sqrt(gp**2 @ w_noise)
+    terms["quantisation"] = np.sqrt(gp**2 @ w_quant)
     drift: FloatArray | None = None  # ∂r/∂κ of the fit poses
     reference = 0.0  # the calibration's temperature T̄, °C
     kappa_bound = np.repeat(tempco, 3)
@@ -465,10 +460,10 @@ def accelerometer_budget(
     verification_u: float | None = None
     if verification is not None and u_dir is not None:
         av = np.asarray(verification, dtype=np.float64)
+        jv, dv, _ = _jacobians(theta, av[None, :], model)
         var_temperature = 0.0
         if drift is not None and verification_temperature is not None:
             # Its drift through θ and its own, the same κ: δr_v = (D_v − J_v·J⁺·D)·κ.
-            jv, dv, _ = _jacobians(theta, av[None, :], model)
             delta_v = np.array([verification_temperature - reference])
             row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
             row = row - (jv @ pinv @ drift)[0]
@@ -477,6 +472,8 @@ def accelerometer_budget(
             theta,
             model,
             av,
+            jv,
+            dv,
             verification_spread,
             verification_samples,
             pinv,
@@ -487,7 +484,9 @@ def accelerometer_budget(
         ratio = abs(rv) / (k * np.sqrt(predicted)) if predicted > 0 else float("inf")
         # The fit's evidence and the model's misfit are one unmodelled effect for the
         # six-parameter model: the larger counts, once (as for the coefficients).
-        beyond = max(0.0, _evidence_at(theta, model, av, evidence) - var_model)
+        # The fit's evidence (its covariance of θ beyond the noise's) there: J_v Σ J_vᵀ.
+        evidence_v = 0.0 if evidence is None else max(0.0, float((jv @ evidence @ jv.T)[0, 0]))
+        beyond = max(0.0, evidence_v - var_model)
         verification_u = float(k * np.sqrt(predicted + beyond))
         if ratio > 1.0:
             terms["model"] = terms["model"] * ratio
@@ -913,6 +912,8 @@ def _verification_variance(
     theta: FloatArray,
     model: Model,
     av: FloatArray,
+    jv: FloatArray,
+    dv: FloatArray,
     spread: ArrayLike | None,
     samples: int | None,
     pinv: FloatArray,
@@ -923,30 +924,15 @@ def _verification_variance(
     """The verification pose's misfit r_v = |C(a_v − o)| − 1 (g), its predicted
     variance (g²): the fit poses' noise through θ, the verification pose's own noise and
     quantisation, the model's misfit there and the drift with temperature
-    (``var_temperature``); and the model's misfit's part of it (g²)."""
+    (``var_temperature``); and the model's misfit's part of it (g²). ``jv``, ``dv``: its
+    J_v (1, p) and ∂r_v/∂a_v (1, 3)."""
     offset, c = unpack(theta, model)
     gv = c @ (av - offset)
     rv = float(np.linalg.norm(gv) - 1.0)
-    jv, dv, _ = _jacobians(theta, av[None, :], model)
     # δr_v = J_v δθ + dv δa_v with δθ = −J⁺ δr: the fit poses' noise reaches it through θ.
     reach = (jv @ pinv)[0]  # ∂r_v/∂r_fit
     var_fit = float(reach**2 @ w_fit)
-    var_n, var_q = _pose_variances(
-        None if spread is None else np.asarray(spread, dtype=np.float64).reshape(1, 3),
-        None if samples is None else np.array([samples]),
-        1,
-    )
+    var_n, var_q = _pose_variances(spread, samples, 1)
     var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
     var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
     return rv, var_fit + var_own + var_model + var_temperature, var_model
-
-
-def _evidence_at(
-    theta: FloatArray, model: Model, av: FloatArray, evidence: FloatArray | None
-) -> float:
-    """The fit's evidence (its covariance of θ beyond the noise's, ``evidence``) at the
-    verification pose's misfit, g²: J_v Σ J_vᵀ (0 without it)."""
-    if evidence is None:
-        return 0.0
-    jv, _, _ = _jacobians(theta, av[None, :], model)
-    return float(max(0.0, (jv @ evidence @ jv.T)[0, 0]))
