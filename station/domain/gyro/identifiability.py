@@ -77,11 +77,10 @@ class IdentifiabilityReport(BaseModel):
 
     def status(self, term: str) -> TermStatus:
         """The status of ``term`` (e.g. ``"N_xy"``)."""
-        for axis in self.axes:
-            for status in axis.terms:
-                if status.term == term:
-                    return status
-        raise KeyError(term)
+        found = next((s for axis in self.axes for s in axis.terms if s.term == term), None)
+        if found is None:
+            raise KeyError(term)
+        return found
 
     def unestimable(self) -> list[TermStatus]:
         """Every term that cannot be estimated, in axis and column order."""

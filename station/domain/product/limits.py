@@ -83,11 +83,6 @@ class Bounds(BaseModel):
         low, high = self.sides
         return math.isfinite(value) and low + u <= value <= high - u
 
-    def margin(self, value: float) -> float:
-        """How far ``value`` lies inside the nearer bound (negative: outside)."""
-        low, high = self.sides
-        return min(value - low, high - value)
-
     def describe(self) -> str:
         """``[a, b]``, ``≤ b`` or ``≥ a``."""
         if self.lower is None:

@@ -40,7 +40,7 @@ import numpy as np
 from station.domain.arrays import FloatArray
 from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
 from station.domain.gyro.motion.integrate import integrate_steps, step_rotvecs
-from station.domain.gyro.motion.moves import GAP_FACTOR, Move
+from station.domain.gyro.motion.moves import Move
 
 #: Unknowns of K.
 K_UNKNOWNS: Final = 9
@@ -107,6 +107,11 @@ class GyroMatrixFit:
     def residual_rms_deg(self) -> float:
         """RMS of the used moves' residuals, degrees."""
         return float(np.sqrt(np.mean(self.residual_deg**2)))
+
+    @property
+    def residual_identity_rms_deg(self) -> float:
+        """RMS of the same moves' residuals with K = I, degrees."""
+        return float(np.sqrt(np.mean(self.residual_identity_deg**2)))
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready (the ``"gyro"`` object of ``calstation solve --stream --json``)."""
@@ -209,7 +214,6 @@ def fit_gyro_matrix(
     moves: list[Move],
     bias_dps: FloatArray,
     *,
-    gap_factor: float = GAP_FACTOR,
     min_moves: int = MIN_MOVES,
     known_turn_deg: float | None = None,
 ) -> GyroMatrixFit:
@@ -234,7 +238,7 @@ def fit_gyro_matrix(
     if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
         raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
     bias = np.asarray(bias_dps, dtype=np.float64)
-    problems = [move.problem(gap_factor) for move in moves]
+    problems = [move.problem() for move in moves]
     used = [index for index, problem in enumerate(problems) if problem is None]
     unusable = [UnusableMove(i, why) for i, why in enumerate(problems) if why is not None]
     if len(used) < min_moves:

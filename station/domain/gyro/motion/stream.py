@@ -271,17 +271,6 @@ def chosen_window(stream: RecordedStream, model: Model) -> StillnessThresholds:
     return stream_thresholds(stream.rate_hz, min(max(seconds, MIN_WINDOW_S), STILL_WINDOW_S))
 
 
-def _improves(gyro: GyroMatrixFit) -> bool:
-    """Whether the fitted K brings the moves closer than K = I does (RMS of the same moves).
-
-    Least squares over the moves alone can do no worse than K = I, which it may choose;
-    a K that does worse was pulled off by something else (declared turns the moves
-    contradict) or stopped in a false minimum, and is no calibration.
-    """
-    identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
-    return gyro.residual_rms_deg <= identity
-
-
 def _geometry(model: Model, poses: int) -> GeometryLimits:
     """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
 
@@ -371,12 +360,15 @@ def calibrate_stream(
         gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
     except GyroMatrixError as exc:
         not_determined = str(exc)
-    if gyro is not None and not _improves(gyro):
-        identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
+    # Least squares over the moves alone can do no worse than K = I, which it may choose;
+    # a K that does worse was pulled off by something else (declared turns the moves
+    # contradict) or stopped in a false minimum, and is no calibration.
+    if gyro is not None and gyro.residual_rms_deg > gyro.residual_identity_rms_deg:
         not_determined = (
             f"K fitted to the {len(gyro.used)} moves leaves them {gyro.residual_rms_deg:.3g}° "
-            f"RMS off, more than without it ({identity:.3g}° with K = I): the moves do not "
-            "determine it (poses split from one rest, or declared turns they contradict?)"
+            f"RMS off, more than without it ({gyro.residual_identity_rms_deg:.3g}° with K = I): "
+            "the moves do not determine it (poses split from one rest, or declared turns they "
+            "contradict?)"
         )
         gyro = None
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])

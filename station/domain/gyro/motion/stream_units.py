@@ -98,11 +98,6 @@ class StreamUnits:
         return DeclaredUnits(self.accel, self.zero_counts, self.counts_per_g)
 
     @property
-    def declared(self) -> bool:
-        """Whether anything but the station's own units was declared."""
-        return self != StreamUnits()
-
-    @property
     def gyro_name(self) -> str:
         """The gyro rates' unit as the results name it: ``deg/s`` or ``rad/s``."""
         return GYRO_UNIT_NAMES[self.gyro]
