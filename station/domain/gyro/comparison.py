@@ -129,11 +129,7 @@ def _needed(
 
 
 def compare_axis(
-    status: AxisIdentifiability,
-    design: FloatArray,
-    y: FloatArray,
-    names: list[str],
-    alpha: float,
+    status: AxisIdentifiability, design: FloatArray, y: FloatArray, names: list[str], alpha: float
 ) -> AxisComparison:
     """Fit the four nested models of one gyro axis and decide the form (module docstring)."""
     sets = _term_sets(status)

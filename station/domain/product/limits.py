@@ -126,8 +126,7 @@ ErrorBounds = Annotated[
 NoiseBounds = Annotated[Bounds, AfterValidator(_plausible(0, ADC_SPAN, "the ADC span", " counts"))]
 """A spread or residual of ADC readings, counts: 0…65535 (the widest ADC's span)."""
 GyroBiasBounds = Annotated[
-    Bounds,
-    AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s")),
+    Bounds, AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s"))
 ]
 """A gyro bias, deg/s: ±655.36 (the protocol's rate field)."""
 FractionBounds = Annotated[Bounds, AfterValidator(_plausible(0, 1, "a fraction's range"))]

@@ -412,8 +412,7 @@ class EolReport(FigurePart):
         None, description="the runs re-judged against a candidate limits profile, when given"
     )
     near_limits: NearLimits | None = Field(
-        None,
-        description="passing runs accepted within one U of a limit (None: no limits to judge)",
+        None, description="passing runs accepted within one U of a limit (None: no limits to judge)"
     )
     product_sections: list[ProductSection] = Field(
         default_factory=list,

@@ -160,8 +160,7 @@ Offset3 = Annotated[
     Vector3, AfterValidator(_within(OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS, "a zero-g output"))
 ]
 Sensitivity3 = Annotated[
-    Vector3,
-    AfterValidator(_within(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity", above=True)),
+    Vector3, AfterValidator(_within(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity", above=True))
 ]
 
 

@@ -179,8 +179,7 @@ class UnitCalibration(_UnitPart):
 
     serial: str
     verdict: Annotated[
-        Verdict,
-        Field(description="the verdict of the latest attempt that counts (aborts do not)"),
+        Verdict, Field(description="the verdict of the latest attempt that counts (aborts do not)")
     ]
     attempts: Annotated[int, Field(description="runs of the unit, aborts not counted")]
     holds: Annotated[

@@ -387,15 +387,9 @@ def calibrate_stream(
         tempco=tempco,
         cross_axis_bound=cross_axis_bound,
     )
+    repeatability = 0.0 if gyro_bias_repeatability_dps is None else gyro_bias_repeatability_dps
     uncertainty = Uncertainty.of_budget(budget).with_gyro(
-        gyro_bias_uncertainty(
-            gyro_means,
-            gyro_spreads,
-            samples,
-            repeatability_dps=0.0
-            if gyro_bias_repeatability_dps is None
-            else gyro_bias_repeatability_dps,
-        ),
+        gyro_bias_uncertainty(gyro_means, gyro_spreads, samples, repeatability_dps=repeatability),
         None if gyro is None else gyro_matrix_uncertainty(gyro, budget),
     )
     return StreamCalibration(
