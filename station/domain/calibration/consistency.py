@@ -260,17 +260,14 @@ def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solu
 def _excluding(refit: Solution, pose: int, poses: FloatArray) -> Solution:
     """``refit`` (over all poses but ``pose``) reported against all N poses."""
     q = refit.quality
-
-    def original(index: int) -> int:
-        return index + (index >= pose)
-
+    closest, other = (index + (index >= pose) for index in q.closest_pair)  # into all N
     studentised = None
     if q.studentised_counts is not None:
         studentised = np.insert(q.studentised_counts, pose, np.nan)
     quality = replace(
         q,
         pose_g=np.linalg.norm(apply(refit.calibration, poses), axis=1),
-        closest_pair=(original(q.closest_pair[0]), original(q.closest_pair[1])),
+        closest_pair=(closest, other),
         studentised_counts=studentised,
     )
     return replace(refit, quality=quality, excluded=(pose,))

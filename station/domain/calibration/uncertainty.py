@@ -400,6 +400,7 @@ def accelerometer_budget(
     cal = solution.calibration
     model = cal.model
     theta = pack(cal.offset, cal.matrix, model)  # in counts; C_upper in g/count
+    offset, c = unpack(theta, model)
     jac, dr_da, n = _jacobians(theta, a, model)
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
@@ -428,7 +429,6 @@ def accelerometer_budget(
     u_dir: FloatArray | None = None
     if verification is not None:
         av = np.asarray(verification, dtype=np.float64)
-        offset, c = unpack(theta, model)
         gv = c @ (av - offset)
         u_dir = gv / np.linalg.norm(gv)
     if model == "six" and cross_axis_bound > 0:
@@ -438,7 +438,6 @@ def accelerometer_budget(
     evidence: FloatArray | None = None  # its covariance of θ
     rows, p = jac.shape
     if rows > p:
-        offset, c = unpack(theta, model)
         residual = np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
         sigma2 = float(residual @ residual) / (rows - p)
         expected = float(np.mean(w_noise + w_quant))
@@ -468,19 +467,15 @@ def accelerometer_budget(
             row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
             row = row - (jv @ pinv @ drift)[0]
             var_temperature = float(row**2 @ kappa_variance)
-        rv, predicted, var_model = _verification_variance(
-            theta,
-            model,
-            av,
-            jv,
-            dv,
-            verification_spread,
-            verification_samples,
-            pinv,
-            w_noise + w_quant,
-            model_rv,
-            var_temperature,
-        )
+        # Its misfit r_v = |C(a_v − o)| − 1 (g) and predicted variance (g²): δr_v = J_v δθ +
+        # ∂r_v/∂a_v δa_v with δθ = −J⁺ δr, so the fit poses' noise reaches it through θ; its
+        # own noise and quantisation; the model's misfit there; the drift with temperature.
+        rv = float(np.linalg.norm(c @ (av - offset)) - 1.0)
+        var_fit = float((jv @ pinv)[0] ** 2 @ (w_noise + w_quant))
+        var_n, var_q = _pose_variances(verification_spread, verification_samples, 1)
+        var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
+        var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
+        predicted = var_fit + var_own + var_model + var_temperature
         ratio = abs(rv) / (k * np.sqrt(predicted)) if predicted > 0 else float("inf")
         # The fit's evidence and the model's misfit are one unmodelled effect for the
         # six-parameter model: the larger counts, once (as for the coefficients).
@@ -906,33 +901,3 @@ def _model_term(
     av = offset + np.einsum("kij,j->ki", coupled, verification_dir) * s
     rv = _residuals(thetas, av[:, None, :])[:, 0]
     return term, np.asarray(rv, dtype=np.float64), (coupled, thetas)
-
-
-def _verification_variance(
-    theta: FloatArray,
-    model: Model,
-    av: FloatArray,
-    jv: FloatArray,
-    dv: FloatArray,
-    spread: ArrayLike | None,
-    samples: int | None,
-    pinv: FloatArray,
-    w_fit: FloatArray,
-    model_rv: FloatArray | None,
-    var_temperature: float = 0.0,
-) -> tuple[float, float, float]:
-    """The verification pose's misfit r_v = |C(a_v − o)| − 1 (g), its predicted
-    variance (g²): the fit poses' noise through θ, the verification pose's own noise and
-    quantisation, the model's misfit there and the drift with temperature
-    (``var_temperature``); and the model's misfit's part of it (g²). ``jv``, ``dv``: its
-    J_v (1, p) and ∂r_v/∂a_v (1, 3)."""
-    offset, c = unpack(theta, model)
-    gv = c @ (av - offset)
-    rv = float(np.linalg.norm(gv) - 1.0)
-    # δr_v = J_v δθ + dv δa_v with δθ = −J⁺ δr: the fit poses' noise reaches it through θ.
-    reach = (jv @ pinv)[0]  # ∂r_v/∂r_fit
-    var_fit = float(reach**2 @ w_fit)
-    var_n, var_q = _pose_variances(spread, samples, 1)
-    var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
-    var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
-    return rv, var_fit + var_own + var_model + var_temperature, var_model

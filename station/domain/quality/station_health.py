@@ -94,23 +94,19 @@ def golden_checks(
         )
         for serial, found in by_serial.items()
     }
-    checks = [
-        GoldenCheck(
-            run_id=run_id,
-            started_at=started_at,
-            serial=serial,
-            verdict=verdict,
-            offset_deviation=_less(offset, baselines[serial][0])
-            if serial in baselines and offset
-            else None,
-            sensitivity_deviation=(
-                _less(sensitivity, baselines[serial][1])
-                if serial in baselines and sensitivity
-                else None
-            ),
+    checks = []
+    for run_id, started_at, serial, verdict, offset, sensitivity in rows:
+        base = baselines.get(serial)
+        checks.append(
+            GoldenCheck(
+                run_id=run_id,
+                started_at=started_at,
+                serial=serial,
+                verdict=verdict,
+                offset_deviation=_less(offset, base[0]) if base and offset else None,
+                sensitivity_deviation=_less(sensitivity, base[1]) if base and sensitivity else None,
+            )
         )
-        for run_id, started_at, serial, verdict, offset, sensitivity in rows
-    ]
     latest: dict[str, GoldenCheck] = {check.serial: check for check in checks}
     drift = []
     for serial, check in sorted(latest.items()):
