@@ -77,9 +77,8 @@ class Quality:
     @property
     def studentised_max_counts(self) -> float | None:
         """The largest |studentised residual| of the fitted poses, counts."""
-        if self.studentised_counts is None:
-            return None
-        return float(np.nanmax(np.abs(self.studentised_counts)))
+        t = self.studentised_counts
+        return None if t is None else float(np.nanmax(np.abs(t)))
 
 
 @dataclass(frozen=True, eq=False)

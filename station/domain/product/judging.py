@@ -105,13 +105,11 @@ def check_rules(profile: LimitsProfile, measured: Measured) -> dict[str, Decisio
     """The decision rule that judges each limit ``profile`` sets (by check code): the
     profile's where the value carries its U in ``measured`` (:data:`GUARDED_CHECKS`),
     simple acceptance elsewhere (a value without U is judged by itself)."""
-    rules: dict[str, DecisionRule] = {}
-    for code, name in CHECKS.items():
-        if getattr(profile, name) is None:
-            continue
-        key = GUARDED_CHECKS.get(code)
-        rules[code] = profile.rule if key in measured.uncertainty else "simple"
-    return rules
+    return {
+        code: profile.rule if GUARDED_CHECKS.get(code) in measured.uncertainty else "simple"
+        for code, name in CHECKS.items()
+        if getattr(profile, name) is not None
+    }
 
 
 def _u(uncertainty: Mapping[str, tuple[float, ...]], key: str, index: int) -> float | None:
