@@ -13,6 +13,7 @@ sensitivity), or a latest check the station failed.
 
 from collections.abc import Sequence
 from datetime import datetime
+from functools import partial
 from typing import Literal
 
 from pydantic import Field
@@ -110,14 +111,9 @@ def golden_checks(
     latest: dict[str, GoldenCheck] = {check.serial: check for check in checks}
     drift = []
     for serial, check in sorted(latest.items()):
+        warning = partial(DriftWarning, serial=serial, checked_at=check.started_at)
         if check.verdict != "pass":
-            drift.append(
-                DriftWarning(
-                    serial=serial,
-                    checked_at=check.started_at,
-                    problem="its latest check failed at the station",
-                )
-            )
+            drift.append(warning(problem="its latest check failed at the station"))
         coefficients: list[tuple[Literal["offset", "sensitivity"], Triple | None, float, str]] = [
             ("offset", check.offset_deviation, OFFSET_TOLERANCE, "counts"),
             ("sensitivity", check.sensitivity_deviation, SENSITIVITY_TOLERANCE, "counts/g"),
@@ -126,9 +122,7 @@ def golden_checks(
             for axis, value in zip(AXES, deviation or (), strict=False):
                 if abs(value) > tolerance:
                     drift.append(
-                        DriftWarning(
-                            serial=serial,
-                            checked_at=check.started_at,
+                        warning(
                             problem=f"{name} {axis} {value:+.2f} {unit} from its baseline at "
                             f"the latest check, beyond ± {tolerance:g}",
                             quantity=name,

@@ -335,14 +335,11 @@ def calibrate_stream(
     gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
     still_gyro = np.concatenate([stream.gyro_dps[s.start : s.stop] for s in stills])
     bias = still_gyro.mean(axis=0)
+    # Each move from the last sample of a still to the first of the next.
+    spans = [slice(a.stop - 1, b.start + 1) for a, b in pairwise(stills)]
     moves = [
-        Move(
-            t=stream.t[a.stop - 1 : b.start + 1],
-            rates_dps=stream.gyro_dps[a.stop - 1 : b.start + 1],
-            gravity_before=gravity[i],
-            gravity_after=gravity[i + 1],
-        )
-        for i, (a, b) in enumerate(pairwise(stills))
+        Move(stream.t[s], stream.gyro_dps[s], gravity[i], gravity[i + 1])
+        for i, s in enumerate(spans)
     ]
     if check_moves is not None:
         check_moves(moves, bias)
