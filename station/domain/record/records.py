@@ -55,6 +55,7 @@ from station.domain.sensors.record_bounds import (
     WIRE_COUNTS_MAX,
     ConditionNumber,
     ErrorMg,
+    GyroSpread,
     Measure,
     Temperature,
     Text,
@@ -367,7 +368,6 @@ class GyroMatrixRecord(_Record):
     verification_deg: AngleDeg | None = None
 
 
-_GyroSpreadValue = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 _MatrixSpread = Annotated[float, Field(ge=0, le=2 * GYRO_MATRIX_MAX)]
 _SpreadRow = tuple[_MatrixSpread, _MatrixSpread, _MatrixSpread]
 _MatrixU = Annotated[float, Field(ge=0, le=MATRIX_MAX_G_PER_COUNT)]
@@ -388,7 +388,7 @@ class UncertaintyRecord(_Record):
         None
     )
     gyro_bias_dps: Annotated[
-        tuple[_GyroSpreadValue, _GyroSpreadValue, _GyroSpreadValue] | None,
+        tuple[GyroSpread, GyroSpread, GyroSpread] | None,
         Field(description="U of each gyro's bias, deg/s"),
     ] = None
     gyro_matrix: Annotated[
