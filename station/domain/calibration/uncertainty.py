@@ -709,26 +709,19 @@ def _pose_variances(
 def disturbed_poses(spread: ArrayLike, fitted: ArrayLike) -> tuple[FloatArray, dict[int, float]]:
     """The poses disturbed while they were taken (module docstring, ``pose_noise``): of
     the poses' sample spreads ``spread`` (N, 3), counts, those of the ``fitted`` poses
-    (indices) whose spread on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
-    sensor's noise there. Returns the fitted poses' excess variance (len(fitted), 3),
-    counts², and the disturbed poses (index into ``spread``) with their largest spread
-    over the noise (:attr:`AccelerometerBudget.disturbed`)."""
+    (indices) whose spread σ on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
+    sensor's noise there, σ_noise the median spread of the fitted poses (at least ½ LSB).
+    Returns the fitted poses' excess variance (len(fitted), 3), counts²: σ² − σ_noise²
+    where disturbed, else 0 (what a disturbed pose's mean carries beyond its noise's); and
+    the disturbed poses (index into ``spread``) with their largest σ/σ_noise
+    (:attr:`AccelerometerBudget.disturbed`)."""
     keep = np.asarray(fitted, dtype=np.int64)
-    excess, over_noise = _excess_variance(np.asarray(spread, dtype=np.float64)[keep])
+    sd = np.asarray(spread, dtype=np.float64)[keep]
+    noise = np.maximum(np.median(sd, axis=0), ADC_LSB_COUNTS / 2)
+    excess = np.where(sd > DISTURBED_SPREAD_RATIO * noise, sd**2 - noise**2, 0.0)
+    over_noise = np.max(sd / noise, axis=1)
     found = np.flatnonzero(np.any(excess > 0, axis=1))
     return excess, {int(keep[i]): float(over_noise[i]) for i in found}
-
-
-def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Per fitted pose and axis (N, 3), the variance a disturbed pose's mean carries beyond
-    its noise's (module docstring, ``pose_noise``): σ² − σ_noise² where σ exceeds
-    :data:`DISTURBED_SPREAD_RATIO`·σ_noise, σ_noise the median spread of the poses (at
-    least ½ LSB), else 0; and each pose's largest σ/σ_noise (N,)."""
-    noise = np.maximum(np.median(spread, axis=0), ADC_LSB_COUNTS / 2)
-    disturbed = spread > DISTURBED_SPREAD_RATIO * noise
-    excess = np.where(disturbed, spread**2 - noise**2, 0.0)
-    ratio = np.max(spread / noise, axis=1)
-    return np.asarray(excess, dtype=np.float64), np.asarray(ratio, dtype=np.float64)
 
 
 def _jacobians(theta: FloatArray, a: FloatArray, model: Model) -> tuple[FloatArray, ...]:

@@ -234,8 +234,7 @@ class LimitsProfile(BaseModel):
         the setting existed.
         """
         unset = {name for name in _OPTIONAL if getattr(self, name) is None}
-        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset or None)
-        return document
+        return self.model_dump(mode="json", exclude=unset or None)
 
     @property
     def sha256(self) -> str:

@@ -427,8 +427,7 @@ class UncertaintyRecord(_Record):
     def to_json(self) -> dict[str, JsonValue]:
         """The one shape: ``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z},
         "gyro_bias_dps": [3], "gyro_matrix": [[3×3]]}``, unmeasured keys left out."""
-        document: dict[str, JsonValue] = self.model_dump(mode="json")
-        return document
+        return self.model_dump(mode="json")
 
 
 def document_sha256(document: Mapping[str, JsonValue]) -> str:

@@ -30,6 +30,7 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration import (
+    UNKNOWNS,
     GeometryLimits,
     Model,
     Solution,
@@ -68,8 +69,6 @@ EDGE_TRIM: Final = 4
 #: a fifth of this of its smallest range, ±250 deg/s): a still rate beyond it is an output's
 #: zero not taken off, or the wrong units.
 MAX_GYRO_BIAS_DPS: Final = 50.0
-#: Fewest still poses for each accelerometer model (its unknowns).
-MIN_POSES: Final[dict[Model, int]] = {"six": 6, "nine": 9}
 
 
 @dataclass(frozen=True, eq=False)
@@ -262,7 +261,7 @@ def chosen_window(stream: RecordedStream, model: Model) -> StillnessThresholds:
     """
     probe = stream_thresholds(stream.rate_hz, PROBE_WINDOW_S)
     rests = still_segments(stream.block(), adapted_thresholds(stream, probe))
-    needed = MIN_POSES[model]
+    needed = UNKNOWNS[model]
     if len(rests) < needed:
         return stream_thresholds(stream.rate_hz, MIN_WINDOW_S)
     lengths = sorted((len(r) for r in rests), reverse=True)
@@ -277,7 +276,7 @@ def _geometry(model: Model, poses: int) -> GeometryLimits:
     A recorded procedure often returns to an orientation it held before; least squares
     is not degenerate for it (each pose is one more equation), eq. 10 with six is.
     """
-    if model == "six" and poses == MIN_POSES["six"]:
+    if model == "six" and poses == UNKNOWNS["six"]:
         return GeometryLimits()
     return GeometryLimits(min_angle_deg=0.0)
 
@@ -319,7 +318,7 @@ def calibrate_stream(
     stills = [
         StillSegment(s.start + trim, s.stop - trim) for s in still_segments(stream.block(), limits)
     ]
-    needed = MIN_POSES[model]
+    needed = UNKNOWNS[model]
     if len(stills) < needed:
         why = why_not_still(stream.block(), limits)
         raise StreamError(
