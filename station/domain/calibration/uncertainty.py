@@ -551,7 +551,6 @@ def gyro_bias_uncertainty(
     p = len(means)
     if p < 1:
         raise ValueError("the gyro bias needs at least one still pose")
-    scatter = np.std(means, axis=0, ddof=1) / np.sqrt(p) if p > 1 else np.zeros(3)
     counts = (
         np.full(p, float(SAMPLES_PER_POSE))
         if samples is None
@@ -571,6 +570,7 @@ def gyro_bias_uncertainty(
         quant = np.sqrt(np.sum(per_pose_q, axis=0)) / p
     type_a = within
     if p > 1:
+        scatter = np.std(means, axis=0, ddof=1) / np.sqrt(p)
         beyond = scatter**2 > within**2 * chi2_quantile(p - 1) / (p - 1)
         type_a = np.where(beyond, scatter, within)
     u = np.sqrt(type_a**2 + quant**2 + repeatability_dps**2)
@@ -589,9 +589,6 @@ def gyro_matrix_uncertainty(
     [JCGM100]_ 5.1.2."""
     variance = fit.standard_errors**2
     if budget is not None:
-        # The coupling turns each move's directions differently, so the fit's residuals
-        # hold part of it already: the larger of the two counts, once (as the
-        # accelerometer's ``fit`` and ``model`` terms).
         variance = np.maximum(variance, model_variance(fit, budget))
         variance = variance + geometry_variance(fit, budget)
     return np.asarray(k * np.sqrt(variance), dtype=np.float64)

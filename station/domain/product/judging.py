@@ -126,17 +126,15 @@ def uncertainty_of(
 ) -> dict[str, tuple[float, ...]]:
     """:attr:`Measured.uncertainty` from the U of each coefficient family, of the
     verification error and of K (None: unknown)."""
-    families: tuple[tuple[str, tuple[float, ...] | None], ...] = (
-        ("offset", offset),
-        ("sensitivity", sensitivity),
-        ("gyro_bias", gyro_bias),
-        ("verification_error", None if verification_error is None else (verification_error,)),
-        (
-            "gyro_matrix",
-            None if gyro_matrix is None else tuple(v for row in gyro_matrix for v in row),
-        ),
-    )
-    return {code: values for code, values in families if values is not None}
+    entries = None if gyro_matrix is None else tuple(v for row in gyro_matrix for v in row)
+    families: dict[str, tuple[float, ...] | None] = {
+        "offset": offset,
+        "sensitivity": sensitivity,
+        "gyro_bias": gyro_bias,
+        "verification_error": None if verification_error is None else (verification_error,),
+        "gyro_matrix": entries,
+    }
+    return {code: values for code, values in families.items() if values is not None}
 
 
 def verdict_failures(

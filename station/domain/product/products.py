@@ -72,8 +72,7 @@ class Product(BaseModel):
             raise InputError(f"{where}: no limits profile {self.limits_profile!r} (known: {known})")
         if self.plan is not None and shipped_plan(self.plan) is None:
             raise InputError(f"{where}: no run plan {self.plan!r}")
-        why = self.contradiction(profile)
-        if why is not None:
+        if (why := self.contradiction(profile)) is not None:
             raise InputError(
                 f"{where}: its sensor contradicts limits profile {profile.name}: {why}"
             )

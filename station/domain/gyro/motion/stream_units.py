@@ -32,7 +32,7 @@ option) it contradicts:
   the gyro units.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Final, Literal
 
 import numpy as np
@@ -136,9 +136,7 @@ def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
         t = stream.t / 1000.0
     else:
         t = stream.t
-    return RecordedStream(
-        t=t, accel_counts=accel, gyro_dps=gyro, temperature_c=stream.temperature_c
-    )
+    return replace(stream, t=t, accel_counts=accel, gyro_dps=gyro)
 
 
 def _near(value: float, expected: float) -> bool:
