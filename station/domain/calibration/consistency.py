@@ -218,7 +218,9 @@ def _explained(
             # On a sound geometry the rest still hold a pose that spoils their fit (or
             # that no sensor could read): this candidate is not the one. On a degenerate
             # one it cannot be told.
-            if not _sound_geometry(poses[keep], judge, max_condition):
+            try:
+                refuse_degenerate_geometry(normalise(poses[keep]), judge, max_condition)
+            except IllConditionedError:
                 raise _UnclearedPoseError(candidate, str(refused)) from None
             continue
         if (refit.quality.studentised_max_counts or 0.0) <= limit:
@@ -240,15 +242,6 @@ def _explained(
             candidates=tuple(c for c, _ in explained),
         )
     return None
-
-
-def _sound_geometry(poses: FloatArray, model: Model, max_condition: float) -> bool:
-    """Whether the poses' directions could determine ``model`` at the nominal sensor."""
-    try:
-        refuse_degenerate_geometry(normalise(poses), model, max_condition)
-    except IllConditionedError:
-        return False
-    return True
 
 
 def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solution:

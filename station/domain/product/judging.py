@@ -76,13 +76,13 @@ def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReas
             reasons.append(check(profile, "pose_noise", std, axis=axis, pose=i))
         if i in measured.link_loss:
             reasons.append(check(profile, "link_loss", measured.link_loss[i], pose=i))
-    u = measured.uncertainty
 
     def guarded(
         code: str, value: float, index: int, axis: Axis | None = None, pose: int | None = None
     ) -> FailureReason | None:
         """The check of a value that may carry its U: entry ``index`` of its U's key."""
-        uncertainty = _u(u, GUARDED_CHECKS[code], index)
+        family = measured.uncertainty.get(GUARDED_CHECKS[code])
+        uncertainty = None if family is None else family[index]
         return check(profile, code, value, axis=axis, pose=pose, uncertainty=uncertainty)
 
     for code, values in (("offset", measured.offset), ("sensitivity", measured.sensitivity)):
@@ -110,11 +110,6 @@ def check_rules(profile: LimitsProfile, measured: Measured) -> dict[str, Decisio
         for code, name in CHECKS.items()
         if getattr(profile, name) is not None
     }
-
-
-def _u(uncertainty: Mapping[str, tuple[float, ...]], key: str, index: int) -> float | None:
-    values = uncertainty.get(key)
-    return None if values is None else values[index]
 
 
 def uncertainty_of(

@@ -270,17 +270,6 @@ def chosen_window(stream: RecordedStream, model: Model) -> StillnessThresholds:
     return stream_thresholds(stream.rate_hz, min(max(seconds, MIN_WINDOW_S), STILL_WINDOW_S))
 
 
-def _geometry(model: Model, poses: int) -> GeometryLimits:
-    """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
-
-    A recorded procedure often returns to an orientation it held before; least squares
-    is not degenerate for it (each pose is one more equation), eq. 10 with six is.
-    """
-    if model == "six" and poses == UNKNOWNS["six"]:
-        return GeometryLimits()
-    return GeometryLimits(min_angle_deg=0.0)
-
-
 def calibrate_stream(
     stream: RecordedStream,
     model: Model = "nine",
@@ -329,7 +318,11 @@ def calibrate_stream(
     means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
     spreads = np.array([stream.accel_counts[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
     samples = np.array([len(s) for s in stills])
-    accel = solve(means, model, _geometry(model, len(means)))
+    # Near-duplicate poses refuse only the six-pose eq. 10: a recorded procedure often
+    # returns to an orientation it held before, and least squares is not degenerate for it
+    # (each pose is one more equation), eq. 10 with six is.
+    paper = model == "six" and len(means) == UNKNOWNS["six"]
+    accel = solve(means, model, GeometryLimits() if paper else GeometryLimits(min_angle_deg=0.0))
     g = apply(accel.calibration, means)
     gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
     still_gyro = np.concatenate([stream.gyro_dps[s.start : s.stop] for s in stills])
