@@ -161,6 +161,7 @@ def solve_least_squares(
         offset=NOMINAL_OFFSET_COUNTS + NOMINAL_SENSITIVITY_COUNTS_PER_G * offset_n,
         matrix=c_n / NOMINAL_SENSITIVITY_COUNTS_PER_G,
     )
+    s2 = calibration.sensitivity**2  # the paper's k1 = s_x²/s_y², k2 = s_x²/s_z²
     return Solution(
         calibration=calibration,
         method="least-squares",
@@ -168,7 +169,7 @@ def solve_least_squares(
             calibration, p, condition, screened, leverage(jac), limits.sensor.counts_per_g
         ),
         standard_errors=_standard_errors(jac, fit.fun, c_n, model),
-        k=_k(calibration) if model == "six" else None,
+        k=(float(s2[0] / s2[1]), float(s2[0] / s2[2])) if model == "six" else None,
     )
 
 
@@ -212,9 +213,3 @@ def _standard_errors(
     diag_index = [3, 6, 8]  # positions of C_00, C_11, C_22 in θ
     c_diag = np.diag(c_n)
     return CoefficientErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2, dof=n - p)
-
-
-def _k(calibration: Calibration) -> tuple[float, float]:
-    """The paper's k1 = s_x²/s_y², k2 = s_x²/s_z²."""
-    s2 = calibration.sensitivity**2
-    return float(s2[0] / s2[1]), float(s2[0] / s2[2])
