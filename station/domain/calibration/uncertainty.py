@@ -477,10 +477,10 @@ def accelerometer_budget(
         var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
         predicted = var_fit + var_own + var_model + var_temperature
         ratio = abs(rv) / (k * np.sqrt(predicted)) if predicted > 0 else float("inf")
-        # The fit's evidence and the model's misfit are one unmodelled effect for the
-        # six-parameter model: the larger counts, once (as for the coefficients).
         # The fit's evidence (its covariance of θ beyond the noise's) there: J_v Σ J_vᵀ.
         evidence_v = 0.0 if evidence is None else max(0.0, float((jv @ evidence @ jv.T)[0, 0]))
+        # The fit's evidence and the model's misfit are one unmodelled effect for the
+        # six-parameter model: the larger counts, once (as for the coefficients).
         beyond = max(0.0, evidence_v - var_model)
         verification_u = float(k * np.sqrt(predicted + beyond))
         if ratio > 1.0:
