@@ -40,7 +40,6 @@ Say = Callable[..., str]
 #: **values)``, the form of ``count`` in one language, ``{count}`` and the values filled.
 Count = Callable[..., str]
 
-_translations: gettext.NullTranslations = gettext.NullTranslations()
 _language: Language = "en"
 
 
@@ -73,8 +72,8 @@ def _translations_of(language: str) -> gettext.NullTranslations:
 
 def set_language(language: str) -> None:
     """Say the operator's lines in ``language`` from now on (one of :data:`LANGUAGES`)."""
-    global _translations, _language
-    _translations = _translations_of(language)
+    global _language
+    _translations_of(language)  # refuses a language not shipped; compiles its catalogue once
     _language = cast(Language, language)  # one of LANGUAGES: _translations_of checked it
 
 
@@ -85,15 +84,14 @@ def language() -> Language:
 
 def tr(message: str, **values: object) -> str:
     """``message`` in the operator's language, its ``{placeholders}`` filled."""
-    return _filled(_language, _translations.gettext(message), values)
+    return speaker(_language)(message, **values)
 
 
 def trn(singular: str, plural: str, count: int, **values: object) -> str:
     """``singular`` or ``plural`` as ``count`` and the operator's language want it (gettext's
     plural forms: Korean and Chinese have one), its ``{placeholders}`` and ``{count}``
     filled."""
-    chosen = _translations.ngettext(singular, plural, count)
-    return _filled(_language, chosen, {"count": count, **values})
+    return counter(_language)(singular, plural, count, **values)
 
 
 def speaker(language: str) -> Say:

@@ -40,6 +40,4 @@ def full_match(pattern: str, text: str) -> dict[str, str] | None:
     """Whether ``pattern`` matches the whole of ``text``: its named groups that matched
     something (``{}`` without any), or None when it does not match."""
     match = compile_pattern(pattern).fullmatch(text)
-    if match is None:
-        return None
-    return {name: value for name, value in match.groupdict().items() if value}
+    return None if match is None else {k: v for k, v in match.groupdict().items() if v}

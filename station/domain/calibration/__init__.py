@@ -18,11 +18,7 @@ Public surface::
 """
 
 from station.domain.calibration.classic import solve_classic
-from station.domain.calibration.consistency import (
-    DEFAULT_RESIDUAL_LIMIT_COUNTS,
-    residual_limit,
-    solve_consistent,
-)
+from station.domain.calibration.consistency import DEFAULT_RESIDUAL_LIMIT_COUNTS, solve_consistent
 from station.domain.calibration.errors import (
     BeyondDatasheetError,
     CalibrationError,
@@ -39,19 +35,11 @@ from station.domain.calibration.errors import (
 from station.domain.calibration.geometry import GeometryLimits, coverage, pair_angles_deg
 from station.domain.calibration.least_squares import UNKNOWNS, solve_least_squares
 from station.domain.calibration.model import Calibration, Model, apply
-from station.domain.calibration.paper import Outcome, PaperBatch, solve_paper, solve_paper_batch
-from station.domain.calibration.residual import MAX_CONDITION
-from station.domain.calibration.solution import (
-    MIN_DOF_SHOWN,
-    SENSITIVITY_CONVENTION,
-    CoefficientErrors,
-    Quality,
-    Solution,
-)
+from station.domain.calibration.paper import Outcome, solve_paper, solve_paper_batch
+from station.domain.calibration.solution import MIN_DOF_SHOWN, SENSITIVITY_CONVENTION, Solution
 from station.domain.calibration.solve import solve
 from station.domain.calibration.uncertainty import (
     COVERAGE_FACTOR,
-    AccelerometerBudget,
     Uncertainty,
     accelerometer_budget,
     gyro_bias_repeatability,
@@ -62,15 +50,12 @@ from station.domain.calibration.uncertainty import (
 __all__ = [
     "COVERAGE_FACTOR",
     "DEFAULT_RESIDUAL_LIMIT_COUNTS",
-    "MAX_CONDITION",
     "MIN_DOF_SHOWN",
     "SENSITIVITY_CONVENTION",
     "UNKNOWNS",
-    "AccelerometerBudget",
     "BeyondDatasheetError",
     "Calibration",
     "CalibrationError",
-    "CoefficientErrors",
     "CoplanarPosesError",
     "DuplicatePoseError",
     "GeometryLimits",
@@ -81,8 +66,6 @@ __all__ = [
     "NonPositiveScaleError",
     "NotCountsError",
     "Outcome",
-    "PaperBatch",
-    "Quality",
     "RailValueError",
     "Solution",
     "TooFewPosesError",
@@ -94,7 +77,6 @@ __all__ = [
     "gyro_bias_uncertainty",
     "gyro_matrix_uncertainty",
     "pair_angles_deg",
-    "residual_limit",
     "solve",
     "solve_classic",
     "solve_consistent",

@@ -218,7 +218,9 @@ def _explained(
             # On a sound geometry the rest still hold a pose that spoils their fit (or
             # that no sensor could read): this candidate is not the one. On a degenerate
             # one it cannot be told.
-            if not _sound_geometry(poses[keep], judge, max_condition):
+            try:
+                refuse_degenerate_geometry(normalise(poses[keep]), judge, max_condition)
+            except IllConditionedError:
                 raise _UnclearedPoseError(candidate, str(refused)) from None
             continue
         if (refit.quality.studentised_max_counts or 0.0) <= limit:
@@ -242,15 +244,6 @@ def _explained(
     return None
 
 
-def _sound_geometry(poses: FloatArray, model: Model, max_condition: float) -> bool:
-    """Whether the poses' directions could determine ``model`` at the nominal sensor."""
-    try:
-        refuse_degenerate_geometry(normalise(poses), model, max_condition)
-    except IllConditionedError:
-        return False
-    return True
-
-
 def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solution:
     """``fit`` carrying the studentised residuals of the model that judged the poses."""
     quality = replace(fit.quality, studentised_counts=judged.quality.studentised_counts)
@@ -260,17 +253,14 @@ def _judged(fit: Solution, judged: Solution, judge: Model, limit: float) -> Solu
 def _excluding(refit: Solution, pose: int, poses: FloatArray) -> Solution:
     """``refit`` (over all poses but ``pose``) reported against all N poses."""
     q = refit.quality
-
-    def original(index: int) -> int:
-        return index + (index >= pose)
-
+    closest, other = (index + (index >= pose) for index in q.closest_pair)  # into all N
     studentised = None
     if q.studentised_counts is not None:
         studentised = np.insert(q.studentised_counts, pose, np.nan)
     quality = replace(
         q,
         pose_g=np.linalg.norm(apply(refit.calibration, poses), axis=1),
-        closest_pair=(original(q.closest_pair[0]), original(q.closest_pair[1])),
+        closest_pair=(closest, other),
         studentised_counts=studentised,
     )
     return replace(refit, quality=quality, excluded=(pose,))

@@ -261,12 +261,9 @@ def _nearest_one(points: FloatArray) -> tuple[FloatArray, NDArray[np.int64]]:
     order = np.argsort(inverse, kind="stable")  # twins side by side
     group = inverse[order]
     twin_next = np.flatnonzero(group[1:] == group[:-1])
-    for mine, twin in (
-        (order[twin_next], order[twin_next + 1]),
-        (order[twin_next + 1], order[twin_next]),
-    ):
-        nearest[mine] = 0.0
-        neighbour[mine] = twin
+    one, other = order[twin_next], order[twin_next + 1]
+    nearest[one] = nearest[other] = 0.0
+    neighbour[one], neighbour[other] = other, one
     return nearest, neighbour
 
 

@@ -38,12 +38,13 @@ from station.domain.calibration.geometry import GeometryLimits, check_poses, ref
 from station.domain.calibration.model import Calibration, Model
 from station.domain.calibration.residual import (
     MAX_CONDITION,
-    UPPER,
     condition_number,
     jacobian_nine,
     jacobian_six,
     leverage,
     normalise,
+    pack,
+    unpack,
 )
 from station.domain.calibration.solution import CoefficientErrors, Solution, quality_of
 from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
@@ -57,26 +58,14 @@ class _Parametrisation:
 
     model: Model
 
-    def unpack(self, theta: FloatArray) -> tuple[FloatArray, FloatArray]:
-        offset = theta[:3]
-        if self.model == "six":
-            return offset, np.diag(1.0 / theta[3:6])
-        c = np.zeros((3, 3))
-        c[UPPER] = theta[3:9]
-        return offset, c
-
-    def pack(self, offset: FloatArray, c: FloatArray) -> FloatArray:
-        tail = 1.0 / np.diag(c) if self.model == "six" else c[UPPER]
-        return np.concatenate([offset, tail])
-
     def residual(self, theta: FloatArray, v: FloatArray) -> FloatArray:
-        offset, c = self.unpack(theta)
+        offset, c = unpack(theta, self.model)
         return np.asarray(np.linalg.norm((v - offset) @ c.T, axis=1) - 1.0, dtype=np.float64)
 
     def jacobian(self, theta: FloatArray, v: FloatArray) -> FloatArray:
         if self.model == "six":
             return jacobian_six(theta[:3], theta[3:6], v)
-        offset, c = self.unpack(theta)
+        offset, c = unpack(theta, self.model)
         return jacobian_nine(offset, c, v)
 
 
@@ -135,7 +124,7 @@ def solve_least_squares(
     param = _Parametrisation(model)
 
     try:
-        theta0 = param.pack(*algebraic_start(v, model))
+        theta0 = pack(*algebraic_start(v, model), model)
     except NonPositiveScaleError:
         refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p, limits.sensor)
@@ -150,7 +139,7 @@ def solve_least_squares(
         raise CalibrationError(
             f"the least-squares fit did not converge though the geometry is sound: {fit.message}"
         )
-    offset_n, c_n = param.unpack(fit.x)
+    offset_n, c_n = unpack(fit.x, model)
     if np.any(np.diag(c_n) <= 0):
         refuse_degenerate_geometry(v, model, max_condition)
         refuse_beyond_datasheet(p, limits.sensor)
@@ -172,6 +161,7 @@ def solve_least_squares(
         offset=NOMINAL_OFFSET_COUNTS + NOMINAL_SENSITIVITY_COUNTS_PER_G * offset_n,
         matrix=c_n / NOMINAL_SENSITIVITY_COUNTS_PER_G,
     )
+    s2 = calibration.sensitivity**2  # the paper's k1 = s_x²/s_y², k2 = s_x²/s_z²
     return Solution(
         calibration=calibration,
         method="least-squares",
@@ -179,7 +169,7 @@ def solve_least_squares(
             calibration, p, condition, screened, leverage(jac), limits.sensor.counts_per_g
         ),
         standard_errors=_standard_errors(jac, fit.fun, c_n, model),
-        k=_k(calibration) if model == "six" else None,
+        k=(float(s2[0] / s2[1]), float(s2[0] / s2[2])) if model == "six" else None,
     )
 
 
@@ -223,9 +213,3 @@ def _standard_errors(
     diag_index = [3, 6, 8]  # positions of C_00, C_11, C_22 in θ
     c_diag = np.diag(c_n)
     return CoefficientErrors(offset=se[:3], sensitivity=se[diag_index] / c_diag**2, dof=n - p)
-
-
-def _k(calibration: Calibration) -> tuple[float, float]:
-    """The paper's k1 = s_x²/s_y², k2 = s_x²/s_z²."""
-    s2 = calibration.sensitivity**2
-    return float(s2[0] / s2[1]), float(s2[0] / s2[2])

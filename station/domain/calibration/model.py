@@ -50,8 +50,8 @@ class Calibration:
         """JSON-ready: offset and sensitivity as ``{x, y, z}``, matrix as nested lists."""
         return {
             "model": self.model,
-            "offset": _xyz(self.offset),
-            "sensitivity": _xyz(self.sensitivity),
+            "offset": xyz(self.offset),
+            "sensitivity": xyz(self.sensitivity),
             "matrix": self.matrix.tolist(),
         }
 
@@ -70,5 +70,6 @@ def apply(calibration: Calibration, raw: ArrayLike) -> FloatArray:
     return np.asarray((counts - calibration.offset) @ calibration.matrix.T, dtype=np.float64)
 
 
-def _xyz(values: FloatArray) -> dict[str, float]:
+def xyz(values: FloatArray) -> dict[str, float]:
+    """Three values in axis order as the JSON's ``{x, y, z}``."""
     return {"x": float(values[0]), "y": float(values[1]), "z": float(values[2])}

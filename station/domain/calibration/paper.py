@@ -20,8 +20,10 @@ The single-unit path :func:`solve_paper` is the batch path with K = 1, so both g
 bit-identical results.
 """
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 from enum import IntEnum
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -115,27 +117,13 @@ def solve_paper_batch(
     if len(parts) == 1:
         return parts[0]
 
-    def cat(field: str, owner: str = "") -> FloatArray:
-        return np.concatenate(
-            [getattr(getattr(part, owner) if owner else part, field) for part in parts]
-        )
+    def joined(items: Sequence[object], name: str) -> Any:
+        return np.concatenate([getattr(item, name) for item in items])
 
-    return PaperBatch(
-        offset=cat("offset"),
-        sensitivity=cat("sensitivity"),
-        k=cat("k"),
-        condition=cat("condition"),
-        outcome=cat("outcome").astype(np.int64),
-        screen=Screen(
-            finding=cat("finding", "screen").astype(np.int64),
-            pose=cat("pose", "screen").astype(np.int64),
-            other=cat("other", "screen").astype(np.int64),
-            min_angle_deg=cat("min_angle_deg", "screen"),
-            coverage=cat("coverage", "screen"),
-            closest=cat("closest", "screen").astype(np.int64),
-            near=cat("near", "screen").astype(np.int64),
-        ),
-    )
+    screens = [part.screen for part in parts]
+    screen = Screen(*(joined(screens, f.name) for f in fields(Screen)))
+    arrays = {f.name: joined(parts, f.name) for f in fields(PaperBatch) if f.name != "screen"}
+    return PaperBatch(**arrays, screen=screen)
 
 
 def _solve_chunk(p: FloatArray, limits: GeometryLimits, max_condition: float) -> PaperBatch:

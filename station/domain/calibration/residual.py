@@ -14,6 +14,7 @@ geometry: cond(J) is the **condition number** reported and bounded for every met
 import numpy as np
 
 from station.domain.arrays import FloatArray
+from station.domain.calibration.model import Model
 from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 #: Default maximum condition number of a solve's Jacobian (normalised counts).
@@ -21,6 +22,21 @@ MAX_CONDITION = 1.0e3
 
 #: Indices of the six free entries of an upper-triangular 3×3 matrix, row by row.
 UPPER = np.triu_indices(3)
+
+
+def unpack(theta: FloatArray, model: Model) -> tuple[FloatArray, FloatArray]:
+    """θ as (o, C): θ = (o, s) with C = diag(1/s) for six, θ = (o, C_upper) for nine."""
+    if model == "six":
+        return theta[:3], np.diag(1.0 / theta[3:6])
+    c = np.zeros((3, 3))
+    c[UPPER] = theta[3:9]
+    return theta[:3], c
+
+
+def pack(offset: FloatArray, c: FloatArray, model: Model) -> FloatArray:
+    """θ of (o, C), as :func:`unpack` reads it."""
+    tail = 1.0 / np.diag(c) if model == "six" else c[UPPER]
+    return np.concatenate([offset, tail])
 
 
 def normalise(counts: FloatArray) -> FloatArray:

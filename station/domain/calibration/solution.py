@@ -15,7 +15,7 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration.geometry import Screen
-from station.domain.calibration.model import Calibration, Model, apply
+from station.domain.calibration.model import Calibration, Model, apply, xyz
 from station.domain.sensors.sensor_spec import PUTTER_SENSOR
 
 Method = Literal["paper-eq10", "least-squares"]
@@ -77,9 +77,8 @@ class Quality:
     @property
     def studentised_max_counts(self) -> float | None:
         """The largest |studentised residual| of the fitted poses, counts."""
-        if self.studentised_counts is None:
-            return None
-        return float(np.nanmax(np.abs(self.studentised_counts)))
+        t = self.studentised_counts
+        return None if t is None else float(np.nanmax(np.abs(t)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -131,8 +130,8 @@ class Solution:
         if self.standard_errors is not None:
             se = self.standard_errors
             payload["standard_errors"] = {
-                "offset": dict(zip("xyz", se.offset.tolist(), strict=True)),
-                "sensitivity": dict(zip("xyz", se.sensitivity.tolist(), strict=True)),
+                "offset": xyz(se.offset),
+                "sensitivity": xyz(se.sensitivity),
                 "dof": se.dof,
             }
         return payload

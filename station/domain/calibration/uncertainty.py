@@ -144,7 +144,7 @@ calibration it gives and the coupling itself.
    method for IMU calibration without external equipments", ICRA 2014.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cache, lru_cache
 from typing import Final, Protocol
 
@@ -152,8 +152,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from station.domain.arrays import FloatArray
-from station.domain.calibration.model import Model
-from station.domain.calibration.residual import UPPER
+from station.domain.calibration.model import Model, xyz
+from station.domain.calibration.residual import UPPER, pack, unpack
 from station.domain.calibration.solution import Solution
 from station.domain.sensors.sensor import (
     CROSS_AXIS_TYPICAL,
@@ -277,10 +277,8 @@ class AccelerometerBudget:
     @property
     def combined(self) -> FloatArray:
         """Shape (6,), the combined standard uncertainty u_c = √Σ u²."""
-        total = np.zeros(6)
-        for values in self.terms.values():
-            total = total + values**2
-        return np.asarray(np.sqrt(total), dtype=np.float64)
+        squares = sum((values**2 for values in self.terms.values()), np.zeros(6))
+        return np.asarray(np.sqrt(squares), dtype=np.float64)
 
     @property
     def expanded(self) -> FloatArray:
@@ -319,9 +317,9 @@ class Uncertainty:
         unmeasured coefficients left out."""
         out: dict[str, object] = {"k": self.k}
         if self.offset is not None:
-            out["offset"] = _xyz(self.offset)
+            out["offset"] = xyz(self.offset)
         if self.sensitivity is not None:
-            out["sensitivity"] = _xyz(self.sensitivity)
+            out["sensitivity"] = xyz(self.sensitivity)
         if self.gyro_bias_dps is not None:
             out["gyro_bias_dps"] = [float(v) for v in self.gyro_bias_dps]
         if self.gyro_matrix is not None:
@@ -348,15 +346,7 @@ class Uncertainty:
         self, bias_dps: FloatArray | None, matrix: FloatArray | None = None
     ) -> "Uncertainty":
         """The same with the gyros' expanded uncertainties added."""
-        return Uncertainty(
-            self.k,
-            self.offset,
-            self.sensitivity,
-            bias_dps,
-            matrix,
-            self.verification_error_mg,
-            self.matrix,
-        )
+        return replace(self, gyro_bias_dps=bias_dps, gyro_matrix=matrix)
 
 
 def accelerometer_budget(
@@ -409,7 +399,8 @@ def accelerometer_budget(
 
     cal = solution.calibration
     model = cal.model
-    theta = _pack(cal.offset, cal.matrix, model)
+    theta = pack(cal.offset, cal.matrix, model)  # in counts; C_upper in g/count
+    offset, c = unpack(theta, model)
     jac, dr_da, n = _jacobians(theta, a, model)
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
@@ -420,14 +411,9 @@ def accelerometer_budget(
     w_noise = np.einsum("ij,ij->i", dr_da**2, var_noise)
     w_quant = np.einsum("ij,ij->i", dr_da**2, var_quant)
     covariance = (pinv * (w_noise + w_quant)) @ pinv.T
-    terms = {
-        "pose_noise": np.sqrt(gp**2 @ w_noise),
-        "quantisation": np.sqrt(gp**2 @ w_quant),
-        "model": np.zeros(6),
-        "fit": np.zeros(6),
-        "temperature": np.zeros(6),
-        "tilt": np.zeros(6),
-    }
+    terms = {name: np.zeros(6) for name in TERMS}  # tilt stays zero (module docstring)
+    terms["pose_noise"] = np.sqrt(gp**2 @ w_noise)
+    terms["quantisation"] = np.sqrt(gp**2 @ w_quant)
     drift: FloatArray | None = None  # ∂r/∂κ of the fit poses
     reference = 0.0  # the calibration's temperature T̄, °C
     kappa_bound = np.repeat(tempco, 3)
@@ -443,7 +429,6 @@ def accelerometer_budget(
     u_dir: FloatArray | None = None
     if verification is not None:
         av = np.asarray(verification, dtype=np.float64)
-        offset, c = _unpack(theta, model)
         gv = c @ (av - offset)
         u_dir = gv / np.linalg.norm(gv)
     if model == "six" and cross_axis_bound > 0:
@@ -453,7 +438,6 @@ def accelerometer_budget(
     evidence: FloatArray | None = None  # its covariance of θ
     rows, p = jac.shape
     if rows > p:
-        offset, c = _unpack(theta, model)
         residual = np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
         sigma2 = float(residual @ residual) / (rows - p)
         expected = float(np.mean(w_noise + w_quant))
@@ -475,29 +459,29 @@ def accelerometer_budget(
     verification_u: float | None = None
     if verification is not None and u_dir is not None:
         av = np.asarray(verification, dtype=np.float64)
+        jv, dv, _ = _jacobians(theta, av[None, :], model)
         var_temperature = 0.0
         if drift is not None and verification_temperature is not None:
             # Its drift through θ and its own, the same κ: δr_v = (D_v − J_v·J⁺·D)·κ.
-            jv, dv, _ = _jacobians(theta, av[None, :], model)
             delta_v = np.array([verification_temperature - reference])
             row = _drift_jacobian(theta, model, av[None, :], dv, delta_v)[0]
             row = row - (jv @ pinv @ drift)[0]
             var_temperature = float(row**2 @ kappa_variance)
-        rv, predicted, var_model = _verification_variance(
-            theta,
-            model,
-            av,
-            verification_spread,
-            verification_samples,
-            pinv,
-            w_noise + w_quant,
-            model_rv,
-            var_temperature,
-        )
+        # Its misfit r_v = |C(a_v − o)| − 1 (g) and predicted variance (g²): δr_v = J_v δθ +
+        # ∂r_v/∂a_v δa_v with δθ = −J⁺ δr, so the fit poses' noise reaches it through θ; its
+        # own noise and quantisation; the model's misfit there; the drift with temperature.
+        rv = float(np.linalg.norm(c @ (av - offset)) - 1.0)
+        var_fit = float((jv @ pinv)[0] ** 2 @ (w_noise + w_quant))
+        var_n, var_q = _pose_variances(verification_spread, verification_samples, 1)
+        var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
+        var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
+        predicted = var_fit + var_own + var_model + var_temperature
         ratio = abs(rv) / (k * np.sqrt(predicted)) if predicted > 0 else float("inf")
+        # The fit's evidence (its covariance of θ beyond the noise's) there: J_v Σ J_vᵀ.
+        evidence_v = 0.0 if evidence is None else max(0.0, float((jv @ evidence @ jv.T)[0, 0]))
         # The fit's evidence and the model's misfit are one unmodelled effect for the
         # six-parameter model: the larger counts, once (as for the coefficients).
-        beyond = max(0.0, _evidence_at(theta, model, av, evidence) - var_model)
+        beyond = max(0.0, evidence_v - var_model)
         verification_u = float(k * np.sqrt(predicted + beyond))
         if ratio > 1.0:
             terms["model"] = terms["model"] * ratio
@@ -567,7 +551,6 @@ def gyro_bias_uncertainty(
     p = len(means)
     if p < 1:
         raise ValueError("the gyro bias needs at least one still pose")
-    scatter = np.std(means, axis=0, ddof=1) / np.sqrt(p) if p > 1 else np.zeros(3)
     counts = (
         np.full(p, float(SAMPLES_PER_POSE))
         if samples is None
@@ -587,6 +570,7 @@ def gyro_bias_uncertainty(
         quant = np.sqrt(np.sum(per_pose_q, axis=0)) / p
     type_a = within
     if p > 1:
+        scatter = np.std(means, axis=0, ddof=1) / np.sqrt(p)
         beyond = scatter**2 > within**2 * chi2_quantile(p - 1) / (p - 1)
         type_a = np.where(beyond, scatter, within)
     u = np.sqrt(type_a**2 + quant**2 + repeatability_dps**2)
@@ -605,9 +589,6 @@ def gyro_matrix_uncertainty(
     [JCGM100]_ 5.1.2."""
     variance = fit.standard_errors**2
     if budget is not None:
-        # The coupling turns each move's directions differently, so the fit's residuals
-        # hold part of it already: the larger of the two counts, once (as the
-        # accelerometer's ``fit`` and ``model`` terms).
         variance = np.maximum(variance, model_variance(fit, budget))
         variance = variance + geometry_variance(fit, budget)
     return np.asarray(k * np.sqrt(variance), dtype=np.float64)
@@ -647,12 +628,12 @@ def geometry_variance(fit: MoveFit, budget: AccelerometerBudget) -> FloatArray:
     if budget.theta is None or budget.covariance is None:
         return np.zeros((3, 3))
     theta, cov = budget.theta, budget.covariance
-    offset, c = _unpack(theta, budget.model)
+    offset, c = unpack(theta, budget.model)
     ends = fit.directions.reshape(-1, 3)
     counts = offset + np.linalg.solve(c, ends.T).T  # (2M, 3)
 
     def directions(t: FloatArray) -> FloatArray:
-        o, m = _unpack(t, budget.model)
+        o, m = unpack(t, budget.model)
         g = (counts - o) @ m.T
         return np.asarray(g / np.linalg.norm(g, axis=1, keepdims=True), dtype=np.float64)
 
@@ -676,7 +657,7 @@ def _drift_jacobian(
     """∂r/∂κ (N, 6) of poses a (N, 3) taken ``delta`` (N,) °C from the calibration's
     temperature, κ = (κ_o, κ_s) the temperature coefficients (module docstring,
     ``temperature``): δa_ij = Δ_i·(κ_o,j + κ_s,j·(a_ij − o_j)), δr_i = (∂r_i/∂a_i)·δa_i."""
-    offset, _ = _unpack(theta, model)
+    offset, _ = unpack(theta, model)
     return np.hstack([dr_da * delta[:, None], dr_da * (a - offset) * delta[:, None]])
 
 
@@ -725,45 +706,24 @@ def _pose_variances(
 def disturbed_poses(spread: ArrayLike, fitted: ArrayLike) -> tuple[FloatArray, dict[int, float]]:
     """The poses disturbed while they were taken (module docstring, ``pose_noise``): of
     the poses' sample spreads ``spread`` (N, 3), counts, those of the ``fitted`` poses
-    (indices) whose spread on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
-    sensor's noise there. Returns the fitted poses' excess variance (len(fitted), 3),
-    counts², and the disturbed poses (index into ``spread``) with their largest spread
-    over the noise (:attr:`AccelerometerBudget.disturbed`)."""
+    (indices) whose spread σ on an axis exceeds :data:`DISTURBED_SPREAD_RATIO` times the
+    sensor's noise there, σ_noise the median spread of the fitted poses (at least ½ LSB).
+    Returns the fitted poses' excess variance (len(fitted), 3), counts²: σ² − σ_noise²
+    where disturbed, else 0 (what a disturbed pose's mean carries beyond its noise's); and
+    the disturbed poses (index into ``spread``) with their largest σ/σ_noise
+    (:attr:`AccelerometerBudget.disturbed`)."""
     keep = np.asarray(fitted, dtype=np.int64)
-    excess, over_noise = _excess_variance(np.asarray(spread, dtype=np.float64)[keep])
+    sd = np.asarray(spread, dtype=np.float64)[keep]
+    noise = np.maximum(np.median(sd, axis=0), ADC_LSB_COUNTS / 2)
+    excess = np.where(sd > DISTURBED_SPREAD_RATIO * noise, sd**2 - noise**2, 0.0)
+    over_noise = np.max(sd / noise, axis=1)
     found = np.flatnonzero(np.any(excess > 0, axis=1))
     return excess, {int(keep[i]): float(over_noise[i]) for i in found}
 
 
-def _excess_variance(spread: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Per fitted pose and axis (N, 3), the variance a disturbed pose's mean carries beyond
-    its noise's (module docstring, ``pose_noise``): σ² − σ_noise² where σ exceeds
-    :data:`DISTURBED_SPREAD_RATIO`·σ_noise, σ_noise the median spread of the poses (at
-    least ½ LSB), else 0; and each pose's largest σ/σ_noise (N,)."""
-    noise = np.maximum(np.median(spread, axis=0), ADC_LSB_COUNTS / 2)
-    disturbed = spread > DISTURBED_SPREAD_RATIO * noise
-    excess = np.where(disturbed, spread**2 - noise**2, 0.0)
-    ratio = np.max(spread / noise, axis=1)
-    return np.asarray(excess, dtype=np.float64), np.asarray(ratio, dtype=np.float64)
-
-
-def _pack(offset: FloatArray, matrix: FloatArray, model: Model) -> FloatArray:
-    """θ in counts: (o, s) for six, (o, C_upper) in g/count for nine."""
-    tail = 1.0 / np.diag(matrix) if model == "six" else matrix[UPPER]
-    return np.concatenate([offset, tail])
-
-
-def _unpack(theta: FloatArray, model: Model) -> tuple[FloatArray, FloatArray]:
-    if model == "six":
-        return theta[:3], np.diag(1.0 / theta[3:6])
-    c = np.zeros((3, 3))
-    c[UPPER] = theta[3:9]
-    return theta[:3], c
-
-
 def _jacobians(theta: FloatArray, a: FloatArray, model: Model) -> tuple[FloatArray, ...]:
     """J = ∂r/∂θ (N, p), ∂r_i/∂a_i (N, 3) and the unit calibrated gravity n (N, 3)."""
-    offset, c = _unpack(theta, model)
+    offset, c = unpack(theta, model)
     d = a - offset
     gvec = d @ c.T
     n = gvec / np.linalg.norm(gvec, axis=1, keepdims=True)
@@ -931,50 +891,3 @@ def _model_term(
     av = offset + np.einsum("kij,j->ki", coupled, verification_dir) * s
     rv = _residuals(thetas, av[:, None, :])[:, 0]
     return term, np.asarray(rv, dtype=np.float64), (coupled, thetas)
-
-
-def _verification_variance(
-    theta: FloatArray,
-    model: Model,
-    av: FloatArray,
-    spread: ArrayLike | None,
-    samples: int | None,
-    pinv: FloatArray,
-    w_fit: FloatArray,
-    model_rv: FloatArray | None,
-    var_temperature: float = 0.0,
-) -> tuple[float, float, float]:
-    """The verification pose's misfit r_v = |C(a_v − o)| − 1 (g), its predicted
-    variance (g²): the fit poses' noise through θ, the verification pose's own noise and
-    quantisation, the model's misfit there and the drift with temperature
-    (``var_temperature``); and the model's misfit's part of it (g²)."""
-    offset, c = _unpack(theta, model)
-    gv = c @ (av - offset)
-    rv = float(np.linalg.norm(gv) - 1.0)
-    jv, dv, _ = _jacobians(theta, av[None, :], model)
-    # δr_v = J_v δθ + dv δa_v with δθ = −J⁺ δr: the fit poses' noise reaches it through θ.
-    reach = (jv @ pinv)[0]  # ∂r_v/∂r_fit
-    var_fit = float(reach**2 @ w_fit)
-    var_n, var_q = _pose_variances(
-        None if spread is None else np.asarray(spread, dtype=np.float64).reshape(1, 3),
-        None if samples is None else np.array([samples]),
-        1,
-    )
-    var_own = float(dv[0] ** 2 @ (var_n[0] + var_q[0]))
-    var_model = 0.0 if model_rv is None else float(np.mean(model_rv**2))
-    return rv, var_fit + var_own + var_model + var_temperature, var_model
-
-
-def _evidence_at(
-    theta: FloatArray, model: Model, av: FloatArray, evidence: FloatArray | None
-) -> float:
-    """The fit's evidence (its covariance of θ beyond the noise's, ``evidence``) at the
-    verification pose's misfit, g²: J_v Σ J_vᵀ (0 without it)."""
-    if evidence is None:
-        return 0.0
-    jv, _, _ = _jacobians(theta, av[None, :], model)
-    return float(max(0.0, (jv @ evidence @ jv.T)[0, 0]))
-
-
-def _xyz(values: FloatArray) -> dict[str, float]:
-    return {"x": float(values[0]), "y": float(values[1]), "z": float(values[2])}

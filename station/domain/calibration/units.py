@@ -24,6 +24,7 @@ from typing import Final, Literal
 import numpy as np
 
 from station.domain.arrays import FloatArray
+from station.domain.calibration.model import xyz
 from station.domain.sensors.sensor import NOMINAL_OFFSET_COUNTS, NOMINAL_SENSITIVITY_COUNTS_PER_G
 
 AccelUnits = Literal["counts", "g", "m/s2"]
@@ -101,22 +102,22 @@ class DeclaredUnits:
         out["units"] = self.names()
         if self.accel == "counts":
             return out
-        out["offset"] = _xyz(self.offset(_array(out["offset"])))
-        out["sensitivity"] = _xyz(self.sensitivity(_array(out["sensitivity"])))
+        out["offset"] = xyz(self.offset(_array(out["offset"])))
+        out["sensitivity"] = xyz(self.sensitivity(_array(out["sensitivity"])))
         out["matrix"] = self.matrix(np.asarray(out["matrix"], dtype=np.float64)).tolist()
         se = out.get("standard_errors")
         if isinstance(se, dict):
             out["standard_errors"] = se | {
-                "offset": _xyz(self.spread(_array(se["offset"]))),
-                "sensitivity": _xyz(self.sensitivity(_array(se["sensitivity"]))),
+                "offset": xyz(self.spread(_array(se["offset"]))),
+                "sensitivity": xyz(self.sensitivity(_array(se["sensitivity"]))),
             }
         u = out.get("uncertainty")
         if isinstance(u, dict):
             restated = dict(u)
             if "offset" in u:
-                restated["offset"] = _xyz(self.spread(_array(u["offset"])))
+                restated["offset"] = xyz(self.spread(_array(u["offset"])))
             if "sensitivity" in u:
-                restated["sensitivity"] = _xyz(self.sensitivity(_array(u["sensitivity"])))
+                restated["sensitivity"] = xyz(self.sensitivity(_array(u["sensitivity"])))
             if "matrix" in u:  # the nine-parameter matrix's U scales as the matrix
                 restated["matrix"] = self.matrix(np.asarray(u["matrix"], dtype=np.float64)).tolist()
             out["uncertainty"] = restated
@@ -129,12 +130,8 @@ class DeclaredUnits:
         return out
 
 
-def _array(xyz: object) -> FloatArray:
+def _array(values: object) -> FloatArray:
     """``{"x", "y", "z"}`` as an array."""
-    if not isinstance(xyz, dict):
-        raise TypeError(f"expected {{x, y, z}}, got {xyz!r}")
-    return np.array([xyz[a] for a in "xyz"], dtype=np.float64)
-
-
-def _xyz(values: FloatArray) -> dict[str, float]:
-    return {a: float(v) for a, v in zip("xyz", values, strict=True)}
+    if not isinstance(values, dict):
+        raise TypeError(f"expected {{x, y, z}}, got {values!r}")
+    return np.array([values[a] for a in "xyz"], dtype=np.float64)

@@ -103,30 +103,19 @@ def _model(
 def _f_test(full: NestedModel, reduced: NestedModel, n: int) -> FTest:
     q = full.parameters - reduced.parameters
     df_den = n - full.parameters
+    test = FTest(
+        full=full.name, reduced=reduced.name, f=None, df_num=q, df_den=df_den, p_value=None
+    )
     if q <= 0 or df_den <= 0:
-        return FTest(
-            full=full.name,
-            reduced=reduced.name,
-            f=None,
-            df_num=q,
-            df_den=df_den,
-            p_value=None,
-            reason="no residual degrees of freedom" if df_den <= 0 else "no extra terms",
-        )
+        reason = "no residual degrees of freedom" if df_den <= 0 else "no extra terms"
+        return test.model_copy(update={"reason": reason})
     f = ((reduced.rss - full.rss) / q) / (max(full.rss, _TINY) / df_den)
     f = float(min(max(f, 0.0), _F_MAX))
     # Imported here: scipy.special takes ~0.5 s to load, and the results server, which
     # imports this module with the run record, rarely needs it (the server's start-up).
     from scipy import special
 
-    return FTest(
-        full=full.name,
-        reduced=reduced.name,
-        f=f,
-        df_num=q,
-        df_den=df_den,
-        p_value=float(special.fdtrc(q, df_den, f)),
-    )
+    return test.model_copy(update={"f": f, "p_value": float(special.fdtrc(q, df_den, f))})
 
 
 def _needed(
@@ -140,11 +129,7 @@ def _needed(
 
 
 def compare_axis(
-    status: AxisIdentifiability,
-    design: FloatArray,
-    y: FloatArray,
-    names: list[str],
-    alpha: float,
+    status: AxisIdentifiability, design: FloatArray, y: FloatArray, names: list[str], alpha: float
 ) -> AxisComparison:
     """Fit the four nested models of one gyro axis and decide the form (module docstring)."""
     sets = _term_sets(status)

@@ -28,5 +28,4 @@ def compensate(model: GyroErrorModel, gyro: FloatArray, acc: FloatArray) -> Floa
     diagonal = np.arange(3)
     matrices[:, diagonal, diagonal] += acc @ model.n_g.T
     rhs = gyro - model.bias - acc @ model.bias_g.T
-    rate = np.asarray(np.linalg.solve(matrices, rhs[:, :, None])[:, :, 0], dtype=np.float64)
-    return rate
+    return np.asarray(np.linalg.solve(matrices, rhs[:, :, None])[:, :, 0], dtype=np.float64)

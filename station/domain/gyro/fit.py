@@ -32,6 +32,8 @@ from station.domain.sensors.sensor import AXES
 
 Vector = list[float | None]
 Matrix = list[list[float | None]]
+#: The fields of the error model's families of terms, in the order of a gyro's row.
+FAMILIES = ("bias_dps", "scale_matrix", "bias_g_sensitivity_dps_per_g", "g_sensitivity_ppm_per_g")
 
 
 class GyroFitErrors(BaseModel):
@@ -87,6 +89,12 @@ class GyroFitReport(BaseModel):
 def _split(row: list[float | None]) -> tuple[float | None, Vector, Vector, Vector]:
     n_ppm = [None if v is None else v * PPM for v in row[7:10]]
     return row[0], row[1:4], row[4:7], n_ppm
+
+
+def _families(rows: list[list[float | None]]) -> dict[str, Any]:
+    """The three gyros' rows as the report's families of terms (:data:`FAMILIES`)."""
+    columns = zip(*map(_split, rows), strict=True)
+    return {name: list(column) for name, column in zip(FAMILIES, columns, strict=True)}
 
 
 def _sense_axis(
@@ -148,26 +156,16 @@ def fit_log(log: GyroLog, alpha: float = DEFAULT_ALPHA) -> GyroFitReport:
         error_rows.append(error)
         rms.append(float(np.sqrt(ls.rss / y.size)))
         comparison.append(compare_axis(status, design, y, term_names(axis), alpha))
-    parts = [_split(r) for r in rows]
-    error_parts = [_split(r) for r in error_rows]
-    sense = [
-        _sense_axis(p[3], e[3], c) for p, e, c in zip(parts, error_parts, comparison, strict=True)
-    ]
+    values, errors = _families(rows), _families(error_rows)
+    n_terms = zip(values[FAMILIES[3]], errors[FAMILIES[3]], comparison, strict=True)
+    sense = [_sense_axis(n, e, c) for n, e, c in n_terms]
     return GyroFitReport(
         dwells=len(log),
-        bias_dps=[p[0] for p in parts],
-        scale_matrix=[p[1] for p in parts],
-        bias_g_sensitivity_dps_per_g=[p[2] for p in parts],
-        g_sensitivity_ppm_per_g=[p[3] for p in parts],
+        **values,
         sense_axis=[s[0] for s in sense],
         sense_axis_reason=[s[1] for s in sense],
         residual_rms_dps=rms,
-        standard_errors=GyroFitErrors(
-            bias_dps=[e[0] for e in error_parts],
-            scale_matrix=[e[1] for e in error_parts],
-            bias_g_sensitivity_dps_per_g=[e[2] for e in error_parts],
-            g_sensitivity_ppm_per_g=[e[3] for e in error_parts],
-        ),
+        standard_errors=GyroFitErrors(**errors),
         unestimable=report.unestimable(),
         identifiability=report,
         comparison=comparison,

@@ -77,11 +77,10 @@ class IdentifiabilityReport(BaseModel):
 
     def status(self, term: str) -> TermStatus:
         """The status of ``term`` (e.g. ``"N_xy"``)."""
-        for axis in self.axes:
-            for status in axis.terms:
-                if status.term == term:
-                    return status
-        raise KeyError(term)
+        found = next((s for axis in self.axes for s in axis.terms if s.term == term), None)
+        if found is None:
+            raise KeyError(term)
+        return found
 
     def unestimable(self) -> list[TermStatus]:
         """Every term that cannot be estimated, in axis and column order."""
@@ -101,19 +100,16 @@ def excitation(log: GyroLog, axis: int) -> tuple[NDArray[np.bool_], dict[str, st
     """Rule 1: mask of excited columns of gyro ``axis``, reasons for the others, caveats."""
     names = term_names(axis)
     a_i = AXES[axis]
-    mask = np.ones(TERMS_PER_AXIS, dtype=bool)
     reasons: dict[str, str] = {}
     caveats: list[str] = []
     rate_max = np.max(np.abs(log.rate), axis=0) if len(log) else np.zeros(3)
     for j, a_j in enumerate(AXES):
         if rate_max[j] < RATE_FLOOR_DPS:
-            mask[1 + j] = False
             reasons[names[1 + j]] = (
                 f"no rate about {a_j} in the log (|rate_ref_{a_j}| < {RATE_FLOOR_DPS:g} deg/s)"
             )
         mean, spread = float(np.mean(log.acc[:, j])), float(np.std(log.acc[:, j]))
         if spread < ACC_SPREAD_FLOOR_G:
-            mask[4 + j] = False
             reasons[names[4 + j]] = (
                 f"acceleration along {a_j} does not vary in the log "
                 f"(spread {spread:.3f} g < {ACC_SPREAD_FLOOR_G:g} g)"
@@ -122,20 +118,19 @@ def excitation(log: GyroLog, axis: int) -> tuple[NDArray[np.bool_], dict[str, st
                 caveats.append(f"bias_{a_i} includes {names[4 + j]} × {mean:+.2f} g")
         n_term = names[7 + j]
         if rate_max[axis] < RATE_FLOOR_DPS:
-            mask[7 + j] = False
             reasons[n_term] = f"no rate about {a_i} (the input axis) in the log"
             continue
         weights = log.rate[:, axis] ** 2
         w_mean = float(np.average(log.acc[:, j], weights=weights))
         w_spread = float(np.sqrt(np.average((log.acc[:, j] - w_mean) ** 2, weights=weights)))
         if w_spread < ACC_SPREAD_FLOOR_G:
-            mask[7 + j] = False
             reasons[n_term] = (
                 f"acceleration along {a_j} does not vary while rate about {a_i} is applied "
                 f"(spread {w_spread:.3f} g < {ACC_SPREAD_FLOOR_G:g} g; it needs both signs)"
             )
             if abs(w_mean) >= ACC_SPREAD_FLOOR_G:
                 caveats.append(f"S_{a_i}{a_i} includes {n_term} × {w_mean:+.2f} g")
+    mask = np.array([name not in reasons for name in names])
     return mask, reasons, caveats
 
 

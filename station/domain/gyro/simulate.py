@@ -68,13 +68,12 @@ class Mount:
 
 def default_mounts() -> tuple[Mount, ...]:
     """Twelve mounts: every input axis, the arm along both other axes, both ways."""
-    mounts = []
-    for i in range(3):
-        others = [j for j in range(3) if j != i]
-        for n, j in enumerate(others):
-            for inward in (1, -1):
-                mounts.append(Mount(i, inward if n == 0 else -inward, j, inward))
-    return tuple(mounts)
+    return tuple(
+        Mount(i, inward if n == 0 else -inward, j, inward)
+        for i in range(3)
+        for n, j in enumerate(j for j in range(3) if j != i)
+        for inward in (1, -1)
+    )
 
 
 @dataclass(frozen=True)

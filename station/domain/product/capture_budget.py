@@ -78,9 +78,8 @@ class AdaptiveCapture(BaseModel):
 
 def _width(bounds: Bounds) -> float:
     """The bounds' width (infinite when a side is open)."""
-    if bounds.lower is None or bounds.upper is None:
-        return math.inf
-    return bounds.upper - bounds.lower
+    low, high = bounds.sides
+    return high - low
 
 
 def pose_budget_counts(profile: LimitsProfile, fraction: float) -> float:

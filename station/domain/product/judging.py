@@ -17,11 +17,11 @@ limit, as the run's record keeps it.
 """
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from station.domain.product.limits import CHECKS, LimitsProfile, check
 from station.domain.record.records import DecisionRule, FailureReason
-from station.domain.sensors.sensor import AXES
+from station.domain.sensors.sensor import AXES, Axis
 
 Triple = tuple[float, float, float]
 Matrix = tuple[Triple, Triple, Triple]
@@ -76,47 +76,28 @@ def limit_checks(profile: LimitsProfile, measured: Measured) -> list[FailureReas
             reasons.append(check(profile, "pose_noise", std, axis=axis, pose=i))
         if i in measured.link_loss:
             reasons.append(check(profile, "link_loss", measured.link_loss[i], pose=i))
-    u = measured.uncertainty
+
+    def guarded(
+        code: str, value: float, index: int, axis: Axis | None = None, pose: int | None = None
+    ) -> FailureReason | None:
+        """The check of a value that may carry its U: entry ``index`` of its U's key."""
+        family = measured.uncertainty.get(GUARDED_CHECKS[code])
+        uncertainty = None if family is None else family[index]
+        return check(profile, code, value, axis=axis, pose=pose, uncertainty=uncertainty)
+
     for code, values in (("offset", measured.offset), ("sensitivity", measured.sensitivity)):
         for i, (axis, value) in enumerate(zip(AXES, values or (), strict=False)):
-            reasons.append(check(profile, code, value, axis=axis, uncertainty=_u(u, code, i)))
+            reasons.append(guarded(code, value, i, axis))
     if measured.verification is not None:
         pose, error = measured.verification
-        reasons.append(
-            check(
-                profile,
-                "verification_error",
-                error,
-                pose=pose,
-                uncertainty=_u(u, "verification_error", 0),
-            )
-        )
+        reasons.append(guarded("verification_error", error, 0, pose=pose))
     for i, (axis, bias) in enumerate(zip(AXES, measured.gyro_bias or (), strict=False)):
-        reasons.append(
-            check(profile, "gyro_bias", bias, axis=axis, uncertainty=_u(u, "gyro_bias", i))
-        )
+        reasons.append(guarded("gyro_bias", bias, i, axis))
     k = measured.gyro_matrix
     if k is not None:
-        for i, axis in enumerate(AXES):
-            reasons.append(
-                check(
-                    profile,
-                    "gyro_scale",
-                    k[i][i] - 1.0,
-                    axis=axis,
-                    uncertainty=_u(u, "gyro_matrix", 4 * i),
-                )
-            )
+        reasons += [guarded("gyro_scale", k[i][i] - 1.0, 4 * i, AXES[i]) for i in range(3)]
         for i, j in ((i, j) for i in range(3) for j in range(3) if i != j):
-            reasons.append(
-                check(
-                    profile,
-                    "gyro_misalignment",
-                    k[i][j],
-                    axis=AXES[i],
-                    uncertainty=_u(u, "gyro_matrix", 3 * i + j),
-                )
-            )
+            reasons.append(guarded("gyro_misalignment", k[i][j], 3 * i + j, AXES[i]))
     return [r for r in reasons if r is not None]
 
 
@@ -124,18 +105,11 @@ def check_rules(profile: LimitsProfile, measured: Measured) -> dict[str, Decisio
     """The decision rule that judges each limit ``profile`` sets (by check code): the
     profile's where the value carries its U in ``measured`` (:data:`GUARDED_CHECKS`),
     simple acceptance elsewhere (a value without U is judged by itself)."""
-    rules: dict[str, DecisionRule] = {}
-    for code, name in CHECKS.items():
-        if getattr(profile, name) is None:
-            continue
-        key = GUARDED_CHECKS.get(code)
-        rules[code] = profile.rule if key in measured.uncertainty else "simple"
-    return rules
-
-
-def _u(uncertainty: Mapping[str, tuple[float, ...]], key: str, index: int) -> float | None:
-    values = uncertainty.get(key)
-    return None if values is None else values[index]
+    return {
+        code: profile.rule if GUARDED_CHECKS.get(code) in measured.uncertainty else "simple"
+        for code, name in CHECKS.items()
+        if getattr(profile, name) is not None
+    }
 
 
 def uncertainty_of(
@@ -147,17 +121,15 @@ def uncertainty_of(
 ) -> dict[str, tuple[float, ...]]:
     """:attr:`Measured.uncertainty` from the U of each coefficient family, of the
     verification error and of K (None: unknown)."""
-    families: tuple[tuple[str, tuple[float, ...] | None], ...] = (
-        ("offset", offset),
-        ("sensitivity", sensitivity),
-        ("gyro_bias", gyro_bias),
-        ("verification_error", None if verification_error is None else (verification_error,)),
-        (
-            "gyro_matrix",
-            None if gyro_matrix is None else tuple(v for row in gyro_matrix for v in row),
-        ),
-    )
-    return {code: values for code, values in families if values is not None}
+    entries = None if gyro_matrix is None else tuple(v for row in gyro_matrix for v in row)
+    families: dict[str, tuple[float, ...] | None] = {
+        "offset": offset,
+        "sensitivity": sensitivity,
+        "gyro_bias": gyro_bias,
+        "verification_error": None if verification_error is None else (verification_error,),
+        "gyro_matrix": entries,
+    }
+    return {code: values for code, values in families.items() if values is not None}
 
 
 def verdict_failures(
@@ -184,16 +156,7 @@ def rejudge(
         for f in stored
         if f.code == "link_loss" and f.pose is not None and f.measured is not None
     }
-    measured = Measured(
-        pose_noise=measured.pose_noise,
-        link_loss={**measured.link_loss, **losses},
-        offset=measured.offset,
-        sensitivity=measured.sensitivity,
-        verification=measured.verification,
-        gyro_bias=measured.gyro_bias,
-        gyro_matrix=measured.gyro_matrix,
-        uncertainty=measured.uncertainty,
-    )
+    measured = replace(measured, link_loss={**measured.link_loss, **losses})
     again = (*REJUDGED, *(("gyro_scale", "gyro_misalignment") if measured.gyro_matrix else ()))
     found = [f for f in stored if f.code not in again]
     return verdict_failures(found, limit_checks(profile, measured))

@@ -65,25 +65,23 @@ class Bounds(BaseModel):
             raise ValueError(f"lower {self.lower} is above upper {self.upper}")
         return self
 
+    @property
+    def sides(self) -> tuple[float, float]:
+        """``(lower, upper)`` with a missing side at ∓∞."""
+        low = self.lower if self.lower is not None else -math.inf
+        return low, self.upper if self.upper is not None else math.inf
+
     def contains(self, value: float) -> bool:
         """Whether ``value`` lies within the bounds (a NaN or an infinity never does: a
         measurement is finite, and an open side is not a licence for ±∞)."""
-        low = self.lower if self.lower is not None else -float("inf")
-        high = self.upper if self.upper is not None else float("inf")
+        low, high = self.sides
         return math.isfinite(value) and low <= value <= high
 
     def guarded(self, value: float, u: float) -> bool:
         """Whether ``value ± u`` lies within the bounds: guarded acceptance with a guard
         band w = u on each side (ILAC-G8:09/2019 4.2.2, JCGM 106:2012 8.3.3)."""
-        low = self.lower if self.lower is not None else -float("inf")
-        high = self.upper if self.upper is not None else float("inf")
+        low, high = self.sides
         return math.isfinite(value) and low + u <= value <= high - u
-
-    def margin(self, value: float) -> float:
-        """How far ``value`` lies inside the nearer bound (negative: outside)."""
-        low = self.lower if self.lower is not None else -float("inf")
-        high = self.upper if self.upper is not None else float("inf")
-        return min(value - low, high - value)
 
     def describe(self) -> str:
         """``[a, b]``, ``≤ b`` or ``≥ a``."""
@@ -128,8 +126,7 @@ ErrorBounds = Annotated[
 NoiseBounds = Annotated[Bounds, AfterValidator(_plausible(0, ADC_SPAN, "the ADC span", " counts"))]
 """A spread or residual of ADC readings, counts: 0…65535 (the widest ADC's span)."""
 GyroBiasBounds = Annotated[
-    Bounds,
-    AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s")),
+    Bounds, AfterValidator(_plausible(-GYRO_RANGE_DPS, GYRO_RANGE_DPS, "the gyro range", " deg/s"))
 ]
 """A gyro bias, deg/s: ±655.36 (the protocol's rate field)."""
 FractionBounds = Annotated[Bounds, AfterValidator(_plausible(0, 1, "a fraction's range"))]
@@ -237,8 +234,7 @@ class LimitsProfile(BaseModel):
         the setting existed.
         """
         unset = {name for name in _OPTIONAL if getattr(self, name) is None}
-        document: dict[str, JsonValue] = self.model_dump(mode="json", exclude=unset or None)
-        return document
+        return self.model_dump(mode="json", exclude=unset or None)
 
     @property
     def sha256(self) -> str:

@@ -57,12 +57,8 @@ def check_solvable(poses: tuple[str, ...], model: Model) -> None:
             f"the {model!r} model needs at least {UNKNOWNS[model]} calibration poses, "
             f"{len(poses)} are configured"
         )
-    ideal = np.array(
-        [
-            NOMINAL_OFFSET_COUNTS + NOMINAL_SENSITIVITY_COUNTS_PER_G * pose(n).gravity_body
-            for n in poses
-        ]
-    )
+    gravity = np.array([pose(n).gravity_body for n in poses])
+    ideal = NOMINAL_OFFSET_COUNTS + NOMINAL_SENSITIVITY_COUNTS_PER_G * gravity
     try:
         solve(ideal, model)
     except CalibrationError as exc:

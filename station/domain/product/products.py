@@ -50,16 +50,12 @@ class Product(BaseModel):
         wholly outside a factor of two of its nominal counts per g (another sensor's)."""
         s = self.sensor
         offset, sensitivity = limits.offset_counts, limits.sensitivity_counts_per_g
-        if (offset.upper is not None and offset.upper < 0) or (
-            offset.lower is not None and offset.lower > s.adc_max
-        ):
+        if offset.sides[1] < 0 or offset.sides[0] > s.adc_max:
             return (
                 f"offset_counts {offset.describe()} beyond the {s.adc_bits}-bit ADC's 0…{s.adc_max}"
             )
         low, high = s.counts_per_g / 2, s.counts_per_g * 2
-        if (sensitivity.upper is not None and sensitivity.upper < low) or (
-            sensitivity.lower is not None and sensitivity.lower > high
-        ):
+        if sensitivity.sides[1] < low or sensitivity.sides[0] > high:
             return (
                 f"sensitivity_counts_per_g {sensitivity.describe()} is not a sensor of "
                 f"{s.counts_per_g:g} counts/g (outside {low:g}…{high:g})"
@@ -76,8 +72,7 @@ class Product(BaseModel):
             raise InputError(f"{where}: no limits profile {self.limits_profile!r} (known: {known})")
         if self.plan is not None and shipped_plan(self.plan) is None:
             raise InputError(f"{where}: no run plan {self.plan!r}")
-        why = self.contradiction(profile)
-        if why is not None:
+        if (why := self.contradiction(profile)) is not None:
             raise InputError(
                 f"{where}: its sensor contradicts limits profile {profile.name}: {why}"
             )

@@ -15,11 +15,13 @@ from station.domain.record.records import LimitsRef, Verdict
 Disposition = Literal["ship", "hold"]
 
 
-class _FigurePart(BaseModel):
+class FigurePart(BaseModel):
+    """Base of every part of the report's figures: immutable, strict about unknown fields."""
+
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-class ReportFilter(_FigurePart):
+class ReportFilter(FigurePart):
     """Which runs the report covers: ``since`` inclusive, ``until`` exclusive (start time),
     and only this station, operator, production lot or product when given."""
 
@@ -31,7 +33,7 @@ class ReportFilter(_FigurePart):
     part_number: str | None = None
 
 
-class Summary(_FigurePart):
+class Summary(FigurePart):
     """Counts and yields of the runs in range, by the yield definition of
     :mod:`db.rollups`.
 
@@ -73,21 +75,21 @@ class Summary(_FigurePart):
     poses: int
 
 
-class StationSummary(_FigurePart):
+class StationSummary(FigurePart):
     """The summary of one station."""
 
     station_id: str
     summary: Summary
 
 
-class ProductSummary(_FigurePart):
+class ProductSummary(FigurePart):
     """The summary of one product: the runs of its part number."""
 
     part_number: str
     summary: Summary
 
 
-class ParetoEntry(_FigurePart):
+class ParetoEntry(FigurePart):
     """Failing runs whose first failure reason is ``code``."""
 
     code: str
@@ -102,14 +104,14 @@ class ParetoEntry(_FigurePart):
 HOLD_AGES = ("< 1 day", "1–7 days", "> 7 days")
 
 
-class HoldCount(_FigurePart):
+class HoldCount(FigurePart):
     """Open holds of one age or cause."""
 
     label: str
     units: int
 
 
-class OpenHolds(_FigurePart):
+class OpenHolds(FigurePart):
     """The held units the report counts (their latest run failed) that no review has
     closed: no quality review of that latest run (``hold_reviews``)."""
 
@@ -123,7 +125,7 @@ class OpenHolds(_FigurePart):
     )
 
 
-class Histogram(_FigurePart):
+class Histogram(FigurePart):
     """Counts of ``bins`` equal bins from ``start``; outliers land in the end bins."""
 
     start: float
@@ -131,7 +133,7 @@ class Histogram(_FigurePart):
     counts: list[int]
 
 
-class Distribution(_FigurePart):
+class Distribution(FigurePart):
     """The histogram the page draws: the latest runs' values in bins from the data
     (:func:`station.domain.quality.capability.data_bins`)."""
 
@@ -144,7 +146,7 @@ class Distribution(_FigurePart):
     runs: int = Field(description="the latest runs in range the values are from")
 
 
-class ParameterStats(_FigurePart):
+class ParameterStats(FigurePart):
     """Distribution and capability of one parameter against its limits."""
 
     name: str
@@ -175,7 +177,7 @@ class ParameterStats(_FigurePart):
     )
 
 
-class ChartPoint(_FigurePart):
+class ChartPoint(FigurePart):
     """One run on a control chart."""
 
     started_at: datetime
@@ -190,7 +192,7 @@ class ChartPoint(_FigurePart):
     )
 
 
-class ControlChart(_FigurePart):
+class ControlChart(FigurePart):
     """Individuals and moving-range chart of one coefficient: ``count`` runs in range set
     its limits, the latest of them are ``points``, each with the Western Electric rules
     it completes (:mod:`station.domain.quality.control`) among the points plotted."""
@@ -210,7 +212,7 @@ class ControlChart(_FigurePart):
     )
 
 
-class TrendFigures(_FigurePart):
+class TrendFigures(FigurePart):
     """The figures of one period of the trend: the units whose first run on the line was
     in it, with their first-pass and final yield, its runs, and the Cpk of its values."""
 
@@ -238,7 +240,7 @@ class TrendShift(TrendFigures):
     end: AwareDatetime = Field(description="the next shift's start (UTC)")
 
 
-class UnitVerdict(_FigurePart):
+class UnitVerdict(FigurePart):
     """A unit's final state for the ship/hold decision: its latest run (``runs``: every
     run of the unit)."""
 
@@ -252,7 +254,7 @@ class UnitVerdict(_FigurePart):
     failure: str | None = Field(description="first failure reason of the latest run")
 
 
-class VerdictFlip(_FigurePart):
+class VerdictFlip(FigurePart):
     """A unit of the report whose latest run would be judged otherwise."""
 
     serial: str
@@ -265,7 +267,7 @@ class VerdictFlip(_FigurePart):
     )
 
 
-class WhatIf(_FigurePart):
+class WhatIf(FigurePart):
     """The report's runs re-judged against a candidate limits profile, nothing stored
     changed: yields, Pareto and capability as they would have been, and the units whose
     verdict would flip."""
@@ -290,7 +292,7 @@ class WhatIf(_FigurePart):
     )
 
 
-class CoefficientRisk(_FigurePart):
+class CoefficientRisk(FigurePart):
     """Global decision risks of one coefficient (JCGM 106:2012 9.5), as fractions of all
     units, from the process's spread and the mean standard uncertainty of measurement.
     They assume a normal population (:mod:`station.domain.quality.risk`); the measured
@@ -322,7 +324,7 @@ class CoefficientRisk(_FigurePart):
     )
 
 
-class NearLimits(_FigurePart):
+class NearLimits(FigurePart):
     """Passing runs accepted within one expanded uncertainty U of a limit (ILAC-G8): an
     offset or a sensitivity whose value ± U reaches past a bound of the report's limits;
     and the estimated false-accept and false-reject rates of each rule."""
@@ -337,7 +339,7 @@ class NearLimits(_FigurePart):
     )
 
 
-class ProductSection(_FigurePart):
+class ProductSection(FigurePart):
     """One product's statistics in a report whose runs are of several products: its runs
     only (``filter`` narrowed to its part number), judged against its own limits profile
     (the latest of its runs'): capability, distributions, control charts, near-limit runs
@@ -360,7 +362,7 @@ class ProductSection(_FigurePart):
     )
 
 
-class EolReport(_FigurePart):
+class EolReport(FigurePart):
     """The end-of-line report over ``filter``."""
 
     generated_at: datetime
@@ -410,8 +412,7 @@ class EolReport(_FigurePart):
         None, description="the runs re-judged against a candidate limits profile, when given"
     )
     near_limits: NearLimits | None = Field(
-        None,
-        description="passing runs accepted within one U of a limit (None: no limits to judge)",
+        None, description="passing runs accepted within one U of a limit (None: no limits to judge)"
     )
     product_sections: list[ProductSection] = Field(
         default_factory=list,

@@ -121,6 +121,5 @@ def decision_risks(
     false_accept = float(np.sum(weight * p_accept * ~inside))
     false_reject = float(np.sum(weight * (1.0 - p_accept) * inside))
     return Risks(
-        false_accept=min(max(false_accept, 0.0), 1.0),
-        false_reject=min(max(false_reject, 0.0), 1.0),
+        false_accept=min(max(false_accept, 0.0), 1.0), false_reject=min(max(false_reject, 0.0), 1.0)
     )

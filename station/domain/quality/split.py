@@ -12,10 +12,10 @@ from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from station.domain.quality.capability import capability_warning, cpk, observed_ppm
-from station.domain.quality.figures import ReportFilter
+from station.domain.quality.figures import FigurePart, ReportFilter
 
 #: What a parameter may be split by: a run's column each.
 SplitBy = Literal["station", "lot", "operator", "fixture_slot", "part_number", "software_version"]
@@ -25,11 +25,7 @@ FENCE = 1.5
 NO_VALUE = "(none)"
 
 
-class _FigurePart(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class GroupStats(_FigurePart):
+class GroupStats(FigurePart):
     """One group's values of the parameter: n, mean, sd, the box plot's five numbers,
     outliers, Cpk and the observed ppm out of limits."""
 
@@ -53,7 +49,7 @@ class GroupStats(_FigurePart):
     )
 
 
-class SplitReport(_FigurePart):
+class SplitReport(FigurePart):
     """``parameter`` over the runs ``filter`` selects (the latest ``sample_limit`` of
     them: ``sampled_runs``), split by ``by``: the largest groups first; over runs of
     several products, a section per product instead."""

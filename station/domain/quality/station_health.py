@@ -13,10 +13,12 @@ sensitivity), or a latest check the station failed.
 
 from collections.abc import Sequence
 from datetime import datetime
+from functools import partial
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from station.domain.quality.figures import FigurePart
 from station.domain.quality.golden import GoldenUnit
 from station.domain.quality.split import GroupStats
 from station.domain.sensors.sensor import AXES
@@ -29,11 +31,7 @@ SENSITIVITY_TOLERANCE: float = GoldenUnit.model_fields["sensitivity_tolerance_co
 Triple = tuple[float, float, float]
 
 
-class _Part(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class GoldenCheck(_Part):
+class GoldenCheck(FigurePart):
     """One golden-unit check: its coefficients' distance from the baseline."""
 
     run_id: str
@@ -44,7 +42,7 @@ class GoldenCheck(_Part):
     sensitivity_deviation: Triple | None = Field(description="counts/g from the baseline")
 
 
-class VersionUse(_Part):
+class VersionUse(FigurePart):
     """Runs of one software version and limits profile, first and last seen."""
 
     software_version: str
@@ -54,7 +52,7 @@ class VersionUse(_Part):
     last: datetime
 
 
-class DriftWarning(_Part):
+class DriftWarning(FigurePart):
     """A golden unit's latest check that failed, or an axis of it beyond tolerance of its
     baseline. ``checked_at`` is a moment (UTC): a page shows it in the plant's zone."""
 
@@ -69,7 +67,7 @@ class DriftWarning(_Part):
     tolerance: float | None = Field(default=None, description="the tolerance it is beyond")
 
 
-class StationHealth(_Part):
+class StationHealth(FigurePart):
     """A station's health over its latest runs (:mod:`db.report.station_health`)."""
 
     station_id: str
@@ -97,34 +95,25 @@ def golden_checks(
         )
         for serial, found in by_serial.items()
     }
-    checks = [
-        GoldenCheck(
-            run_id=run_id,
-            started_at=started_at,
-            serial=serial,
-            verdict=verdict,
-            offset_deviation=_less(offset, baselines[serial][0])
-            if serial in baselines and offset
-            else None,
-            sensitivity_deviation=(
-                _less(sensitivity, baselines[serial][1])
-                if serial in baselines and sensitivity
-                else None
-            ),
+    checks = []
+    for run_id, started_at, serial, verdict, offset, sensitivity in rows:
+        base = baselines.get(serial)
+        checks.append(
+            GoldenCheck(
+                run_id=run_id,
+                started_at=started_at,
+                serial=serial,
+                verdict=verdict,
+                offset_deviation=_less(offset, base[0]) if base and offset else None,
+                sensitivity_deviation=_less(sensitivity, base[1]) if base and sensitivity else None,
+            )
         )
-        for run_id, started_at, serial, verdict, offset, sensitivity in rows
-    ]
     latest: dict[str, GoldenCheck] = {check.serial: check for check in checks}
     drift = []
     for serial, check in sorted(latest.items()):
+        warning = partial(DriftWarning, serial=serial, checked_at=check.started_at)
         if check.verdict != "pass":
-            drift.append(
-                DriftWarning(
-                    serial=serial,
-                    checked_at=check.started_at,
-                    problem="its latest check failed at the station",
-                )
-            )
+            drift.append(warning(problem="its latest check failed at the station"))
         coefficients: list[tuple[Literal["offset", "sensitivity"], Triple | None, float, str]] = [
             ("offset", check.offset_deviation, OFFSET_TOLERANCE, "counts"),
             ("sensitivity", check.sensitivity_deviation, SENSITIVITY_TOLERANCE, "counts/g"),
@@ -133,9 +122,7 @@ def golden_checks(
             for axis, value in zip(AXES, deviation or (), strict=False):
                 if abs(value) > tolerance:
                     drift.append(
-                        DriftWarning(
-                            serial=serial,
-                            checked_at=check.started_at,
+                        warning(
                             problem=f"{name} {axis} {value:+.2f} {unit} from its baseline at "
                             f"the latest check, beyond ± {tolerance:g}",
                             quantity=name,
@@ -148,13 +135,10 @@ def golden_checks(
 
 
 def _mean(triples: Sequence[Triple]) -> Triple:
-    n = len(triples)
-    return (
-        sum(t[0] for t in triples) / n,
-        sum(t[1] for t in triples) / n,
-        sum(t[2] for t in triples) / n,
-    )
+    x, y, z = (sum(column) / len(triples) for column in zip(*triples, strict=True))
+    return (x, y, z)
 
 
 def _less(value: Triple, reference: Triple) -> Triple:
-    return (value[0] - reference[0], value[1] - reference[1], value[2] - reference[2])
+    x, y, z = (v - r for v, r in zip(value, reference, strict=True))
+    return (x, y, z)

@@ -55,6 +55,7 @@ from station.domain.sensors.record_bounds import (
     WIRE_COUNTS_MAX,
     ConditionNumber,
     ErrorMg,
+    GyroSpread,
     Measure,
     Temperature,
     Text,
@@ -160,8 +161,7 @@ Offset3 = Annotated[
     Vector3, AfterValidator(_within(OFFSET_MIN_COUNTS, OFFSET_MAX_COUNTS, "a zero-g output"))
 ]
 Sensitivity3 = Annotated[
-    Vector3,
-    AfterValidator(_within(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity", above=True)),
+    Vector3, AfterValidator(_within(0, SENSITIVITY_MAX_COUNTS_PER_G, "a sensitivity", above=True))
 ]
 
 
@@ -368,7 +368,6 @@ class GyroMatrixRecord(_Record):
     verification_deg: AngleDeg | None = None
 
 
-_GyroSpreadValue = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 _MatrixSpread = Annotated[float, Field(ge=0, le=2 * GYRO_MATRIX_MAX)]
 _SpreadRow = tuple[_MatrixSpread, _MatrixSpread, _MatrixSpread]
 _MatrixU = Annotated[float, Field(ge=0, le=MATRIX_MAX_G_PER_COUNT)]
@@ -389,7 +388,7 @@ class UncertaintyRecord(_Record):
         None
     )
     gyro_bias_dps: Annotated[
-        tuple[_GyroSpreadValue, _GyroSpreadValue, _GyroSpreadValue] | None,
+        tuple[GyroSpread, GyroSpread, GyroSpread] | None,
         Field(description="U of each gyro's bias, deg/s"),
     ] = None
     gyro_matrix: Annotated[
@@ -428,8 +427,7 @@ class UncertaintyRecord(_Record):
     def to_json(self) -> dict[str, JsonValue]:
         """The one shape: ``{"k", "offset": {x,y,z}, "sensitivity": {x,y,z},
         "gyro_bias_dps": [3], "gyro_matrix": [[3×3]]}``, unmeasured keys left out."""
-        document: dict[str, JsonValue] = self.model_dump(mode="json")
-        return document
+        return self.model_dump(mode="json")
 
 
 def document_sha256(document: Mapping[str, JsonValue]) -> str:

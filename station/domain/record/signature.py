@@ -30,11 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from station.domain.constants import IDENTIFIER_PATTERN
 from station.domain.errors import InputError
-from station.domain.record.records import (
-    RunRecord,
-    UtcDatetime,
-    canonical_json,
-)
+from station.domain.record.records import RunRecord, UtcDatetime, canonical_json
 
 #: A signatory's name: an identifier, as a station's or an operator's.
 SignatoryName = Annotated[str, Field(pattern=IDENTIFIER_PATTERN)]
@@ -105,9 +101,7 @@ def new_key() -> tuple[bytes, str]:
     and its public half as hex (registered)."""
     key = Ed25519PrivateKey.generate()
     pem = key.private_bytes(
-        serialization.Encoding.PEM,
-        serialization.PrivateFormat.PKCS8,
-        serialization.NoEncryption(),
+        serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption()
     )
     return pem, public_hex(key)
 

@@ -22,7 +22,7 @@ its retest limit) and at the verdict (:func:`disposition`).
 
 from collections.abc import Sequence
 from datetime import datetime
-from typing import Annotated, Protocol
+from typing import Annotated, Any, Protocol, TypeVar
 from uuid import UUID
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -119,6 +119,9 @@ class _UnitPart(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
+_Part = TypeVar("_Part", bound=_UnitPart)
+
+
 class HeldCalibration(_UnitPart):
     """The coefficients the unit holds: those of the last run that wrote it."""
 
@@ -176,8 +179,7 @@ class UnitCalibration(_UnitPart):
 
     serial: str
     verdict: Annotated[
-        Verdict,
-        Field(description="the verdict of the latest attempt that counts (aborts do not)"),
+        Verdict, Field(description="the verdict of the latest attempt that counts (aborts do not)")
     ]
     attempts: Annotated[int, Field(description="runs of the unit, aborts not counted")]
     holds: Annotated[
@@ -239,37 +241,23 @@ def _held(writer: Run) -> HeldCalibration | None:
     cal = writer.coefficients
     if cal is None or not wrote_unit(writer):
         return None
-    return HeldCalibration(
-        run_id=writer.run_id,
-        verdict=writer.verdict,
+    return _of_run(
+        HeldCalibration,
+        writer,
         written_at=writer.finished_at,
-        station_id=writer.station_id,
-        model=writer.model,
-        limits=writer.limits,
         offset=cal.offset,
         sensitivity=cal.sensitivity,
         matrix=cal.matrix,
-        quality=writer.quality,
-        gyro_matrix=writer.gyro_matrix,
-        uncertainty=writer.uncertainty,
     )
 
 
 def _attempt(run: Run) -> UnitAttempt:
     """``run`` as the unit's latest attempt."""
-    return UnitAttempt(
-        run_id=run.run_id,
-        verdict=run.verdict,
-        disposition=run.disposition,
-        started_at=run.started_at,
-        finished_at=run.finished_at,
-        station_id=run.station_id,
-        operator_id=run.operator_id,
-        lot=run.lot,
-        part_number=run.part_number,
-        software_version=run.software_version,
-        model=run.model,
-        limits=run.limits,
-        wrote_unit=wrote_unit(run),
-        failures=run.failures,
-    )
+    return _of_run(UnitAttempt, run, wrote_unit=wrote_unit(run))
+
+
+def _of_run(part: type[_Part], run: Run, **given: Any) -> _Part:
+    """A ``part`` of the unit's answer: the fields ``given``, every other one as ``run``
+    has it."""
+    taken = {name: getattr(run, name) for name in part.model_fields if name not in given}
+    return part(**taken, **given)

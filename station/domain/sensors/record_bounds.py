@@ -99,9 +99,6 @@ GyroSpread = Annotated[float, Field(ge=0, le=GYRO_SPAN_DPS)]
 Temperature = Annotated[float, Field(ge=-TEMPERATURE_RANGE_C, le=TEMPERATURE_RANGE_C)]
 """A temperature the unit reports, °C."""
 
-Sensitivity = Annotated[float, Field(gt=0, le=SENSITIVITY_MAX_COUNTS_PER_G)]
-"""A calibrated sensitivity, counts/g."""
-
 ErrorMg = Annotated[float, Field(ge=0, le=ERROR_MAX_MG)]
 """A residual or verification error, mg."""
 

@@ -43,15 +43,13 @@ class ZeroG:
     """Each axis' zero-g reading as known so far, how far off it may be, and the sensor's
     nominal sensitivity that turns the rest of a reading into g (counts, counts/g).
 
-    The default is the putter's datasheet (:data:`PUTTER_SENSOR`); :meth:`datasheet`
-    gives any product's sensor's.
+    :meth:`datasheet` gives a product's sensor's before any axis is measured (where none
+    is given, the putter's: :data:`PUTTER_SENSOR`).
     """
 
-    offset: FloatArray = field(default_factory=lambda: np.full(3, PUTTER_SENSOR.zero_g_counts))
-    doubt: FloatArray = field(
-        default_factory=lambda: np.full(3, PUTTER_SENSOR.zero_g_spread_counts)
-    )
-    counts_per_g: float = PUTTER_SENSOR.counts_per_g
+    offset: FloatArray
+    doubt: FloatArray
+    counts_per_g: float
 
     @classmethod
     def datasheet(cls, sensor: SensorSpec) -> "ZeroG":
@@ -88,7 +86,7 @@ class ZeroG:
 
 def gravity_direction(accel_counts: FloatArray, zero_g: ZeroG | None = None) -> FloatArray:
     """Unit vector of the sensed gravity reaction (body axes) from mean raw counts (3,)."""
-    known = zero_g or ZeroG()
+    known = zero_g or ZeroG.datasheet(PUTTER_SENSOR)
     g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
     norm = _length(g)
     return g / norm if norm > 0 else np.array([0.0, 0.0, 0.0])
@@ -138,7 +136,7 @@ def sense(
     zero_g: ZeroG | None = None,
 ) -> Sensed:
     """The named pose (of ``candidates``, default all) nearest to the mean counts."""
-    known = zero_g or ZeroG()
+    known = zero_g or ZeroG.datasheet(PUTTER_SENSOR)
     g = (np.asarray(accel_counts, dtype=np.float64) - known.offset) / known.counts_per_g
     norm = _length(g)
     if norm == 0:

@@ -116,6 +116,5 @@ def read_pose_file(path: Path) -> PoseFile:
         raise InputError(f"{path}: no pose rows after the header")
     table = np.array(rows, dtype=np.float64)
     temperatures = table[:, -1] if warm else None
-    if not present:
-        return PoseFile(path, table[:, :3], tuple(lines), temperatures=temperatures)
-    return PoseFile(path, table[:, :3], tuple(lines), table[:, 3:6], table[:, 6], temperatures)
+    spread, samples = (table[:, 3:6], table[:, 6]) if present else (None, None)
+    return PoseFile(path, table[:, :3], tuple(lines), spread, samples, temperatures)

@@ -174,7 +174,6 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     summary = block.summary()
     sensor = limits.sensor
     reasons: list[str] = []
-    motion = False
     span = block.span
     loss = 1.0 - len(block) / span if span > 0 else 0.0
     if loss > limits.max_loss_fraction:
@@ -185,6 +184,7 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
     saturated = tuple(axis for axis, rail in zip(AXES, at_rail, strict=True) if rail)
     if saturated:
         reasons.append(f"accel {', '.join(saturated)} at the ADC rail")
+    unmoved = len(reasons)  # the link's and the rails' reasons: every later one is motion
     quarter = max(1, len(block) // 4)
     firsts, lasts = acc[:quarter].sum(axis=0).tolist(), acc[-quarter:].sum(axis=0).tolist()
     spread_max, drift_max = limits.accel_std_max_counts, limits.accel_drift_max_counts
@@ -194,24 +194,20 @@ def judge_window(block: SampleBlock, limits: StillnessThresholds) -> WindowVerdi
             continue
         if s > spread_max:
             reasons.append(f"accel {axis} spread {s:.1f} counts > {spread_max:g}")
-            motion = True
         if (drift := abs(last / quarter - first / quarter)) > drift_max:
             reasons.append(f"accel {axis} drifted {drift:.1f} counts > {drift_max:g}")
-            motion = True
     nominal_g = (summary.accel_mean - sensor.zero_g_counts) / sensor.counts_per_g
     magnitude = math.sqrt(float(nominal_g @ nominal_g))
     if not saturated and abs(magnitude - 1.0) > limits.gravity_tolerance_g:
         reasons.append(f"|a| {magnitude:.2f} g is not 1 g ± {limits.gravity_tolerance_g:g}")
-        motion = True
     rate_max, gyro_spread_max = limits.gyro_rate_max_dps, limits.gyro_std_max_dps
     rates = zip(summary.gyro_mean.tolist(), limits.gyro_bias_dps, strict=True)
     for axis, (mean, bias), s in zip(AXES, rates, summary.gyro_std.tolist(), strict=True):
         if abs(rate := mean - bias) > rate_max:
             reasons.append(f"gyro {axis} turning {rate:+.2f} deg/s > {rate_max:g}")
-            motion = True
         if s > gyro_spread_max:
             reasons.append(f"gyro {axis} spread {s:.2f} deg/s > {gyro_spread_max:g}")
-            motion = True
+    motion = len(reasons) > unmoved
     return WindowVerdict(tuple(reasons), saturated, loss, motion, block, summary)
 
 
@@ -287,19 +283,15 @@ def still_segments(block: SampleBlock, limits: StillnessThresholds) -> list[Stil
 
 #: A refused window's reason without its numbers: what kind of refusal it is.
 _NUMBERS = re.compile(r"[-+]?\d[\d.]*%?")
+_OTHER_COUNTS = (
+    "the accelerometer not in this putter's counts (zero 2048, 819.2 counts/g)? "
+    "declare --accel-units"
+)
 #: What each kind of refusal, in most windows of a recording, says about it.
 _HINTS = (
     ("turning", "a unit never at rest, a gyro's rate swinging, or gyro units not deg/s?"),
-    (
-        "at the ADC rail",
-        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
-        "counts/g)? declare --accel-units",
-    ),
-    (
-        "is not 1 g",
-        "the accelerometer not in this putter's counts (zero 2048, 819.2 "
-        "counts/g)? declare --accel-units",
-    ),
+    ("at the ADC rail", _OTHER_COUNTS),
+    ("is not 1 g", _OTHER_COUNTS),
     ("spread", "more noise than the stillness limits allow, or the unit never held still?"),
 )
 

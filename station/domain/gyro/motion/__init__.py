@@ -10,7 +10,7 @@ Public surface::
 
     Move(t, rates_dps, gravity_before, gravity_after)          moves.py
         .problem() -> str | None          why it cannot be integrated (gaps, ...)
-    fit_gyro_matrix(moves, bias_dps, *, gap_factor, min_moves) -> GyroMatrixFit
+    fit_gyro_matrix(moves, bias_dps, *, min_moves, known_turn_deg) -> GyroMatrixFit
                                                                 matrix_fit.py
         GyroMatrixFit.scale_matrix (3, 3), .standard_errors (3, 3),
         .bias_dps (3,), .used, .residual_deg, .residual_identity_deg,

@@ -40,7 +40,7 @@ import numpy as np
 from station.domain.arrays import FloatArray
 from station.domain.gyro.motion.errors import GyroMatrixError, StreamError
 from station.domain.gyro.motion.integrate import integrate_steps, step_rotvecs
-from station.domain.gyro.motion.moves import GAP_FACTOR, Move
+from station.domain.gyro.motion.moves import Move
 
 #: Unknowns of K.
 K_UNKNOWNS: Final = 9
@@ -108,6 +108,11 @@ class GyroMatrixFit:
         """RMS of the used moves' residuals, degrees."""
         return float(np.sqrt(np.mean(self.residual_deg**2)))
 
+    @property
+    def residual_identity_rms_deg(self) -> float:
+        """RMS of the same moves' residuals with K = I, degrees."""
+        return float(np.sqrt(np.mean(self.residual_identity_deg**2)))
+
     def to_dict(self) -> dict[str, object]:
         """JSON-ready (the ``"gyro"`` object of ``calstation solve --stream --json``)."""
         return {
@@ -142,14 +147,7 @@ class _Moves:
         #: Each move's raw steps summed: ``K⁻¹·swept`` is its rotation vector for a turn
         #: about a fixed axis.
         swept = np.array([r.sum(axis=0) for r in raw]).reshape(-1, 3)
-        returns = np.array(
-            [
-                np.degrees(np.arccos(np.clip(m.gravity_before @ m.gravity_after, -1, 1)))
-                < SAME_POSE_DEG
-                for m in moves
-            ],
-            dtype=bool,
-        )
+        returns = np.array([m.gravity_turn_deg < SAME_POSE_DEG for m in moves], dtype=bool)
         #: What each move that returns to the pose it left sweeps, degrees (its raw rates).
         self.returned_deg = np.degrees(np.linalg.norm(swept[returns], axis=1))
         self.turns = (
@@ -216,7 +214,6 @@ def fit_gyro_matrix(
     moves: list[Move],
     bias_dps: FloatArray,
     *,
-    gap_factor: float = GAP_FACTOR,
     min_moves: int = MIN_MOVES,
     known_turn_deg: float | None = None,
 ) -> GyroMatrixFit:
@@ -241,14 +238,9 @@ def fit_gyro_matrix(
     if CONSTRAINTS_PER_MOVE * min_moves <= K_UNKNOWNS:
         raise ValueError(f"min_moves {min_moves} leaves no degree of freedom for K")
     bias = np.asarray(bias_dps, dtype=np.float64)
-    unusable: list[UnusableMove] = []
-    used: list[int] = []
-    for index, move in enumerate(moves):
-        problem = move.problem(gap_factor)
-        if problem is None:
-            used.append(index)
-        else:
-            unusable.append(UnusableMove(index, problem))
+    problems = [move.problem() for move in moves]
+    used = [index for index, problem in enumerate(problems) if problem is None]
+    unusable = [UnusableMove(i, why) for i, why in enumerate(problems) if why is not None]
     if len(used) < min_moves:
         why = "; ".join(f"move {u.index}: {u.reason}" for u in unusable)
         raise GyroMatrixError(

@@ -38,7 +38,13 @@ class Move:
     gravity_before: FloatArray
     gravity_after: FloatArray
 
-    def problem(self, gap_factor: float = GAP_FACTOR) -> str | None:
+    @property
+    def gravity_turn_deg(self) -> float:
+        """The angle between the gravity directions at the move's two ends, degrees."""
+        cosine = np.clip(self.gravity_before @ self.gravity_after, -1, 1)
+        return float(np.degrees(np.arccos(cosine)))
+
+    def problem(self) -> str | None:
         """Why the move cannot be integrated, or None when it can."""
         n = len(self.t)
         if n < MIN_MOVE_SAMPLES or self.rates_dps.shape != (n, 3):
@@ -50,7 +56,7 @@ class Move:
             k = int(np.argmax(step <= 0))
             return f"time does not increase at sample {k + 1} (t = {self.t[k + 1]:.6g} s)"
         median = float(np.median(step))
-        if (step > gap_factor * median).any():
+        if (step > GAP_FACTOR * median).any():
             k = int(np.argmax(step))
             return (
                 f"gap of {step[k]:.4g} s at t = {self.t[k]:.6g} s "

@@ -30,6 +30,7 @@ import numpy as np
 
 from station.domain.arrays import FloatArray
 from station.domain.calibration import (
+    UNKNOWNS,
     GeometryLimits,
     Model,
     Solution,
@@ -68,8 +69,6 @@ EDGE_TRIM: Final = 4
 #: a fifth of this of its smallest range, ±250 deg/s): a still rate beyond it is an output's
 #: zero not taken off, or the wrong units.
 MAX_GYRO_BIAS_DPS: Final = 50.0
-#: Fewest still poses for each accelerometer model (its unknowns).
-MIN_POSES: Final[dict[Model, int]] = {"six": 6, "nine": 9}
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,13 +89,8 @@ class RecordedStream:
             raise StreamError(f"stream: gyro must be ({n}, 3), got {self.gyro_dps.shape}")
         if self.temperature_c is not None and self.temperature_c.shape != (n,):
             raise StreamError(f"stream: temperature must be ({n},)")
-        finite = (
-            np.isfinite(self.t).all()
-            and np.isfinite(self.accel_counts).all()
-            and np.isfinite(self.gyro_dps).all()
-            and (self.temperature_c is None or np.isfinite(self.temperature_c).all())
-        )
-        if not finite:
+        columns = (self.t, self.accel_counts, self.gyro_dps, self.temperature_c)
+        if not all(np.isfinite(c).all() for c in columns if c is not None):
             raise StreamError("stream: a value is not a finite number")
         if n < 2:
             raise StreamError(f"stream: {n} samples, too few to calibrate from")
@@ -267,35 +261,13 @@ def chosen_window(stream: RecordedStream, model: Model) -> StillnessThresholds:
     """
     probe = stream_thresholds(stream.rate_hz, PROBE_WINDOW_S)
     rests = still_segments(stream.block(), adapted_thresholds(stream, probe))
-    needed = MIN_POSES[model]
+    needed = UNKNOWNS[model]
     if len(rests) < needed:
         return stream_thresholds(stream.rate_hz, MIN_WINDOW_S)
     lengths = sorted((len(r) for r in rests), reverse=True)
     kth = lengths[min(max(needed, MIN_MOVES + 1), len(lengths)) - 1]
     seconds = REST_FRACTION * kth / stream.rate_hz
     return stream_thresholds(stream.rate_hz, min(max(seconds, MIN_WINDOW_S), STILL_WINDOW_S))
-
-
-def _improves(gyro: GyroMatrixFit) -> bool:
-    """Whether the fitted K brings the moves closer than K = I does (RMS of the same moves).
-
-    Least squares over the moves alone can do no worse than K = I, which it may choose;
-    a K that does worse was pulled off by something else (declared turns the moves
-    contradict) or stopped in a false minimum, and is no calibration.
-    """
-    identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
-    return gyro.residual_rms_deg <= identity
-
-
-def _geometry(model: Model, poses: int) -> GeometryLimits:
-    """The geometry screen: near-duplicate poses refuse only the six-pose eq. 10.
-
-    A recorded procedure often returns to an orientation it held before; least squares
-    is not degenerate for it (each pose is one more equation), eq. 10 with six is.
-    """
-    if model == "six" and poses == MIN_POSES["six"]:
-        return GeometryLimits()
-    return GeometryLimits(min_angle_deg=0.0)
 
 
 def calibrate_stream(
@@ -335,7 +307,7 @@ def calibrate_stream(
     stills = [
         StillSegment(s.start + trim, s.stop - trim) for s in still_segments(stream.block(), limits)
     ]
-    needed = MIN_POSES[model]
+    needed = UNKNOWNS[model]
     if len(stills) < needed:
         why = why_not_still(stream.block(), limits)
         raise StreamError(
@@ -346,19 +318,20 @@ def calibrate_stream(
     means = np.array([stream.accel_counts[s.start : s.stop].mean(axis=0) for s in stills])
     spreads = np.array([stream.accel_counts[s.start : s.stop].std(axis=0, ddof=1) for s in stills])
     samples = np.array([len(s) for s in stills])
-    accel = solve(means, model, _geometry(model, len(means)))
+    # Near-duplicate poses refuse only the six-pose eq. 10: a recorded procedure often
+    # returns to an orientation it held before, and least squares is not degenerate for it
+    # (each pose is one more equation), eq. 10 with six is.
+    paper = model == "six" and len(means) == UNKNOWNS["six"]
+    accel = solve(means, model, GeometryLimits() if paper else GeometryLimits(min_angle_deg=0.0))
     g = apply(accel.calibration, means)
     gravity = g / np.linalg.norm(g, axis=1, keepdims=True)
     still_gyro = np.concatenate([stream.gyro_dps[s.start : s.stop] for s in stills])
     bias = still_gyro.mean(axis=0)
+    # Each move from the last sample of a still to the first of the next.
+    spans = [slice(a.stop - 1, b.start + 1) for a, b in pairwise(stills)]
     moves = [
-        Move(
-            t=stream.t[a.stop - 1 : b.start + 1],
-            rates_dps=stream.gyro_dps[a.stop - 1 : b.start + 1],
-            gravity_before=gravity[i],
-            gravity_after=gravity[i + 1],
-        )
-        for i, (a, b) in enumerate(pairwise(stills))
+        Move(stream.t[s], stream.gyro_dps[s], gravity[i], gravity[i + 1])
+        for i, s in enumerate(spans)
     ]
     if check_moves is not None:
         check_moves(moves, bias)
@@ -376,12 +349,15 @@ def calibrate_stream(
         gyro = fit_gyro_matrix(moves, bias, min_moves=min_moves, known_turn_deg=known_turn_deg)
     except GyroMatrixError as exc:
         not_determined = str(exc)
-    if gyro is not None and not _improves(gyro):
-        identity = float(np.sqrt(np.mean(gyro.residual_identity_deg**2)))
+    # Least squares over the moves alone can do no worse than K = I, which it may choose;
+    # a K that does worse was pulled off by something else (declared turns the moves
+    # contradict) or stopped in a false minimum, and is no calibration.
+    if gyro is not None and gyro.residual_rms_deg > gyro.residual_identity_rms_deg:
         not_determined = (
             f"K fitted to the {len(gyro.used)} moves leaves them {gyro.residual_rms_deg:.3g}° "
-            f"RMS off, more than without it ({identity:.3g}° with K = I): the moves do not "
-            "determine it (poses split from one rest, or declared turns they contradict?)"
+            f"RMS off, more than without it ({gyro.residual_identity_rms_deg:.3g}° with K = I): "
+            "the moves do not determine it (poses split from one rest, or declared turns they "
+            "contradict?)"
         )
         gyro = None
     gyro_means = np.array([stream.gyro_dps[s.start : s.stop].mean(axis=0) for s in stills])
@@ -400,15 +376,9 @@ def calibrate_stream(
         tempco=tempco,
         cross_axis_bound=cross_axis_bound,
     )
+    repeatability = 0.0 if gyro_bias_repeatability_dps is None else gyro_bias_repeatability_dps
     uncertainty = Uncertainty.of_budget(budget).with_gyro(
-        gyro_bias_uncertainty(
-            gyro_means,
-            gyro_spreads,
-            samples,
-            repeatability_dps=0.0
-            if gyro_bias_repeatability_dps is None
-            else gyro_bias_repeatability_dps,
-        ),
+        gyro_bias_uncertainty(gyro_means, gyro_spreads, samples, repeatability_dps=repeatability),
         None if gyro is None else gyro_matrix_uncertainty(gyro, budget),
     )
     return StreamCalibration(

@@ -32,7 +32,7 @@ option) it contradicts:
   the gyro units.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Final, Literal
 
 import numpy as np
@@ -98,11 +98,6 @@ class StreamUnits:
         return DeclaredUnits(self.accel, self.zero_counts, self.counts_per_g)
 
     @property
-    def declared(self) -> bool:
-        """Whether anything but the station's own units was declared."""
-        return self != StreamUnits()
-
-    @property
     def gyro_name(self) -> str:
         """The gyro rates' unit as the results name it: ``deg/s`` or ``rad/s``."""
         return GYRO_UNIT_NAMES[self.gyro]
@@ -141,9 +136,7 @@ def convert(stream: RecordedStream, units: StreamUnits) -> RecordedStream:
         t = stream.t / 1000.0
     else:
         t = stream.t
-    return RecordedStream(
-        t=t, accel_counts=accel, gyro_dps=gyro, temperature_c=stream.temperature_c
-    )
+    return replace(stream, t=t, accel_counts=accel, gyro_dps=gyro)
 
 
 def _near(value: float, expected: float) -> bool:
@@ -187,14 +180,9 @@ def check_units(stream: RecordedStream, units: StreamUnits) -> None:
     """Refuse a stream (in the station's units, after :func:`convert`) whose numbers say
     its columns are in other units than ``units`` declares, saying which option fits."""
     rate = stream.rate_hz
-    if units.rate_hz is None and rate < MIN_RATE_HZ:
-        hint = "milliseconds? use --time-units ms, or" if units.time == "s" else "so"
-        raise StreamError(
-            f"stream: time steps {1.0 / rate:.4g} s apart ({rate:.4g} samples/s): "
-            f"{hint} give the rate with --rate HZ"
-        )
-    if units.rate_hz is None and rate > MAX_RATE_HZ:
-        hint = "seconds? use --time-units s, or" if units.time == "ms" else "so"
+    if units.rate_hz is None and not MIN_RATE_HZ <= rate <= MAX_RATE_HZ:
+        unit, name = ("ms", "milliseconds") if rate < MIN_RATE_HZ else ("s", "seconds")
+        hint = f"{name}? use --time-units {unit}, or" if units.time != unit else "so"
         raise StreamError(
             f"stream: time steps {1.0 / rate:.4g} s apart ({rate:.4g} samples/s): "
             f"{hint} give the rate with --rate HZ"
@@ -246,9 +234,7 @@ def check_turns(moves: list[Move], bias_dps: FloatArray, units: StreamUnits) -> 
     between those directions (module docstring)."""
     ratios = []
     for move in moves:
-        tilt = float(
-            np.degrees(np.arccos(np.clip(move.gravity_before @ move.gravity_after, -1, 1)))
-        )
+        tilt = move.gravity_turn_deg
         if tilt < MIN_GRAVITY_TURN_DEG or move.problem() is not None:
             continue
         steps = step_rotvecs(move.t, np.radians(move.rates_dps - bias_dps))

@@ -9,15 +9,14 @@ from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from station.domain.calibration import solve, solve_paper_batch
+from station.domain.calibration.residual import pack, unpack
 from station.domain.calibration.uncertainty import (
     _REFITS,
     COVERAGE_FACTOR,
     TERMS,
     Uncertainty,
     _jacobians,
-    _pack,
     _refit,
-    _unpack,
     accelerometer_budget,
     chi2_quantile,
     gyro_bias_uncertainty,
@@ -80,10 +79,10 @@ def test_the_pose_noise_term_is_the_spread_of_re_solved_noisy_poses(  # type: ig
 def test_the_jacobian_is_the_residual_s_derivative(unit, rotation, model) -> None:  # type: ignore[no-untyped-def]
     poses = unit.still_counts(rotation.apply(spread_directions(12)))
     cal = solve(poses, model).calibration
-    theta = _pack(cal.offset, cal.matrix, model)
+    theta = pack(cal.offset, cal.matrix, model)
 
     def residual(t: np.ndarray, a: np.ndarray) -> np.ndarray:
-        offset, c = _unpack(t, model)
+        offset, c = unpack(t, model)
         return np.linalg.norm((a - offset) @ c.T, axis=1) - 1.0
 
     jac, dr_da, _ = _jacobians(theta, poses, model)
