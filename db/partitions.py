@@ -135,4 +135,7 @@ def _create(connection: Connection, index: int) -> int:
             connection.execute(
                 text(f"ALTER TABLE {table} ATTACH PARTITION {table}_default DEFAULT")
             )
+            # The planner's figures of both at once: autovacuum's come a minute or more
+            # later, and until then it took the moved rows for an empty month.
+            connection.execute(text(f"ANALYZE {table}_{suffix}, {table}_default"))
     return waiting or 0
