@@ -70,7 +70,7 @@ def store(url: str, runs: int, days: int, units: int) -> None:
 
 def measure(url: str) -> dict[str, tuple[int, int]]:
     """Each table's rows and total bytes (heap, TOAST, indexes), after VACUUM ANALYZE. A
-    partitioned table's bytes are those of its partitions that hold rows: the months
+    partitioned table's bytes are those of its partitions that hold rows: the years
     created ahead, empty, are a fixed cost (their empty indexes), not bytes a row."""
     engine = make_engine(url)
     with engine.connect().execution_options(isolation_level="AUTOCOMMIT") as connection:

@@ -2,7 +2,7 @@
 
     python benchmarks/bench_submit.py                   # 100,000 runs seeded, about 2 minutes
     python benchmarks/bench_submit.py --runs 20000      # smaller, quicker
-    python benchmarks/bench_submit.py --months-ahead 120 # with ten years of monthly partitions
+    python benchmarks/bench_submit.py --years-ahead 9    # with ten years of partitions
 
 Seeds a schema of its own on PostgreSQL as :mod:`bench_api` does (``--postgres-url``,
 default ``CALSTATION_TEST_POSTGRES_URL`` or the local ``test`` database), then stores
@@ -12,9 +12,10 @@ of a seeded unit (its runs before it); a run delivered late (started before the 
 latest stored run). The first ``--warmup`` submissions, which compile SQLAlchemy's
 statements, are not counted. Prints per kind the median and 90th percentile of the CPU
 time of this process (``time.process_time``) and of the wall time per submission.
-``--months-ahead N`` first gives ``runs`` and ``poses`` N months of partitions past the
-current one (:func:`db.partitions.add_months`; the migration makes twelve): a database
-that keeps ten years reads that many months' indexes where it looks a unit up by serial.
+``--years-ahead N`` first gives ``runs`` and ``poses`` N years of partitions past the
+current one (:func:`db.partitions.add_years`; the migration makes one): a database that
+keeps ten years plans and reads that many partitions where it looks a unit up by serial
+(``--years-ahead 119`` stands for ten years of months).
 """
 
 import argparse
@@ -28,7 +29,7 @@ import numpy as np
 from bench_api import DEFAULT_URL, T0, bench_schema, new_record, seed
 
 from db import RunRepository, open_database
-from db.partitions import add_months
+from db.partitions import add_years
 from station.domain.record.records import RunRecord
 
 
@@ -58,7 +59,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=100_000)
     parser.add_argument("--submissions", type=int, default=300)
     parser.add_argument("--warmup", type=int, default=20)
-    parser.add_argument("--months-ahead", type=int, default=12)
+    parser.add_argument("--years-ahead", type=int, default=1)
     parser.add_argument(
         "--postgres-url", default=os.environ.get("CALSTATION_TEST_POSTGRES_URL", DEFAULT_URL)
     )
@@ -69,7 +70,7 @@ def main() -> None:
         _key, units = seed(url, args.runs)
         database = open_database(url)
         with database.engine.begin() as connection:
-            months = add_months(connection, args.months_ahead)
+            years = add_years(connection, args.years_ahead)
         for kind in ("new", "retest", "late"):
             cpu, wall = [], []
             for i, record in enumerate(records(kind, args.warmup + args.submissions, units)):
@@ -87,7 +88,7 @@ def main() -> None:
 
     after = os.getloadavg()
     print(f"\n{args.runs:,} runs seeded; load average before: {load_before}, after: {after}")
-    print(f"runs and poses partitioned by month from {months.first} to {months.last}\n")
+    print(f"runs and poses partitioned by year from {years.first} to {years.last}\n")
     print("| submission | n | CPU ms median | CPU ms p90 | wall ms median | wall ms p90 |")
     print("|---|---|---|---|---|---|")
     for kind, cpu, wall in rows:

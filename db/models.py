@@ -3,7 +3,7 @@
 ``runs`` is append-only: a retest is a new row, a unit's current verdict is its latest
 run's (by ``started_at``), its first run stays for first-pass yield. ``run_ids`` registers
 each run (its UUID, its key, its start) and every row that belongs to a run refers to it
-there, so that ``runs`` and ``poses`` can be partitioned by month on PostgreSQL (migration
+there, so that ``runs`` and ``poses`` can be partitioned by year on PostgreSQL (migration
 0025, :mod:`db.partitions`). Each run owns its ``poses`` and its ``run_failures``;
 ``units`` holds each unit's current calibration, ready to serve, kept in step with
 ``runs`` at every submission; ``station_keys`` holds the hashed API keys of the stations
@@ -66,7 +66,7 @@ RUN_KEY = "run_ids.run_pk"
 class Run(Base):
     """One calibration attempt of one unit at one station.
 
-    On PostgreSQL the table is partitioned by month of ``started_at`` and its primary key
+    On PostgreSQL the table is partitioned by year of ``started_at`` and its primary key
     is ``(id, started_at)`` (migration 0025); the models state the key both backends share.
     """
 
@@ -147,7 +147,7 @@ class Run(Base):
 class RunPose(Base):
     """One still pose of a run: the accepted capture (counts, deg/s, °C) and link health.
 
-    ``started_at`` is the run's: on PostgreSQL the table is partitioned by its month, as
+    ``started_at`` is the run's: on PostgreSQL the table is partitioned by its year, as
     ``runs`` is, and its keys hold it (migration 0025).
     """
 

@@ -1,15 +1,21 @@
-"""Monthly partitions of ``runs`` and ``poses`` on PostgreSQL.
+"""Yearly partitions of ``runs`` and ``poses`` on PostgreSQL.
 
 From revision 0025 both tables are partitioned by range of ``started_at``: one partition
-a calendar month in UTC (``runs_2027_01``, ``poses_2027_01``), and a default partition
-(``runs_default``, ``poses_default``) for any start outside the months created. An insert
-then touches the indexes of its month only, vacuum and index upkeep go a month at a time,
-and a report over a period reads the months it spans (``docs/api.md``, *Capacity*).
+a calendar year in UTC (``runs_2027``, ``poses_2027``), and a default partition
+(``runs_default``, ``poses_default``) for any start outside the years created. An insert
+then touches the indexes of its year only, vacuum and index upkeep go a year at a time,
+a report over a period reads the years it spans, and retiring a year is detaching its
+partitions (``docs/api.md``, *Capacity*).
 
-The migration creates the months from the oldest run's to twelve past the current one;
-:func:`add_months` (``calstation db partitions``, a monthly job) keeps them ahead, and
-gives the runs that went to the default partition (their month had none) a month of
-their own, so that no month's rows are split. SQLite keeps plain tables.
+By year, not by month: a submission looks its unit up by serial number, which no start
+prunes, so each of its statements is planned over every partition kept. Measured with
+``benchmarks/bench_submit.py --years-ahead``: 15 partitions doubled a submission's time
+in PostgreSQL, 145 (ten years of months) made it fifty times longer.
+
+The migration creates the years that hold runs, the current one and the next;
+:func:`add_years` (``calstation db partitions``, a job run daily or monthly) keeps them
+ahead, and gives the runs that went to the default partition (their year had none) a
+year of their own, so that no year's rows are split. SQLite keeps plain tables.
 """
 
 import re
@@ -23,20 +29,20 @@ from station.domain.errors import InputError
 
 #: The partitioned tables, ``poses`` holding its run's ``started_at``.
 PARTITIONED = ("runs", "poses")
-#: How many months past the current one :func:`add_months` keeps, by default.
-MONTHS_AHEAD = 12
-_PARTITION = re.compile(r"(runs|poses)_(\d{4}_\d{2}|default)")
+#: How many years past the current one :func:`add_years` keeps, by default.
+YEARS_AHEAD = 1
+_PARTITION = re.compile(r"(runs|poses)_(\d{4}|default)")
 
 
 @dataclass(frozen=True)
-class Months:
-    """What :func:`add_months` found and did: the first and last month (``YYYY-MM``) the
-    tables have (not every month between need have runs), the months it created, and
-    the runs it moved out of the default partition."""
+class Years:
+    """What :func:`add_years` found and did: the first and last year the tables have
+    (not every year between need have runs), the years it created, and the runs it moved
+    out of the default partition."""
 
-    first: str
-    last: str
-    created: list[str]
+    first: int
+    last: int
+    created: list[int]
     moved: int
 
 
@@ -51,40 +57,30 @@ def include_name(name: str | None, type_: str, parent_names: object) -> bool:
     return not (type_ == "table" and name is not None and is_partition(name))
 
 
-def _month(index: int) -> str:
-    """Month ``index`` (months since year 0) as ``YYYY-MM``."""
-    return f"{index // 12:04d}-{index % 12 + 1:02d}"
-
-
-def _first_moment(index: int) -> datetime:
-    """The first moment of month ``index``, in UTC."""
-    return datetime(index // 12, index % 12 + 1, 1, tzinfo=UTC)
-
-
 def require_partitioned(url: str) -> None:
     """:class:`InputError` unless the database at ``url`` is PostgreSQL: SQLite's tables
     are not partitioned."""
     parsed = make_url(url)
     if parsed.get_backend_name() != "postgresql":
         shown = parsed.render_as_string(hide_password=True)
-        raise InputError(f"database {shown} is SQLite: only PostgreSQL partitions runs by month")
+        raise InputError(f"database {shown} is SQLite: only PostgreSQL partitions runs by year")
 
 
-def add_months(connection: Connection, ahead: int = MONTHS_AHEAD) -> Months:
-    """Create the partitions of ``runs`` and ``poses`` missing from the current month to
-    ``ahead`` months past it (UTC), and those of every month with runs in the default
+def add_years(connection: Connection, ahead: int = YEARS_AHEAD) -> Years:
+    """Create the partitions of ``runs`` and ``poses`` missing from the current year to
+    ``ahead`` years past it (UTC), and those of every year with runs in the default
     partition, in the caller's transaction.
 
-    Runs land in the default partition when their month has none: a station whose clock
-    was wrong, or runs replayed from before the database's first month. Their month is
+    Runs land in the default partition when their year has none: a station whose clock
+    was wrong, or runs replayed from before the database's first year. Their year is
     created and they, and their poses, move in: the default partition is detached, the
-    month created, its rows copied over and deleted, and the default attached again.
-    Submissions wait meanwhile (:func:`db.rollups.lock_submissions`). PostgreSQL only
-    (:func:`require_partitioned`).
+    year created, its rows copied over and deleted, the default attached again and both
+    analysed. Submissions wait meanwhile (:func:`db.rollups.lock_submissions`).
+    PostgreSQL only (:func:`require_partitioned`).
     """
     lock_submissions(connection)
     existing = {
-        _index(name)
+        int(name[-4:])
         for name in connection.scalars(
             text(
                 "SELECT c.relname FROM pg_inherits AS i JOIN pg_class AS c ON c.oid = i.inhrelid "
@@ -93,49 +89,45 @@ def add_months(connection: Connection, ahead: int = MONTHS_AHEAD) -> Months:
         )
     }
     waiting = connection.scalars(
-        text("SELECT DISTINCT to_char(started_at AT TIME ZONE 'UTC', 'YYYY_MM') FROM runs_default")
+        text(
+            "SELECT DISTINCT CAST(extract(year FROM started_at AT TIME ZONE 'UTC') AS integer) "
+            "FROM runs_default"
+        )
     )
-    now = datetime.now(UTC)
-    current = now.year * 12 + now.month - 1
-    wanted = {*range(current, current + ahead + 1), *(_index(month) for month in waiting)}
+    current = datetime.now(UTC).year
+    wanted = {*range(current, current + ahead + 1), *waiting}
     created = sorted(wanted - existing)
-    moved = sum(_create(connection, index) for index in created)
-    months = existing | wanted
-    return Months(_month(min(months)), _month(max(months)), [_month(i) for i in created], moved)
+    moved = sum(_create(connection, year) for year in created)
+    years = existing | wanted
+    return Years(min(years), max(years), created, moved)
 
 
-def _index(name: str) -> int:
-    """The month (months since year 0) a name ending in ``YYYY_MM`` stands for."""
-    return int(name[-7:-3]) * 12 + int(name[-2:]) - 1
-
-
-def _create(connection: Connection, index: int) -> int:
-    """Create month ``index``'s partitions, moving its rows out of the default ones;
-    return how many runs moved."""
-    start, end = _first_moment(index), _first_moment(index + 1)
+def _create(connection: Connection, year: int) -> int:
+    """Create ``year``'s partitions, moving its rows out of the default ones; return how
+    many runs moved."""
+    start, end = (datetime(y, 1, 1, tzinfo=UTC) for y in (year, year + 1))
     window = {"start": start, "end": end}
-    in_month = "started_at >= :start AND started_at < :end"
-    waiting = connection.scalar(text(f"SELECT count(*) FROM runs_default WHERE {in_month}"), window)
-    suffix = f"{index // 12:04d}_{index % 12 + 1:02d}"
+    in_year = "started_at >= :start AND started_at < :end"
+    waiting = connection.scalar(text(f"SELECT count(*) FROM runs_default WHERE {in_year}"), window)
     for table in PARTITIONED:
         if waiting:
             connection.execute(text(f"ALTER TABLE {table} DETACH PARTITION {table}_default"))
         connection.execute(
             text(
-                f"CREATE TABLE {table}_{suffix} PARTITION OF {table} "
+                f"CREATE TABLE {table}_{year:04d} PARTITION OF {table} "
                 f"FOR VALUES FROM ('{start.isoformat()}') TO ('{end.isoformat()}')"
             )
         )
         if waiting:
             connection.execute(
-                text(f"INSERT INTO {table} SELECT * FROM {table}_default WHERE {in_month}"),
+                text(f"INSERT INTO {table} SELECT * FROM {table}_default WHERE {in_year}"),
                 window,
             )
-            connection.execute(text(f"DELETE FROM {table}_default WHERE {in_month}"), window)
+            connection.execute(text(f"DELETE FROM {table}_default WHERE {in_year}"), window)
             connection.execute(
                 text(f"ALTER TABLE {table} ATTACH PARTITION {table}_default DEFAULT")
             )
             # The planner's figures of both at once: autovacuum's come a minute or more
-            # later, and until then it took the moved rows for an empty month.
-            connection.execute(text(f"ANALYZE {table}_{suffix}, {table}_default"))
+            # later, and until then it took the moved rows for an empty year.
+            connection.execute(text(f"ANALYZE {table}_{year:04d}, {table}_default"))
     return waiting or 0

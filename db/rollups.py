@@ -133,8 +133,8 @@ PER_POSE: dict[str, InstrumentedAttribute[float | None]] = {
     f"pose_noise_{a}": getattr(RunPose, f"std_{a}") for a in "xyz"
 }
 
-#: A run's poses: by its key and its start, so that PostgreSQL reads the run's month of
-#: ``poses`` only (both tables are partitioned by month, :mod:`db.partitions`).
+#: A run's poses: by its key and its start, so that PostgreSQL reads the run's year of
+#: ``poses`` only (both tables are partitioned by year, :mod:`db.partitions`).
 OWN_POSES = and_(RunPose.run_pk == Run.id, RunPose.started_at == Run.started_at)
 
 #: The pose noise of a run summed over its poses (``run_facts``), by fact column: a

@@ -281,7 +281,7 @@ def test_a_backup_a_day_with_calstation_db_backup_into_its_volume(
     backup = services["backup"]
     script = " ".join(_command(backup))
     assert re.search(r"calstation db backup \"?/backups/", script)
-    assert "calstation db partitions;" in script  # the months ahead, the same round
+    assert "calstation db partitions;" in script  # the years ahead, the same round
     assert "sleep 86400" in script
     assert (
         backup["environment"]["CALSTATION_DATABASE_URL"]

@@ -120,7 +120,7 @@ class RunPage:
 
 def _by_run_id(query: Select[*Ts], run_id: UUID) -> Select[*Ts]:
     """``query`` of ``runs`` narrowed to the run ``run_id``, found in the register: by its
-    key and its start, so that PostgreSQL reads one month's partition."""
+    key and its start, so that PostgreSQL reads one year's partition."""
     return query.join(RunId, (RunId.run_pk == Run.id) & (RunId.started_at == Run.started_at)).where(
         RunId.run_id == run_id
     )

@@ -107,27 +107,27 @@ def db_upgrade(database_url: DatabaseUrlOption = None) -> None:
 @db_app.command("partitions")
 def db_partitions(
     ahead: Annotated[
-        int, typer.Option("--ahead", help="Months to have past the current one.", min=0)
-    ] = 12,
+        int, typer.Option("--ahead", help="Years to have past the current one.", min=0)
+    ] = 1,
     database_url: DatabaseUrlOption = None,
 ) -> None:
-    """Create the monthly partitions of runs and poses ahead (PostgreSQL; a monthly job).
-    Runs stored in the default partition (their month had none) move into their month."""
+    """Create the yearly partitions of runs and poses ahead (PostgreSQL; a daily or monthly
+    job). Runs stored in the default partition (their year had none) move into their year."""
     from db import DatabaseSettings, open_database
-    from db.partitions import add_months, require_partitioned
+    from db.partitions import add_years, require_partitioned
 
     url = database_url or DatabaseSettings.from_environment().url()
     require_partitioned(url)
     database = open_database(url)
     try:
         with database.engine.begin() as connection:
-            months = add_months(connection, ahead)
+            years = add_years(connection, ahead)
     finally:
         database.dispose()
-    created = ", ".join(months.created) or "none"
+    created = ", ".join(map(str, years.created)) or "none"
     out.print(
-        f"database {_shown(url)}: runs and poses by month from {months.first} to {months.last}; "
-        f"created {created}; {months.moved} runs moved in from the default partition",
+        f"database {_shown(url)}: runs and poses by year from {years.first} to {years.last}; "
+        f"created {created}; {years.moved} runs moved in from the default partition",
         markup=False,
     )
 

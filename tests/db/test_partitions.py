@@ -1,6 +1,6 @@
-"""Monthly partitions of ``runs`` and ``poses`` on PostgreSQL (revision 0025,
-:mod:`db.partitions`): rows in their month's partition, kept there through the upgrade,
-months added ahead, rows of a month created late moved in, reads pruned to their months,
+"""Yearly partitions of ``runs`` and ``poses`` on PostgreSQL (revision 0025,
+:mod:`db.partitions`): rows in their year's partition, kept there through the upgrade,
+years added ahead, rows of a year created late moved in, reads pruned to their years,
 idempotency kept by the register of runs."""
 
 from datetime import UTC, datetime, timedelta
@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 from db import RunRepository, make_engine
 from db.database import upgrade
 from db.models import Run, RunId
-from db.partitions import add_months
+from db.partitions import add_years
 from db.store.repository import RunConflictError, record_sha256
 from tests.conftest import CliRunner
 from tests.db.records import make_record
@@ -24,10 +24,6 @@ POSTGRESQL = pytest.mark.parametrize(
 )
 
 
-def _month_of(moment: datetime) -> str:
-    return f"{moment.year:04d}_{moment.month:02d}"
-
-
 def _homes(connection: Connection, table: str) -> dict[int, str]:
     """Each row's partition, by run key."""
     key = "id" if table == "runs" else "run_pk"
@@ -35,13 +31,24 @@ def _homes(connection: Connection, table: str) -> dict[int, str]:
     return {pk: partition for pk, partition in rows}
 
 
+def _partitions(connection: Connection) -> set[str]:
+    return set(
+        connection.scalars(
+            text(
+                "SELECT inhrelid::regclass::text FROM pg_inherits "
+                "WHERE inhparent = 'runs'::regclass"
+            )
+        )
+    )
+
+
 @POSTGRESQL
-def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
+def test_the_upgrade_puts_each_run_and_its_poses_in_its_years_partition(
     empty_url: str,
 ) -> None:
     now = datetime.now(UTC)
-    # Two months before this one, this one, and a station whose clock said 2001.
-    starts = [now - timedelta(days=days) for days in (75, 40, 0)] + [
+    # Two years ago, last year, now, and a station whose clock said 2001.
+    starts = [now - timedelta(days=days) for days in (730, 365, 0)] + [
         datetime(2001, 5, 3, tzinfo=UTC)
     ]
     records = [
@@ -56,19 +63,11 @@ def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
         upgrade(engine)
         with engine.connect() as connection:
             runs, poses = _homes(connection, "runs"), _homes(connection, "poses")
-            partitions = set(
-                connection.scalars(
-                    text(
-                        "SELECT inhrelid::regclass::text FROM pg_inherits "
-                        "WHERE inhparent = 'runs'::regclass"
-                    )
-                )
-            )
-        ahead = [now.replace(day=1) + timedelta(days=31 * i) for i in range(13)]
-        assert partitions == {
-            *(f"runs_{_month_of(moment)}" for moment in starts + ahead),
-            "runs_default",
-        }  # the months with runs, the current one and twelve ahead: not 2001 to now
+            # The years with runs, this one and the next: not every year from 2001.
+            assert _partitions(connection) == {
+                *(f"runs_{year}" for year in {s.year for s in starts} | {now.year + 1}),
+                "runs_default",
+            }
         with Session(engine) as session:
             repository = RunRepository(session)
             for record in records:
@@ -76,8 +75,8 @@ def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
                 assert stored is not None
                 assert stored.poses == record.poses
                 pk = session.scalar(select(RunId.run_pk).where(RunId.run_id == record.run_id))
-                assert runs[pk] == f"runs_{_month_of(record.started_at)}"
-                assert poses[pk] == f"poses_{_month_of(record.started_at)}"
+                assert runs[pk] == f"runs_{record.started_at.year}"
+                assert poses[pk] == f"poses_{record.started_at.year}"
             # A retry of a run stored before the upgrade is found, a clash refused, and a
             # new run numbered after the old ones.
             assert not repository.submit(records[0]).created
@@ -88,23 +87,23 @@ def test_the_upgrade_puts_each_run_and_its_poses_in_its_months_partition(
             assert old == len(records)
             assert repository.submit(make_record(serial="PT-000009", started_at=now)).created
             session.commit()
-            assert session.scalar(select(func.max(Run.id))) > old
+            assert (session.scalar(select(func.max(Run.id))) or 0) > old
     finally:
         engine.dispose()
 
 
 @POSTGRESQL
-def test_runs_outside_the_months_get_a_month_of_their_own(empty_url: str) -> None:
-    """A run from before the database's first month (replayed from a station's outbox)
-    and one past the twelve months ahead (a clock ahead) wait in the default partition;
-    the monthly job gives each its month and moves it in, poses and all."""
+def test_runs_outside_the_years_get_a_year_of_their_own(empty_url: str) -> None:
+    """A run from before the database's first year (replayed from a station's outbox)
+    and one past the year ahead (a clock ahead) wait in the default partition; the job
+    gives each its year and moves it in, poses and all."""
     engine = make_engine(empty_url)
     try:
         upgrade(engine)
         now = datetime.now(UTC)
         records = [
-            make_record(serial="PT-000001", started_at=now - timedelta(days=100)),
-            make_record(serial="PT-000002", started_at=now + timedelta(days=31 * 15)),
+            make_record(serial="PT-000001", started_at=datetime(now.year - 3, 6, 1, tzinfo=UTC)),
+            make_record(serial="PT-000002", started_at=datetime(now.year + 4, 2, 1, tzinfo=UTC)),
         ]
         with Session(engine) as session:
             for record in records:
@@ -114,15 +113,16 @@ def test_runs_outside_the_months_get_a_month_of_their_own(empty_url: str) -> Non
             assert set(_homes(connection, "runs").values()) == {"runs_default"}
             assert set(_homes(connection, "poses").values()) == {"poses_default"}
         with engine.begin() as connection:
-            months = add_months(connection)
-        assert months.created == [r.started_at.strftime("%Y-%m") for r in records]
-        assert months.moved == len(records)
-        assert months.first == records[0].started_at.strftime("%Y-%m")
+            years = add_years(connection)
+        assert years.created == [r.started_at.year for r in records]
+        assert years.moved == len(records)
+        assert (years.first, years.last) == (now.year - 3, now.year + 4)
         with engine.begin() as connection:
-            assert add_months(connection).created == []  # once only
+            assert add_years(connection).created == []  # once only
             for table in ("runs", "poses"):
                 homes = set(_homes(connection, table).values())
-                assert homes == {f"{table}_{_month_of(r.started_at)}" for r in records}
+                assert homes == {f"{table}_{r.started_at.year}" for r in records}
+            assert add_years(connection, ahead=2).created == [now.year + 2]
         with Session(engine) as session:
             for record in records:
                 stored = RunRepository(session).get(record.run_id)
@@ -133,14 +133,14 @@ def test_runs_outside_the_months_get_a_month_of_their_own(empty_url: str) -> Non
 
 
 @POSTGRESQL
-def test_a_read_of_one_month_reads_that_months_partitions_only(empty_url: str) -> None:
+def test_a_read_of_one_period_reads_that_years_partitions_only(empty_url: str) -> None:
     """The report's reads of a period and of a run's poses (joined on the run's key and
-    start, as :data:`db.rollups.OWN_POSES`): the runs' months are pruned when planned, the
+    start, as :data:`db.rollups.OWN_POSES`): the runs' years are pruned when planned, the
     poses' while executing, run by run."""
     engine = make_engine(empty_url)
     try:
         upgrade(engine)
-        start = datetime.now(UTC).replace(day=1, hour=0, minute=0, second=0, microsecond=0)
+        start = datetime.now(UTC).replace(month=1, day=1, hour=0, minute=0, second=0)
         with Session(engine) as session:
             RunRepository(session).submit(make_record(started_at=start + timedelta(hours=1)))
             session.commit()
@@ -158,11 +158,10 @@ def test_a_read_of_one_month_reads_that_months_partitions_only(empty_url: str) -
                 .scalars()
                 .all()
             )
-        month = _month_of(start)
         read = [line for line in plan if " on " in line and "never executed" not in line]
         assert [line.split(" on ")[1].split()[0] for line in read] == [
-            f"runs_{month}",
-            f"poses_{month}",
+            f"runs_{start.year}",
+            f"poses_{start.year}",
         ], "\n".join(plan)
     finally:
         engine.dispose()
@@ -174,6 +173,6 @@ def test_partitions_are_refused_on_sqlite_in_one_line(run_cli: CliRunner, tmp_pa
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [
         f"calstation: error: database sqlite:///{database} is SQLite: "
-        "only PostgreSQL partitions runs by month"
+        "only PostgreSQL partitions runs by year"
     ]
     assert not database.exists()

@@ -1,5 +1,5 @@
 """The register of runs (``run_ids``), and on PostgreSQL ``runs`` and ``poses``
-partitioned by month of ``started_at``.
+partitioned by year of ``started_at``.
 
 ``run_ids`` holds each run's UUID, its key (``run_pk``, from the sequence that numbered
 ``runs.id``) and its start: the UUID's uniqueness, on which a submission's idempotency
@@ -11,10 +11,10 @@ that belonged to a run (``runs`` itself, ``poses``, ``run_failures``, ``run_fact
 PostgreSQL requires every unique constraint of a partitioned table to hold the partition
 key, and a foreign key onto one to name it; with the references on ``run_ids`` neither
 is needed, and ``runs`` and ``poses`` become tables partitioned by range of
-``started_at``: one partition a calendar month (UTC, ``runs_2026_12``) for each month that
-holds runs and from the current month to twelve past it, and a ``runs_default`` /
-``poses_default`` for any start outside them. Their primary keys become ``(id,
-started_at)``. ``calstation db partitions`` creates the months ahead as time goes on
+``started_at``: one partition a calendar year (UTC, ``runs_2026``) for each year that
+holds runs, the current one and the next, and a ``runs_default`` / ``poses_default`` for
+any start outside them. Their primary keys become ``(id, started_at)``. ``calstation db
+partitions`` creates the years ahead as time goes on
 (:mod:`db.partitions`). SQLite keeps plain tables. Plain operations only: this revision
 does not import the project's code, so it stays as written.
 
@@ -38,8 +38,8 @@ BigId = sa.BigInteger().with_variant(sa.Integer(), "sqlite")
 UtcDateTime = sa.DateTime(timezone=True)
 #: The tables that refer to a run by ``run_pk``, besides ``poses``.
 CHILDREN = ("run_failures", "run_facts", "units")
-#: Months created past the current one.
-AHEAD = 12
+#: Years created past the current one.
+AHEAD = 1
 #: ``runs``' secondary indexes, as the models name them.
 RUN_INDEXES = {
     "ix_runs_serial_started_at": "serial, started_at, id",
@@ -50,16 +50,10 @@ RUN_INDEXES = {
     "ix_runs_part_number_started_at": "part_number, started_at, id",
 }
 
-#: Each month that holds runs, as months since year 0 (``year * 12 + month - 1``), in UTC.
-MONTHS = """
-SELECT DISTINCT CAST(extract(year FROM moment) * 12 + extract(month FROM moment) - 1 AS integer)
-FROM (SELECT started_at AT TIME ZONE 'UTC' AS moment FROM runs) AS moments
+#: Each year that holds runs, in UTC.
+YEARS = """
+SELECT DISTINCT CAST(extract(year FROM started_at AT TIME ZONE 'UTC') AS integer) FROM runs
 """
-
-
-def _first_moment(month: int) -> str:
-    """The first moment of ``month`` (months since year 0), as PostgreSQL reads it."""
-    return f"{month // 12:04d}-{month % 12 + 1:02d}-01 00:00:00+00"
 
 
 def upgrade() -> None:
@@ -141,7 +135,7 @@ def _rebuild_sqlite_runs(old: str, new: str) -> None:
 
 def _partition() -> None:
     """PostgreSQL: move the references onto ``run_ids``, rebuild ``runs`` and ``poses``
-    partitioned by month, copy the rows over and drop the old tables."""
+    partitioned by year, copy the rows over and drop the old tables."""
     # run_ids numbers the runs from now on, with the sequence that numbered them.
     op.execute("ALTER SEQUENCE runs_id_seq OWNED BY NONE")
     op.execute("ALTER SEQUENCE runs_id_seq RENAME TO run_ids_run_pk_seq")
@@ -160,28 +154,27 @@ def _partition() -> None:
     op.execute("ALTER SEQUENCE poses_id_seq OWNED BY NONE")
     for table in ("runs", "poses"):
         op.execute(
-            f"CREATE TABLE {table}_by_month (LIKE {table} INCLUDING DEFAULTS "
+            f"CREATE TABLE {table}_by_year (LIKE {table} INCLUDING DEFAULTS "
             "INCLUDING CONSTRAINTS) PARTITION BY RANGE (started_at)"
         )
-    op.execute("ALTER TABLE poses_by_month ALTER COLUMN started_at SET NOT NULL")
-    now = datetime.now(UTC)
-    current = now.year * 12 + now.month - 1
-    months = {*op.get_bind().scalars(sa.text(MONTHS)), *range(current, current + AHEAD + 1)}
-    for month in sorted(months):
+    op.execute("ALTER TABLE poses_by_year ALTER COLUMN started_at SET NOT NULL")
+    current = datetime.now(UTC).year
+    years = {*op.get_bind().scalars(sa.text(YEARS)), *range(current, current + AHEAD + 1)}
+    for year in sorted(years):
         for table in ("runs", "poses"):
             op.execute(
-                f"CREATE TABLE {table}_{month // 12:04d}_{month % 12 + 1:02d} "
-                f"PARTITION OF {table}_by_month "
-                f"FOR VALUES FROM ('{_first_moment(month)}') TO ('{_first_moment(month + 1)}')"
+                f"CREATE TABLE {table}_{year:04d} PARTITION OF {table}_by_year "
+                f"FOR VALUES FROM ('{year:04d}-01-01 00:00:00+00') "
+                f"TO ('{year + 1:04d}-01-01 00:00:00+00')"
             )
     for table in ("runs", "poses"):
-        op.execute(f"CREATE TABLE {table}_default PARTITION OF {table}_by_month DEFAULT")
-    op.execute("INSERT INTO runs_by_month SELECT * FROM runs")
-    op.execute("INSERT INTO poses_by_month SELECT * FROM poses")
+        op.execute(f"CREATE TABLE {table}_default PARTITION OF {table}_by_year DEFAULT")
+    op.execute("INSERT INTO runs_by_year SELECT * FROM runs")
+    op.execute("INSERT INTO poses_by_year SELECT * FROM poses")
     op.execute("DROP TABLE poses")
     op.execute("DROP TABLE runs")
     for table in ("runs", "poses"):
-        op.execute(f"ALTER TABLE {table}_by_month RENAME TO {table}")
+        op.execute(f"ALTER TABLE {table}_by_year RENAME TO {table}")
         op.execute(f"ALTER TABLE {table} ADD CONSTRAINT pk_{table} PRIMARY KEY (id, started_at)")
     op.execute("ALTER SEQUENCE poses_id_seq OWNED BY poses.id")
     op.execute(
