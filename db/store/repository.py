@@ -15,7 +15,7 @@ from datetime import UTC, datetime
 from typing import Any, Literal, TypeVarTuple, cast
 from uuid import UUID
 
-from sqlalchemy import Select, insert, select, text, tuple_, update
+from sqlalchemy import ColumnElement, Select, insert, select, text, tuple_, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
@@ -57,12 +57,10 @@ _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 # Built once, values bound at execution: the compiled statement is cached.
 _REGISTER_RUN: dict[str, ReturningInsert[int]] = {
-    "postgresql": postgresql.insert(RunId)
+    dialect.dialect.name: dialect.insert(RunId)
     .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(RunId.run_pk),
-    "sqlite": sqlite.insert(RunId)
-    .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(RunId.run_pk),
+    .returning(RunId.run_pk)
+    for dialect in (postgresql, sqlite)
 }
 
 Ts = TypeVarTuple("Ts")
@@ -126,28 +124,27 @@ def _by_run_id(query: Select[*Ts], run_id: UUID) -> Select[*Ts]:
     )
 
 
+#: The record's optional fields added after the first stations shipped.
+_ADDED_FIELDS = (
+    "lot",
+    "disposition",
+    "purpose",
+    "gyro_matrix",
+    "uncertainty",
+    "decision_rule",
+    "as_found",
+)
+
+
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
     A record without a lot, a disposition, a purpose, a gyro matrix, uncertainties, a
     decision rule, its as-found values, its limits profile or excluded poses, or of the
-    default product, is
-    hashed without the field, as before the field existed, so a retry from an older
-    station matches the run it stored.
+    default product, is hashed without the field, as before the field existed, so a retry
+    from an older station matches the run it stored.
     """
-    unset: dict[str, Any] = {
-        name: True
-        for name in (
-            "lot",
-            "disposition",
-            "purpose",
-            "gyro_matrix",
-            "uncertainty",
-            "decision_rule",
-            "as_found",
-        )
-        if getattr(record, name) is None
-    }
+    unset: dict[str, Any] = {name: True for name in _ADDED_FIELDS if getattr(record, name) is None}
     if record.part_number == DEFAULT_PART_NUMBER:  # every run before products existed
         unset["part_number"] = True
     if record.limits.profile is None:
@@ -267,13 +264,7 @@ class RunRepository:
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""
-        run = self.session.scalars(
-            select(Run)
-            .where(Run.serial == serial)
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(1)
-        ).one_or_none()
-        return None if run is None else self._summaries([run])[0]
+        return self._latest(Run.serial == serial)
 
     def history(self, serial: str) -> list[RunSummary]:
         """Every run of the unit, oldest first (the first one gives first-pass yield)."""
@@ -287,18 +278,12 @@ class RunRepository:
     ) -> RunSummary | None:
         """The latest golden-unit run (``purpose`` golden) of ``station_id`` started in
         ``[since, before)``: the shift's check a certificate names as its reference."""
-        run = self.session.scalars(
-            select(Run)
-            .where(
-                Run.station_id == station_id,
-                Run.purpose == "golden",
-                Run.started_at >= since,
-                Run.started_at < before,
-            )
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(1)
-        ).one_or_none()
-        return None if run is None else self._summaries([run])[0]
+        return self._latest(
+            Run.station_id == station_id,
+            Run.purpose == "golden",
+            Run.started_at >= since,
+            Run.started_at < before,
+        )
 
     def serials(self, prefix: str, limit: int | None = None) -> list[str]:
         """The serial numbers stored that begin with ``prefix`` (its ``_`` and ``%`` as
@@ -318,17 +303,14 @@ class RunRepository:
         """A page of runs matching ``query``, newest first."""
         if not 1 <= query.limit <= MAX_PAGE:
             raise InputError(f"limit must be 1…{MAX_PAGE}, got {query.limit}")
-        stmt = select(Run)
-        if query.serial is not None:
-            stmt = stmt.where(Run.serial == query.serial)
-        if query.station_id is not None:
-            stmt = stmt.where(Run.station_id == query.station_id)
-        if query.lot is not None:
-            stmt = stmt.where(Run.lot == query.lot)
-        if query.part_number is not None:
-            stmt = stmt.where(Run.part_number == query.part_number)
-        if query.verdict is not None:
-            stmt = stmt.where(Run.verdict == query.verdict)
+        equal = (
+            (Run.serial, query.serial),
+            (Run.station_id, query.station_id),
+            (Run.lot, query.lot),
+            (Run.part_number, query.part_number),
+            (Run.verdict, query.verdict),
+        )
+        stmt = select(Run).where(*(column == value for column, value in equal if value is not None))
         if query.since is not None:
             stmt = stmt.where(Run.started_at >= query.since)
         if query.until is not None:
@@ -349,6 +331,13 @@ class RunRepository:
         database is upgraded (:mod:`db.database`).
         """
         return refresh_answers(self.session)
+
+    def _latest(self, *where: ColumnElement[bool]) -> RunSummary | None:
+        """The latest run (by start time) of those ``where`` selects."""
+        run = self.session.scalars(
+            select(Run).where(*where).order_by(Run.started_at.desc(), Run.id.desc()).limit(1)
+        ).one_or_none()
+        return None if run is None else self._summaries([run])[0]
 
     def _summaries(self, runs: Sequence[Run]) -> list[RunSummary]:
         failed = [run.id for run in runs if run.verdict == "fail"]
