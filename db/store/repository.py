@@ -57,10 +57,10 @@ _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 # Built once, values bound at execution: the compiled statement is cached.
 _REGISTER_RUN: dict[str, ReturningInsert[int]] = {
-    dialect.dialect.name: dialect.insert(RunId)
+    name: dialect.insert(RunId)
     .on_conflict_do_nothing(index_elements=["run_id"])
     .returning(RunId.run_pk)
-    for dialect in (postgresql, sqlite)
+    for name, dialect in (("postgresql", postgresql), ("sqlite", sqlite))
 }
 
 Ts = TypeVarTuple("Ts")
