@@ -67,6 +67,12 @@ def _axes_of(row: Any, prefix: str) -> dict[str, float | None]:
     return {a: getattr(row, f"{prefix}_{a}") for a in "xyz"}
 
 
+def stored_axes(row: Any, prefix: str) -> tuple[float, float, float] | None:
+    """The vector in the columns ``{prefix}_x``, ``_y``, ``_z`` of ``row``; None if one is NULL."""
+    x, y, z = (getattr(row, f"{prefix}_{a}") for a in "xyz")
+    return None if x is None or y is None or z is None else (float(x), float(y), float(z))
+
+
 def _document(field: BaseModel | None) -> Any:
     """A field of the record as its JSON column holds it."""
     return None if field is None else field.model_dump(mode="json")
