@@ -255,12 +255,11 @@ class RunRepository:
             .where(RunPose.run_pk == run.id, RunPose.started_at == run.started_at)
             .order_by(RunPose.index)
         ).all()
-        profile = self.session.scalar(
-            select(StoredLimitsProfile.document).where(
-                StoredLimitsProfile.sha256 == run.limits_sha256
-            )
+        profile = self.session.get(StoredLimitsProfile, run.limits_sha256)
+        document = None if profile is None else profile.document
+        return stored_run_of(
+            run, failures_of(self.session, [run.id])[run.id], list(poses), document
         )
-        return stored_run_of(run, failures_of(self.session, [run.id])[run.id], list(poses), profile)
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""
@@ -289,15 +288,14 @@ class RunRepository:
         """The serial numbers stored that begin with ``prefix`` (its ``_`` and ``%`` as
         themselves), in order; the first ``limit`` of them. A walk of
         ``ix_runs_serial_started_at`` from ``prefix``."""
-        return list(
-            self.session.scalars(
-                select(Run.serial)
-                .where(Run.serial.startswith(prefix, autoescape=True))
-                .distinct()
-                .order_by(Run.serial)
-                .limit(limit)
-            )
+        stmt = (
+            select(Run.serial)
+            .where(Run.serial.startswith(prefix, autoescape=True))
+            .distinct()
+            .order_by(Run.serial)
+            .limit(limit)
         )
+        return list(self.session.scalars(stmt))
 
     def list_runs(self, query: RunQuery) -> RunPage:
         """A page of runs matching ``query``, newest first."""
@@ -436,14 +434,8 @@ class RunRepository:
         ).one_or_none()
         if row is None:
             return None
-        return GyroFitRecord.model_validate(
-            {
-                "serial": row.serial,
-                "fitted_at": row.fitted_at,
-                "source": row.source,
-                **row.document,
-            }
-        )
+        fields = {name: getattr(row, name) for name in ("serial", "fitted_at", "source")}
+        return GyroFitRecord.model_validate({**fields, **row.document})
 
 
 class ReviewRefusedError(CalstationError):
