@@ -138,10 +138,7 @@ def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
         }
         if run.offset_x is not None
         else None,
-        "quality": {
-            **{name: getattr(run, name) for name in _QUALITY_FIELDS},
-            "excluded_poses": run.excluded_poses,
-        }
+        "quality": {name: getattr(run, name) for name in (*_QUALITY_FIELDS, "excluded_poses")}
         if run.residual_rms_mg is not None
         else None,
     }

@@ -73,7 +73,7 @@ class RunConflictError(CalstationError):
     """A run with this UUID is already stored with different content."""
 
 
-#: What an API key may store: its station's runs, or units' gyro fits (a lab's).
+#: What an API key may store: its station's runs, units' gyro fits (a lab's) or reviews.
 KeyScope = Literal["station", "lab", "quality"]
 
 
@@ -202,12 +202,11 @@ class RunRepository:
 
         The register's unique ``run_id`` decides (``INSERT … ON CONFLICT DO NOTHING``
         into ``run_ids``, which numbers the run), so concurrent duplicates cannot both
-        land. A retry of the same record
-        returns the stored run; the same UUID with other content raises
-        :class:`RunConflictError`. A new run brings the report's facts and roll-ups up to
-        date in the same transaction (:func:`db.rollups.record_run`); submissions are
-        serialised for that (:func:`db.rollups.lock_submissions`). ``outbox``: the
-        station's outbox as it sent the run, kept as its latest report
+        land. A retry of the same record returns the stored run; the same UUID with other
+        content raises :class:`RunConflictError`. A new run brings the report's facts and
+        roll-ups up to date in the same transaction (:func:`db.rollups.record_run`);
+        submissions are serialised for that (:func:`db.rollups.lock_submissions`).
+        ``outbox``: the station's outbox as it sent the run, kept as its latest report
         (:func:`db.store.outbox_reports.record_outbox`), a retry's too.
         """
         digest = record_sha256(record)
