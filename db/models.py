@@ -208,11 +208,10 @@ class RunFailure(Base):
 class Unit(Base):
     """A unit's current state: which run is its latest, and that run's answer, serialised.
 
-    ``calibration`` is the JSON of :class:`station.domain.record.records.UnitCalibration` for the
-    run
-    ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
-    ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores
-    the run (:mod:`db.store.units`), so a unit lookup reads one row by primary key. Answers
+    ``calibration`` is the JSON of :class:`station.domain.record.unit_state.UnitCalibration`
+    for the run ``run_pk``, which is the unit's latest by ``(started_at, id)`` — the order
+    ``ix_runs_serial_started_at`` walks. It is written in the transaction that stores the
+    run (:mod:`db.store.units`), so a unit lookup reads one row by primary key. Answers
     missing or of an older shape are written at upgrade (:mod:`db.database`).
     """
 

@@ -117,6 +117,9 @@ from station.domain.record.unit_state import ABORTED
 #: ``report_counts`` adds the limits profile.
 BUCKET = ("day", "station_id", "operator_id", "lot", "part_number")
 LIMITS = ("limits_name", "limits_version", "limits_sha256")
+#: The keys of ``report_counts`` and ``report_failures`` rows.
+COUNT_KEYS = (*BUCKET, *LIMITS)
+FAILURE_KEYS = (*BUCKET, "code")
 
 #: Histogram bin columns of ``report_parameters``.
 HISTOGRAM = tuple(f"h{i:02d}" for i in range(HISTOGRAM_BINS))
@@ -149,18 +152,12 @@ NOISE_TOTALS: dict[str, ColumnElement[float]] = {
 
 #: How each value column merges across rows: ``sum``, ``min`` or ``max``.
 COUNT_VALUES: dict[str, str] = {
-    "runs": "sum",
-    "runs_passed": "sum",
-    "duration_ms": "sum",
-    "poses": "sum",
+    **dict.fromkeys(("runs", "runs_passed", "duration_ms", "poses"), "sum"),
     "first_start": "min",
     "last_finish": "max",
-    "line_units": "sum",
-    "line_first_pass": "sum",
-    "line_final_pass": "sum",
-    "retests": "sum",
-    "aborts": "sum",
-    "charted": "sum",
+    **dict.fromkeys(
+        ("line_units", "line_first_pass", "line_final_pass", "retests", "aborts", "charted"), "sum"
+    ),
     **{f"mr_{name}": "sum" for name in COEFFICIENTS},
 }
 #: The columns a trend reads (:mod:`db.report.trends`): no moving ranges, so no earlier run.
@@ -168,20 +165,12 @@ TREND_COUNT_VALUES: dict[str, str] = {
     name: COUNT_VALUES[name]
     for name in ("runs", "runs_passed", "line_units", "line_first_pass", "line_final_pass")
 }
-#: The columns a product's summary reads.
+#: The columns a product's summary reads: all but the first start, the last finish and
+#: the control charts' (charted runs, moving ranges).
 PRODUCT_COUNT_VALUES: dict[str, str] = {
-    name: COUNT_VALUES[name]
-    for name in (
-        "runs",
-        "runs_passed",
-        "duration_ms",
-        "poses",
-        "line_units",
-        "line_first_pass",
-        "line_final_pass",
-        "retests",
-        "aborts",
-    )
+    name: merge
+    for name, merge in COUNT_VALUES.items()
+    if name not in ("first_start", "last_finish", "charted") and not name.startswith("mr_")
 }
 FAILURE_VALUES: dict[str, str] = {"runs": "sum"}
 #: The columns a mean and spread (and Cpk) need, all added up.
@@ -360,16 +349,13 @@ def _facts(where: Sequence[ColumnElement[bool]]) -> Select[Any]:
     latest_verdict = (
         select(other.verdict).where(unit_attempt).order_by(*newest).limit(1).scalar_subquery()
     )
-    bias = {a: Run.gyro[("bias", a)].as_float() for a in "xyz"}
     return select(
         Run.id,
         select(RunFailure.code)
         .where(RunFailure.run_pk == Run.id, RunFailure.position == 0)
         .scalar_subquery(),
         select(func.count()).select_from(RunPose).where(OWN_POSES).scalar_subquery(),
-        bias["x"],
-        bias["y"],
-        bias["z"],
+        *(Run.gyro[("bias", a)].as_float() for a in "xyz"),
         *(
             select(func.sum(total)).where(OWN_POSES).scalar_subquery()
             for total in NOISE_TOTALS.values()
@@ -396,9 +382,7 @@ _FACT_COLUMNS = (
     "run_pk",
     "first_failure",
     "poses",
-    "gyro_bias_x",
-    "gyro_bias_y",
-    "gyro_bias_z",
+    *(f"gyro_bias_{a}" for a in "xyz"),
     *NOISE_TOTALS,
     "attempt",
     "line_first",
@@ -442,17 +426,16 @@ def count_contributions(
     joined only when ``values`` asks for moving ranges."""
     previous = aliased(Run, name="previous")
     passed = Run.verdict == _PASS
-    facts = RunFacts
     sums: dict[str, ColumnElement[Any]] = {
         "runs": func.count(),
         "runs_passed": _count_if(passed),
         "duration_ms": func.sum(duration_ms(Run.started_at, Run.finished_at)),
-        "poses": func.sum(facts.poses),
-        "line_units": _count_if(facts.line_first),
-        "line_first_pass": _count_if(and_(facts.line_first, passed)),
-        "line_final_pass": _count_if(facts.line_final_pass),
-        "retests": _count_if(and_(facts.attempt, ~facts.line_first)),
-        "aborts": _count_if(~facts.attempt),
+        "poses": func.sum(RunFacts.poses),
+        "line_units": _count_if(RunFacts.line_first),
+        "line_first_pass": _count_if(and_(RunFacts.line_first, passed)),
+        "line_final_pass": _count_if(RunFacts.line_final_pass),
+        "retests": _count_if(and_(RunFacts.attempt, ~RunFacts.line_first)),
+        "aborts": _count_if(~RunFacts.attempt),
         "charted": func.count(Run.offset_x),
         **{
             f"mr_{name}": func.coalesce(
@@ -470,10 +453,10 @@ def count_contributions(
     stmt = (
         select(*picked, *(totals[name].label(name) for name in values))
         .select_from(Run)
-        .join(facts, facts.run_pk == Run.id)
+        .join(RunFacts, RunFacts.run_pk == Run.id)
     )
     if any(name.startswith("mr_") for name in values):
-        stmt = stmt.outerjoin(previous, previous.id == facts.chart_previous)
+        stmt = stmt.outerjoin(previous, previous.id == RunFacts.chart_previous)
     return stmt.where(*where).group_by(*picked)
 
 
@@ -662,10 +645,17 @@ def _moments(
 # -- keeping the roll-ups -----------------------------------------------------------------
 
 
-def _upsert(
-    dialect: str, table: Any, keys: Sequence[str], values: dict[str, str], rows: Select[Any]
-) -> Executable:
-    """Add ``rows`` into ``table``: sums added, minima and maxima kept."""
+#: Each roll-up's key columns and how each of its value columns merges.
+_ROLLUPS: dict[Any, tuple[Sequence[str], Mapping[str, str]]] = {
+    ReportCounts: (COUNT_KEYS, COUNT_VALUES),
+    ReportFailures: (FAILURE_KEYS, FAILURE_VALUES),
+    ReportParameters: (("parameter", *BUCKET), PARAMETER_VALUES),
+}
+
+
+def _upsert(dialect: str, table: Any, rows: Select[Any]) -> Executable:
+    """Add ``rows`` into the roll-up ``table``: sums added, minima and maxima kept."""
+    keys, values = _ROLLUPS[table]
     stmt = (postgresql.insert if dialect == "postgresql" else sqlite.insert)(table)
     stmt = stmt.from_select([*keys, *values], rows)
     current, added = table.__table__.c, stmt.excluded
@@ -680,13 +670,6 @@ def stored_bounds(connection: Connection) -> FamilyBounds:
     return {family: (lower, upper) for family, lower, upper in rows}
 
 
-def _store_bounds(connection: Connection, bounds: FamilyBounds) -> None:
-    connection.execute(
-        insert(ReportBounds),
-        [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
-    )
-
-
 def _bounds_for_rollup(connection: Connection, run_pk: int) -> FamilyBounds | None:
     """The stored bounds (empty: the run's profile is not stored either, nothing is binned
     yet); before any, the bounds of the run's stored profile, with every stored run,
@@ -694,22 +677,19 @@ def _bounds_for_rollup(connection: Connection, run_pk: int) -> FamilyBounds | No
     bounds = stored_bounds(connection)
     if bounds:
         return bounds
-    profile = connection.execute(
-        select(StoredLimitsProfile.document)
-        .join(Run, Run.limits_sha256 == StoredLimitsProfile.sha256)
-        .where(Run.id == run_pk)
-    ).scalar_one_or_none()
+    profile = _profile_bounds(connection, Run.id == run_pk)
     if profile is not None:
-        rebuild(connection, profile_bounds(LimitsProfile.model_validate_json(profile)))
+        rebuild(connection, profile)
         return None
     return {}
 
 
-def _latest_stored_bounds(connection: Connection) -> FamilyBounds | None:
-    """The bounds of the stored profile of the latest run that has one."""
+def _profile_bounds(connection: Connection, *where: ColumnElement[bool]) -> FamilyBounds | None:
+    """The bounds of the stored profile of the latest run ``where`` selects that has one."""
     document = connection.execute(
         select(StoredLimitsProfile.document)
         .join(Run, Run.limits_sha256 == StoredLimitsProfile.sha256)
+        .where(*where)
         .order_by(Run.started_at.desc(), Run.id.desc())
         .limit(1)
     ).scalar_one_or_none()
@@ -777,7 +757,6 @@ def _submission(
         .subquery("following")
     )
     same_unit = select(Run.id).where(Run.serial == bindparam("serial", type_=Run.serial.type))
-    keys, failures = [*BUCKET, *LIMITS], [*BUCKET, "code"]
     new = [Run.id == run_pk]
     parameters = None
     if bounds:
@@ -785,28 +764,18 @@ def _submission(
         parameters = _upsert(
             dialect,
             ReportParameters,
-            ["parameter", *BUCKET],
-            PARAMETER_VALUES,
             # WHERE: SQLite reads an ON after a bare FROM as a join's.
             select(*rows.c).where(true()),
         )
     return _Submission(
         changed=union(same_unit, select(following.c.id)),
         take_out=_upsert(
-            dialect,
-            ReportCounts,
-            keys,
-            COUNT_VALUES,
-            count_contributions(keys, [Run.id.in_(changed)], -1),
+            dialect, ReportCounts, count_contributions(COUNT_KEYS, [Run.id.in_(changed)], -1)
         ),
         forget=delete(RunFacts).where(RunFacts.run_pk.in_(changed)),
         facts=insert(RunFacts).from_select(_FACT_COLUMNS, _facts([Run.id.in_(both)])),
-        counts=_upsert(
-            dialect, ReportCounts, keys, COUNT_VALUES, count_contributions(keys, [Run.id.in_(both)])
-        ),
-        failures=_upsert(
-            dialect, ReportFailures, failures, FAILURE_VALUES, failure_contributions(failures, new)
-        ),
+        counts=_upsert(dialect, ReportCounts, count_contributions(COUNT_KEYS, [Run.id.in_(both)])),
+        failures=_upsert(dialect, ReportFailures, failure_contributions(FAILURE_KEYS, new)),
         parameters=parameters,
     )
 
@@ -818,14 +787,13 @@ def record_run(connection: Connection, run_pk: int) -> None:
     line with coefficients, are taken out of ``report_counts``, their facts recomputed,
     and added back with the new run.
     """
-    golden = connection.scalar(select(Run.purpose).where(Run.id == run_pk)) is not None
-    bounds = None if golden else _bounds_for_rollup(connection, run_pk)
+    purpose, serial, started_at = connection.execute(
+        select(Run.purpose, Run.serial, Run.started_at).where(Run.id == run_pk)
+    ).one()
+    bounds = None if purpose is not None else _bounds_for_rollup(connection, run_pk)
     if bounds is None:
         return
     do = _submission(connection.dialect.name, tuple(sorted(bounds.items())))
-    serial, started_at = connection.execute(
-        select(Run.serial, Run.started_at).where(Run.id == run_pk)
-    ).one()
     found = connection.scalars(
         do.changed, {"run_pk": run_pk, "serial": serial, "started_at": started_at}
     )
@@ -847,26 +815,20 @@ def rebuild(connection: Connection, bounds: FamilyBounds | None = None) -> None:
     latest run that has one), which are stored in ``report_bounds``; with neither, no
     parameter is binned (until a run brings a profile: :func:`record_run`).
     """
-    bounds = bounds or _latest_stored_bounds(connection)
+    bounds = bounds or _profile_bounds(connection)
     for table in (ReportParameters, ReportFailures, ReportCounts, RunFacts, ReportBounds):
         connection.execute(delete(table))
     if bounds is not None:
-        _store_bounds(connection, bounds)
-    connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([PRODUCTION])))
-    connection.execute(
-        insert(ReportCounts).from_select(
-            [*BUCKET, *LIMITS, *COUNT_VALUES],
-            count_contributions([*BUCKET, *LIMITS], [PRODUCTION]),
-        )
-    )
-    connection.execute(
-        insert(ReportFailures).from_select(
-            [*BUCKET, "code", *FAILURE_VALUES],
-            failure_contributions([*BUCKET, "code"], [PRODUCTION]),
-        )
-    )
-    rolled = parameter_contributions(BUCKET, [PRODUCTION], bounds) if bounds is not None else []
-    for rows in rolled:
         connection.execute(
-            insert(ReportParameters).from_select(["parameter", *BUCKET, *PARAMETER_VALUES], rows)
+            insert(ReportBounds),
+            [{"family": f, "lower": lo, "upper": up} for f, (lo, up) in bounds.items()],
         )
+    connection.execute(insert(RunFacts).from_select(_FACT_COLUMNS, _facts([PRODUCTION])))
+    rolled = parameter_contributions(BUCKET, [PRODUCTION], bounds) if bounds is not None else []
+    for rollup, rows in (
+        (ReportCounts, count_contributions(COUNT_KEYS, [PRODUCTION])),
+        (ReportFailures, failure_contributions(FAILURE_KEYS, [PRODUCTION])),
+        *((ReportParameters, parameters) for parameters in rolled),
+    ):
+        keys, values = _ROLLUPS[rollup]
+        connection.execute(insert(rollup).from_select([*keys, *values], rows))

@@ -3,10 +3,10 @@
 ranges ([Song2006] offsets and sensitivities; Montgomery's I-MR chart).
 """
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
-from sqlalchemy import ColumnElement, Row, func, select, tuple_
+from sqlalchemy import ColumnElement, Row, RowMapping, func, select, tuple_
 from sqlalchemy.orm import Session, aliased
 
 from db.models import Run, RunFacts, RunPose
@@ -102,18 +102,17 @@ def latest_values(
     )
     rows = session.execute(latest).all()
     values: dict[str, list[float]] = {name: [] for name in [*PER_RUN, *PER_POSE]}
-    for row in rows:
-        for name in PER_RUN:
-            value = row._mapping[name]
-            if value is not None:
-                values[name].append(float(value))
+
+    def add(read: Iterable[RowMapping], names: Iterable[str]) -> None:
+        for row in read:
+            for name in names:
+                if (value := row[name]) is not None:
+                    values[name].append(float(value))
+
+    add((row._mapping for row in rows), PER_RUN)
     if rows:
         poses = select(*(column.label(name) for name, column in PER_POSE.items())).where(
             tuple_(RunPose.run_pk, RunPose.started_at).in_([(r.id, r.started_at) for r in rows])
         )
-        for pose in session.execute(poses):
-            for name in PER_POSE:
-                value = pose._mapping[name]
-                if value is not None:
-                    values[name].append(float(value))
+        add(session.execute(poses).mappings(), PER_POSE)
     return values, len(rows)

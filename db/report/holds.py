@@ -36,13 +36,12 @@ class HeldUnits:
 def held_units(session: Session, limit: int) -> HeldUnits:
     """The latest ``limit`` units on hold (their latest attempt failed), and how many
     there are."""
-    on_hold = (Run.verdict == "fail", RunFacts.line_latest)
     answers = session.scalars(
         select(Unit.calibration)
         .select_from(Run)
         .join(RunFacts, RunFacts.run_pk == Run.id)
         .join(Unit, Unit.serial == Run.serial)
-        .where(*on_hold)
+        .where(Run.verdict == "fail", RunFacts.line_latest)
         .order_by(Run.started_at.desc(), Run.id.desc())
         .limit(limit)
     ).all()

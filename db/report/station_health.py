@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 
 from db.models import Run
 from db.rollups import PRODUCTION
+from db.store.mapping import stored_axes
 from station.domain.quality.parameters import COEFFICIENTS
 from station.domain.quality.split import group_stats
 from station.domain.quality.station_health import StationHealth, VersionUse, golden_checks
@@ -43,10 +44,8 @@ def station_health(session: Session, station_id: str) -> StationHealth | None:
             r.started_at,
             r.serial,
             r.verdict,
-            None if r.offset_x is None else (r.offset_x, r.offset_y, r.offset_z),
-            None
-            if r.sensitivity_x is None
-            else (r.sensitivity_x, r.sensitivity_y, r.sensitivity_z),
+            stored_axes(r, "offset"),
+            stored_axes(r, "sensitivity"),
         )
         for r in reversed(golden)
     ]

@@ -3,14 +3,13 @@
 Nothing is written: each run's stored values (pose noise, coefficients, verification
 error, gyro bias, the coefficients' uncertainties, so a candidate with the guarded
 decision rule can be compared with the simple one) and stored failures are read a page
-at a time and judged again by
-:func:`station.domain.product.judging.rejudge`, the station's own checks. What the report needs is
-counted on the way: the runs that pass, the units whose first attempt on the line is in
-range (the report's cohort, by the yield definition of :mod:`db.rollups`) with their
-first and final passes — a unit's latest attempt may lie after the range, so those runs
-are judged too — the failing runs by their new first
-failure reason, the verdicts that change, and the cohort's units whose latest attempt's
-verdict flips.
+at a time and judged again by :func:`station.domain.product.judging.rejudge`, the
+station's own checks. What the report needs is counted on the way: the runs that pass,
+the units whose first attempt on the line is in range (the report's cohort, by the yield
+definition of :mod:`db.rollups`) with their first and final passes — a unit's latest
+attempt may lie after the range, so those runs are judged too — the failing runs by
+their new first failure reason, the verdicts that change, and the cohort's units whose
+latest attempt's verdict flips.
 """
 
 from collections import Counter
@@ -22,7 +21,7 @@ from sqlalchemy import ColumnElement, Row, and_, select, tuple_
 from sqlalchemy.orm import Session
 
 from db.models import Run, RunFacts, RunPose
-from db.store.mapping import failure_reason, failures_of
+from db.store.mapping import failure_reason, failures_of, stored_axes
 from station.domain.product.judging import Measured, rejudge
 from station.domain.product.limits import LimitsProfile
 from station.domain.quality.figures import VerdictFlip
@@ -52,28 +51,19 @@ class Rejudged:
     flips_total: int = 0
 
 
-def _triple(row: Row[Any], prefix: str, source: str = "") -> tuple[float, float, float] | None:
-    values = [getattr(row, f"{source}{prefix}_{a}") for a in "xyz"]
-    if any(v is None for v in values):
-        return None
-    return (float(values[0]), float(values[1]), float(values[2]))
-
-
 def _uncertainty(document: dict[str, Any] | None) -> dict[str, tuple[float, ...]]:
     """A stored run's U of its offsets, sensitivities, gyro biases and verification error
     (a candidate profile with the guarded rule judges by them; a run stored without them,
     by its values)."""
     if not document:
         return {}
-    xyz = {
-        code: tuple(float(document[key][a]) for a in "xyz")
-        for code, key in (("offset", "offset"), ("sensitivity", "sensitivity"))
-        if key in document
+    triples: dict[str, tuple[float, ...]] = {
+        code: tuple(float(document[code][a]) for a in "xyz")
+        for code in ("offset", "sensitivity")
+        if code in document
     }
-    bias = document.get("gyro_bias_dps")
-    triples: dict[str, tuple[float, ...]] = {code: (v[0], v[1], v[2]) for code, v in xyz.items()}
-    if bias is not None:
-        triples["gyro_bias"] = (float(bias[0]), float(bias[1]), float(bias[2]))
+    if (bias := document.get("gyro_bias_dps")) is not None:
+        triples["gyro_bias"] = tuple(float(bias[i]) for i in range(3))
     if (verification := document.get("verification_error_mg")) is not None:
         triples["verification_error"] = (float(verification),)
     return triples
@@ -153,9 +143,7 @@ def _judged(
                 RunPose.run_pk,
                 RunPose.index.label("position"),
                 RunPose.role,
-                RunPose.std_x,
-                RunPose.std_y,
-                RunPose.std_z,
+                *(getattr(RunPose, f"std_{a}") for a in "xyz"),
             )
             .where(tuple_(RunPose.run_pk, RunPose.started_at).in_(keys))
             .order_by(RunPose.run_pk, RunPose.index)
@@ -171,10 +159,10 @@ def _judged(
             error = row.verification_error_mg
             measured = Measured(
                 pose_noise={p.position: (p.std_x, p.std_y, p.std_z) for p in own},
-                offset=_triple(row, "offset"),
-                sensitivity=_triple(row, "sensitivity"),
+                offset=stored_axes(row, "offset"),
+                sensitivity=stored_axes(row, "sensitivity"),
                 verification=None if error is None or verify is None else (verify, error),
-                gyro_bias=_triple(row, "gyro_bias"),
+                gyro_bias=stored_axes(row, "gyro_bias"),
                 uncertainty=_uncertainty(row.uncertainty),
             )
             stored = failures.get(row.id, [])

@@ -30,9 +30,8 @@ def store_profile(session: Session, ref: LimitsRef) -> None:
     """Store the profile ``ref`` carries unless its SHA-256 is stored already.
 
     :class:`station.domain.errors.InputError` when the document is not a limits profile
-    (:func:`station.domain.product.limits.profile_of`); the reference itself checked that it hashes
-    to
-    ``ref.sha256``, and the stored text is the text that hash was taken over.
+    (:func:`station.domain.product.limits.profile_of`); the reference itself checked that it
+    hashes to ``ref.sha256``, and the stored text is the text that hash was taken over.
     """
     profile = profile_of(ref)
     if profile is not None:

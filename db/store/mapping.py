@@ -7,6 +7,7 @@ from collections.abc import Collection
 from datetime import datetime
 from typing import Any
 
+from pydantic import BaseModel
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -17,7 +18,64 @@ from station.domain.record.records import (
     RunRecord,
     RunSummary,
     StoredRun,
+    Vector3,
 )
+
+#: The columns of ``runs`` that hold a field of the record as it is, under its name.
+_RUN_FIELDS = (
+    "run_id",
+    "serial",
+    "station_id",
+    "operator_id",
+    "lot",
+    "part_number",
+    "fixture_slot",
+    "started_at",
+    "finished_at",
+    "software_version",
+    "algorithm",
+    "model",
+    "verdict",
+    "disposition",
+    "purpose",
+    "decision_rule",
+    "check_rules",
+)
+#: The columns of ``runs`` that hold a field of the record's quality, under its name.
+_QUALITY_FIELDS = (
+    "residual_rms_mg",
+    "residual_max_mg",
+    "condition_number",
+    "verification_error_mg",
+)
+#: The record's fields stored as JSON documents, each in the column of its name.
+_DOCUMENT_FIELDS = ("gyro", "gyro_matrix", "as_found")
+#: The fields of the record's limits, each in the column ``limits_{field}``.
+_LIMITS_FIELDS = ("name", "version", "sha256")
+#: The columns of ``poses`` that hold a field of the pose record (or of its link) as it is.
+_POSE_FIELDS = ("index", "name", "role", "sample_count", "temperature_c")
+_LINK_FIELDS = ("crc_errors", "gaps", "resyncs", "lost_samples")
+
+
+def _axes_columns(prefix: str, vector: Vector3 | None) -> dict[str, float | None]:
+    """The columns ``{prefix}_x``, ``_y``, ``_z`` of ``vector`` (all ``None`` without one)."""
+    return {f"{prefix}_{a}": None if vector is None else getattr(vector, a) for a in "xyz"}
+
+
+def _axes_of(row: Any, prefix: str) -> dict[str, float | None]:
+    """The vector stored in the columns ``{prefix}_x``, ``_y``, ``_z`` of ``row``."""
+    return {a: getattr(row, f"{prefix}_{a}") for a in "xyz"}
+
+
+def stored_axes(row: Any, prefix: str) -> tuple[float, float, float] | None:
+    """The vector in the columns ``{prefix}_x``, ``_y``, ``_z`` of ``row``; None if one is NULL."""
+    x, y, z = (getattr(row, f"{prefix}_{a}") for a in "xyz")
+    return None if x is None or y is None or z is None else (float(x), float(y), float(z))
+
+
+def _document(field: BaseModel | None) -> Any:
+    """A field of the record as its JSON column holds it."""
+    return None if field is None else field.model_dump(mode="json")
 
 
 def run_row(
@@ -26,74 +84,33 @@ def run_row(
     """The ``runs`` row of ``record``, numbered ``pk`` in the register of runs."""
     cal, quality = record.coefficients, record.quality
     return {
+        **{name: getattr(record, name) for name in _RUN_FIELDS},
         "id": pk,
-        "run_id": record.run_id,
-        "serial": record.serial,
-        "station_id": record.station_id,
-        "operator_id": record.operator_id,
-        "lot": record.lot,
-        "part_number": record.part_number,
-        "fixture_slot": record.fixture_slot,
-        "started_at": record.started_at,
-        "finished_at": record.finished_at,
         "received_at": received_at,
-        "software_version": record.software_version,
-        "algorithm": record.algorithm,
-        "model": record.model,
-        "limits_name": record.limits.name,
-        "limits_version": record.limits.version,
-        "limits_sha256": record.limits.sha256,
-        "verdict": record.verdict,
-        "disposition": record.disposition,
-        "purpose": record.purpose,
-        "offset_x": cal.offset.x if cal else None,
-        "offset_y": cal.offset.y if cal else None,
-        "offset_z": cal.offset.z if cal else None,
-        "sensitivity_x": cal.sensitivity.x if cal else None,
-        "sensitivity_y": cal.sensitivity.y if cal else None,
-        "sensitivity_z": cal.sensitivity.z if cal else None,
+        **{f"limits_{name}": getattr(record.limits, name) for name in _LIMITS_FIELDS},
+        **_axes_columns("offset", cal.offset if cal else None),
+        **_axes_columns("sensitivity", cal.sensitivity if cal else None),
         "matrix": [list(row) for row in cal.matrix] if cal else None,
-        "residual_rms_mg": quality.residual_rms_mg if quality else None,
-        "residual_max_mg": quality.residual_max_mg if quality else None,
-        "condition_number": quality.condition_number if quality else None,
-        "verification_error_mg": quality.verification_error_mg if quality else None,
+        **{name: getattr(quality, name) if quality else None for name in _QUALITY_FIELDS},
         "excluded_poses": list(quality.excluded_poses)
         if quality and quality.excluded_poses
         else None,
-        "gyro": record.gyro.model_dump(mode="json") if record.gyro else None,
-        "gyro_matrix": record.gyro_matrix.model_dump(mode="json") if record.gyro_matrix else None,
+        **{name: _document(getattr(record, name)) for name in _DOCUMENT_FIELDS},
         "uncertainty": record.uncertainty.to_json() if record.uncertainty else None,
-        "decision_rule": record.decision_rule,
-        "check_rules": record.check_rules,
-        "as_found": record.as_found.model_dump(mode="json") if record.as_found else None,
         "record_sha256": record_sha256,
     }
 
 
 def pose_row(run_pk: int, started_at: datetime, pose: PoseRecord) -> dict[str, Any]:
     """The ``poses`` row of one pose of run ``run_pk``, started at ``started_at``."""
-    gyro = pose.gyro_mean
     return {
         "run_pk": run_pk,
         "started_at": started_at,
-        "index": pose.index,
-        "name": pose.name,
-        "role": pose.role,
-        "mean_x": pose.mean.x,
-        "mean_y": pose.mean.y,
-        "mean_z": pose.mean.z,
-        "std_x": pose.std.x,
-        "std_y": pose.std.y,
-        "std_z": pose.std.z,
-        "sample_count": pose.sample_count,
-        "gyro_x": gyro.x if gyro else None,
-        "gyro_y": gyro.y if gyro else None,
-        "gyro_z": gyro.z if gyro else None,
-        "temperature_c": pose.temperature_c,
-        "crc_errors": pose.link.crc_errors,
-        "gaps": pose.link.gaps,
-        "resyncs": pose.link.resyncs,
-        "lost_samples": pose.link.lost_samples,
+        **{name: getattr(pose, name) for name in _POSE_FIELDS},
+        **_axes_columns("mean", pose.mean),
+        **_axes_columns("std", pose.std),
+        **_axes_columns("gyro", pose.gyro_mean),
+        **{name: getattr(pose.link, name) for name in _LINK_FIELDS},
         "replaced": [capture.model_dump(mode="json") for capture in pose.replaced],
     }
 
@@ -107,56 +124,22 @@ def failure_rows(run_pk: int, record: RunRecord) -> list[dict[str, Any]]:
 
 
 def _header(run: Run, failures: list[RunFailure]) -> dict[str, Any]:
-    has_cal = run.offset_x is not None
-    has_quality = run.residual_rms_mg is not None
     return {
-        "run_id": run.run_id,
-        "serial": run.serial,
-        "station_id": run.station_id,
-        "operator_id": run.operator_id,
-        "lot": run.lot,
-        "part_number": run.part_number,
-        "fixture_slot": run.fixture_slot,
-        "started_at": run.started_at,
-        "finished_at": run.finished_at,
-        "received_at": run.received_at,
-        "software_version": run.software_version,
-        "algorithm": run.algorithm,
-        "model": run.model,
-        "limits": {
-            "name": run.limits_name,
-            "version": run.limits_version,
-            "sha256": run.limits_sha256,
+        **{
+            name: getattr(run, name)
+            for name in (*_RUN_FIELDS, *_DOCUMENT_FIELDS, "uncertainty", "received_at")
         },
-        "verdict": run.verdict,
-        "disposition": run.disposition,
-        "purpose": run.purpose,
-        "gyro": run.gyro,
-        "gyro_matrix": run.gyro_matrix,
-        "uncertainty": run.uncertainty,
-        "decision_rule": run.decision_rule,
-        "check_rules": run.check_rules,
-        "as_found": run.as_found,
+        "limits": {name: getattr(run, f"limits_{name}") for name in _LIMITS_FIELDS},
         "failures": [failure_reason(f) for f in failures],
         "coefficients": {
-            "offset": {"x": run.offset_x, "y": run.offset_y, "z": run.offset_z},
-            "sensitivity": {
-                "x": run.sensitivity_x,
-                "y": run.sensitivity_y,
-                "z": run.sensitivity_z,
-            },
+            "offset": _axes_of(run, "offset"),
+            "sensitivity": _axes_of(run, "sensitivity"),
             "matrix": run.matrix,
         }
-        if has_cal
+        if run.offset_x is not None
         else None,
-        "quality": {
-            "residual_rms_mg": run.residual_rms_mg,
-            "residual_max_mg": run.residual_max_mg,
-            "condition_number": run.condition_number,
-            "verification_error_mg": run.verification_error_mg,
-            "excluded_poses": run.excluded_poses,
-        }
-        if has_quality
+        "quality": {name: getattr(run, name) for name in (*_QUALITY_FIELDS, "excluded_poses")}
+        if run.residual_rms_mg is not None
         else None,
     }
 
@@ -186,22 +169,11 @@ def summary_of(run: Run, failures: list[RunFailure]) -> RunSummary:
 
 def _pose(pose: RunPose) -> dict[str, Any]:
     return {
-        "index": pose.index,
-        "name": pose.name,
-        "role": pose.role,
-        "mean": {"x": pose.mean_x, "y": pose.mean_y, "z": pose.mean_z},
-        "std": {"x": pose.std_x, "y": pose.std_y, "z": pose.std_z},
-        "sample_count": pose.sample_count,
-        "gyro_mean": {"x": pose.gyro_x, "y": pose.gyro_y, "z": pose.gyro_z}
-        if pose.gyro_x is not None
-        else None,
-        "temperature_c": pose.temperature_c,
-        "link": {
-            "crc_errors": pose.crc_errors,
-            "gaps": pose.gaps,
-            "resyncs": pose.resyncs,
-            "lost_samples": pose.lost_samples,
-        },
+        **{name: getattr(pose, name) for name in _POSE_FIELDS},
+        "mean": _axes_of(pose, "mean"),
+        "std": _axes_of(pose, "std"),
+        "gyro_mean": _axes_of(pose, "gyro") if pose.gyro_x is not None else None,
+        "link": {name: getattr(pose, name) for name in _LINK_FIELDS},
         "replaced": pose.replaced,
     }
 

@@ -15,7 +15,7 @@ from datetime import UTC, datetime
 from typing import Any, Literal, TypeVarTuple, cast
 from uuid import UUID
 
-from sqlalchemy import Select, insert, select, text, tuple_, update
+from sqlalchemy import ColumnElement, Select, insert, select, text, tuple_, update
 from sqlalchemy.dialects import postgresql, sqlite
 from sqlalchemy.orm import Session
 from sqlalchemy.sql.dml import ReturningInsert
@@ -57,12 +57,10 @@ _FAILURES = Base.metadata.tables[RunFailure.__tablename__]
 
 # Built once, values bound at execution: the compiled statement is cached.
 _REGISTER_RUN: dict[str, ReturningInsert[int]] = {
-    "postgresql": postgresql.insert(RunId)
+    name: dialect.insert(RunId)
     .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(RunId.run_pk),
-    "sqlite": sqlite.insert(RunId)
-    .on_conflict_do_nothing(index_elements=["run_id"])
-    .returning(RunId.run_pk),
+    .returning(RunId.run_pk)
+    for name, dialect in (("postgresql", postgresql), ("sqlite", sqlite))
 }
 
 Ts = TypeVarTuple("Ts")
@@ -75,7 +73,7 @@ class RunConflictError(CalstationError):
     """A run with this UUID is already stored with different content."""
 
 
-#: What an API key may store: its station's runs, or units' gyro fits (a lab's).
+#: What an API key may store: its station's runs, units' gyro fits (a lab's) or reviews.
 KeyScope = Literal["station", "lab", "quality"]
 
 
@@ -126,28 +124,27 @@ def _by_run_id(query: Select[*Ts], run_id: UUID) -> Select[*Ts]:
     )
 
 
+#: The record's optional fields added after the first stations shipped.
+_ADDED_FIELDS = (
+    "lot",
+    "disposition",
+    "purpose",
+    "gyro_matrix",
+    "uncertainty",
+    "decision_rule",
+    "as_found",
+)
+
+
 def record_sha256(record: RunRecord) -> str:
     """SHA-256 of the record's canonical JSON: equal for a retry, different for a clash.
 
     A record without a lot, a disposition, a purpose, a gyro matrix, uncertainties, a
     decision rule, its as-found values, its limits profile or excluded poses, or of the
-    default product, is
-    hashed without the field, as before the field existed, so a retry from an older
-    station matches the run it stored.
+    default product, is hashed without the field, as before the field existed, so a retry
+    from an older station matches the run it stored.
     """
-    unset: dict[str, Any] = {
-        name: True
-        for name in (
-            "lot",
-            "disposition",
-            "purpose",
-            "gyro_matrix",
-            "uncertainty",
-            "decision_rule",
-            "as_found",
-        )
-        if getattr(record, name) is None
-    }
+    unset: dict[str, Any] = {name: True for name in _ADDED_FIELDS if getattr(record, name) is None}
     if record.part_number == DEFAULT_PART_NUMBER:  # every run before products existed
         unset["part_number"] = True
     if record.limits.profile is None:
@@ -205,12 +202,11 @@ class RunRepository:
 
         The register's unique ``run_id`` decides (``INSERT … ON CONFLICT DO NOTHING``
         into ``run_ids``, which numbers the run), so concurrent duplicates cannot both
-        land. A retry of the same record
-        returns the stored run; the same UUID with other content raises
-        :class:`RunConflictError`. A new run brings the report's facts and roll-ups up to
-        date in the same transaction (:func:`db.rollups.record_run`); submissions are
-        serialised for that (:func:`db.rollups.lock_submissions`). ``outbox``: the
-        station's outbox as it sent the run, kept as its latest report
+        land. A retry of the same record returns the stored run; the same UUID with other
+        content raises :class:`RunConflictError`. A new run brings the report's facts and
+        roll-ups up to date in the same transaction (:func:`db.rollups.record_run`);
+        submissions are serialised for that (:func:`db.rollups.lock_submissions`).
+        ``outbox``: the station's outbox as it sent the run, kept as its latest report
         (:func:`db.store.outbox_reports.record_outbox`), a retry's too.
         """
         digest = record_sha256(record)
@@ -258,22 +254,15 @@ class RunRepository:
             .where(RunPose.run_pk == run.id, RunPose.started_at == run.started_at)
             .order_by(RunPose.index)
         ).all()
-        profile = self.session.scalar(
-            select(StoredLimitsProfile.document).where(
-                StoredLimitsProfile.sha256 == run.limits_sha256
-            )
+        profile = self.session.get(StoredLimitsProfile, run.limits_sha256)
+        document = None if profile is None else profile.document
+        return stored_run_of(
+            run, failures_of(self.session, [run.id])[run.id], list(poses), document
         )
-        return stored_run_of(run, failures_of(self.session, [run.id])[run.id], list(poses), profile)
 
     def latest_for_serial(self, serial: str) -> RunSummary | None:
         """The unit's current state: its latest run (by start time)."""
-        run = self.session.scalars(
-            select(Run)
-            .where(Run.serial == serial)
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(1)
-        ).one_or_none()
-        return None if run is None else self._summaries([run])[0]
+        return self._latest(Run.serial == serial)
 
     def history(self, serial: str) -> list[RunSummary]:
         """Every run of the unit, oldest first (the first one gives first-pass yield)."""
@@ -287,48 +276,38 @@ class RunRepository:
     ) -> RunSummary | None:
         """The latest golden-unit run (``purpose`` golden) of ``station_id`` started in
         ``[since, before)``: the shift's check a certificate names as its reference."""
-        run = self.session.scalars(
-            select(Run)
-            .where(
-                Run.station_id == station_id,
-                Run.purpose == "golden",
-                Run.started_at >= since,
-                Run.started_at < before,
-            )
-            .order_by(Run.started_at.desc(), Run.id.desc())
-            .limit(1)
-        ).one_or_none()
-        return None if run is None else self._summaries([run])[0]
+        return self._latest(
+            Run.station_id == station_id,
+            Run.purpose == "golden",
+            Run.started_at >= since,
+            Run.started_at < before,
+        )
 
     def serials(self, prefix: str, limit: int | None = None) -> list[str]:
         """The serial numbers stored that begin with ``prefix`` (its ``_`` and ``%`` as
         themselves), in order; the first ``limit`` of them. A walk of
         ``ix_runs_serial_started_at`` from ``prefix``."""
-        return list(
-            self.session.scalars(
-                select(Run.serial)
-                .where(Run.serial.startswith(prefix, autoescape=True))
-                .distinct()
-                .order_by(Run.serial)
-                .limit(limit)
-            )
+        stmt = (
+            select(Run.serial)
+            .where(Run.serial.startswith(prefix, autoescape=True))
+            .distinct()
+            .order_by(Run.serial)
+            .limit(limit)
         )
+        return list(self.session.scalars(stmt))
 
     def list_runs(self, query: RunQuery) -> RunPage:
         """A page of runs matching ``query``, newest first."""
         if not 1 <= query.limit <= MAX_PAGE:
             raise InputError(f"limit must be 1…{MAX_PAGE}, got {query.limit}")
-        stmt = select(Run)
-        if query.serial is not None:
-            stmt = stmt.where(Run.serial == query.serial)
-        if query.station_id is not None:
-            stmt = stmt.where(Run.station_id == query.station_id)
-        if query.lot is not None:
-            stmt = stmt.where(Run.lot == query.lot)
-        if query.part_number is not None:
-            stmt = stmt.where(Run.part_number == query.part_number)
-        if query.verdict is not None:
-            stmt = stmt.where(Run.verdict == query.verdict)
+        equal = (
+            (Run.serial, query.serial),
+            (Run.station_id, query.station_id),
+            (Run.lot, query.lot),
+            (Run.part_number, query.part_number),
+            (Run.verdict, query.verdict),
+        )
+        stmt = select(Run).where(*(column == value for column, value in equal if value is not None))
         if query.since is not None:
             stmt = stmt.where(Run.started_at >= query.since)
         if query.until is not None:
@@ -349,6 +328,13 @@ class RunRepository:
         database is upgraded (:mod:`db.database`).
         """
         return refresh_answers(self.session)
+
+    def _latest(self, *where: ColumnElement[bool]) -> RunSummary | None:
+        """The latest run (by start time) of those ``where`` selects."""
+        run = self.session.scalars(
+            select(Run).where(*where).order_by(Run.started_at.desc(), Run.id.desc()).limit(1)
+        ).one_or_none()
+        return None if run is None else self._summaries([run])[0]
 
     def _summaries(self, runs: Sequence[Run]) -> list[RunSummary]:
         failed = [run.id for run in runs if run.verdict == "fail"]
@@ -447,14 +433,8 @@ class RunRepository:
         ).one_or_none()
         if row is None:
             return None
-        return GyroFitRecord.model_validate(
-            {
-                "serial": row.serial,
-                "fitted_at": row.fitted_at,
-                "source": row.source,
-                **row.document,
-            }
-        )
+        fields = {name: getattr(row, name) for name in ("serial", "fitted_at", "source")}
+        return GyroFitRecord.model_validate({**fields, **row.document})
 
 
 class ReviewRefusedError(CalstationError):

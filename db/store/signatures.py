@@ -49,9 +49,7 @@ def add_signature(session: Session, run_id: UUID, signature: Signature) -> None:
 def signature_of(session: Session, run_id: UUID) -> Signature | None:
     """The stored signature of run ``run_id``'s certificate, if it was signed."""
     row = session.scalar(select(CertificateSignature).where(CertificateSignature.run_id == run_id))
-    if row is None:
-        return None
-    return Signature.model_validate(row, from_attributes=True)
+    return None if row is None else Signature.model_validate(row, from_attributes=True)
 
 
 def verify_signed(session: Session, signed: SignedCertificate) -> None:

@@ -56,6 +56,16 @@ def answer_json(runs: Sequence[RunSummary | StoredRun]) -> str:
     return UnitCalibration.of_history(runs).model_dump_json()
 
 
+def _unit_row(run_pk: int, latest: RunSummary | StoredRun, calibration: str) -> dict[str, Any]:
+    """The ``units`` row of the unit whose latest run is ``latest`` (key ``run_pk``)."""
+    return {
+        "serial": latest.serial,
+        "run_pk": run_pk,
+        "started_at": latest.started_at,
+        "calibration": calibration,
+    }
+
+
 def _runs_of(session: Session, serials: Sequence[str]) -> dict[str, list[tuple[int, RunSummary]]]:
     """Every run of each of ``serials`` with its key, oldest first (by ``(started_at, id)``)."""
     runs = session.scalars(
@@ -72,17 +82,10 @@ def record_units(session: Session, serials: Sequence[str]) -> None:
     """Write the answers about ``serials`` from their stored runs."""
     if not serials:
         return
-    rows = []
-    for serial, runs in _runs_of(session, serials).items():
-        pk, latest = runs[-1]
-        rows.append(
-            {
-                "serial": serial,
-                "run_pk": pk,
-                "started_at": latest.started_at,
-                "calibration": answer_json([run for _, run in runs]),
-            }
-        )
+    rows = [
+        _unit_row(*runs[-1], answer_json([run for _, run in runs]))
+        for runs in _runs_of(session, serials).values()
+    ]
     session.execute(for_dialect(session, _UPSERT), rows)
 
 
@@ -104,12 +107,7 @@ def record_unit_run(session: Session, run_pk: int, run: RunSummary | StoredRun) 
         if stored is None
         else UnitCalibration.model_validate_json(stored.calibration).then(run)
     )
-    row = {
-        "serial": run.serial,
-        "run_pk": run_pk,
-        "started_at": run.started_at,
-        "calibration": answer.model_dump_json(),
-    }
+    row = _unit_row(run_pk, run, answer.model_dump_json())
     session.execute(for_dialect(session, _UPSERT), [row])
 
 
