@@ -9,8 +9,9 @@ partitions (``docs/api.md``, *Capacity*).
 
 By year, not by month: a submission looks its unit up by serial number, which no start
 prunes, so each of its statements is planned over every partition kept. Measured with
-``benchmarks/bench_submit.py --years-ahead``: 15 partitions doubled a submission's time
-in PostgreSQL, 145 (ten years of months) made it fifty times longer.
+``benchmarks/bench_submit.py``: 11 partitions (ten years) took a submission 1.4–1.8
+times its time without partitions, 15 months 2 times, and with 121 (ten years of months)
+230 submissions did not finish in 15 minutes (``docs/benchmarks.md``, *partitions*).
 
 The migration creates the years that hold runs, the current one and the next;
 :func:`add_years` (``calstation db partitions``, a job run daily or monthly) keeps them
